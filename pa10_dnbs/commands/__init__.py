@@ -1,0 +1,1 @@
+"""Implementations of the ``pa10-dnbs`` sub-commands."""

@@ -1,0 +1,200 @@
+"""Load and validate ``config/*.yaml``.
+
+Every key is declared once in ``SCHEMA`` with its kind; unknown keys, wrong
+types and non-finite or out-of-range numbers raise :class:`ConfigError`
+naming the dotted key (e.g. ``dnbs.torque_net.eta``).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from . import JOINT_NAMES
+
+N_JOINTS = len(JOINT_NAMES)
+
+
+class ConfigError(ValueError):
+    """A configuration value is missing, unknown, or invalid; the message names the key."""
+
+
+@dataclass(frozen=True)
+class Num:
+    """A real number; ``low`` is the bound, ``strict`` makes it exclusive; ``integer`` requires an int."""
+
+    low: float | None = None
+    strict: bool = True
+    integer: bool = False
+    high: float | None = None
+
+
+@dataclass(frozen=True)
+class Joints:
+    """Seven numbers (one per joint) with the bounds of ``num``; a single number is broadcast."""
+
+    num: Num
+
+
+@dataclass(frozen=True)
+class Pair:
+    """Two increasing numbers >= 0, e.g. a time window [t0, t1]."""
+
+
+@dataclass(frozen=True)
+class Flag:
+    """true or false."""
+
+
+@dataclass(frozen=True)
+class Text:
+    """A non-empty string, optionally one of ``choices``."""
+
+    choices: tuple[str, ...] = ()
+
+
+POS = Num(0.0)
+NONNEG = Num(0.0, strict=False)
+ANY = Num()
+
+
+def _net_schema() -> dict:
+    return {
+        "max_degree": Num(0, strict=False, integer=True, high=4),
+        "input_scale": (POS,),  # tuple of Num: fixed-length list, length set per network below
+        "init_weight_std": Joints(NONNEG),
+        "p0": Joints(POS),
+        "q": Joints(NONNEG),
+        "r": Joints(POS),
+        "eta": Joints(POS),
+    }
+
+
+_alpha = _net_schema()
+_alpha["input_scale"] = (POS, POS)
+_torque = _net_schema()
+_torque["input_scale"] = (POS, POS, POS)
+
+SCHEMA: dict[str, Any] = {
+    "simulation": {
+        "dt_s": Num(0.0, high=0.1),
+        "duration_s": POS,
+        "window_s": Pair(),
+        "seed": Num(0, strict=False, integer=True),
+        "initial_position_offset_rad": Joints(ANY),
+        "initial_velocity_rad_s": Joints(ANY),
+    },
+    "reference": {
+        "amplitude_rad": Joints(NONNEG),
+        "envelope_rate_per_s3": Joints(POS),
+        "frequency_rad_s": Joints(NONNEG),
+        "preview_steps": Num(0, strict=False, integer=True, high=100),
+    },
+    "plant": {
+        "urdf": Text(),
+        "gravity_mps2": NONNEG,
+        "rotor_inertia_kgm2": Joints(NONNEG),
+        "viscous_nms_per_rad": Joints(NONNEG),
+        "coulomb_nm": Joints(NONNEG),
+        "coulomb_smoothing_rad_s": POS,
+        "torque_limit_nm": Joints(POS),
+    },
+    "dnbs": {"anti_windup": Flag(), "alpha_net": _alpha, "torque_net": _torque},
+    "pid": {"kp": Joints(NONNEG), "ki": Joints(NONNEG), "kd": Joints(NONNEG)},
+}
+
+
+def _number(key: str, value: Any, spec: Num) -> float | int:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ConfigError(f"{key}: expected a number, got {type(value).__name__} {value!r}")
+    if spec.integer and not (isinstance(value, int) or float(value).is_integer()):
+        raise ConfigError(f"{key}: expected an integer, got {value!r}")
+    if not math.isfinite(value):
+        raise ConfigError(f"{key}: must be finite, got {value!r}")
+    if spec.low is not None and (value <= spec.low if spec.strict else value < spec.low):
+        rel = ">" if spec.strict else ">="
+        raise ConfigError(f"{key}: must be {rel} {spec.low:g}, got {value!r}")
+    if spec.high is not None and value > spec.high:
+        raise ConfigError(f"{key}: must be <= {spec.high:g}, got {value!r}")
+    return int(value) if spec.integer else float(value)
+
+
+def _check(key: str, value: Any, spec: Any) -> Any:
+    if isinstance(spec, dict):
+        if not isinstance(value, dict):
+            raise ConfigError(f"{key or '<root>'}: expected a mapping, got {type(value).__name__}")
+        unknown = sorted(set(value) - set(spec))
+        if unknown:
+            raise ConfigError(f"{key + '.' if key else ''}{unknown[0]}: unknown key "
+                              f"(allowed: {', '.join(sorted(spec))})")
+        missing = sorted(set(spec) - set(value))
+        if missing:
+            raise ConfigError(f"{key + '.' if key else ''}{missing[0]}: missing key")
+        return {k: _check(f"{key}.{k}" if key else k, value[k], spec[k]) for k in spec}
+    if isinstance(spec, Num):
+        return _number(key, value, spec)
+    if isinstance(spec, Joints):
+        if isinstance(value, list):
+            if len(value) != N_JOINTS:
+                raise ConfigError(f"{key}: expected {N_JOINTS} values (one per joint), got {len(value)}")
+            return tuple(_number(f"{key}[{i}]", v, spec.num) for i, v in enumerate(value))
+        return (_number(key, value, spec.num),) * N_JOINTS
+    if isinstance(spec, tuple):
+        if not isinstance(value, list) or len(value) != len(spec):
+            raise ConfigError(f"{key}: expected a list of {len(spec)} numbers, got {value!r}")
+        return tuple(_number(f"{key}[{i}]", v, s) for i, (v, s) in enumerate(zip(value, spec)))
+    if isinstance(spec, Pair):
+        if not isinstance(value, list) or len(value) != 2:
+            raise ConfigError(f"{key}: expected [t0, t1], got {value!r}")
+        t0, t1 = (_number(f"{key}[{i}]", v, NONNEG) for i, v in enumerate(value))
+        if t1 <= t0:
+            raise ConfigError(f"{key}: t1 must be greater than t0, got {value!r}")
+        return (t0, t1)
+    if isinstance(spec, Flag):
+        if not isinstance(value, bool):
+            raise ConfigError(f"{key}: expected true or false, got {value!r}")
+        return value
+    if isinstance(spec, Text):
+        if not isinstance(value, str) or not value:
+            raise ConfigError(f"{key}: expected a non-empty string, got {value!r}")
+        if spec.choices and value not in spec.choices:
+            raise ConfigError(f"{key}: must be one of {', '.join(spec.choices)}, got {value!r}")
+        return value
+    raise TypeError(f"bad schema entry at {key}")  # pragma: no cover
+
+
+def validate(raw: Any, base_dir: Path) -> dict:
+    """Validate a parsed YAML document; relative file paths resolve against ``base_dir``."""
+    cfg = _check("", raw, SCHEMA)
+    sim = cfg["simulation"]
+    if sim["window_s"][1] > sim["duration_s"] + 1e-12:
+        raise ConfigError(f"simulation.window_s: ends at {sim['window_s'][1]:g} s, after "
+                          f"simulation.duration_s = {sim['duration_s']:g} s")
+    urdf = Path(cfg["plant"]["urdf"])
+    if not urdf.is_absolute():
+        urdf = (base_dir / urdf).resolve()
+    if not urdf.is_file():
+        raise ConfigError(f"plant.urdf: file not found: {urdf}")
+    cfg["plant"]["urdf"] = str(urdf)
+    return cfg
+
+
+def load_config(path: str | Path) -> dict:
+    """Read and validate a YAML config file. Raises ConfigError (naming the key or file)."""
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(f"config file not found: {path}")
+    try:
+        raw = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{path}: not valid YAML: {exc}") from None
+    return validate(raw, base_dir=path.resolve().parent)
+
+
+def default_config_path() -> Path:
+    """The shipped ``config/default.yaml`` (source tree or installed share directory)."""
+    from .paths import share_path
+    return share_path("config", "default.yaml")

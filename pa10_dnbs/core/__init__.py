@@ -1,0 +1,1 @@
+"""Numeric core: reference, HONN, EKF, controllers, metrics. Imports only numpy."""

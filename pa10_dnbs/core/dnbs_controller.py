@@ -1,0 +1,89 @@
+"""Per-joint decentralized neural backstepping controller, eq. 23-26.
+
+For joint i at step k, using only that joint's x1 (angle, rad), x2 (velocity,
+rad/s) and its own reference:
+    alpha = w1^T S1(z1),  z1 = [x1, x_d(k+2)]          virtual control [rad/s]
+    u     = w2^T S2(z2),  z2 = [x1, x2, alpha]         torque [N m]
+    e1 = x_d(k) - x1,     e2 = alpha - x2
+and both networks are trained by an EKF every step (except, with anti-windup,
+an update that would push an already saturated torque further out). e2 has the opposite sign of
+the paper's printed eq. 26: with H = S(z) and w <- w + eta K e the printed
+x2 - alpha is positive feedback (test/test_dnbs_controller.py shows it).
+The torque is saturated at the joint's Table 2 limit.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .ekf import EKFParams, EKFTrainer
+from .honn import HONN, monomial_exponents
+from .reference import ReferenceSample
+
+
+@dataclass(frozen=True)
+class NetworkParams:
+    """One HONN and its EKF.
+
+    max_degree: terms are all tanh monomials of total degree <= max_degree;
+    input_scale: per input, in that input's units; init_weight_std: std of
+    the seeded normal initial weights; ekf: EKF settings.
+    """
+
+    max_degree: int
+    input_scale: tuple[float, ...]
+    init_weight_std: float
+    ekf: EKFParams
+
+
+@dataclass(frozen=True)
+class DNBSParams:
+    """Settings of one joint's DNBS controller."""
+
+    alpha_net: NetworkParams
+    torque_net: NetworkParams
+    torque_limit_nm: float
+    anti_windup: bool = True       # skip updates that would push a saturated torque further out
+    printed_e2_sign: bool = False  # True reproduces the paper's printed e2 = x2 - alpha (diverges)
+
+
+class DNBSJointController:
+    """Neural backstepping controller for one joint; see the module docstring."""
+
+    def __init__(self, params: DNBSParams, seed):
+        """``seed``: int or sequence of ints for numpy.random.default_rng (initial weights)."""
+        self.params = params
+        rng = np.random.default_rng(seed)
+        self.alpha_honn = HONN(monomial_exponents(2, params.alpha_net.max_degree),
+                               params.alpha_net.input_scale)
+        self.torque_honn = HONN(monomial_exponents(3, params.torque_net.max_degree),
+                                params.torque_net.input_scale)
+        w1 = rng.normal(0.0, params.alpha_net.init_weight_std, self.alpha_honn.n_terms)
+        w2 = rng.normal(0.0, params.torque_net.init_weight_std, self.torque_honn.n_terms)
+        self.alpha_ekf = EKFTrainer(w1, params.alpha_net.ekf)
+        self.torque_ekf = EKFTrainer(w2, params.torque_net.ekf)
+        self.alpha = 0.0
+        self.torque_unsaturated = 0.0
+
+    def step(self, x1: float, x2: float, ref: ReferenceSample) -> float:
+        """Compute the torque [N m] for state (x1, x2) and train both networks."""
+        S1 = self.alpha_honn.regressor((x1, ref.position_ahead_rad))
+        alpha = float(self.alpha_ekf.w @ S1)
+        S2 = self.torque_honn.regressor((x1, x2, alpha))
+        u = float(self.torque_ekf.w @ S2)
+
+        e1 = ref.position_rad - x1
+        e2 = (x2 - alpha) if self.params.printed_e2_sign else (alpha - x2)
+        lim = self.params.torque_limit_nm
+        # Conditional integration: while the torque is clipped, an update that
+        # raises |u| further (e > 0 raises both alpha and u) only winds up.
+        saturated = self.params.anti_windup and abs(u) >= lim
+        if not (saturated and e1 * u > 0.0):
+            self.alpha_ekf.update(S1, e1)
+        if not (saturated and e2 * u > 0.0):
+            self.torque_ekf.update(S2, e2)
+
+        self.alpha = alpha
+        self.torque_unsaturated = u
+        return min(max(u, -lim), lim)

@@ -1,0 +1,63 @@
+"""Extended Kalman filter training of a scalar-output, weight-linear network.
+
+Eq. 7-9 / 13-16 of the paper with m = 1:
+    M = 1 / (R + H^T P H)
+    K = P H M
+    w <- w + eta K e
+    P <- P - K H^T P + Q
+P stays exactly symmetric: the correction is computed as (P H)(P H)^T M.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class EKFParams:
+    """EKF settings for one network.
+
+    p0: initial diagonal of P [output-units^2 per unit-regressor^2];
+    q: diagonal of Q added every step; r: R (scalar, error-units^2);
+    eta: learning rate (dimensionless step scale).
+    """
+
+    p0: float
+    q: float
+    r: float
+    eta: float
+
+    def __post_init__(self):
+        for name in ("p0", "q", "r", "eta"):
+            v = getattr(self, name)
+            if not np.isfinite(v) or v < 0 or (name in ("p0", "r", "eta") and v == 0):
+                raise ValueError(f"EKF parameter {name} must be finite and positive (q may be 0), got {v}")
+
+
+class EKFTrainer:
+    """Holds w (L,) and P (L, L) and applies one EKF step per call."""
+
+    def __init__(self, weights: np.ndarray, params: EKFParams):
+        self.params = params
+        self.w = np.array(weights, dtype=float)
+        n = self.w.size
+        self.P = np.eye(n) * params.p0
+        self._P_diag = self.P.reshape(-1)[:: n + 1]  # a view: adds Q in place
+        self._outer = np.empty((n, n))
+        self._eta, self._q, self._r = params.eta, params.q, params.r
+
+    def update(self, H: np.ndarray, error: float) -> float:
+        """One step with regressor H (L,) and training error e; returns the gain g = H^T K.
+
+        g in [0, 1) is the fraction of eta*e that the output at the same input moves by.
+        """
+        PH = self.P @ H
+        hph = float(H @ PH)
+        m = 1.0 / (self._r + hph)
+        self.w += (self._eta * m * error) * PH
+        outer = np.multiply(PH[:, None], PH, out=self._outer)  # (PH)(PH)^T, exactly symmetric
+        outer *= m
+        self.P -= outer
+        self._P_diag += self._q
+        return hph * m

@@ -1,0 +1,77 @@
+"""High-order neural network of eq. 3-4 with a scalar output.
+
+phi(w, z) = w^T S(z),  S_i(z) = prod_j tanh(z_j / scale_j)^(d_ij),
+for a configurable set of exponent rows d_i (a row of zeros is the bias).
+The output is linear in w, so the EKF's H = d phi / d w = S(z).
+"""
+from __future__ import annotations
+
+from itertools import product
+
+import numpy as np
+
+
+def monomial_exponents(n_inputs: int, max_degree: int) -> np.ndarray:
+    """All exponent rows with total degree <= max_degree, bias first.
+
+    Returns an int array of shape (L, n_inputs), ordered by degree, then
+    lexicographically (descending), so the order is stable across runs.
+    """
+    if n_inputs < 1 or max_degree < 0:
+        raise ValueError("n_inputs must be >= 1 and max_degree >= 0")
+    rows = [r for r in product(range(max_degree + 1), repeat=n_inputs) if sum(r) <= max_degree]
+    rows.sort(key=lambda r: (sum(r), tuple(-x for x in r)))
+    return np.array(rows, dtype=int)
+
+
+class HONN:
+    """Scalar-output HONN.
+
+    Parameters
+    ----------
+    exponents : array_like of int, shape (L, p)
+        d_ij: power of tanh(z_j) in term i.
+    input_scale : array_like, shape (p,)
+        Each input is divided by its scale before tanh (units of that input).
+    """
+
+    def __init__(self, exponents, input_scale):
+        self.exponents = np.asarray(exponents, dtype=int)
+        self.input_scale = np.asarray(input_scale, dtype=float)
+        if self.exponents.ndim != 2 or self.exponents.shape[1] != self.input_scale.size:
+            raise ValueError("exponents must have shape (L, p) with p = len(input_scale)")
+        if np.any(self.exponents < 0):
+            raise ValueError("exponents must be non-negative")
+        if np.any(~np.isfinite(self.input_scale)) or np.any(self.input_scale <= 0):
+            raise ValueError("input_scale must be finite and positive")
+        # Term i is the product of D factors ext[f_i1] ... ext[f_iD], where
+        # ext = [1, s_1, ..., s_p] and D is the largest total degree; a term of
+        # lower degree is padded with index 0 (the constant 1).
+        degree = int(self.exponents.sum(axis=1).max(initial=0))
+        factors = np.zeros((self.exponents.shape[0], max(degree, 1)), dtype=np.intp)
+        for i, row in enumerate(self.exponents):
+            idx = [j + 1 for j, d in enumerate(row) for _ in range(d)]
+            factors[i, :len(idx)] = idx
+        self._factor_cols = [np.ascontiguousarray(factors[:, c]) for c in range(factors.shape[1])]
+        self._inv_scale = 1.0 / self.input_scale
+        self._ext = np.ones(self.input_scale.size + 1)
+
+    @property
+    def n_terms(self) -> int:
+        """L, the number of weights."""
+        return self.exponents.shape[0]
+
+    def regressor(self, z) -> np.ndarray:
+        """S(z), shape (L,), for inputs z of shape (p,)."""
+        ext = self._ext
+        np.tanh(np.multiply(z, self._inv_scale), out=ext[1:])
+        cols = self._factor_cols
+        out = ext.take(cols[0])
+        for c in cols[1:]:
+            out *= ext.take(c)
+        return out
+
+    @staticmethod
+    def output(weights: np.ndarray, regressor: np.ndarray) -> float:
+        """phi = w^T S."""
+        return float(weights @ regressor)

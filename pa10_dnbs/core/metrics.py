@@ -1,0 +1,48 @@
+"""Tracking metrics over a time window, per joint.
+
+All inputs are time series sampled every dt_s: error_rad and torque_nm of
+shape (n_steps, n_joints); the window is [t0, t1] seconds, inclusive of t0,
+exclusive of t1 (samples k with t0 <= k dt < t1).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def window_slice(n_steps: int, dt_s: float, window_s: tuple[float, float]) -> slice:
+    """Index range of the samples inside [t0, t1)."""
+    t0, t1 = window_s
+    if not (0.0 <= t0 < t1):
+        raise ValueError(f"window must satisfy 0 <= t0 < t1, got {window_s}")
+    k0 = int(np.ceil(t0 / dt_s - 1e-9))
+    k1 = min(n_steps, int(np.ceil(t1 / dt_s - 1e-9)))
+    if k1 <= k0:
+        raise ValueError(f"window {window_s} s holds no sample of a {n_steps * dt_s:g} s run")
+    return slice(k0, k1)
+
+
+def joint_metrics(error_rad: np.ndarray, torque_nm: np.ndarray, torque_limit_nm,
+                  dt_s: float, window_s: tuple[float, float]) -> list[dict]:
+    """Per joint: RMS and max |error| in the window, max |torque| and saturated fraction over the run.
+
+    A step counts as saturated when |torque| >= limit * (1 - 1e-9).
+    """
+    error_rad = np.asarray(error_rad, dtype=float)
+    torque_nm = np.asarray(torque_nm, dtype=float)
+    limit = np.asarray(torque_limit_nm, dtype=float)
+    w = window_slice(error_rad.shape[0], dt_s, window_s)
+    ew = error_rad[w]
+    rms = np.sqrt(np.mean(ew**2, axis=0))
+    emax = np.max(np.abs(ew), axis=0)
+    tmax = np.max(np.abs(torque_nm), axis=0)
+    sat = np.mean(np.abs(torque_nm) >= limit * (1.0 - 1e-9), axis=0)
+    return [
+        {
+            "rms_error_rad": float(rms[j]),
+            "max_abs_error_rad": float(emax[j]),
+            "max_abs_torque_nm": float(tmax[j]),
+            "torque_limit_nm": float(limit[j]),
+            "saturated_fraction": float(sat[j]),
+        }
+        for j in range(error_rad.shape[1])
+    ]

@@ -1,0 +1,78 @@
+"""Desired joint trajectories of the paper, eq. 27 with Table 1.
+
+x_d(k) = c (1 - exp(-d (kT)^3)) sin(w kT), with kT in seconds. The printed
+exponent ``e^{d k T^3}`` is read as ``exp(-d (kT)^3)`` (see
+``../shared/reference/paper_notes.md``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class ReferenceSample:
+    """What one joint controller needs from the reference at step k.
+
+    position_rad: x_d(k); velocity_rad_s: dx_d/dt at kT (analytic);
+    position_ahead_rad: x_d(k+2), the preview used by the virtual control.
+    """
+
+    position_rad: float
+    velocity_rad_s: float
+    position_ahead_rad: float
+
+
+class Reference:
+    """Eq. 27 for N joints.
+
+    Parameters
+    ----------
+    amplitude_rad, envelope_rate_per_s3, frequency_rad_s : array_like, shape (N,)
+        c_i [rad], d_i [1/s^3], w_i [rad/s] of Table 1.
+    dt_s : float
+        Sampling time T [s].
+    preview_steps : int
+        How far ahead ``position_ahead_rad`` looks (the paper's k+2).
+    """
+
+    def __init__(self, amplitude_rad, envelope_rate_per_s3, frequency_rad_s,
+                 dt_s: float, preview_steps: int = 2):
+        self.c = np.asarray(amplitude_rad, dtype=float)
+        self.d = np.asarray(envelope_rate_per_s3, dtype=float)
+        self.w = np.asarray(frequency_rad_s, dtype=float)
+        if not (self.c.shape == self.d.shape == self.w.shape) or self.c.ndim != 1:
+            raise ValueError("reference parameters must be 1-D arrays of equal length")
+        self.dt_s = float(dt_s)
+        self.preview_steps = int(preview_steps)
+
+    @property
+    def n_joints(self) -> int:
+        return self.c.size
+
+    def position(self, k) -> np.ndarray:
+        """x_d at step(s) k [rad]: shape (N,) for scalar k, (len(k), N) for an array."""
+        t = np.asarray(k, dtype=float)[..., None] * self.dt_s
+        return self.c * (1.0 - np.exp(-self.d * t**3)) * np.sin(self.w * t)
+
+    def velocity(self, k) -> np.ndarray:
+        """Analytic dx_d/dt at step(s) k [rad/s], same shapes as :meth:`position`."""
+        t = np.asarray(k, dtype=float)[..., None] * self.dt_s
+        env = 1.0 - np.exp(-self.d * t**3)
+        denv = 3.0 * self.d * t**2 * np.exp(-self.d * t**3)
+        return self.c * (denv * np.sin(self.w * t) + env * self.w * np.cos(self.w * t))
+
+    def sample(self, joint: int, k: int) -> ReferenceSample:
+        """Reference of one joint at step k, with the k + preview_steps preview."""
+        now = self.position(k)[joint]
+        vel = self.velocity(k)[joint]
+        ahead = self.position(k + self.preview_steps)[joint]
+        return ReferenceSample(float(now), float(vel), float(ahead))
+
+    def samples(self, k: int) -> list[ReferenceSample]:
+        """All joints' samples at step k (one evaluation per quantity)."""
+        now = self.position(k)
+        vel = self.velocity(k)
+        ahead = self.position(k + self.preview_steps)
+        return [ReferenceSample(float(a), float(b), float(c)) for a, b, c in zip(now, vel, ahead)]

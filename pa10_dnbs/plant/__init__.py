@@ -1,0 +1,21 @@
+"""PA10-7C(E) plant backed by PyBullet (the only module that imports pybullet)."""
+
+from pa10_dnbs.plant.pybullet_plant import (
+    COULOMB_NM,
+    N_JOINTS,
+    ROTOR_INERTIA_KGM2,
+    TORQUE_LIMIT_NM,
+    VISCOUS_NMS_PER_RAD,
+    PlantParams,
+    PyBulletPA10Plant,
+)
+
+__all__ = [
+    "COULOMB_NM",
+    "N_JOINTS",
+    "ROTOR_INERTIA_KGM2",
+    "TORQUE_LIMIT_NM",
+    "VISCOUS_NMS_PER_RAD",
+    "PlantParams",
+    "PyBulletPA10Plant",
+]

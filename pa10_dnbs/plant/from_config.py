@@ -1,0 +1,57 @@
+"""Build the PyBullet plant and its initial state from a validated config dict."""
+from __future__ import annotations
+
+import os
+import sys
+from contextlib import contextmanager
+
+import numpy as np
+
+from .pybullet_plant import PlantParams, PyBulletPA10Plant
+
+
+@contextmanager
+def _quiet_c_stdout():
+    """Hide what PyBullet's C code prints on stdout ("argv[0]=", build time)."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 1)
+        yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+def open_client(gui: bool = False):
+    """A private PyBullet client (pybullet_utils BulletClient): DIRECT unless the GUI is asked for."""
+    with _quiet_c_stdout():
+        import pybullet
+        from pybullet_utils.bullet_client import BulletClient
+
+        return BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
+
+
+def plant_from_config(cfg: dict, client: BulletClient) -> PyBulletPA10Plant:
+    """Plant with ``cfg['plant']`` parameters, reset to the configured initial state."""
+    p = cfg["plant"]
+    params = PlantParams(
+        dt_s=cfg["simulation"]["dt_s"],
+        gravity_mps2=p["gravity_mps2"],
+        rotor_inertia_kgm2=p["rotor_inertia_kgm2"],
+        viscous_nms_per_rad=p["viscous_nms_per_rad"],
+        coulomb_nm=p["coulomb_nm"],
+        coulomb_smoothing_rad_s=p["coulomb_smoothing_rad_s"],
+        torque_limit_nm=p["torque_limit_nm"],
+    )
+    plant = PyBulletPA10Plant(client, p["urdf"], params)
+    q0, qd0 = initial_state(cfg)
+    plant.reset(q0, qd0)
+    return plant
+
+
+def initial_state(cfg: dict) -> tuple[np.ndarray, np.ndarray]:
+    """x1(0) = x_d(0) + offset (x_d(0) = 0 for eq. 27), x2(0) = configured velocity; (7,) each."""
+    sim = cfg["simulation"]
+    return np.array(sim["initial_position_offset_rad"], float), np.array(sim["initial_velocity_rad_s"], float)

@@ -1,0 +1,1 @@
+"""Metrics files, figures and the Markdown report of a run."""

@@ -1,0 +1,89 @@
+"""Figures like the paper's: tracking per joint (Figs. 4-10), errors (Fig. 11), torques."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from ..sim.run_data import RunData  # noqa: E402
+
+_MAX_POINTS = 4000  # plotted samples per curve; the npz keeps every step
+
+
+def _stride(n: int) -> int:
+    return max(1, n // _MAX_POINTS)
+
+
+def _grid(title: str):
+    fig, axes = plt.subplots(4, 2, figsize=(11, 11), sharex=True, constrained_layout=True)
+    fig.suptitle(title)
+    axes = axes.ravel()
+    axes[-1].axis("off")
+    return fig, axes
+
+
+def tracking_figure(run: RunData, path: Path) -> None:
+    """Reference (solid) and actual (dashed) angle per joint, as Figs. 4-10."""
+    s = _stride(run.n_steps)
+    t = run.time_s[::s]
+    fig, axes = _grid(f"Trajectory tracking ({run.controller.upper()})")
+    for j, name in enumerate(run.joint_names):
+        ax = axes[j]
+        ax.plot(t, run.reference_rad[::s, j], "-", color="k", lw=1.2, label="reference $x_{d}$")
+        ax.plot(t, run.position_rad[::s, j], "--", color="tab:red", lw=1.2, label="actual $x_1$")
+        ax.set_ylabel(f"{name} [rad]")
+        ax.grid(alpha=0.3)
+    axes[0].legend(loc="upper left", fontsize=8)
+    for ax in axes[5:7]:
+        ax.set_xlabel("time [s]")
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def error_figure(runs: list[RunData], path: Path, window_s: tuple[float, float] | None = None) -> None:
+    """Tracking error x_d - x1 per joint (Fig. 11); several runs are overlaid for comparison."""
+    fig, axes = _grid("Tracking errors " + " vs ".join(r.controller.upper() for r in runs))
+    for run in runs:
+        s = _stride(run.n_steps)
+        for j, name in enumerate(run.joint_names):
+            axes[j].plot(run.time_s[::s], run.error_rad[::s, j], lw=1.0, label=run.controller.upper())
+    for j, name in enumerate(runs[0].joint_names):
+        ax = axes[j]
+        ax.set_ylabel(f"{name} error [rad]")
+        ax.grid(alpha=0.3)
+        if window_s is not None:
+            ax.axvspan(*window_s, color="0.9", zorder=0)
+            lo, hi = window_s
+            vals = [np.abs(r.error_rad[int(lo / r.dt_s):int(hi / r.dt_s), j]).max(initial=0) for r in runs]
+            lim = 4 * max(vals) if max(vals) > 0 else None
+            if lim and np.isfinite(lim):
+                ax.set_ylim(-lim, lim)  # zoom on the metrics window; the transient runs off the top
+    axes[0].legend(loc="upper right", fontsize=8)
+    for ax in axes[5:7]:
+        ax.set_xlabel("time [s]")
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def torque_figure(run: RunData, path: Path) -> None:
+    """Applied torque per joint with its Table 2 limits (dotted)."""
+    s = _stride(run.n_steps)
+    t = run.time_s[::s]
+    fig, axes = _grid(f"Applied torques ({run.controller.upper()}) and Table 2 limits")
+    for j, name in enumerate(run.joint_names):
+        ax = axes[j]
+        ax.plot(t, run.torque_nm[::s, j], lw=1.0, color="tab:blue")
+        lim = run.torque_limit_nm[j]
+        ax.axhline(lim, ls=":", color="k")
+        ax.axhline(-lim, ls=":", color="k")
+        ax.set_ylim(-1.15 * lim, 1.15 * lim)
+        ax.set_ylabel(f"{name} [N m]")
+        ax.grid(alpha=0.3)
+    for ax in axes[5:7]:
+        ax.set_xlabel("time [s]")
+    fig.savefig(path, dpi=90)
+    plt.close(fig)

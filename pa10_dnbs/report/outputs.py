@@ -1,0 +1,83 @@
+"""Write a run's outputs into a directory atomically: all files or none.
+
+Files go to a temporary sibling directory that is renamed into place only
+when everything was written; an existing directory is replaced only with
+``force``.
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+
+from ..sim.run_data import RunData
+from .figures import error_figure, torque_figure, tracking_figure
+from .markdown import report_markdown
+
+
+class OutputExistsError(FileExistsError):
+    """The output directory exists and ``--force`` was not given."""
+
+
+def check_output_dir(out: Path, force: bool) -> None:
+    """Fail early, before any work, if ``out`` exists and may not be replaced."""
+    if out.exists() and not force:
+        raise OutputExistsError(f"output directory exists: {out} (use --force to replace it)")
+
+
+@contextmanager
+def atomic_output_dir(out: Path, force: bool):
+    """Yield a temporary directory; on success it replaces ``out``, on error it is removed."""
+    out = Path(out)
+    check_output_dir(out, force)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+    try:
+        yield tmp
+        if out.exists():
+            old = out.with_name(f".{out.name}.old-{os.getpid()}")
+            out.rename(old)
+            tmp.rename(out)
+            shutil.rmtree(old)
+        else:
+            tmp.rename(out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def write_run(directory: Path, run: RunData, metrics: dict) -> list[tuple[str, str]]:
+    """metrics.json, timeseries.npz and the three figures of one run; returns (caption, file) pairs."""
+    directory.mkdir(parents=True, exist_ok=True)
+    (directory / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
+    run.save_npz(directory / "timeseries.npz")
+    tag = run.controller.upper()
+    figs = [(f"{tag}: reference (solid) and actual (dashed) angles, Figs. 4-10", "tracking.png"),
+            (f"{tag}: tracking errors, Fig. 11 (metrics window shaded)", "errors.png"),
+            (f"{tag}: applied torques and Table 2 limits", "torques.png")]
+    tracking_figure(run, directory / "tracking.png")
+    error_figure([run], directory / "errors.png", tuple(metrics["window_s"]))
+    torque_figure(run, directory / "torques.png")
+    return figs
+
+
+def write_report(directory: Path, runs: list[RunData], metrics: list[dict], title: str,
+                 notes: list[str]) -> None:
+    """A single run's files at the top of ``directory``; several runs in sub-directories plus a comparison."""
+    if len(runs) == 1:
+        figs = write_run(directory, runs[0], metrics[0])
+    else:
+        figs = []
+        for run, m in zip(runs, metrics):
+            sub = run.controller
+            figs += [(c, f"{sub}/{f}") for c, f in write_run(directory / sub, run, m)]
+        error_figure(runs, directory / "errors_compare.png", tuple(metrics[0]["window_s"]))
+        figs.insert(0, ("Tracking errors of " + " and ".join(r.controller.upper() for r in runs)
+                        + " overlaid (metrics window shaded)", "errors_compare.png"))
+        (directory / "summary.json").write_text(json.dumps(
+            {m["controller"]: {"worst_rms_error_rad": m["worst_rms_error_rad"],
+                               "metrics": f"{m['controller']}/metrics.json"} for m in metrics}, indent=2) + "\n")
+    (directory / "report.md").write_text(report_markdown(metrics, figs, title, notes))

@@ -1,0 +1,1 @@
+"""In-process closed-loop simulation (no ROS)."""

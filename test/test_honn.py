@@ -1,0 +1,47 @@
+"""HONN of eq. 3-4: the regressor, and H = dphi/dw checked by finite differences."""
+import numpy as np
+import pytest
+
+from pa10_dnbs.core.honn import HONN, monomial_exponents
+
+
+def test_monomials_up_to_degree_two_of_three_inputs():
+    e = monomial_exponents(3, 2)
+    assert e.shape == (10, 3)
+    assert e[0].tolist() == [0, 0, 0]  # bias first
+    assert {tuple(r) for r in e} == {r for r in np.ndindex(3, 3, 3) if sum(r) <= 2}
+
+
+def test_regressor_is_product_of_tanh_powers():
+    net = HONN([[0, 0], [1, 0], [0, 1], [2, 1], [0, 3]], input_scale=[2.0, 0.5])
+    z = np.array([0.7, -0.3])
+    s = np.tanh(z / [2.0, 0.5])
+    np.testing.assert_allclose(net.regressor(z), [1, s[0], s[1], s[0] ** 2 * s[1], s[1] ** 3], rtol=1e-15)
+
+
+@pytest.mark.parametrize("degree", [1, 2, 3])
+def test_H_equals_finite_difference_of_output(degree):
+    rng = np.random.default_rng(degree)
+    net = HONN(monomial_exponents(3, degree), input_scale=[3.0, 3.0, 3.0])
+    w = rng.normal(size=net.n_terms)
+    z = rng.normal(size=3)
+    H = net.regressor(z)
+    h = 1e-6
+    fd = np.array([(HONN.output(w + h * ei, net.regressor(z)) - HONN.output(w - h * ei, net.regressor(z))) / (2 * h)
+                   for ei in np.eye(net.n_terms)])
+    np.testing.assert_allclose(H, fd, rtol=1e-7, atol=1e-9)
+
+
+def test_regressor_does_not_alias_between_calls():
+    net = HONN(monomial_exponents(2, 2), input_scale=[1.0, 1.0])
+    a = net.regressor([0.1, 0.2])
+    a_copy = a.copy()
+    net.regressor([0.5, -0.9])
+    np.testing.assert_array_equal(a, a_copy)
+
+
+def test_bad_structure_rejected():
+    with pytest.raises(ValueError):
+        HONN([[1, 0, 0]], input_scale=[1.0, 1.0])
+    with pytest.raises(ValueError):
+        HONN([[1, 0]], input_scale=[1.0, 0.0])
