@@ -5,10 +5,11 @@ Eq. 7-9 / 13-16 of the paper with m = 1:
     K = P H M
     w <- w + eta K e
     P <- P - K H^T P + Q
-P stays exactly symmetric: the correction is computed as (P H)(P H)^T M.
+P stays exactly symmetric: the correction is computed as v v^T with v = P H sqrt(M).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,6 +46,8 @@ class EKFTrainer:
         self.P = np.eye(n) * params.p0
         self._P_diag = self.P.reshape(-1)[:: n + 1]  # a view: adds Q in place
         self._outer = np.empty((n, n))
+        self._v = np.empty(n)           # P H sqrt(M)
+        self._v_col = self._v[:, None]  # the same buffer as a column (a view, made once)
         self._eta, self._q, self._r = params.eta, params.q, params.r
 
     def update(self, H: np.ndarray, error: float) -> float:
@@ -55,9 +58,9 @@ class EKFTrainer:
         PH = self.P @ H
         hph = float(H @ PH)
         m = 1.0 / (self._r + hph)
-        self.w += (self._eta * m * error) * PH
-        outer = np.multiply(PH[:, None], PH, out=self._outer)  # (PH)(PH)^T, exactly symmetric
-        outer *= m
-        self.P -= outer
+        sqrt_m = math.sqrt(m)
+        v = np.multiply(PH, sqrt_m, out=self._v)
+        self.w += (self._eta * sqrt_m * error) * v          # eta K e, K = P H M
+        self.P -= np.multiply(self._v_col, v, out=self._outer)  # K H^T P = v v^T: exactly symmetric
         self._P_diag += self._q
         return hph * m

@@ -6,6 +6,7 @@ The output is linear in w, so the EKF's H = d phi / d w = S(z).
 """
 from __future__ import annotations
 
+import math
 from itertools import product
 
 import numpy as np
@@ -53,7 +54,7 @@ class HONN:
             idx = [j + 1 for j, d in enumerate(row) for _ in range(d)]
             factors[i, :len(idx)] = idx
         self._factor_cols = [np.ascontiguousarray(factors[:, c]) for c in range(factors.shape[1])]
-        self._inv_scale = 1.0 / self.input_scale
+        self._inv_scale = tuple(float(1.0 / x) for x in self.input_scale)
         self._ext = np.ones(self.input_scale.size + 1)
 
     @property
@@ -64,7 +65,8 @@ class HONN:
     def regressor(self, z) -> np.ndarray:
         """S(z), shape (L,), for inputs z of shape (p,)."""
         ext = self._ext
-        np.tanh(np.multiply(z, self._inv_scale), out=ext[1:])
+        for j, (zj, inv) in enumerate(zip(z, self._inv_scale), start=1):
+            ext[j] = math.tanh(zj * inv)
         cols = self._factor_cols
         out = ext.take(cols[0])
         for c in cols[1:]:

@@ -1,32 +1,15 @@
 """Build the PyBullet plant and its initial state from a validated config dict."""
 from __future__ import annotations
 
-import os
-import sys
-from contextlib import contextmanager
-
 import numpy as np
 
 from .pybullet_plant import PlantParams, PyBulletPA10Plant
-
-
-@contextmanager
-def _quiet_c_stdout():
-    """Hide what PyBullet's C code prints on stdout ("argv[0]=", build time)."""
-    sys.stdout.flush()
-    saved = os.dup(1)
-    try:
-        with open(os.devnull, "wb") as null:
-            os.dup2(null.fileno(), 1)
-        yield
-    finally:
-        os.dup2(saved, 1)
-        os.close(saved)
+from .quiet_stdout import quiet_c_stdout
 
 
 def open_client(gui: bool = False):
     """A private PyBullet client (pybullet_utils BulletClient): DIRECT unless the GUI is asked for."""
-    with _quiet_c_stdout():
+    with quiet_c_stdout():
         import pybullet
         from pybullet_utils.bullet_client import BulletClient
 

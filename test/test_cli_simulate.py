@@ -1,0 +1,80 @@
+"""``pa10-dnbs simulate`` end to end: outputs, bad input (exit 2, nothing written), --force."""
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from pa10_dnbs.config import default_config_path
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+def _cli(*args, cwd=None):
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    return subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", *map(str, args)], capture_output=True,
+                          text=True, env=env, cwd=cwd, timeout=300)
+
+
+def test_simulate_both_writes_metrics_figures_report_timeseries(tmp_path):
+    out = tmp_path / "run"
+    r = _cli("simulate", "--controller", "both", "--duration", "1.0", "--out", out, "--no-progress")
+    assert r.returncode == 0, r.stderr
+    for sub in ("dnbs", "pid"):
+        m = json.loads((out / sub / "metrics.json").read_text())
+        assert m["controller"] == sub and m["duration_s"] == pytest.approx(1.0) and m["dt_s"] == 0.001
+        assert m["window_s"] == [0.5, 1.0]  # shorter than the configured [10, 20]: second half
+        assert len(m["joints"]) == 7 and m["joints"][0]["name"] == "s1"
+        assert {"rms_error_rad", "max_abs_error_rad", "max_abs_torque_nm", "torque_limit_nm",
+                "saturated_fraction"} <= set(m["joints"][0])
+        assert m["wall_time_s"] > 0 and m["real_time_factor"] > 0
+        for f in ("tracking.png", "errors.png", "torques.png", "timeseries.npz"):
+            assert (out / sub / f).stat().st_size > 1000
+    report = (out / "report.md").read_text()
+    assert "DNBS RMS" in report and "PID RMS" in report and "errors_compare.png" in report
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temporary left
+
+
+def _bad_config(tmp_path, edit):
+    d = yaml.safe_load(default_config_path().read_text())
+    d["plant"]["urdf"] = str((default_config_path().parent / d["plant"]["urdf"]).resolve())
+    edit(d)
+    p = tmp_path / "bad.yaml"
+    p.write_text(yaml.safe_dump(d))
+    return p
+
+
+@pytest.mark.parametrize("edit,named", [
+    (lambda d: d["dnbs"].__setitem__("extra", 1), "dnbs.extra"),
+    (lambda d: d["pid"].__setitem__("kd", "high"), "pid.kd"),
+    (lambda d: d["simulation"].__setitem__("dt_s", -0.001), "simulation.dt_s"),
+    (lambda d: d["dnbs"]["alpha_net"].__setitem__("q", float("inf")), "dnbs.alpha_net.q"),
+    (lambda d: d["plant"].__setitem__("urdf", "/no/such/pa10.urdf"), "/no/such/pa10.urdf"),
+])
+def test_bad_config_exits_2_names_key_writes_nothing(tmp_path, edit, named):
+    out = tmp_path / "out"
+    r = _cli("simulate", "--config", _bad_config(tmp_path, edit), "--duration", "0.5", "--out", out)
+    assert r.returncode == 2
+    assert named in r.stderr and "Traceback" not in r.stderr
+    assert not out.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.yaml"]
+
+
+def test_bad_duration_exits_2(tmp_path):
+    r = _cli("simulate", "--duration", "-3", "--out", tmp_path / "o")
+    assert r.returncode == 2 and "--duration" in r.stderr and not (tmp_path / "o").exists()
+
+
+def test_existing_output_needs_force(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "keep.txt").write_text("mine")
+    r = _cli("simulate", "--controller", "pid", "--duration", "0.2", "--out", out)
+    assert r.returncode == 2 and "--force" in r.stderr
+    assert (out / "keep.txt").read_text() == "mine"
+    r = _cli("simulate", "--controller", "pid", "--duration", "0.2", "--out", out, "--force", "--no-progress")
+    assert r.returncode == 0, r.stderr
+    assert not (out / "keep.txt").exists() and (out / "metrics.json").exists()

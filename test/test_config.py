@@ -1,0 +1,77 @@
+"""Config validation: every bad value is rejected with the key named."""
+import copy
+import math
+
+import pytest
+import yaml
+
+from pa10_dnbs.config import ConfigError, default_config_path, load_config
+
+
+def _write(tmp_path, raw):
+    p = tmp_path / "c.yaml"
+    p.write_text(yaml.safe_dump(raw))
+    return p
+
+
+@pytest.fixture
+def raw():
+    d = yaml.safe_load(default_config_path().read_text())
+    d["plant"]["urdf"] = str((default_config_path().parent / d["plant"]["urdf"]).resolve())
+    return d
+
+
+def test_default_config_is_valid():
+    cfg = load_config(default_config_path())
+    assert cfg["simulation"]["dt_s"] == 0.001
+    assert len(cfg["dnbs"]["torque_net"]["eta"]) == 7
+
+
+@pytest.mark.parametrize("path,value,match", [
+    (("dnbs", "torque_net", "eta"), -1.0, r"dnbs\.torque_net\.eta: must be > 0"),
+    (("dnbs", "alpha_net", "p0"), 0, r"dnbs\.alpha_net\.p0: must be > 0"),
+    (("simulation", "dt_s"), float("nan"), r"simulation\.dt_s: must be finite"),
+    (("plant", "torque_limit_nm"), [232, 232, 100, 100, 14.5, 14.5, math.inf], r"plant\.torque_limit_nm\[6\]: must be finite"),
+    (("plant", "viscous_nms_per_rad"), "ten", r"plant\.viscous_nms_per_rad: expected a number"),
+    (("simulation", "seed"), 1.5, r"simulation\.seed: expected an integer"),
+    (("dnbs", "anti_windup"), "yes", r"dnbs\.anti_windup: expected true or false"),
+    (("pid", "kp"), [1, 2, 3], r"pid\.kp: expected 7 values"),
+    (("simulation", "window_s"), [5.0, 2.0], r"simulation\.window_s: t1 must be greater"),
+    (("simulation", "duration_s"), 5.0, r"simulation\.window_s: ends at 20 s, after simulation\.duration_s"),
+    (("simulation", "initial_velocity_rad_s"), True, r"simulation\.initial_velocity_rad_s: expected a number"),
+])
+def test_bad_values_name_the_key(tmp_path, raw, path, value, match):
+    d = copy.deepcopy(raw)
+    node = d
+    for k in path[:-1]:
+        node = node[k]
+    node[path[-1]] = value
+    with pytest.raises(ConfigError, match=match):
+        load_config(_write(tmp_path, d))
+
+
+def test_unknown_and_missing_keys(tmp_path, raw):
+    d = copy.deepcopy(raw)
+    d["dnbs"]["torque_net"]["etta"] = 1.0
+    with pytest.raises(ConfigError, match=r"dnbs\.torque_net\.etta: unknown key"):
+        load_config(_write(tmp_path, d))
+    d = copy.deepcopy(raw)
+    del d["plant"]["gravity_mps2"]
+    with pytest.raises(ConfigError, match=r"plant\.gravity_mps2: missing key"):
+        load_config(_write(tmp_path, d))
+
+
+def test_missing_urdf_and_missing_file(tmp_path, raw):
+    d = copy.deepcopy(raw)
+    d["plant"]["urdf"] = "nowhere/robot.urdf"
+    with pytest.raises(ConfigError, match=r"plant\.urdf: file not found: .*nowhere/robot\.urdf"):
+        load_config(_write(tmp_path, d))
+    with pytest.raises(ConfigError, match="config file not found"):
+        load_config(tmp_path / "absent.yaml")
+
+
+def test_not_yaml(tmp_path):
+    p = tmp_path / "bad.yaml"
+    p.write_text("simulation: [unclosed\n")
+    with pytest.raises(ConfigError, match="not valid YAML"):
+        load_config(p)
