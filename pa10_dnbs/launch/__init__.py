@@ -1,0 +1,1 @@
+"""Starting, watching and stopping the node graph (no launch package: plain subprocesses)."""

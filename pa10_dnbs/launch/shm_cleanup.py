@@ -1,0 +1,61 @@
+"""Remove the Fast DDS shared-memory segments a run left behind, and only those.
+
+Fast DDS keeps segments in /dev/shm (``fastrtps_<hex>``, ``fastrtps_port<N>``
+with ``_el`` lock files and ``sem.fastrtps_port<N>_mutex`` semaphores). A clean
+exit removes them; a killed process does not. Port segments are numbered
+across all domains, so deleting by pattern would break other live graphs: a
+segment is removed only if it appeared during this run and no live process
+maps it (a semaphore counts as in use while its port segment is mapped).
+"""
+from __future__ import annotations
+
+import glob
+import os
+
+SHM_DIR = "/dev/shm"
+
+
+def fastdds_segments() -> set[str]:
+    """Names of the Fast DDS files in /dev/shm now."""
+    try:
+        return {f for f in os.listdir(SHM_DIR) if "fastrtps" in f or "fast_datasharing" in f}
+    except FileNotFoundError:
+        return set()
+
+
+def _mapped_segments() -> set[str]:
+    names = set()
+    for maps in glob.glob("/proc/[0-9]*/maps"):
+        try:
+            with open(maps) as fh:
+                for line in fh:
+                    i = line.find(SHM_DIR + "/")
+                    if i >= 0:
+                        names.add(line[i + len(SHM_DIR) + 1:].split()[0])
+        except OSError:
+            continue
+    return names
+
+
+def _owner(name: str) -> str:
+    """The segment whose mapping keeps ``name`` in use."""
+    if name.startswith("sem.") and name.endswith("_mutex"):
+        return name[4:-6]
+    if name.endswith("_el"):
+        return name[:-3]
+    return name
+
+
+def remove_stale(created_during_run: set[str]) -> list[str]:
+    """Delete the given segments that no live process uses; return what was removed."""
+    busy = _mapped_segments()
+    removed = []
+    for name in sorted(created_during_run):
+        if name in busy or _owner(name) in busy:
+            continue
+        try:
+            os.unlink(os.path.join(SHM_DIR, name))
+            removed.append(name)
+        except OSError:
+            pass
+    return removed

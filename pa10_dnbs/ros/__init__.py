@@ -1,0 +1,1 @@
+"""ROS 2 node graph: thin nodes around the numeric core and the plant."""

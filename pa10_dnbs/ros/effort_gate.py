@@ -1,0 +1,80 @@
+"""The plant's side of the loop, without ROS: which torque to apply at each step.
+
+Lockstep: step k is applied when every joint's effort answering state k has
+arrived, or when the timeout expires; a missing (or non-finite) effort is
+replaced by the joint's last applied torque ("hold") or zero, and counted.
+Realtime: at the tick that advances the plant from state k to k+1, the latest
+effort of each joint is applied (zero-order hold); a joint whose effort
+answering state k (the state published one tick earlier) has not arrived
+counts a miss.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+class EffortGate:
+    """Collects efforts by step for ``n_joints`` joints."""
+
+    def __init__(self, n_joints: int, on_missing: str = "hold"):
+        if on_missing not in ("hold", "zero"):
+            raise ValueError(f"on_missing must be 'hold' or 'zero', got {on_missing!r}")
+        self.n = n_joints
+        self.on_missing = on_missing
+        self.step = 0
+        self._efforts = np.zeros(n_joints)
+        self._have = np.zeros(n_joints, dtype=bool)
+        self.applied = np.zeros(n_joints)
+        self.latest = np.zeros(n_joints)
+        self.latest_step = np.full(n_joints, -1, dtype=np.int64)
+        self.timeouts = np.zeros(n_joints, dtype=np.int64)     # lockstep: effort replaced after the timeout
+        self.nonfinite = np.zeros(n_joints, dtype=np.int64)    # efforts rejected for NaN/Inf
+        self.stale = np.zeros(n_joints, dtype=np.int64)        # efforts for a step already applied
+        self.misses = np.zeros(n_joints, dtype=np.int64)       # realtime: previous state not answered at a tick
+        self.ticks = 0
+        self.ticks_all_on_time = 0
+
+    def offer(self, joint: int, step: int, effort: float) -> bool:
+        """Record an effort; True when all joints have answered the current step."""
+        if not math.isfinite(effort):
+            self.nonfinite[joint] += 1
+            return False
+        if step > self.latest_step[joint]:
+            self.latest[joint] = effort
+            self.latest_step[joint] = step
+        if step != self.step:
+            if step < self.step:
+                self.stale[joint] += 1
+            return False
+        self._efforts[joint] = effort
+        self._have[joint] = True
+        return bool(self._have.all())
+
+    @property
+    def missing(self) -> list[int]:
+        """Joints that have not answered the current step."""
+        return [j for j in range(self.n) if not self._have[j]]
+
+    def take_lockstep(self, timed_out: bool = False) -> np.ndarray:
+        """Torques for the current step; with ``timed_out`` the missing joints are filled in and counted."""
+        if not timed_out and not self._have.all():
+            raise RuntimeError("take_lockstep before all efforts arrived")
+        for j in np.flatnonzero(~self._have):
+            self.timeouts[j] += 1
+            self._efforts[j] = self.applied[j] if self.on_missing == "hold" else 0.0
+        self.applied = self._efforts.copy()
+        self._have[:] = False
+        self.step += 1
+        return self.applied
+
+    def take_realtime(self) -> np.ndarray:
+        """Torques at the tick that applies step ``self.step``: the latest efforts, counting misses."""
+        missed = self.latest_step < self.step
+        self.misses += missed
+        self.ticks += 1
+        self.ticks_all_on_time += not missed.any()
+        self.applied = self.latest.copy()
+        self.step += 1
+        return self.applied

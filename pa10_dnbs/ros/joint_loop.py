@@ -1,0 +1,60 @@
+"""One joint's control loop as the node runs it, without ROS.
+
+Receives the joint's state for step k and reference points by step, and
+answers each state exactly once with an effort. A state that arrives before
+its references (x_d(k) and x_d(k + preview)) waits for them, so the answer
+does not depend on message timing; a state seen again (a resend) gets the
+same effort back without training the networks twice.
+"""
+from __future__ import annotations
+
+from ..core.reference import ReferenceSample
+
+
+class JointLoop:
+    """Bookkeeping around one joint controller (DNBS or PID, anything with ``step``)."""
+
+    def __init__(self, controller, preview_steps: int):
+        self.controller = controller
+        self.preview_steps = preview_steps
+        self._ref_pos: dict[int, float] = {}
+        self._ref_vel: dict[int, float] = {}
+        self._pending: dict[int, tuple[float, float]] = {}
+        self.last_step = -1
+        self.last_effort = 0.0
+        self.duplicates = 0
+        self.out_of_order = 0
+
+    def add_reference(self, first_step: int, positions, velocities) -> list[tuple[int, float]]:
+        """Store points for steps first_step, first_step + 1, ...; answer states that were waiting."""
+        for i, (p, v) in enumerate(zip(positions, velocities)):
+            self._ref_pos[first_step + i] = p
+            self._ref_vel[first_step + i] = v
+        return self._drain()
+
+    def on_state(self, step: int, position: float, velocity: float) -> list[tuple[int, float]]:
+        """Answer state ``step``: a list of (step, effort) ready to publish (empty while waiting)."""
+        if step == self.last_step:
+            self.duplicates += 1
+            return [(step, self.last_effort)]
+        if step < self.last_step:
+            self.out_of_order += 1
+            return []
+        self._pending[step] = (position, velocity)
+        return self._drain()
+
+    def _drain(self) -> list[tuple[int, float]]:
+        out = []
+        for step in sorted(self._pending):
+            ahead = step + self.preview_steps
+            if step not in self._ref_pos or ahead not in self._ref_pos:
+                break
+            q, qd = self._pending.pop(step)
+            sample = ReferenceSample(self._ref_pos[step], self._ref_vel[step], self._ref_pos[ahead])
+            self.last_effort = self.controller.step(q, qd, sample)
+            self.last_step = step
+            out.append((step, self.last_effort))
+        if len(self._ref_pos) > 4096:  # forget references of answered steps, now and then
+            for old in [k for k in self._ref_pos if k < self.last_step]:
+                del self._ref_pos[old], self._ref_vel[old]
+        return out

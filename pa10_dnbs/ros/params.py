@@ -1,0 +1,26 @@
+"""Node parameters: declared in code with defaults, valued from the command line or a params file."""
+from __future__ import annotations
+
+from rclpy.node import Node
+
+from ..config import ConfigError, default_config_path, load_config
+
+
+def declare(node: Node, defaults: dict) -> dict:
+    """Declare every parameter of ``defaults`` and return their current values."""
+    for name, value in defaults.items():
+        node.declare_parameter(name, value)
+    return {name: node.get_parameter(name).value for name in defaults}
+
+
+def load_node_config(path: str) -> dict:
+    """The numeric config (config/*.yaml) a node runs with; '' means the shipped default."""
+    try:
+        return load_config(path or default_config_path())
+    except ConfigError as exc:
+        raise SystemExit(f"config error: {exc}") from None
+
+
+def check_choice(name: str, value, choices) -> None:
+    if value not in choices:
+        raise ValueError(f"parameter {name} must be one of {', '.join(map(str, choices))}, got {value!r}")

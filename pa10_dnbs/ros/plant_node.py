@@ -1,0 +1,244 @@
+"""plant_node: the PyBullet PA10 plant on the wire.
+
+Publishes /clock, /joint_states (all 7: position, velocity, and as effort the
+torque applied over the step that led to this state) and per joint
+/pa10/<joint>/state (that joint only, stamped k T). Subscribes to the seven
+/pa10/<joint>/effort topics and applies them, saturated at Table 2.
+
+mode lockstep: state k+1 is computed when all efforts answering state k have
+arrived; a missing one is re-requested after ``resend_s`` and replaced (held
+or zeroed, counted) after ``effort_timeout_s``. mode realtime: the plant
+steps every T of wall time with the latest effort of each joint and counts
+the ticks at which the effort answering the previous state was missing.
+Timing figures go to ``stats_file`` (JSON) at exit.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+import time
+
+import numpy as np
+from rclpy.node import Node
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+
+from .. import JOINT_NAMES
+from ..plant.from_config import open_client, plant_from_config
+from .effort_gate import EffortGate
+from .params import check_choice, declare, load_node_config
+from .runtime import announce_ready, run_node
+from .wire import CLOCK, JOINT_STATES, StepClock, effort_topic, loop_qos, record_qos, state_topic
+
+
+class PlantNode(Node):
+    def __init__(self):
+        super().__init__("plant")
+        p = declare(self, {
+            "config_file": "", "mode": "lockstep", "duration_s": 0.0, "effort_timeout_s": 1.0,
+            "resend_s": 0.25, "on_missing_effort": "hold", "reliability": "reliable", "stats_file": "",
+            "min_joint_states_subscribers": 0, "start_timeout_s": 30.0, "settle_s": 0.3,
+        })
+        check_choice("mode", p["mode"], ("lockstep", "realtime"))
+        check_choice("on_missing_effort", p["on_missing_effort"], ("hold", "zero"))
+        check_choice("reliability", p["reliability"], ("reliable", "best_effort"))
+        self.p = p
+        cfg = load_node_config(p["config_file"])
+        self.dt = cfg["simulation"]["dt_s"]
+        duration = p["duration_s"] if p["duration_s"] > 0 else cfg["simulation"]["duration_s"]
+        self.n_steps = int(round(duration / self.dt))
+        self.clock_ = StepClock(self.dt)
+        self._client = open_client()
+        self.plant = plant_from_config(cfg, self._client)
+        self.gate = EffortGate(len(JOINT_NAMES), p["on_missing_effort"])
+        qos = loop_qos(p["reliability"])
+        self._state_pubs = [self.create_publisher(JointState, state_topic(j), qos) for j in JOINT_NAMES]
+        self._clock_pub = self.create_publisher(Clock, CLOCK, loop_qos("reliable"))
+        self._js_pub = self.create_publisher(JointState, JOINT_STATES, record_qos())
+        self._effort_subs = [
+            self.create_subscription(JointState, effort_topic(j), lambda m, i=i: self._on_effort(i, m), qos)
+            for i, j in enumerate(JOINT_NAMES)]
+        self._joint_msgs = [JointState(name=[j]) for j in JOINT_NAMES]
+        self._js = JointState(name=list(JOINT_NAMES))
+        self._clock_msg = Clock()
+        self.t_pub = np.full(self.n_steps + 1, np.nan)          # wall time state k was published [s]
+        self.latency = np.full((self.n_steps + 1, len(JOINT_NAMES)), np.nan)  # state k -> effort k [s]
+        self.resends = np.zeros(len(JOINT_NAMES), dtype=np.int64)
+        self.late_ticks = 0
+        self.finished = False
+        self.exit_code = 1  # until the run completes
+        self.wall_start = self.wall_end = math.nan
+        announce_ready("plant")
+
+    # ---------------------------------------------------------------- wire
+    def _publish_state(self, k: int, joints=None) -> None:
+        q, qd = self.plant.state
+        stamp = self.clock_.stamp(k)
+        for j in (range(len(JOINT_NAMES)) if joints is None else joints):
+            m = self._joint_msgs[j]
+            m.header.stamp = stamp
+            m.position = [float(q[j])]
+            m.velocity = [float(qd[j])]
+            self._state_pubs[j].publish(m)
+        if joints is not None:
+            return
+        self.t_pub[k] = time.perf_counter()
+        self._clock_msg.clock = stamp
+        self._clock_pub.publish(self._clock_msg)
+        js = self._js
+        js.header.stamp = stamp
+        js.position = q.tolist()
+        js.velocity = qd.tolist()
+        js.effort = self.gate.applied.tolist()
+        self._js_pub.publish(js)
+
+    def _on_effort(self, joint: int, msg: JointState) -> None:
+        k = self.clock_.step_of(msg.header.stamp)
+        if 0 <= k <= self.n_steps and math.isnan(self.latency[k, joint]):
+            self.latency[k, joint] = time.perf_counter() - self.t_pub[k]
+        if self.gate.offer(joint, k, float(msg.effort[0])) and self.p["mode"] == "lockstep" and not self.finished:
+            self._advance(timed_out=False)
+
+    # ---------------------------------------------------------------- stepping
+    def _advance(self, timed_out: bool) -> None:
+        if self.p["mode"] == "lockstep":
+            tau = self.gate.take_lockstep(timed_out)
+        else:
+            tau = self.gate.take_realtime()
+        self.plant.step(tau)
+        k = self.gate.step
+        self._publish_state(k)
+        if k >= self.n_steps:
+            self.finished = True
+            self.wall_end = time.perf_counter()
+            fut = getattr(self, "_finished_future", None)
+            if fut is not None and not fut.done():
+                fut.set_result(None)
+
+    def _wait_for_graph(self, executor, stop) -> bool:
+        t0 = time.perf_counter()
+        need_js = self.p["min_joint_states_subscribers"]
+        while not stop.done():
+            lacking = [f"{state_topic(j)} (no subscriber)" for j, pub in zip(JOINT_NAMES, self._state_pubs)
+                       if pub.get_subscription_count() < 1]
+            lacking += [f"{effort_topic(j)} (no publisher)" for j, sub in zip(JOINT_NAMES, self._effort_subs)
+                        if sub.get_publisher_count() < 1]
+            if self._clock_pub.get_subscription_count() < 1:
+                lacking.append(f"{CLOCK} (no subscriber: reference node)")
+            if self._js_pub.get_subscription_count() < need_js:
+                lacking.append(f"{JOINT_STATES} (fewer than {need_js} subscribers)")
+            if not lacking:
+                settle_end = time.perf_counter() + self.p["settle_s"]
+                while time.perf_counter() < settle_end and not stop.done():
+                    executor.spin_once(timeout_sec=0.02)
+                return not stop.done()
+            if time.perf_counter() - t0 > self.p["start_timeout_s"]:
+                raise RuntimeError("graph incomplete after start_timeout_s: " + "; ".join(lacking))
+            executor.spin_once(timeout_sec=0.05)
+        return False
+
+    def loop(self, executor, stop) -> None:
+        if not self._wait_for_graph(executor, stop):
+            return
+        print("RUNNING plant", flush=True)
+        self.wall_start = time.perf_counter()
+        self._publish_state(0)
+        if self.p["mode"] == "lockstep":
+            self._loop_lockstep(executor, stop)
+        else:
+            self._loop_realtime(executor, stop)
+        if self.finished:
+            self.exit_code = 0
+
+    def _loop_lockstep(self, executor, stop) -> None:
+        # Callbacks drive the steps (an effort completing step k publishes k+1);
+        # a 10 ms wall-clock timer handles resends and timeouts.
+        self._last_resend = (-1, 0.0)
+        timer = self.create_timer(0.01, self._check_lockstep_timeouts)
+        finished = self._finished_future = type(stop)()
+        stop.add_done_callback(lambda _: finished.set_result(None) if not finished.done() else None)
+        executor.spin_until_future_complete(finished, timeout_sec=1e9)
+        self.destroy_timer(timer)
+
+    def _check_lockstep_timeouts(self) -> None:
+        if self.finished:
+            return
+        k = self.gate.step
+        now = time.perf_counter()
+        waited = now - self.t_pub[k]
+        if waited > self.p["effort_timeout_s"]:
+            missing = self.gate.missing
+            self.get_logger().warning(
+                f"step {k}: no effort from {', '.join(JOINT_NAMES[j] for j in missing)} after "
+                f"{self.p['effort_timeout_s']:g} s; applying {self.p['on_missing_effort']}")
+            self._advance(timed_out=True)
+        elif waited > self.p["resend_s"]:
+            step, t = self._last_resend
+            if step != k or now - t > self.p["resend_s"]:
+                missing = self.gate.missing
+                self.resends[missing] += 1
+                self._publish_state(k, joints=missing)
+                self._last_resend = (k, now)
+
+    def _loop_realtime(self, executor, stop) -> None:
+        t_next = self.t_pub[0] + self.dt
+        while not self.finished and not stop.done():
+            now = time.perf_counter()
+            if now >= t_next:
+                if now - t_next > self.dt:
+                    self.late_ticks += 1
+                self._advance(timed_out=False)
+                t_next += self.dt
+            else:
+                executor.spin_once(timeout_sec=t_next - now)
+
+    # ---------------------------------------------------------------- report
+    def stats(self) -> dict:
+        k = self.gate.step
+        wall = (self.wall_end if self.finished else time.perf_counter()) - self.wall_start
+        lat = self.latency[:k]
+        joints = []
+        for i, name in enumerate(JOINT_NAMES):
+            li = lat[:, i][np.isfinite(lat[:, i])]
+            joints.append({
+                "name": name,
+                "effort_timeouts": int(self.gate.timeouts[i]),
+                "missed_ticks": int(self.gate.misses[i]),
+                "nonfinite_efforts": int(self.gate.nonfinite[i]),
+                "stale_efforts": int(self.gate.stale[i]),
+                "resent_states": int(self.resends[i]),
+                "latency_median_us": float(np.median(li) * 1e6) if li.size else None,
+                "latency_p99_us": float(np.percentile(li, 99) * 1e6) if li.size else None,
+                "latency_max_us": float(li.max() * 1e6) if li.size else None,
+            })
+        on_time = None
+        if self.p["mode"] == "realtime" and self.gate.ticks > 0:
+            # a tick is on time when every joint's effort for the previous state had arrived
+            on_time = self.gate.ticks_all_on_time / self.gate.ticks
+        return {
+            "mode": self.p["mode"], "steps": int(k), "completed": self.finished,
+            "sim_time_s": k * self.dt, "wall_time_s": wall if math.isfinite(wall) else None,
+            "real_time_factor": (k * self.dt / wall) if wall and math.isfinite(wall) and wall > 0 else None,
+            "on_missing_effort": self.p["on_missing_effort"], "effort_timeout_s": self.p["effort_timeout_s"],
+            "late_ticks": int(self.late_ticks), "on_time_fraction": on_time,
+            "limit_hits": self.plant.limit_hits.tolist(), "joints": joints,
+        }
+
+    def close(self) -> None:
+        path = self.p["stats_file"]
+        if path:
+            tmp = f"{path}.tmp"
+            with open(tmp, "w") as f:
+                json.dump(self.stats(), f, indent=2)
+            os.replace(tmp, path)
+        self._client.disconnect()
+
+
+def main(args=None) -> int:
+    return run_node(PlantNode, args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

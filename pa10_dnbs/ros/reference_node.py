@@ -1,0 +1,66 @@
+"""reference_node: publishes each joint's desired trajectory (eq. 27, Table 1) ahead of time.
+
+On /pa10/<joint>/reference (trajectory_msgs/JointTrajectory, one joint,
+reliable + transient-local) in batches of ``batch_steps`` points; header.stamp
+is the time of the first point, time_from_start counts from it. Paced by
+/clock: it keeps at least ``lookahead_steps`` published beyond the current step.
+"""
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+from rclpy.node import Node
+from rosgraph_msgs.msg import Clock
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+from .. import JOINT_NAMES
+from ..controller_factory import build_reference
+from .params import declare, load_node_config
+from .runtime import announce_ready, run_node
+from .wire import CLOCK, StepClock, loop_qos, reference_qos, reference_topic
+
+
+class ReferenceNode(Node):
+    def __init__(self):
+        super().__init__("reference")
+        p = declare(self, {"config_file": "", "batch_steps": 100, "lookahead_steps": 150})
+        if p["batch_steps"] < 1 or p["lookahead_steps"] < 3:
+            raise ValueError("batch_steps must be >= 1 and lookahead_steps >= 3")
+        cfg = load_node_config(p["config_file"])
+        self.reference = build_reference(cfg)
+        self.clock_ = StepClock(cfg["simulation"]["dt_s"])
+        self.batch = p["batch_steps"]
+        self.lookahead = p["lookahead_steps"]
+        self.published_until = 0  # steps [0, published_until) are out
+        self._pubs = [self.create_publisher(JointTrajectory, reference_topic(j), reference_qos()) for j in JOINT_NAMES]
+        self.create_subscription(Clock, CLOCK, self._on_clock, loop_qos("reliable"))
+        self._publish_through(self.lookahead)
+        announce_ready("reference")
+
+    def _on_clock(self, msg: Clock) -> None:
+        self._publish_through(self.clock_.step_of(msg.clock) + self.lookahead)
+
+    def _publish_through(self, last_step: int) -> None:
+        while self.published_until <= last_step:
+            k0 = self.published_until
+            steps = np.arange(k0, k0 + self.batch)
+            pos = self.reference.position(steps)  # (batch, 7)
+            vel = self.reference.velocity(steps)
+            for j, (name, pub) in enumerate(zip(JOINT_NAMES, self._pubs)):
+                msg = JointTrajectory()
+                self.clock_.stamp(k0, msg.header.stamp)
+                msg.joint_names = [name]
+                msg.points = [JointTrajectoryPoint(positions=[float(pos[i, j])], velocities=[float(vel[i, j])],
+                                                   time_from_start=self.clock_.duration(i))
+                              for i in range(self.batch)]
+                pub.publish(msg)
+            self.published_until = k0 + self.batch
+
+
+def main(args=None) -> int:
+    return run_node(ReferenceNode, args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,70 @@
+"""Topic names, QoS profiles and message conversions shared by the nodes.
+
+Step k is carried as the stamp k * T (integer nanoseconds), so step and
+simulated time are the same thing on the wire.
+"""
+from __future__ import annotations
+
+from builtin_interfaces.msg import Duration, Time
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+ARM_NS = "/pa10"
+JOINT_STATES = "/joint_states"
+CLOCK = "/clock"
+
+
+def state_topic(joint: str) -> str:
+    return f"{ARM_NS}/{joint}/state"
+
+
+def effort_topic(joint: str) -> str:
+    return f"{ARM_NS}/{joint}/effort"
+
+
+def reference_topic(joint: str) -> str:
+    return f"{ARM_NS}/{joint}/reference"
+
+
+def loop_qos(reliability: str, depth: int = 10) -> QoSProfile:
+    """Per-joint 1 kHz state/effort and /clock: KEEP_LAST, volatile."""
+    rel = {"reliable": ReliabilityPolicy.RELIABLE, "best_effort": ReliabilityPolicy.BEST_EFFORT}[reliability]
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=rel,
+                      durability=DurabilityPolicy.VOLATILE)
+
+
+def reference_qos(depth: int = 20) -> QoSProfile:
+    """Reference batches: reliable and transient-local, so a late subscriber gets the recent ones."""
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+def record_qos(depth: int = 2000) -> QoSProfile:
+    """Monitoring /joint_states: reliable with a deep queue so nothing is lost."""
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.VOLATILE)
+
+
+class StepClock:
+    """Conversions between step k and ROS time for a fixed step T = dt_ns nanoseconds."""
+
+    def __init__(self, dt_s: float):
+        self.dt_ns = int(round(dt_s * 1e9))
+        if self.dt_ns <= 0:
+            raise ValueError("dt_s must be at least 1 ns")
+
+    def stamp(self, step: int, out: Time | None = None) -> Time:
+        ns = step * self.dt_ns
+        t = out if out is not None else Time()
+        t.sec, t.nanosec = divmod(ns, 1_000_000_000)
+        return t
+
+    def step_of(self, stamp: Time) -> int:
+        return round((stamp.sec * 1_000_000_000 + stamp.nanosec) / self.dt_ns)
+
+    def duration(self, steps: int) -> Duration:
+        d = Duration()
+        d.sec, d.nanosec = divmod(steps * self.dt_ns, 1_000_000_000)
+        return d
+
+    def steps_of(self, d: Duration) -> int:
+        return round((d.sec * 1_000_000_000 + d.nanosec) / self.dt_ns)
