@@ -6,6 +6,7 @@ stamp of the state it answers.
 """
 from __future__ import annotations
 
+import struct
 import sys
 
 from rclpy.node import Node
@@ -14,6 +15,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 from .. import JOINT_NAMES
 from ..controller_factory import CONTROLLER_KINDS, build_controller
+from . import joint_state_cdr
 from .joint_loop import JointLoop
 from .params import check_choice, declare, load_node_config
 from .runtime import announce_ready, run_node
@@ -31,15 +33,22 @@ class JointControllerNode(Node):
         index = JOINT_NAMES.index(self.joint)
         self.clock_ = StepClock(cfg["simulation"]["dt_s"])
         self.loop_ = JointLoop(build_controller(cfg, p["controller"], index), cfg["reference"]["preview_steps"])
-        self._out = JointState()
-        self._out.name = [self.joint]
+        self.malformed = 0
+        self._names = [self.joint]
         self._pub = self.create_publisher(JointState, effort_topic(self.joint), loop_qos(p["reliability"]))
-        self.create_subscription(JointState, state_topic(self.joint), self._on_state, loop_qos(p["reliability"]))
+        self.create_subscription(JointState, state_topic(self.joint), self._on_state, loop_qos(p["reliability"]),
+                                 raw=True)
         self.create_subscription(JointTrajectory, reference_topic(self.joint), self._on_reference, reference_qos())
         announce_ready(f"joint_controller {self.joint}")
 
-    def _on_state(self, msg: JointState) -> None:
-        self._publish(self.loop_.on_state(self.clock_.step_of(msg.header.stamp), msg.position[0], msg.velocity[0]))
+    def _on_state(self, data: bytes) -> None:
+        try:
+            sec, nanosec, _, pos, vel, _ = joint_state_cdr.decode(data)
+            q, qd = pos[0], vel[0]
+        except (ValueError, IndexError, struct.error, UnicodeDecodeError):
+            self.malformed += 1
+            return
+        self._publish(self.loop_.on_state(self.clock_.step_of_sec_nanosec(sec, nanosec), q, qd))
 
     def _on_reference(self, msg: JointTrajectory) -> None:
         first = self.clock_.step_of(msg.header.stamp)
@@ -48,11 +57,9 @@ class JointControllerNode(Node):
                                                [pt.velocities[0] for pt in pts]))
 
     def _publish(self, answers) -> None:
-        out = self._out
         for step, effort in answers:
-            self.clock_.stamp(step, out.header.stamp)
-            out.effort = [effort]
-            self._pub.publish(out)
+            sec, nanosec = self.clock_.sec_nanosec(step)
+            self._pub.publish(joint_state_cdr.encode(sec, nanosec, self._names, (), (), (effort,)))
 
 
 def main(args=None) -> int:

@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import struct
 import sys
 import time
 
@@ -27,9 +28,10 @@ from sensor_msgs.msg import JointState
 
 from .. import JOINT_NAMES
 from ..plant.from_config import open_client, plant_from_config
+from . import joint_state_cdr
 from .effort_gate import EffortGate
 from .params import check_choice, declare, load_node_config
-from .runtime import announce_ready, run_node
+from .runtime import announce_ready, run_node, spin_until
 from .wire import CLOCK, JOINT_STATES, StepClock, effort_topic, loop_qos, record_qos, state_topic
 
 
@@ -58,11 +60,11 @@ class PlantNode(Node):
         self._clock_pub = self.create_publisher(Clock, CLOCK, loop_qos("reliable"))
         self._js_pub = self.create_publisher(JointState, JOINT_STATES, record_qos())
         self._effort_subs = [
-            self.create_subscription(JointState, effort_topic(j), lambda m, i=i: self._on_effort(i, m), qos)
+            self.create_subscription(JointState, effort_topic(j), lambda m, i=i: self._on_effort(i, m), qos, raw=True)
             for i, j in enumerate(JOINT_NAMES)]
-        self._joint_msgs = [JointState(name=[j]) for j in JOINT_NAMES]
-        self._js = JointState(name=list(JOINT_NAMES))
+        self._names = [[j] for j in JOINT_NAMES]
         self._clock_msg = Clock()
+        self.malformed = np.zeros(len(JOINT_NAMES), dtype=np.int64)
         self.t_pub = np.full(self.n_steps + 1, np.nan)          # wall time state k was published [s]
         self.latency = np.full((self.n_steps + 1, len(JOINT_NAMES)), np.nan)  # state k -> effort k [s]
         self.resends = np.zeros(len(JOINT_NAMES), dtype=np.int64)
@@ -75,30 +77,29 @@ class PlantNode(Node):
     # ---------------------------------------------------------------- wire
     def _publish_state(self, k: int, joints=None) -> None:
         q, qd = self.plant.state
-        stamp = self.clock_.stamp(k)
+        ql, qdl = q.tolist(), qd.tolist()
+        sec, nanosec = self.clock_.sec_nanosec(k)
         for j in (range(len(JOINT_NAMES)) if joints is None else joints):
-            m = self._joint_msgs[j]
-            m.header.stamp = stamp
-            m.position = [float(q[j])]
-            m.velocity = [float(qd[j])]
-            self._state_pubs[j].publish(m)
+            self._state_pubs[j].publish(
+                joint_state_cdr.encode(sec, nanosec, self._names[j], (ql[j],), (qdl[j],), ()))
         if joints is not None:
             return
         self.t_pub[k] = time.perf_counter()
-        self._clock_msg.clock = stamp
+        self._clock_msg.clock.sec, self._clock_msg.clock.nanosec = sec, nanosec
         self._clock_pub.publish(self._clock_msg)
-        js = self._js
-        js.header.stamp = stamp
-        js.position = q.tolist()
-        js.velocity = qd.tolist()
-        js.effort = self.gate.applied.tolist()
-        self._js_pub.publish(js)
+        self._js_pub.publish(joint_state_cdr.encode(sec, nanosec, JOINT_NAMES, ql, qdl, self.gate.applied.tolist()))
 
-    def _on_effort(self, joint: int, msg: JointState) -> None:
-        k = self.clock_.step_of(msg.header.stamp)
+    def _on_effort(self, joint: int, data: bytes) -> None:
+        try:
+            sec, nanosec, _, _, _, effort = joint_state_cdr.decode(data)
+            u = float(effort[0])
+        except (ValueError, IndexError, struct.error, UnicodeDecodeError):
+            self.malformed[joint] += 1
+            return
+        k = self.clock_.step_of_sec_nanosec(sec, nanosec)
         if 0 <= k <= self.n_steps and math.isnan(self.latency[k, joint]):
             self.latency[k, joint] = time.perf_counter() - self.t_pub[k]
-        if self.gate.offer(joint, k, float(msg.effort[0])) and self.p["mode"] == "lockstep" and not self.finished:
+        if self.gate.offer(joint, k, u) and self.p["mode"] == "lockstep" and not self.finished:
             self._advance(timed_out=False)
 
     # ---------------------------------------------------------------- stepping
@@ -157,9 +158,8 @@ class PlantNode(Node):
         # a 10 ms wall-clock timer handles resends and timeouts.
         self._last_resend = (-1, 0.0)
         timer = self.create_timer(0.01, self._check_lockstep_timeouts)
-        finished = self._finished_future = type(stop)()
-        stop.add_done_callback(lambda _: finished.set_result(None) if not finished.done() else None)
-        executor.spin_until_future_complete(finished, timeout_sec=1e9)
+        self._finished_future = type(stop)()
+        spin_until(executor, self._finished_future, stop)
         self.destroy_timer(timer)
 
     def _check_lockstep_timeouts(self) -> None:
@@ -209,6 +209,7 @@ class PlantNode(Node):
                 "nonfinite_efforts": int(self.gate.nonfinite[i]),
                 "stale_efforts": int(self.gate.stale[i]),
                 "resent_states": int(self.resends[i]),
+                "malformed_efforts": int(self.malformed[i]),
                 "latency_median_us": float(np.median(li) * 1e6) if li.size else None,
                 "latency_p99_us": float(np.percentile(li, 99) * 1e6) if li.size else None,
                 "latency_max_us": float(li.max() * 1e6) if li.size else None,

@@ -1,14 +1,17 @@
 """Process plumbing shared by the nodes: init, spin, READY line, clean exit.
 
 ``EventsExecutor.spin()`` busy-loops in the rclpy 7.1.6 wheel, so nodes spin
-with ``spin_until_future_complete`` and a long timeout instead (1e10 s
-overflows and returns at once). rclpy's own signal handlers wake the executor:
-SIGINT raises KeyboardInterrupt, SIGTERM ExternalShutdownException; the node
-then exits 0.
+with ``spin_until_future_complete`` in short slices instead. rclpy's own
+signal handling is off: it raises KeyboardInterrupt wherever the interpreter
+is, and when that lands inside a callback run by the C++ executor the
+subscription stays "in use" and ``Node.destroy_node()`` then spins forever
+(seen here). SIGINT and SIGTERM instead complete a ``stop`` future that every
+spin loop checks; the node then tears down and exits 0.
 """
 from __future__ import annotations
 
 import os
+import signal
 import sys
 import threading
 from typing import Callable
@@ -18,7 +21,13 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
 from rclpy.task import Future
 
-FOREVER_S = 1e9
+SLICE_S = 0.2  # longest a spin call runs before the stop future is checked again
+
+
+def spin_until(executor, future: Future, stop: Future) -> None:
+    """Spin until ``future`` or ``stop`` is done."""
+    while not future.done() and not stop.done():
+        executor.spin_until_future_complete(future, timeout_sec=SLICE_S)
 
 
 def announce_ready(name: str) -> None:
@@ -33,8 +42,15 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
     ``done`` (a Future), ``exit_code`` (int), ``loop(executor)`` (its own spin
     loop) and ``close()`` (flush files before shutdown).
     """
-    rclpy.init(args=args)
+    rclpy.init(args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     stop = Future()
+
+    def on_signal(signum, _frame):
+        if not stop.done():
+            stop.set_result(signal.Signals(signum).name)
+
+    signal.signal(signal.SIGINT, on_signal)
+    signal.signal(signal.SIGTERM, on_signal)
     node = None
     executor = EventsExecutor()
     code = 0
@@ -46,7 +62,7 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
         if hasattr(node, "loop"):
             node.loop(executor, stop)
         else:
-            executor.spin_until_future_complete(stop, timeout_sec=FOREVER_S)
+            spin_until(executor, stop, stop)
         code = getattr(node, "exit_code", 0)
     except (KeyboardInterrupt, ExternalShutdownException):
         code = 0
@@ -57,10 +73,11 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
         traceback.print_exc()
         code = 1
     finally:
-        # Teardown can spin forever inside Node.destroy_node() when the events
-        # executor still holds a handle (seen with the 7.1.6 wheel): detach the
-        # node first, and hard-exit if teardown still hangs.
+        # Last resort if teardown still hangs: the watchdog thread can only run
+        # while the main thread releases the GIL, so SIGALRM (default action:
+        # terminate) backs it up.
         _arm_teardown_watchdog(code)
+        signal.alarm(int(TEARDOWN_LIMIT_S) + 2)
         if node is not None and hasattr(node, "close"):
             try:
                 node.close()
@@ -73,6 +90,7 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
+        signal.alarm(0)
     return code
 
 

@@ -58,6 +58,12 @@ class StepClock:
         t.sec, t.nanosec = divmod(ns, 1_000_000_000)
         return t
 
+    def sec_nanosec(self, step: int) -> tuple[int, int]:
+        return divmod(step * self.dt_ns, 1_000_000_000)
+
+    def step_of_sec_nanosec(self, sec: int, nanosec: int) -> int:
+        return round((sec * 1_000_000_000 + nanosec) / self.dt_ns)
+
     def step_of(self, stamp: Time) -> int:
         return round((stamp.sec * 1_000_000_000 + stamp.nanosec) / self.dt_ns)
 
