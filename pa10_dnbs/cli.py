@@ -1,4 +1,4 @@
-"""``pa10-dnbs`` command line: simulate (in-process); more sub-commands join as they land.
+"""``pa10-dnbs`` command line: simulate (in-process) and launch (ROS 2 node graph).
 
 Exit codes: 0 success, 1 run failure, 2 bad input (config, arguments, existing output).
 """
@@ -16,7 +16,27 @@ def _simulate(args: argparse.Namespace) -> int:
     from .commands.simulate import run_simulate
 
     return run_simulate(config_path=args.config, controller=args.controller, duration_s=args.duration,
-                        out=args.out, force=args.force, progress=not args.no_progress)
+                        out=args.out, force=args.force, progress=not args.no_progress and sys.stderr.isatty())
+
+
+def _launch(args: argparse.Namespace) -> int:
+    from .commands.launch import run_launch
+
+    return run_launch(config_path=args.config, mode=args.mode, controller=args.controller,
+                      duration_s=args.duration, out=args.out, force=args.force,
+                      progress=not args.no_progress and sys.stderr.isatty(), domain_id=args.domain_id,
+                      reliability=args.reliability, effort_timeout_s=args.effort_timeout,
+                      on_missing_effort=args.on_missing_effort)
+
+
+def _add_run_args(p: argparse.ArgumentParser, controllers: tuple[str, ...]) -> None:
+    p.add_argument("--config", type=Path, default=None, help=f"YAML config (default: {default_config_path()})")
+    p.add_argument("--controller", choices=controllers, default="dnbs")
+    p.add_argument("--duration", type=float, default=None, metavar="SECONDS",
+                   help="simulated time [s] (default: simulation.duration_s of the config, 20 s)")
+    p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
+    p.add_argument("--force", action="store_true", help="replace an existing output directory")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -24,15 +44,20 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     sim = sub.add_parser("simulate", help="closed loop in one process (no ROS), with metrics, figures, report")
-    sim.add_argument("--config", type=Path, default=None,
-                     help=f"YAML config (default: {default_config_path()})")
-    sim.add_argument("--controller", choices=("dnbs", "pid", "both"), default="dnbs")
-    sim.add_argument("--duration", type=float, default=None, metavar="SECONDS",
-                     help="simulated time [s] (default: simulation.duration_s of the config, 20 s)")
-    sim.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
-    sim.add_argument("--force", action="store_true", help="replace an existing output directory")
-    sim.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _add_run_args(sim, ("dnbs", "pid", "both"))
     sim.set_defaults(func=_simulate)
+
+    la = sub.add_parser("launch", help="the ROS 2 node graph (plant, 7 joint controllers, reference)")
+    la.add_argument("--mode", choices=("lockstep", "realtime"), default="lockstep",
+                    help="lockstep: simulated time, deterministic; realtime: 1 kHz wall clock")
+    _add_run_args(la, ("dnbs", "pid"))
+    la.add_argument("--domain-id", type=int, default=None, help="ROS_DOMAIN_ID (default: derived from the PID)")
+    la.add_argument("--reliability", choices=("reliable", "best_effort"), default="reliable",
+                    help="QoS of the per-joint state/effort topics")
+    la.add_argument("--effort-timeout", type=float, default=1.0, metavar="SECONDS",
+                    help="lockstep: wall time to wait for a joint's effort before holding/zeroing it")
+    la.add_argument("--on-missing-effort", choices=("hold", "zero"), default="hold")
+    la.set_defaults(func=_launch)
     return parser
 
 

@@ -28,7 +28,7 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
     kinds = ("dnbs", "pid") if controller == "both" else (controller,)
     runs, metrics = [], []
     for kind in kinds:
-        run = simulate(cfg, kind, duration_s, progress=progress and sys.stderr.isatty() or progress == "force")
+        run = simulate(cfg, kind, duration_s, progress=progress)
         runs.append(run)
         metrics.append(metrics_dict(run, window, source="in-process", config_file=str(config_path.resolve()),
                                     seed=cfg["simulation"]["seed"], limit_hits=run.extra["limit_hits"]))

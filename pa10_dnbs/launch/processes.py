@@ -1,0 +1,75 @@
+"""Child processes of the launcher: start, watch their output, stop them politely.
+
+Each child's stdout and stderr go to one log file; a reader thread also
+remembers the READY / RUNNING lines the nodes print. Stopping escalates:
+SIGINT, then SIGTERM after ``grace_int_s``, then SIGKILL after ``grace_term_s``.
+"""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import threading
+import time
+from pathlib import Path
+
+
+class ManagedProcess:
+    def __init__(self, name: str, argv: list[str], env: dict, log_path: Path):
+        self.name = name
+        self.argv = argv
+        self.log_path = log_path
+        self.lines: list[str] = []
+        self._log = open(log_path, "w", buffering=1)
+        self.proc = subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                     stdin=subprocess.DEVNULL, text=True, bufsize=1)
+        self._reader = threading.Thread(target=self._read, name=f"log-{name}", daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        for line in self.proc.stdout:
+            self._log.write(line)
+            if line.startswith(("READY", "RUNNING", "FAILED")):
+                self.lines.append(line.strip())
+
+    def saw(self, prefix: str) -> bool:
+        return any(line.startswith(prefix) for line in self.lines)
+
+    @property
+    def pid(self) -> int:
+        return self.proc.pid
+
+    @property
+    def returncode(self) -> int | None:
+        return self.proc.poll()
+
+    def tail(self, n: int = 12) -> str:
+        self._log.flush()
+        try:
+            return "".join(self.log_path.read_text(errors="replace").splitlines(True)[-n:])
+        except OSError:
+            return ""
+
+    def close_log(self) -> None:
+        self._reader.join(timeout=2)
+        self._log.close()
+
+
+def stop_all(procs: list[ManagedProcess], grace_int_s: float = 5.0, grace_term_s: float = 3.0) -> dict[str, int]:
+    """SIGINT every running child, escalate for the stragglers; return each child's exit code."""
+    for sig, grace in ((signal.SIGINT, grace_int_s), (signal.SIGTERM, grace_term_s), (signal.SIGKILL, 5.0)):
+        running = [p for p in procs if p.returncode is None]
+        if not running:
+            break
+        for p in running:
+            try:
+                os.kill(p.pid, sig)
+            except ProcessLookupError:
+                pass
+        deadline = time.monotonic() + grace
+        while time.monotonic() < deadline and any(p.returncode is None for p in running):
+            time.sleep(0.02)
+    for p in procs:
+        p.proc.wait()
+        p.close_log()
+    return {p.name: p.returncode for p in procs}
