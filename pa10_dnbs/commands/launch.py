@@ -9,6 +9,7 @@ from ..config import ConfigError, default_config_path, load_config
 from ..launch.graph_run import GraphFailure, GraphOptions, run_graph
 from ..report.metrics_file import effective_window, metrics_dict
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
+from ..ros.wire_monitor import load_wire_run
 
 
 def run_launch(config_path: Path | None, mode: str, controller: str, duration_s: float | None, out: Path,
@@ -33,16 +34,14 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                        on_missing_effort=on_missing_effort, progress=progress)
     window = effective_window(n_steps * dt, cfg["simulation"]["window_s"])
 
-    def monitor_factory():
-        from ..ros.wire_monitor import WireMonitor
-
-        return WireMonitor(dt, n_steps, cfg["plant"]["torque_limit_nm"])
-
     try:
         with atomic_output_dir(out, force) as tmp:
-            result, monitor = run_graph(opt, tmp, monitor_factory, say=lambda s: print(s, flush=True))
+            result = run_graph(opt, tmp, say=lambda s: print(s, flush=True))
             stats = result.stats
-            run = monitor.run_data(controller, stats["wall_time_s"])
+            run, missing = load_wire_run(result.wire_file, controller, cfg["plant"]["torque_limit_nm"],
+                                         stats["wall_time_s"])
+            if missing:
+                raise GraphFailure(f"the wire monitor's record is incomplete: {missing}")
             metrics = metrics_dict(
                 run, window, source="ros-graph", mode=mode, config_file=str(config_path),
                 seed=cfg["simulation"]["seed"], reliability=reliability, domain_id=result.domain_id,
@@ -57,7 +56,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
             write_report(tmp, [run], [metrics], title=f"PA10-7CE node graph run ({mode})", notes=notes)
     except GraphFailure as exc:
         print(f"pa10-dnbs launch: FAILED: {exc}", file=sys.stderr, flush=True)
-        return 1
+        return 130 if exc.interrupted else 1
     m = metrics
     print(f"{controller} ({mode}): worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over {m['window_s']} s, "
           f"real-time factor {m['real_time_factor']:.2f}")

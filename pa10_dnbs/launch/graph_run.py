@@ -1,13 +1,16 @@
 """Run the whole node graph once: start, wait until ready, run, stop, collect.
 
-Nine processes (reference, seven joint controllers, plant) on a private
-ROS_DOMAIN_ID with discovery limited to this host; the launcher's own wire
-monitor collects the run from the messages.
+Nine node processes (reference, seven joint controllers, plant) and a wire
+monitor that records what they send, on a private ROS_DOMAIN_ID with
+discovery limited to this host. The launcher only supervises: it never joins
+DDS itself, so once its children have exited, every shared-memory segment of
+the run is unmapped and a leftover (from a killed node) can be removed.
 """
 from __future__ import annotations
 
 import json
 import os
+import signal
 import sys
 import time
 from dataclasses import dataclass, field
@@ -22,6 +25,10 @@ READY_TIMEOUT_S = 60.0
 
 class GraphFailure(RuntimeError):
     """A node failed, exited early, or the run did not complete."""
+
+    def __init__(self, message: str, interrupted: bool = False):
+        super().__init__(message)
+        self.interrupted = interrupted
 
 
 @dataclass
@@ -46,6 +53,23 @@ class GraphResult:
     domain_id: int
     wall_total_s: float
     shm_removed: list[str]
+    wire_file: Path
+
+
+class _Stop(BaseException):
+    """Raised in the launcher's main thread by SIGINT or SIGTERM."""
+
+
+def _stop_on_signals() -> dict:
+    """SIGINT and SIGTERM stop the graph cleanly, even where the parent shell left SIGINT ignored."""
+    def handler(signum, _frame):
+        raise _Stop(signal.Signals(signum).name)
+
+    previous = {}
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        previous[signum] = signal.getsignal(signum)
+        signal.signal(signum, handler)
+    return previous
 
 
 def pick_domain_id() -> int:
@@ -67,15 +91,19 @@ def _ros_args(node: str, params: dict) -> list[str]:
     return args
 
 
-def node_commands(opt: GraphOptions, stats_file: Path) -> list[tuple[str, list[str]]]:
-    """(name, argv) of every node, the plant last (it starts stepping once the others are matched)."""
+def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[tuple[str, list[str]]]:
+    """(name, argv) of every process: the wire monitor, the nine nodes, the plant last (it starts
+    stepping once the others are matched)."""
     py = [sys.executable, "-m"]
     cfg = str(opt.config_path)
-    cmds = [("reference", py + ["pa10_dnbs.ros.reference_node"] + _ros_args("reference", {"config_file": cfg}))]
+    cmds = [("wire_monitor", py + ["pa10_dnbs.ros.wire_monitor"] + _ros_args("wire_monitor", {
+                "config_file": cfg, "duration_s": opt.duration_s, "out_file": str(wire_file)})),
+            ("reference", py + ["pa10_dnbs.ros.reference_node"] + _ros_args("reference", {"config_file": cfg}))]
     for j in JOINT_NAMES:
         cmds.append((f"joint_controller_{j}", py + ["pa10_dnbs.ros.joint_controller_node"] + _ros_args(
             f"joint_controller_{j}", {"config_file": cfg, "joint": j, "controller": opt.controller,
-                                      "reliability": opt.reliability})))
+                                      "reliability": opt.reliability,
+                                      "queue_depth": 1 if opt.mode == "realtime" else 10})))
     cmds.append(("plant", py + ["pa10_dnbs.ros.plant_node"] + _ros_args("plant", {
         "config_file": cfg, "mode": opt.mode, "duration_s": opt.duration_s, "reliability": opt.reliability,
         "effort_timeout_s": opt.effort_timeout_s, "on_missing_effort": opt.on_missing_effort,
@@ -83,34 +111,37 @@ def node_commands(opt: GraphOptions, stats_file: Path) -> list[tuple[str, list[s
     return cmds
 
 
-def run_graph(opt: GraphOptions, workdir: Path, monitor_factory, say=print) -> tuple[GraphResult, object]:
-    """Run the graph; logs go to ``workdir/logs``. Returns (result, monitor). Raises GraphFailure."""
+def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
+    """Run the graph; logs go to ``workdir/logs``, the wire record to ``workdir/wire.npz``. Raises GraphFailure.
+
+    The launcher itself never joins DDS: the wire monitor is one of its child processes.
+    """
     domain = opt.domain_id if opt.domain_id is not None else pick_domain_id()
     env = node_env(domain, opt.extra_env)
-    os.environ["ROS_DOMAIN_ID"] = env["ROS_DOMAIN_ID"]  # the in-process monitor joins the same domain
-    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    os.environ.pop("ROS_LOCALHOST_ONLY", None)
     logs = workdir / "logs"
     logs.mkdir(parents=True, exist_ok=True)
     stats_file = workdir / "plant_stats.json"
+    wire_file = workdir / "wire.npz"
     shm_before = fastdds_segments()
     t_start = time.monotonic()
-    monitor = monitor_factory()
     procs: list[ManagedProcess] = []
     failure: str | None = None
+    previous = _stop_on_signals()
     try:
-        for name, argv in node_commands(opt, stats_file):
+        for name, argv in node_commands(opt, stats_file, wire_file):
             procs.append(ManagedProcess(name, argv, env, logs / f"{name}.log"))
-        say(f"launch: domain {domain}, {len(procs)} nodes: " + ", ".join(f"{p.name}={p.pid}" for p in procs))
+        say(f"launch: domain {domain}, {len(procs) - 1} nodes: " + ", ".join(f"{p.name}={p.pid}" for p in procs[1:])
+            + f"; wire_monitor={procs[0].pid}")
         failure = _wait_ready(procs)
         if failure is None:
             say("launch: graph ready (every node printed READY)")
-            failure = _watch(procs, opt, monitor, say)
-    except KeyboardInterrupt:
-        failure = "interrupted (SIGINT)"
+            failure = _watch(procs, opt, say)
+    except _Stop as sig:
+        failure = f"interrupted ({sig})"
     finally:
         codes = stop_all(procs)
-        monitor.stop()
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
         shm_removed = remove_stale(fastdds_segments() - shm_before)
     say("launch: stopped: " + " ".join(f"{n}={c}" for n, c in codes.items())
         + (f"; removed {len(shm_removed)} stale shared-memory segments" if shm_removed else ""))
@@ -118,11 +149,10 @@ def run_graph(opt: GraphOptions, workdir: Path, monitor_factory, say=print) -> t
     if failure is None and bad:
         failure = "nodes exited with non-zero codes: " + ", ".join(f"{n}={c}" for n, c in bad.items())
     if failure is not None:
-        raise GraphFailure(failure)
+        raise GraphFailure(failure, interrupted=failure.startswith("interrupted"))
     stats = json.loads(stats_file.read_text())
-    result = GraphResult(stats=stats, exit_codes=codes, pids={p.name: p.pid for p in procs}, domain_id=domain,
-                         wall_total_s=time.monotonic() - t_start, shm_removed=shm_removed)
-    return result, monitor
+    return GraphResult(stats=stats, exit_codes=codes, pids={p.name: p.pid for p in procs}, domain_id=domain,
+                       wall_total_s=time.monotonic() - t_start, shm_removed=shm_removed, wire_file=wire_file)
 
 
 def _describe(p: ManagedProcess) -> str:
@@ -143,15 +173,16 @@ def _wait_ready(procs: list[ManagedProcess]) -> str | None:
     return f"not ready after {READY_TIMEOUT_S:g} s: {', '.join(late)}"
 
 
-def _watch(procs: list[ManagedProcess], opt: GraphOptions, monitor, say) -> str | None:
-    plant = procs[-1]
+def _watch(procs: list[ManagedProcess], opt: GraphOptions, say) -> str | None:
+    monitor, plant = procs[0], procs[-1]
     limit_s = 120.0 + 50.0 * opt.duration_s  # generous: a run slower than 1/50 real time is broken
     deadline = time.monotonic() + limit_s
     bar = None
+    n_steps = int(round(opt.duration_s * 1000))
     if opt.progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=monitor.n, desc=f"launch {opt.mode} {opt.controller}", unit="step", unit_scale=True)
+        bar = tqdm(total=n_steps, desc=f"launch {opt.mode} {opt.controller}", unit="step", unit_scale=True)
     announced = False
     try:
         while time.monotonic() < deadline:
@@ -166,18 +197,17 @@ def _watch(procs: list[ManagedProcess], opt: GraphOptions, monitor, say) -> str 
             if plant.returncode == 0:
                 break
             if bar is not None:
-                bar.update(max(0, monitor.latest_step - bar.n))
+                bar.update(max(0, monitor.progress - bar.n))
             time.sleep(0.05)
         else:
             return f"run did not finish within {limit_s:g} s"
         end = time.monotonic() + 10.0  # the last messages may still be in flight
-        while not monitor.complete() and time.monotonic() < end:
+        while not monitor.saw("COMPLETE") and time.monotonic() < end:
             time.sleep(0.05)
-        monitor.stop()
-        if not monitor.complete():
-            return "the wire monitor did not receive the whole run: " + monitor.missing_summary()
+        if not monitor.saw("COMPLETE"):
+            return "the wire monitor did not receive the whole run (see logs/wire_monitor.log)"
         return None
     finally:
         if bar is not None:
-            bar.update(max(0, monitor.latest_step - bar.n))
+            bar.update(max(0, n_steps - bar.n))
             bar.close()

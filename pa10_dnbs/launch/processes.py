@@ -20,6 +20,7 @@ class ManagedProcess:
         self.argv = argv
         self.log_path = log_path
         self.lines: list[str] = []
+        self.progress = 0
         self._log = open(log_path, "w", buffering=1)
         self.proc = subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                      stdin=subprocess.DEVNULL, text=True, bufsize=1)
@@ -29,7 +30,9 @@ class ManagedProcess:
     def _read(self) -> None:
         for line in self.proc.stdout:
             self._log.write(line)
-            if line.startswith(("READY", "RUNNING", "FAILED")):
+            if line.startswith("PROGRESS "):
+                self.progress = int(line.split()[1])
+            elif line.startswith(("READY", "RUNNING", "FAILED", "COMPLETE")):
                 self.lines.append(line.strip())
 
     def saw(self, prefix: str) -> bool:

@@ -25,7 +25,8 @@ from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_to
 class JointControllerNode(Node):
     def __init__(self):
         super().__init__("joint_controller")
-        p = declare(self, {"config_file": "", "joint": "", "controller": "dnbs", "reliability": "reliable"})
+        p = declare(self, {"config_file": "", "joint": "", "controller": "dnbs", "reliability": "reliable",
+                           "queue_depth": 10})
         check_choice("joint", p["joint"], JOINT_NAMES)
         check_choice("controller", p["controller"], CONTROLLER_KINDS)
         cfg = load_node_config(p["config_file"])
@@ -34,10 +35,12 @@ class JointControllerNode(Node):
         self.clock_ = StepClock(cfg["simulation"]["dt_s"])
         self.loop_ = JointLoop(build_controller(cfg, p["controller"], index), cfg["reference"]["preview_steps"])
         self.malformed = 0
+        self.states_received = 0
+        self.efforts_sent = 0
         self._names = [self.joint]
-        self._pub = self.create_publisher(JointState, effort_topic(self.joint), loop_qos(p["reliability"]))
-        self.create_subscription(JointState, state_topic(self.joint), self._on_state, loop_qos(p["reliability"]),
-                                 raw=True)
+        qos = loop_qos(p["reliability"], depth=p["queue_depth"])
+        self._pub = self.create_publisher(JointState, effort_topic(self.joint), qos)
+        self.create_subscription(JointState, state_topic(self.joint), self._on_state, qos, raw=True)
         self.create_subscription(JointTrajectory, reference_topic(self.joint), self._on_reference, reference_qos())
         announce_ready(f"joint_controller {self.joint}")
 
@@ -48,6 +51,7 @@ class JointControllerNode(Node):
         except (ValueError, IndexError, struct.error, UnicodeDecodeError):
             self.malformed += 1
             return
+        self.states_received += 1
         self._publish(self.loop_.on_state(self.clock_.step_of_sec_nanosec(sec, nanosec), q, qd))
 
     def _on_reference(self, msg: JointTrajectory) -> None:
@@ -60,6 +64,14 @@ class JointControllerNode(Node):
         for step, effort in answers:
             sec, nanosec = self.clock_.sec_nanosec(step)
             self._pub.publish(joint_state_cdr.encode(sec, nanosec, self._names, (), (), (effort,)))
+            self.efforts_sent += 1
+
+    def close(self) -> None:
+        loop = self.loop_
+        print(f"STATS joint_controller {self.joint}: states {self.states_received}, efforts {self.efforts_sent}, "
+              f"last answered step {loop.last_step}, waiting for references {len(loop.pending_steps)}, "
+              f"duplicates {loop.duplicates}, out of order {loop.out_of_order}, malformed {self.malformed}, "
+              f"reference steps buffered {loop.reference_span}", flush=True)
 
 
 def main(args=None) -> int:

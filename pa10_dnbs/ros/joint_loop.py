@@ -25,6 +25,16 @@ class JointLoop:
         self.duplicates = 0
         self.out_of_order = 0
 
+    @property
+    def pending_steps(self) -> list[int]:
+        """States waiting for their references."""
+        return sorted(self._pending)
+
+    @property
+    def reference_span(self) -> tuple[int, int] | None:
+        """(first, last) step of the buffered references."""
+        return (min(self._ref_pos), max(self._ref_pos)) if self._ref_pos else None
+
     def add_reference(self, first_step: int, positions, velocities) -> list[tuple[int, float]]:
         """Store points for steps first_step, first_step + 1, ...; answer states that were waiting."""
         for i, (p, v) in enumerate(zip(positions, velocities)):

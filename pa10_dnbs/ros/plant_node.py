@@ -55,7 +55,8 @@ class PlantNode(Node):
         self._client = open_client()
         self.plant = plant_from_config(cfg, self._client)
         self.gate = EffortGate(len(JOINT_NAMES), p["on_missing_effort"])
-        qos = loop_qos(p["reliability"])
+        # realtime: latest value only (depth 1), a late reader skips stale states
+        qos = loop_qos(p["reliability"], depth=1 if p["mode"] == "realtime" else 10)
         self._state_pubs = [self.create_publisher(JointState, state_topic(j), qos) for j in JOINT_NAMES]
         self._clock_pub = self.create_publisher(Clock, CLOCK, loop_qos("reliable"))
         self._js_pub = self.create_publisher(JointState, JOINT_STATES, record_qos())
@@ -70,7 +71,7 @@ class PlantNode(Node):
         self.resends = np.zeros(len(JOINT_NAMES), dtype=np.int64)
         self.late_ticks = 0
         self.finished = False
-        self.exit_code = 1  # until the run completes
+        self.exit_code = 0  # a signal before the end is a clean stop; "completed" in the stats says if it ran out
         self.wall_start = self.wall_end = math.nan
         announce_ready("plant")
 
@@ -150,8 +151,6 @@ class PlantNode(Node):
             self._loop_lockstep(executor, stop)
         else:
             self._loop_realtime(executor, stop)
-        if self.finished:
-            self.exit_code = 0
 
     def _loop_lockstep(self, executor, stop) -> None:
         # Callbacks drive the steps (an effort completing step k publishes k+1);
@@ -183,7 +182,10 @@ class PlantNode(Node):
                 self._last_resend = (k, now)
 
     def _loop_realtime(self, executor, stop) -> None:
+        # Ticks follow the wall clock; a plant that falls behind keeps stepping
+        # (physics is never skipped) and counts the ticks it was late for.
         t_next = self.t_pub[0] + self.dt
+        n_subs = len(JOINT_NAMES)
         while not self.finished and not stop.done():
             now = time.perf_counter()
             if now >= t_next:
@@ -191,6 +193,8 @@ class PlantNode(Node):
                     self.late_ticks += 1
                 self._advance(timed_out=False)
                 t_next += self.dt
+                for _ in range(n_subs):  # serve what arrived, even when there is no slack
+                    executor.spin_once(timeout_sec=0.0)
             else:
                 executor.spin_once(timeout_sec=t_next - now)
 

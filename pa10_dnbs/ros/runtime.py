@@ -1,12 +1,14 @@
 """Process plumbing shared by the nodes: init, spin, READY line, clean exit.
 
-``EventsExecutor.spin()`` busy-loops in the rclpy 7.1.6 wheel, so nodes spin
-with ``spin_until_future_complete`` in short slices instead. rclpy's own
-signal handling is off: it raises KeyboardInterrupt wherever the interpreter
-is, and when that lands inside a callback run by the C++ executor the
-subscription stays "in use" and ``Node.destroy_node()`` then spins forever
-(seen here). SIGINT and SIGTERM instead complete a ``stop`` future that every
-spin loop checks; the node then tears down and exits 0.
+Two workarounds for the rclpy 7.1.6 wheel:
+- ``EventsExecutor.spin()`` busy-loops, so nodes spin with
+  ``spin_until_future_complete`` in short slices instead;
+- ``Node.destroy_node()`` sometimes never returns under load (see
+  ``_release_entities``), so teardown releases the endpoints itself.
+rclpy's own signal handling is off (it raises KeyboardInterrupt wherever the
+interpreter is, including inside callbacks run by the C++ executor): SIGINT
+and SIGTERM complete a ``stop`` future that every spin loop checks; the node
+then tears down and exits 0.
 """
 from __future__ import annotations
 
@@ -88,13 +90,31 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
             executor.remove_node(node)
         executor.shutdown()
         if node is not None:
-            node.destroy_node()
+            _release_entities(node)
         rclpy.try_shutdown()
         signal.alarm(0)
     return code
 
 
 TEARDOWN_LIMIT_S = 5.0
+
+
+def _release_entities(node) -> None:
+    """Destroy the node's endpoints one by one instead of ``Node.destroy_node()``.
+
+    Under load, ``destroy_node()`` sometimes never returns in the rclpy 7.1.6
+    wheel: its final ``destroy_when_not_in_use()`` on the node handle spins
+    with the GIL held. The endpoints (and so the DDS readers and writers) are
+    released here; the node handle itself goes with the process.
+    """
+    for pub in list(node.publishers):
+        node.destroy_publisher(pub)
+    for sub in list(node.subscriptions):
+        node.destroy_subscription(sub)
+    for timer in list(node.timers):
+        node.destroy_timer(timer)
+    for srv in list(node.services):
+        node.destroy_service(srv)
 
 
 def _arm_teardown_watchdog(code: int) -> None:

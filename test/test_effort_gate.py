@@ -1,0 +1,60 @@
+"""Plant-side effort bookkeeping: lockstep completion, timeouts, realtime misses."""
+import math
+
+import numpy as np
+import pytest
+
+from pa10_dnbs.ros.effort_gate import EffortGate
+
+
+def test_lockstep_completes_only_with_all_joints():
+    g = EffortGate(3)
+    assert not g.offer(0, 0, 1.0)
+    assert not g.offer(2, 0, 3.0)
+    assert g.missing == [1]
+    assert g.offer(1, 0, 2.0)
+    np.testing.assert_array_equal(g.take_lockstep(), [1.0, 2.0, 3.0])
+    assert g.step == 1 and g.missing == [0, 1, 2]
+
+
+def test_stale_and_future_efforts_do_not_complete_a_step():
+    g = EffortGate(2)
+    for j in range(2):
+        g.offer(j, 0, 1.0)
+    g.take_lockstep()
+    assert not g.offer(0, 0, 5.0)  # a resend answer for step 0
+    assert g.stale[0] == 1
+    assert not g.offer(1, 7, 5.0)  # not the current step either
+    assert g.missing == [0, 1]
+
+
+@pytest.mark.parametrize("mode,expected", [("hold", 4.0), ("zero", 0.0)])
+def test_timeout_fills_missing_joint_and_counts(mode, expected):
+    g = EffortGate(2, on_missing=mode)
+    g.offer(0, 0, 1.0)
+    g.offer(1, 0, 4.0)
+    g.take_lockstep()
+    g.offer(0, 1, 2.0)
+    tau = g.take_lockstep(timed_out=True)
+    assert tau.tolist() == [2.0, expected]
+    assert g.timeouts.tolist() == [0, 1]
+    with pytest.raises(RuntimeError):
+        g.take_lockstep()
+
+
+def test_nonfinite_effort_is_rejected_and_counted():
+    g = EffortGate(1)
+    assert not g.offer(0, 0, math.nan)
+    assert not g.offer(0, 0, math.inf)
+    assert g.nonfinite[0] == 2 and g.missing == [0]
+
+
+def test_realtime_zero_order_hold_and_miss_count():
+    g = EffortGate(2)
+    g.offer(0, 0, 1.0)
+    g.offer(1, 0, 2.0)
+    assert g.take_realtime().tolist() == [1.0, 2.0]  # tick applying step 0: both answered state 0
+    g.offer(0, 1, 3.0)                                # joint 1 late for state 1
+    assert g.take_realtime().tolist() == [3.0, 2.0]  # held
+    assert g.misses.tolist() == [0, 1]
+    assert (g.ticks, g.ticks_all_on_time) == (2, 1)
