@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# The main job: bootstrap the venv, then the 20 s closed loop (DNBS and the PID
-# baseline) with metrics, figures and report in runs/main/ (replaced if present).
-# Extra arguments go to `pa10-dnbs simulate`, e.g. --out DIR.
+# The main job: bootstrap the venv, then run the ROS 2 node graph (plant, seven
+# DNBS joint-controller processes, reference) for 20 s of simulated time in
+# lockstep, with metrics, figures and report in runs/main/ (replaced if present).
+# Extra arguments go to `pa10-dnbs launch`, e.g. --mode realtime or --out DIR.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 source "$ROOT/scripts/bootstrap.sh"
 cd "$ROOT"
-exec "$ROOT/.venv/bin/pa10-dnbs" simulate --controller both --duration 20 --out runs/main --force "$@"
+exec "$ROOT/.venv/bin/pa10-dnbs" launch --mode lockstep --controller dnbs --duration 20 --out runs/main --force "$@"
