@@ -8,7 +8,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .config import ConfigError, default_config_path, load_config
+from .config import ConfigError, default_config_path
 from .report.outputs import OutputExistsError
 
 
@@ -65,9 +65,12 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except (ConfigError, OutputExistsError, FileNotFoundError) as exc:
+    except (ConfigError, OutputExistsError) as exc:
         print(f"pa10-dnbs: error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:
+        print(f"pa10-dnbs: error: {exc}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print("pa10-dnbs: interrupted, no output written", file=sys.stderr)
         return 130

@@ -42,11 +42,17 @@ def test_timeout_fills_missing_joint_and_counts(mode, expected):
         g.take_lockstep()
 
 
-def test_nonfinite_effort_is_rejected_and_counted():
-    g = EffortGate(1)
-    assert not g.offer(0, 0, math.nan)
-    assert not g.offer(0, 0, math.inf)
-    assert g.nonfinite[0] == 2 and g.missing == [0]
+def test_nonfinite_effort_is_replaced_at_once_and_counted():
+    g = EffortGate(2, on_missing="hold")
+    g.offer(0, 0, 1.0)
+    g.offer(1, 0, 2.0)
+    g.take_lockstep()
+    assert not g.offer(0, 1, math.nan)      # joint 0 answered (held), joint 1 not yet
+    assert g.missing == [1]
+    assert not g.offer(0, 1, math.inf)      # a second bad answer changes nothing
+    assert g.offer(1, 1, 5.0)
+    assert g.take_lockstep().tolist() == [1.0, 5.0]
+    assert g.nonfinite.tolist() == [2, 0] and g.timeouts.tolist() == [0, 0]
 
 
 def test_realtime_zero_order_hold_and_miss_count():

@@ -48,5 +48,5 @@ def test_P_stays_exactly_symmetric_and_positive_definite():
 def test_bad_params_are_rejected(field, value):
     kw = dict(p0=1.0, q=0.0, r=1.0, eta=1.0)
     kw[field] = value
-    with pytest.raises(ValueError, match=field):
+    with pytest.raises(ValueError, match=rf"EKF parameter {field} must"):
         EKFParams(**kw)

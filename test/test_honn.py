@@ -19,17 +19,36 @@ def test_regressor_is_product_of_tanh_powers():
     np.testing.assert_allclose(net.regressor(z), [1, s[0], s[1], s[0] ** 2 * s[1], s[1] ** 3], rtol=1e-15)
 
 
+def _phi_eq3(w, z, exponents, scale):
+    """phi(w, z) of eq. 3 written out term by term, independently of HONN.regressor."""
+    total = 0.0
+    for wi, d in zip(w, exponents):
+        term = 1.0
+        for zj, sj, dj in zip(z, scale, d):
+            term *= np.tanh(zj / sj) ** dj
+        total += wi * term
+    return total
+
+
 @pytest.mark.parametrize("degree", [1, 2, 3])
 def test_H_equals_finite_difference_of_output(degree):
+    # H (the regressor the EKF uses) against d phi / d w by central differences of eq. 3 itself.
     rng = np.random.default_rng(degree)
-    net = HONN(monomial_exponents(3, degree), input_scale=[3.0, 3.0, 3.0])
+    scale = [3.0, 2.0, 0.5]
+    net = HONN(monomial_exponents(3, degree), input_scale=scale)
     w = rng.normal(size=net.n_terms)
     z = rng.normal(size=3)
-    H = net.regressor(z)
     h = 1e-6
-    fd = np.array([(HONN.output(w + h * ei, net.regressor(z)) - HONN.output(w - h * ei, net.regressor(z))) / (2 * h)
-                   for ei in np.eye(net.n_terms)])
-    np.testing.assert_allclose(H, fd, rtol=1e-7, atol=1e-9)
+    fd = np.array([(_phi_eq3(w + h * e, z, net.exponents, scale) - _phi_eq3(w - h * e, z, net.exponents, scale))
+                   / (2 * h) for e in np.eye(net.n_terms)])
+    np.testing.assert_allclose(net.regressor(z), fd, rtol=1e-7, atol=1e-9)
+    assert HONN.output(w, net.regressor(z)) == pytest.approx(_phi_eq3(w, z, net.exponents, scale), rel=1e-12)
+
+
+def test_wrong_number_of_inputs_is_an_error():
+    net = HONN(monomial_exponents(3, 2), input_scale=[1.0, 1.0, 1.0])
+    with pytest.raises(ValueError, match="expected 3 inputs"):
+        net.regressor([0.1, 0.2])
 
 
 def test_regressor_does_not_alias_between_calls():

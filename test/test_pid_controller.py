@@ -1,5 +1,4 @@
 """PID baseline: the law and the gains of paper_notes.md."""
-import numpy as np
 import pytest
 
 from pa10_dnbs.controller_factory import build_controller

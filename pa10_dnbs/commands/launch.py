@@ -26,12 +26,14 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         raise ConfigError(f"--domain-id: must be in 0..101, got {domain_id}")
     if not (math.isfinite(effort_timeout_s) and effort_timeout_s > 0):
         raise ConfigError(f"--effort-timeout: must be a positive number of seconds, got {effort_timeout_s}")
-    check_output_dir(out, force)
     dt = cfg["simulation"]["dt_s"]
     n_steps = int(round(duration_s / dt))
+    if n_steps < 2:
+        raise ConfigError(f"--duration: {duration_s} s is shorter than two steps of {dt} s")
+    check_output_dir(out, force)
     opt = GraphOptions(config_path=config_path, mode=mode, controller=controller, duration_s=n_steps * dt,
                        domain_id=domain_id, reliability=reliability, effort_timeout_s=effort_timeout_s,
-                       on_missing_effort=on_missing_effort, progress=progress)
+                       on_missing_effort=on_missing_effort, progress=progress, dt_s=dt)
     window = effective_window(n_steps * dt, cfg["simulation"]["window_s"])
 
     try:
@@ -53,6 +55,9 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                      f"source: ROS 2 node graph, {mode} mode, {reliability} QoS, domain {result.domain_id}; "
                      "time series rebuilt from /joint_states and the reference topics",
                      _timing_note(stats)]
+            if tuple(window) != tuple(cfg["simulation"]["window_s"]):
+                notes.append(f"run shorter than the configured window {list(cfg['simulation']['window_s'])}: "
+                             "metrics over the second half instead")
             write_report(tmp, [run], [metrics], title=f"PA10-7CE node graph run ({mode})", notes=notes)
     except GraphFailure as exc:
         print(f"pa10-dnbs launch: FAILED: {exc}", file=sys.stderr, flush=True)

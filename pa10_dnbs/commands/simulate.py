@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 
 from ..config import ConfigError, default_config_path, load_config
@@ -23,6 +22,7 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
     n_steps = int(round(duration_s / cfg["simulation"]["dt_s"]))
     if n_steps < 2:
         raise ConfigError(f"--duration: {duration_s} s is shorter than two steps")
+    duration_s = n_steps * cfg["simulation"]["dt_s"]
     check_output_dir(out, force)
     window = effective_window(duration_s, cfg["simulation"]["window_s"])
     kinds = ("dnbs", "pid") if controller == "both" else (controller,)

@@ -76,8 +76,9 @@ class DNBSJointController:
         e1 = ref.position_rad - x1
         e2 = (x2 - alpha) if self.params.printed_e2_sign else (alpha - x2)
         lim = self.params.torque_limit_nm
-        # Conditional integration: while the torque is clipped, an update that
-        # raises |u| further (e > 0 raises both alpha and u) only winds up.
+        # Conditional integration: while the torque is clipped, skip an update
+        # that would raise |u| further: e2 > 0 raises u directly; e1 > 0 raises
+        # alpha, and so u too wherever du/dalpha > 0 (the case the law relies on).
         saturated = self.params.anti_windup and abs(u) >= lim
         if not (saturated and e1 * u > 0.0):
             self.alpha_ekf.update(S1, e1)

@@ -65,6 +65,8 @@ class HONN:
     def regressor(self, z) -> np.ndarray:
         """S(z), shape (L,), for inputs z of shape (p,)."""
         ext = self._ext
+        if len(z) != len(self._inv_scale):
+            raise ValueError(f"expected {len(self._inv_scale)} inputs, got {len(z)}")
         for j, (zj, inv) in enumerate(zip(z, self._inv_scale), start=1):
             ext[j] = math.tanh(zj * inv)
         cols = self._factor_cols

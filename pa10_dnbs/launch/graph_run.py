@@ -13,7 +13,7 @@ import os
 import signal
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 from .. import JOINT_NAMES
@@ -42,33 +42,36 @@ class GraphOptions:
     effort_timeout_s: float = 1.0
     on_missing_effort: str = "hold"
     progress: bool = False
-    extra_env: dict = field(default_factory=dict)
+    dt_s: float = 1e-3
 
 
 @dataclass
 class GraphResult:
     stats: dict
     exit_codes: dict[str, int]
-    pids: dict[str, int]
     domain_id: int
     wall_total_s: float
-    shm_removed: list[str]
     wire_file: Path
 
 
-class _Stop(BaseException):
-    """Raised in the launcher's main thread by SIGINT or SIGTERM."""
+class _StopRequest:
+    """Set by SIGINT or SIGTERM; the launcher's loops check it (no exception at an arbitrary point,
+    so a signal can neither orphan a child being started nor interrupt the shutdown)."""
+
+    def __init__(self):
+        self.signal_name: str | None = None
+
+    def __call__(self, signum, _frame):
+        if self.signal_name is None:
+            self.signal_name = signal.Signals(signum).name
 
 
-def _stop_on_signals() -> dict:
-    """SIGINT and SIGTERM stop the graph cleanly, even where the parent shell left SIGINT ignored."""
-    def handler(signum, _frame):
-        raise _Stop(signal.Signals(signum).name)
-
+def _catch_signals(stop: _StopRequest) -> dict:
+    """Route SIGINT and SIGTERM to ``stop``, even where the parent shell left SIGINT ignored."""
     previous = {}
     for signum in (signal.SIGINT, signal.SIGTERM):
         previous[signum] = signal.getsignal(signum)
-        signal.signal(signum, handler)
+        signal.signal(signum, stop)
     return previous
 
 
@@ -77,9 +80,9 @@ def pick_domain_id() -> int:
     return 1 + os.getpid() % 101
 
 
-def node_env(domain_id: int, extra: dict) -> dict:
+def node_env(domain_id: int) -> dict:
     env = {**os.environ, "ROS_DOMAIN_ID": str(domain_id), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
-           "PYTHONUNBUFFERED": "1", **extra}
+           "PYTHONUNBUFFERED": "1"}
     env.pop("ROS_LOCALHOST_ONLY", None)  # deprecated in Jazzy; conflicts with the discovery range
     return env
 
@@ -117,7 +120,7 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
     The launcher itself never joins DDS: the wire monitor is one of its child processes.
     """
     domain = opt.domain_id if opt.domain_id is not None else pick_domain_id()
-    env = node_env(domain, opt.extra_env)
+    env = node_env(domain)
     logs = workdir / "logs"
     logs.mkdir(parents=True, exist_ok=True)
     stats_file = workdir / "plant_stats.json"
@@ -126,23 +129,27 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
     t_start = time.monotonic()
     procs: list[ManagedProcess] = []
     failure: str | None = None
-    previous = _stop_on_signals()
+    stop = _StopRequest()
+    previous = _catch_signals(stop)
     try:
         for name, argv in node_commands(opt, stats_file, wire_file):
+            if stop.signal_name:
+                break
             procs.append(ManagedProcess(name, argv, env, logs / f"{name}.log"))
-        say(f"launch: domain {domain}, {len(procs) - 1} nodes: " + ", ".join(f"{p.name}={p.pid}" for p in procs[1:])
-            + f"; wire_monitor={procs[0].pid}")
-        failure = _wait_ready(procs)
-        if failure is None:
+        if not stop.signal_name:
+            say(f"launch: domain {domain}, {len(procs) - 1} nodes: "
+                + ", ".join(f"{p.name}={p.pid}" for p in procs[1:]) + f"; wire_monitor={procs[0].pid}")
+            failure = _wait_ready(procs, stop)
+        if failure is None and not stop.signal_name:
             say("launch: graph ready (every node printed READY)")
-            failure = _watch(procs, opt, say)
-    except _Stop as sig:
-        failure = f"interrupted ({sig})"
+            failure = _watch(procs, opt, say, stop)
     finally:
         codes = stop_all(procs)
+        shm_removed = remove_stale(fastdds_segments() - shm_before)
         for signum, handler in previous.items():
             signal.signal(signum, handler)
-        shm_removed = remove_stale(fastdds_segments() - shm_before)
+    if stop.signal_name:
+        failure = f"interrupted ({stop.signal_name})"
     say("launch: stopped: " + " ".join(f"{n}={c}" for n, c in codes.items())
         + (f"; removed {len(shm_removed)} stale shared-memory segments" if shm_removed else ""))
     bad = {n: c for n, c in codes.items() if c != 0}
@@ -154,8 +161,8 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
     if failure is not None:
         raise GraphFailure(failure, interrupted=failure.startswith("interrupted"))
     stats = json.loads(stats_file.read_text())
-    return GraphResult(stats=stats, exit_codes=codes, pids={p.name: p.pid for p in procs}, domain_id=domain,
-                       wall_total_s=time.monotonic() - t_start, shm_removed=shm_removed, wire_file=wire_file)
+    return GraphResult(stats=stats, exit_codes=codes, domain_id=domain, wall_total_s=time.monotonic() - t_start,
+                       wire_file=wire_file)
 
 
 def _describe(p: ManagedProcess) -> str:
@@ -163,25 +170,27 @@ def _describe(p: ManagedProcess) -> str:
     return f"{what} exited early with code {p.returncode}\n--- last lines of {p.log_path} ---\n{p.tail()}"
 
 
-def _wait_ready(procs: list[ManagedProcess]) -> str | None:
+def _wait_ready(procs: list[ManagedProcess], stop: _StopRequest) -> str | None:
     deadline = time.monotonic() + READY_TIMEOUT_S
-    while time.monotonic() < deadline:
+    while time.monotonic() < deadline and not stop.signal_name:
         for p in procs:
             if p.returncode is not None:
                 return _describe(p)
         if all(p.saw("READY") for p in procs):
             return None
         time.sleep(0.05)
+    if stop.signal_name:
+        return None
     late = [p.name for p in procs if not p.saw("READY")]
     return f"not ready after {READY_TIMEOUT_S:g} s: {', '.join(late)}"
 
 
-def _watch(procs: list[ManagedProcess], opt: GraphOptions, say) -> str | None:
+def _watch(procs: list[ManagedProcess], opt: GraphOptions, say, stop: _StopRequest) -> str | None:
     monitor, plant = procs[0], procs[-1]
     limit_s = 120.0 + 50.0 * opt.duration_s  # generous: a run slower than 1/50 real time is broken
     deadline = time.monotonic() + limit_s
     bar = None
-    n_steps = int(round(opt.duration_s * 1000))
+    n_steps = int(round(opt.duration_s / opt.dt_s))
     if opt.progress:
         from tqdm import tqdm
 
@@ -189,6 +198,8 @@ def _watch(procs: list[ManagedProcess], opt: GraphOptions, say) -> str | None:
     announced = False
     try:
         while time.monotonic() < deadline:
+            if stop.signal_name:
+                return None
             if not announced and plant.saw("RUNNING"):
                 say("launch: plant running")
                 announced = True
@@ -205,10 +216,11 @@ def _watch(procs: list[ManagedProcess], opt: GraphOptions, say) -> str | None:
         else:
             return f"run did not finish within {limit_s:g} s"
         end = time.monotonic() + 10.0  # the last messages may still be in flight
-        while not monitor.saw("COMPLETE") and time.monotonic() < end:
+        while not monitor.saw("COMPLETE") and time.monotonic() < end and not stop.signal_name:
             time.sleep(0.05)
-        if not monitor.saw("COMPLETE"):
-            return "the wire monitor did not receive the whole run (see logs/wire_monitor.log)"
+        if not monitor.saw("COMPLETE") and not stop.signal_name:
+            return ("the wire monitor did not receive the whole run\n--- last lines of its log ---\n"
+                    + monitor.tail())
         return None
     finally:
         if bar is not None:

@@ -23,15 +23,19 @@ class ManagedProcess:
         self.progress = 0
         self._log = open(log_path, "w", buffering=1)
         self.proc = subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                     stdin=subprocess.DEVNULL, text=True, bufsize=1)
+                                     stdin=subprocess.DEVNULL, text=True, errors="replace", bufsize=1)
         self._reader = threading.Thread(target=self._read, name=f"log-{name}", daemon=True)
         self._reader.start()
 
     def _read(self) -> None:
+        # This thread must keep draining the pipe whatever arrives, or the child blocks on a full pipe.
         for line in self.proc.stdout:
             self._log.write(line)
             if line.startswith("PROGRESS "):
-                self.progress = int(line.split()[1])
+                try:
+                    self.progress = int(line.split()[1])
+                except (IndexError, ValueError):
+                    pass
             elif line.startswith(("READY", "RUNNING", "FAILED", "COMPLETE")):
                 self.lines.append(line.strip())
 

@@ -19,13 +19,18 @@ from .markdown import report_markdown
 
 
 class OutputExistsError(FileExistsError):
-    """The output directory exists and ``--force`` was not given."""
+    """The output directory exists and ``--force`` was not given, or cannot be written."""
 
 
 def check_output_dir(out: Path, force: bool) -> None:
     """Fail early, before any work, if ``out`` exists and may not be replaced."""
     if out.exists() and not force:
         raise OutputExistsError(f"output directory exists: {out} (use --force to replace it)")
+    parent = Path(out).resolve().parent
+    while not parent.exists():
+        parent = parent.parent
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise OutputExistsError(f"cannot write under {parent} (output directory {out})")
 
 
 @contextmanager
@@ -37,16 +42,21 @@ def atomic_output_dir(out: Path, force: bool):
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     try:
         yield tmp
+        old = None
         if out.exists():
             old = out.with_name(f".{out.name}.old-{os.getpid()}")
             out.rename(old)
+        try:
             tmp.rename(out)
-            shutil.rmtree(old)
-        else:
-            tmp.rename(out)
+        except BaseException:
+            if old is not None:
+                old.rename(out)  # put the previous output back
+            raise
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
 
 
 def write_run(directory: Path, run: RunData, metrics: dict) -> list[tuple[str, str]]:

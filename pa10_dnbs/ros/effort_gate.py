@@ -1,8 +1,9 @@
 """The plant's side of the loop, without ROS: which torque to apply at each step.
 
 Lockstep: step k is applied when every joint's effort answering state k has
-arrived, or when the timeout expires; a missing (or non-finite) effort is
-replaced by the joint's last applied torque ("hold") or zero, and counted.
+arrived, or when the timeout expires; a missing effort is replaced by the
+joint's last applied torque ("hold") or zero, and counted; so is a non-finite
+one, at once.
 Realtime: at the tick that advances the plant from state k to k+1, the latest
 effort of each joint is applied (zero-order hold); a joint whose effort
 answering state k (the state published one tick earlier) has not arrived
@@ -37,10 +38,19 @@ class EffortGate:
         self.ticks_all_on_time = 0
 
     def offer(self, joint: int, step: int, effort: float) -> bool:
-        """Record an effort; True when all joints have answered the current step."""
+        """Record an effort; True when all joints have answered the current step.
+
+        A non-finite effort for the current step counts as that joint's answer,
+        replaced at once by its last applied torque ("hold") or zero, and counted.
+        """
         if not math.isfinite(effort):
             self.nonfinite[joint] += 1
-            return False
+            if step != self.step or self._have[joint]:
+                return False
+            effort = self.applied[joint] if self.on_missing == "hold" else 0.0
+            self._efforts[joint] = effort
+            self._have[joint] = True
+            return bool(self._have.all())
         if step > self.latest_step[joint]:
             self.latest[joint] = effort
             self.latest_step[joint] = step

@@ -25,9 +25,10 @@ class ReferenceNode(Node):
     def __init__(self):
         super().__init__("reference")
         p = declare(self, {"config_file": "", "batch_steps": 100, "lookahead_steps": 150})
-        if p["batch_steps"] < 1 or p["lookahead_steps"] < 3:
-            raise ValueError("batch_steps must be >= 1 and lookahead_steps >= 3")
         cfg = load_node_config(p["config_file"])
+        preview = cfg["reference"]["preview_steps"]
+        if p["batch_steps"] < 1 or p["lookahead_steps"] <= preview:
+            raise ValueError(f"batch_steps must be >= 1 and lookahead_steps > reference.preview_steps = {preview}")
         self.reference = build_reference(cfg)
         self.clock_ = StepClock(cfg["simulation"]["dt_s"])
         self.batch = p["batch_steps"]

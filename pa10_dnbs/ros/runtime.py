@@ -24,6 +24,7 @@ from rclpy.experimental import EventsExecutor
 from rclpy.task import Future
 
 SLICE_S = 0.2  # longest a spin call runs before the stop future is checked again
+TEARDOWN_LIMIT_S = 5.0  # a teardown that takes longer is cut short
 
 
 def spin_until(executor, future: Future, stop: Future) -> None:
@@ -38,11 +39,11 @@ def announce_ready(name: str) -> None:
 
 
 def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
-    """Create the node, spin until it sets ``node.done`` or a signal arrives; return the exit code.
+    """Create the node and spin it until SIGINT or SIGTERM (or its own ``loop`` returns); return the exit code.
 
     ``make_node`` builds the node after ``rclpy.init``; the node may define
-    ``done`` (a Future), ``exit_code`` (int), ``loop(executor)`` (its own spin
-    loop) and ``close()`` (flush files before shutdown).
+    ``exit_code`` (int), ``loop(executor, stop)`` (its own spin loop, which
+    must return once ``stop`` is done) and ``close()`` (write files, report).
     """
     rclpy.init(args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     stop = Future()
@@ -59,8 +60,6 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
     try:
         node = make_node()
         executor.add_node(node)
-        done = getattr(node, "done", None) or Future()
-        done.add_done_callback(lambda _: stop.set_result("done") if not stop.done() else None)
         if hasattr(node, "loop"):
             node.loop(executor, stop)
         else:
@@ -78,7 +77,7 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
         # Last resort if teardown still hangs: the watchdog thread can only run
         # while the main thread releases the GIL, so SIGALRM (default action:
         # terminate) backs it up.
-        _arm_teardown_watchdog(code)
+        watchdog = _arm_teardown_watchdog(code)
         signal.alarm(int(TEARDOWN_LIMIT_S) + 2)
         if node is not None and hasattr(node, "close"):
             try:
@@ -93,10 +92,8 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
             _release_entities(node)
         rclpy.try_shutdown()
         signal.alarm(0)
+        watchdog.cancel()
     return code
-
-
-TEARDOWN_LIMIT_S = 5.0
 
 
 def _release_entities(node) -> None:
@@ -117,7 +114,7 @@ def _release_entities(node) -> None:
         node.destroy_service(srv)
 
 
-def _arm_teardown_watchdog(code: int) -> None:
+def _arm_teardown_watchdog(code: int) -> threading.Timer:
     def expire():
         print(f"teardown hung for {TEARDOWN_LIMIT_S:g} s; exiting", file=sys.stderr, flush=True)
         os._exit(code if code else 3)
@@ -125,3 +122,4 @@ def _arm_teardown_watchdog(code: int) -> None:
     timer = threading.Timer(TEARDOWN_LIMIT_S, expire)
     timer.daemon = True
     timer.start()
+    return timer

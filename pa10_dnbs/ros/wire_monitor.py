@@ -10,6 +10,7 @@ The launcher runs it as its own process, so the launcher never joins DDS.
 from __future__ import annotations
 
 import os
+import struct
 import sys
 from pathlib import Path
 
@@ -40,7 +41,10 @@ class WireMonitorNode(Node):
         self.clock = StepClock(self.dt_s)
         nj = len(JOINT_NAMES)
         self.pos, self.vel, self.eff, self.ref = (np.full((self.n + 1, nj), np.nan) for _ in range(4))
+        self.got_state = np.zeros(self.n + 1, dtype=bool)   # NaN in the data is data, not a gap
+        self.got_ref = np.zeros((self.n + 1, nj), dtype=bool)
         self.received = 0
+        self.malformed = 0
         self._ref_missing = self.n
         self._announced = False
         self.create_subscription(JointState, JOINT_STATES, self._on_joint_states, record_qos(), raw=True)
@@ -50,9 +54,14 @@ class WireMonitorNode(Node):
         announce_ready("wire_monitor")
 
     def _on_joint_states(self, data: bytes) -> None:
-        sec, nanosec, _, pos, vel, eff = joint_state_cdr.decode(data)
+        try:
+            sec, nanosec, _, pos, vel, eff = joint_state_cdr.decode(data)
+        except (ValueError, struct.error, UnicodeDecodeError):
+            self.malformed += 1
+            return
         k = self.clock.step_of_sec_nanosec(sec, nanosec)
-        if 0 <= k <= self.n and np.isnan(self.pos[k, 0]):
+        if 0 <= k <= self.n and not self.got_state[k]:
+            self.got_state[k] = True
             self.received += 1
             self.pos[k], self.vel[k], self.eff[k] = pos, vel, eff
             if k % 500 == 0:
@@ -65,7 +74,8 @@ class WireMonitorNode(Node):
             k = k0 + self.clock.steps_of(pt.time_from_start)
             if 0 <= k < self.n:
                 self.ref[k, joint] = pt.positions[0]
-        self._ref_missing = int(np.isnan(self.ref[: self.n]).any(axis=1).sum())
+                self.got_ref[k, joint] = True
+        self._ref_missing = int((~self.got_ref[: self.n]).any(axis=1).sum())
         self._check_complete()
 
     def _check_complete(self) -> None:
@@ -76,7 +86,7 @@ class WireMonitorNode(Node):
     def close(self) -> None:
         tmp = f"{self.out_file}.tmp.npz"
         np.savez(tmp, dt_s=self.dt_s, position_rad=self.pos, velocity_rad_s=self.vel, effort_nm=self.eff,
-                 reference_rad=self.ref, received=self.received)
+                 reference_rad=self.ref, got_state=self.got_state, got_ref=self.got_ref, malformed=self.malformed)
         os.replace(tmp, self.out_file)
 
 
@@ -84,10 +94,11 @@ def load_wire_run(path: Path, controller: str, torque_limit_nm, wall_time_s: flo
     """RunData from the monitor's file, and a description of what is missing (None when complete)."""
     with np.load(path) as z:
         pos, vel, eff, ref = z["position_rad"], z["velocity_rad_s"], z["effort_nm"], z["reference_rad"]
+        got_state, got_ref = z["got_state"], z["got_ref"]
         dt = float(z["dt_s"])
     n = pos.shape[0] - 1
-    states = int(np.isnan(pos[:, 0]).sum())
-    refs = int(np.isnan(ref[:n]).any(axis=1).sum())
+    states = int((~got_state).sum())
+    refs = int((~got_ref[:n]).any(axis=1).sum())
     missing = None if states == 0 and refs == 0 else (
         f"{states} of {n + 1} joint states and {refs} of {n} reference steps missing")
     run = RunData(controller=controller, dt_s=dt, joint_names=JOINT_NAMES, torque_limit_nm=np.asarray(torque_limit_nm),
