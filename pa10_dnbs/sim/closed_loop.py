@@ -7,6 +7,7 @@ import numpy as np
 
 from .. import JOINT_NAMES
 from ..controller_factory import build_controller, build_reference
+from ..core.reference import ReferenceSample
 from ..plant.from_config import open_client, plant_from_config
 from .run_data import RunData
 
@@ -24,16 +25,16 @@ def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = Fal
     client = open_client()
     try:
         plant = plant_from_config(cfg, client)
-        pos = np.empty((n, 7))
-        vel = np.empty((n, 7))
-        tau = np.empty((n, 7))
+        nj = len(JOINT_NAMES)
+        pos = np.empty((n, nj))
+        vel = np.empty((n, nj))
+        tau = np.empty((n, nj))
         ref = reference.position(np.arange(n))
         ref_vel = reference.velocity(np.arange(n))
         ref_ahead = reference.position(np.arange(n) + reference.preview_steps)
-        from ..core.reference import ReferenceSample
 
         bar = _progress_bar(n, controller) if progress else None
-        u = np.empty(7)
+        u = np.empty(nj)
         t0 = time.perf_counter()
         for k in range(n):
             q, qd = plant.state
