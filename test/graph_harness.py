@@ -61,6 +61,12 @@ class Launcher:
         pids["wire_monitor"] = int(m.group(2))
         return pids
 
+    def wait_running(self, timeout: float = 60) -> dict[str, int]:
+        """Wait until the plant is stepping; return the PIDs of the nodes and the wire monitor."""
+        pids = self.node_pids()
+        self.wait_for("launch: plant running", timeout)
+        return pids
+
     def interrupt(self):
         self.proc.send_signal(signal.SIGINT)
 

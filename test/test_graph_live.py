@@ -23,8 +23,7 @@ def test_each_controller_sees_only_its_own_joint_and_sigint_stops_cleanly(tmp_pa
     shm_before = fastdds_segments()
     la = Launcher("--duration", 120, "--out", tmp_path / "never_written", domain_id=62)
     try:
-        pids = la.node_pids()
-        la.wait_for("launch: plant running", 60)
+        pids = la.wait_running()
         found = _introspect(62)
         assert set(found) == set(JOINT_NAMES)
         for j, (subs, pubs) in found.items():
@@ -49,8 +48,7 @@ def test_killed_controller_stops_the_launcher_naming_the_joint(tmp_path):
     shm_before = fastdds_segments()
     la = Launcher("--duration", 120, "--out", tmp_path / "o", domain_id=63)
     try:
-        pids = la.node_pids()
-        la.wait_for("launch: plant running", 60)
+        pids = la.wait_running()
         time.sleep(1.0)
         os.kill(pids["joint_controller_e1"], signal.SIGKILL)
         t0 = time.monotonic()
@@ -71,8 +69,7 @@ def test_stalled_controller_is_timed_out_held_and_counted(tmp_path):
     la = Launcher("--duration", 3, "--effort-timeout", 0.4, "--on-missing-effort", "hold", "--out", out,
                   domain_id=64)
     try:
-        pids = la.node_pids()
-        la.wait_for("launch: plant running", 60)
+        pids = la.wait_running()
         time.sleep(0.5)
         os.kill(pids["joint_controller_w1"], signal.SIGSTOP)
         time.sleep(1.5)
