@@ -23,6 +23,7 @@ import time
 
 import numpy as np
 from rclpy.node import Node
+from rclpy.task import Future
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
@@ -71,6 +72,7 @@ class PlantNode(Node):
         self.resends = np.zeros(len(JOINT_NAMES), dtype=np.int64)
         self.late_ticks = 0
         self.finished = False
+        self._finished_future = Future()  # done when the last step is applied (lockstep spin ends on it)
         self.exit_code = 0  # a signal before the end is a clean stop; "completed" in the stats says if it ran out
         self.wall_start = self.wall_end = math.nan
         announce_ready("plant")
@@ -115,9 +117,8 @@ class PlantNode(Node):
         if k >= self.n_steps:
             self.finished = True
             self.wall_end = time.perf_counter()
-            fut = getattr(self, "_finished_future", None)
-            if fut is not None and not fut.done():
-                fut.set_result(None)
+            if not self._finished_future.done():
+                self._finished_future.set_result(None)
 
     def _wait_for_graph(self, executor, stop) -> bool:
         t0 = time.perf_counter()
@@ -157,7 +158,6 @@ class PlantNode(Node):
         # a 10 ms wall-clock timer handles resends and timeouts.
         self._last_resend = (-1, 0.0)
         timer = self.create_timer(0.01, self._check_lockstep_timeouts)
-        self._finished_future = type(stop)()
         spin_until(executor, self._finished_future, stop)
         self.destroy_timer(timer)
 
