@@ -1,4 +1,4 @@
-"""``pa10-dnbs`` command line: simulate (in-process) and launch (ROS 2 node graph).
+"""``pa10-dnbs`` command line: simulate (in-process), launch (ROS 2 node graph), analyse and replay bags.
 
 Exit codes: 0 success, 1 run failure, 2 bad input (config, arguments, existing output).
 """
@@ -9,6 +9,8 @@ import sys
 from pathlib import Path
 
 from .config import ConfigError, default_config_path
+from .bag.bag_reader import BagError
+from .bag.bag_writer import BagExistsError
 from .report.outputs import OutputExistsError
 
 
@@ -26,7 +28,21 @@ def _launch(args: argparse.Namespace) -> int:
                       duration_s=args.duration, out=args.out, force=args.force,
                       progress=not args.no_progress and sys.stderr.isatty(), domain_id=args.domain_id,
                       reliability=args.reliability, effort_timeout_s=args.effort_timeout,
-                      on_missing_effort=args.on_missing_effort)
+                      on_missing_effort=args.on_missing_effort, record=args.record)
+
+
+def _analyse(args: argparse.Namespace) -> int:
+    from .commands.analyse import run_analyse
+
+    return run_analyse(args.bag, args.out, args.force, args.config)
+
+
+def _replay(args: argparse.Namespace) -> int:
+    from .commands.replay import run_replay
+
+    return run_replay(args.bag, rate=args.rate, topics=args.topics, start_offset_s=args.start_offset, loop=args.loop,
+                      clock_hz=args.clock, wait_for_subscribers_s=args.wait_for_subscribers,
+                      queue_depth=args.queue_depth)
 
 
 def _add_run_args(p: argparse.ArgumentParser, controllers: tuple[str, ...]) -> None:
@@ -57,7 +73,33 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--effort-timeout", type=float, default=1.0, metavar="SECONDS",
                     help="lockstep: wall time to wait for a joint's effort before holding/zeroing it")
     la.add_argument("--on-missing-effort", choices=("hold", "zero"), default="hold")
+    la.add_argument("--record", type=Path, default=None, metavar="BAG_DIR",
+                    help="record every topic into a rosbag2 MCAP bag (replaced only with --force)")
     la.set_defaults(func=_launch)
+
+    an = sub.add_parser("analyse", help="metrics, figures and report of a recorded run, from its bag alone")
+    an.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 bag directory (metadata.yaml + .mcap)")
+    an.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
+    an.add_argument("--config", type=Path, default=None,
+                    help="YAML config (default: the one stored in the bag, else the shipped default)")
+    an.add_argument("--force", action="store_true", help="replace an existing output directory")
+    an.set_defaults(func=_analyse)
+
+    rp = sub.add_parser("replay", help="publish a bag's topics with their recorded timing (like ros2 bag play)")
+    rp.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 bag directory")
+    rp.add_argument("--rate", type=float, default=1.0, help="playback speed factor (default 1)")
+    rp.add_argument("--topics", nargs="+", default=None, metavar="TOPIC", help="only these topics (default: all)")
+    rp.add_argument("--start-offset", type=float, default=0.0, metavar="SECONDS",
+                    help="skip the bag's first SECONDS (of its own timeline)")
+    rp.add_argument("--loop", action="store_true", help="play again and again until Ctrl-C")
+    rp.add_argument("--clock", type=float, nargs="?", const=100.0, default=0.0, metavar="HZ",
+                    help="publish /clock from the bag's timeline at HZ (default 100 when given); "
+                         "the recorded /clock is then not replayed")
+    rp.add_argument("--wait-for-subscribers", type=float, default=0.0, metavar="SECONDS",
+                    help="before playing, wait up to SECONDS until every topic has a subscriber (exit 1 if not)")
+    rp.add_argument("--queue-depth", type=int, default=1000,
+                    help="keep_last depth of each publisher, at least (default 1000)")
+    rp.set_defaults(func=_replay)
     return parser
 
 
@@ -65,7 +107,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except (ConfigError, OutputExistsError) as exc:
+    except (ConfigError, OutputExistsError, BagExistsError, BagError) as exc:
         print(f"pa10-dnbs: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:

@@ -1,4 +1,4 @@
-"""launch_testing-style helpers without the launch package: start the launcher, wait for lines, stop it."""
+"""launch_testing-style helpers without the launch package: start the launcher or a node, wait for lines, stop it."""
 from __future__ import annotations
 
 import os
@@ -13,16 +13,22 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 
 
-class Launcher:
-    """``pa10-dnbs launch`` as a child process whose output lines can be awaited."""
+def ros_env(domain_id: int) -> dict:
+    """Environment of a test's ROS process: its own domain, discovery on this host only."""
+    env = {**os.environ, "PYTHONPATH": str(REPO), "PYTHONUNBUFFERED": "1", "ROS_DOMAIN_ID": str(domain_id),
+           "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    env.pop("ROS_LOCALHOST_ONLY", None)
+    return env
 
-    def __init__(self, *args, domain_id: int):
+
+class Proc:
+    """A child process (stdout and stderr merged) whose output lines can be awaited."""
+
+    def __init__(self, argv: list, domain_id: int):
         self.lines: list[str] = []
         self._cond = threading.Condition()
-        env = {**os.environ, "PYTHONPATH": str(REPO), "PYTHONUNBUFFERED": "1"}
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "pa10_dnbs.cli", "launch", "--domain-id", str(domain_id), "--no-progress",
-             *map(str, args)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=REPO)
+        self.proc = subprocess.Popen([str(a) for a in argv], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                     text=True, env=ros_env(domain_id), cwd=REPO)
         self._t = threading.Thread(target=self._read, daemon=True)
         self._t.start()
 
@@ -55,18 +61,6 @@ class Launcher:
     def output(self) -> str:
         return "\n".join(self.lines)
 
-    def node_pids(self) -> dict[str, int]:
-        m = self.wait_for(r"launch: domain \d+, 9 nodes: (.*); wire_monitor=(\d+)", 60)
-        pids = {k: int(v) for k, v in (kv.split("=") for kv in m.group(1).split(", "))}
-        pids["wire_monitor"] = int(m.group(2))
-        return pids
-
-    def wait_running(self, timeout: float = 60) -> dict[str, int]:
-        """Wait until the plant is stepping; return the PIDs of the nodes and the wire monitor."""
-        pids = self.node_pids()
-        self.wait_for("launch: plant running", timeout)
-        return pids
-
     def interrupt(self):
         self.proc.send_signal(signal.SIGINT)
 
@@ -74,6 +68,26 @@ class Launcher:
         if self.proc.poll() is None:
             self.proc.kill()
             self.proc.wait()
+
+
+class Launcher(Proc):
+    """``pa10-dnbs launch`` as a child process."""
+
+    def __init__(self, *args, domain_id: int):
+        super().__init__([sys.executable, "-m", "pa10_dnbs.cli", "launch", "--domain-id", domain_id, "--no-progress",
+                          *args], domain_id)
+
+    def node_pids(self) -> dict[str, int]:
+        m = self.wait_for(r"launch: domain \d+, \d+ nodes: (.*); observer (\w+)=(\d+)", 60)
+        pids = {k: int(v) for k, v in (kv.split("=") for kv in m.group(1).split(", "))}
+        pids[m.group(2)] = int(m.group(3))
+        return pids
+
+    def wait_running(self, timeout: float = 60) -> dict[str, int]:
+        """Wait until the plant is stepping; return the PIDs of the nodes and the observer (wire monitor or recorder)."""
+        pids = self.node_pids()
+        self.wait_for("launch: plant running", timeout)
+        return pids
 
 
 def alive(pid: int) -> bool:

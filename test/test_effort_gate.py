@@ -64,3 +64,27 @@ def test_realtime_zero_order_hold_and_miss_count():
     assert g.take_realtime().tolist() == [3.0, 2.0]  # held
     assert g.misses.tolist() == [0, 1]
     assert (g.ticks, g.ticks_all_on_time) == (2, 1)
+
+
+def test_efforts_ahead_are_kept_until_their_step():
+    """A player re-driving the plant sends efforts for later steps; each is applied at its own step."""
+    gate = EffortGate(2)
+    assert not gate.offer(0, 1, 10.0) and not gate.offer(1, 1, 11.0)   # step 1, early
+    assert not gate.offer(0, 2, 20.0)
+    assert not gate.ready
+    gate.offer(0, 0, 1.0)
+    assert gate.offer(1, 0, 2.0)
+    np.testing.assert_array_equal(gate.take_lockstep(), [1.0, 2.0])
+    assert gate.ready                      # step 1 was complete before it came
+    np.testing.assert_array_equal(gate.take_lockstep(), [10.0, 11.0])
+    assert gate.missing == [1]             # step 2: joint 1 still owes
+    assert gate.offer(1, 2, 21.0)
+    np.testing.assert_array_equal(gate.take_lockstep(), [20.0, 21.0])
+    assert gate.timeouts.sum() == 0 and gate.stale.sum() == 0
+
+
+def test_efforts_ahead_are_bounded():
+    gate = EffortGate(1, max_pending=2)
+    for k in (1, 2, 3, 4):
+        gate.offer(0, k, float(k))
+    assert gate.dropped_ahead.tolist() == [2]

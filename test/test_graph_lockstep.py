@@ -1,32 +1,19 @@
 """The node graph in lockstep: ready, converging over ROS, bit-identical to in-process, clean shutdown.
 
-One 6 s DNBS run (module fixture) is checked from several sides.
+One 6 s DNBS run, recorded into a bag (session fixture ``lockstep_run`` in conftest.py), is checked from
+several sides; test_bag_graph.py checks its bag.
 """
 import json
 
 import numpy as np
 import pytest
 
-from graph_harness import Launcher, alive, exit_codes
+from graph_harness import alive, exit_codes
 from pa10_dnbs.launch.shm_cleanup import fastdds_segments
 from pa10_dnbs.sim.closed_loop import simulate
 from pa10_dnbs.sim.run_data import RunData
 
-DURATION_S = 6.0
-
-
-@pytest.fixture(scope="module")
-def lockstep_run(tmp_path_factory):
-    out = tmp_path_factory.mktemp("graph") / "run"
-    shm_before = fastdds_segments()
-    la = Launcher("--mode", "lockstep", "--controller", "dnbs", "--duration", DURATION_S, "--out", out,
-                  domain_id=61)
-    try:
-        pids = la.node_pids()
-        rc = la.wait(timeout=300)
-    finally:
-        la.kill()
-    return {"out": out, "rc": rc, "output": la.output, "pids": pids, "shm_before": shm_before}
+from conftest import LOCKSTEP_DURATION_S as DURATION_S
 
 
 def test_every_node_reported_ready_and_ran(lockstep_run):
@@ -34,7 +21,9 @@ def test_every_node_reported_ready_and_ran(lockstep_run):
     assert "launch: graph ready (every node printed READY)" in lockstep_run["output"]
     assert "launch: plant running" in lockstep_run["output"]
     logs = lockstep_run["out"] / "logs"
-    names = ["wire_monitor", "reference", "plant"] + [f"joint_controller_{j}" for j in ("s1", "s2", "s3", "e1", "e2", "w1", "w2")]
+    # recorded with --record: the recorder is the observer, no wire monitor
+    names = ["recorder", "reference", "plant"] + [f"joint_controller_{j}" for j in ("s1", "s2", "s3", "e1", "e2", "w1", "w2")]
+    assert not (logs / "wire_monitor.log").exists()
     for n in names:
         assert "READY" in (logs / f"{n}.log").read_text(), n
 
@@ -62,7 +51,7 @@ def test_bit_identical_to_in_process_simulation(lockstep_run, _default_cfg):
 
 def test_clean_shutdown(lockstep_run):
     codes = exit_codes(lockstep_run["output"])
-    assert len(codes) == 10 and all(c == 0 for c in codes.values()), codes  # 9 nodes + wire monitor
+    assert len(codes) == 10 and all(c == 0 for c in codes.values()), codes  # 9 nodes and the recorder
     assert not [n for n, pid in lockstep_run["pids"].items() if alive(pid)]
     leaked = fastdds_segments() - lockstep_run["shm_before"]
     assert not leaked, leaked

@@ -5,16 +5,22 @@ import math
 import sys
 from pathlib import Path
 
+from .. import JOINT_NAMES
+from ..bag.analysis import wire_record_from_bag
+from ..bag.bag_reader import Bag, BagError
+from ..bag.bag_writer import check_bag_path
 from ..config import ConfigError, default_config_path, load_config
+from ..kinematics.urdf_chain import UrdfChain
 from ..launch.graph_run import GraphFailure, GraphOptions, run_graph
 from ..report.metrics_file import effective_window, metrics_dict
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
+from ..topics import CLOCK, JOINT_STATES, effort_topic, state_topic
 from ..ros.wire_monitor import load_wire_run
 
 
 def run_launch(config_path: Path | None, mode: str, controller: str, duration_s: float | None, out: Path,
                force: bool, progress: bool, domain_id: int | None, reliability: str, effort_timeout_s: float,
-               on_missing_effort: str) -> int:
+               on_missing_effort: str, record: Path | None = None) -> int:
     """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code."""
     config_path = Path(config_path).resolve() if config_path else default_config_path()
     cfg = load_config(config_path)
@@ -31,42 +37,83 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     if n_steps < 2:
         raise ConfigError(f"--duration: {duration_s} s is shorter than two steps of {dt} s")
     check_output_dir(out, force)
+    if record is not None:
+        record = Path(record).resolve()
+        if record == Path(out).resolve() or Path(out).resolve() in record.parents:
+            raise ConfigError(f"--record: the bag {record} must not be inside the output directory {out}")
+        check_bag_path(record, force)
     opt = GraphOptions(config_path=config_path, mode=mode, controller=controller, duration_s=n_steps * dt,
                        domain_id=domain_id, reliability=reliability, effort_timeout_s=effort_timeout_s,
-                       on_missing_effort=on_missing_effort, progress=progress, dt_s=dt)
+                       on_missing_effort=on_missing_effort, progress=progress, dt_s=dt, record_bag=record,
+                       force_bag=force)
     window = effective_window(n_steps * dt, cfg["simulation"]["window_s"])
 
     try:
         with atomic_output_dir(out, force) as tmp:
             result = run_graph(opt, tmp, say=lambda s: print(s, flush=True))
             stats = result.stats
-            run, missing = load_wire_run(result.wire_file, controller, cfg["plant"]["torque_limit_nm"],
-                                         stats["wall_time_s"])
+            if record is None:
+                run, missing = load_wire_run(result.wire_file, controller, cfg["plant"]["torque_limit_nm"],
+                                             stats["wall_time_s"])
+                source = "the wire monitor's record of /joint_states and the reference topics"
+            else:
+                run, missing = _bag_run(record, dt, n_steps, controller, cfg, stats["wall_time_s"],
+                                        lockstep=mode == "lockstep")
+                source = f"the bag's /joint_states and reference topics ({record})"
             if missing:
-                raise GraphFailure(f"the wire monitor's record is incomplete: {missing}")
+                raise GraphFailure(f"the record of the run is incomplete: {missing}")
             metrics = metrics_dict(
                 run, window, source="ros-graph", mode=mode, config_file=str(config_path),
                 seed=cfg["simulation"]["seed"], reliability=reliability, domain_id=result.domain_id,
                 wall_time_total_s=result.wall_total_s, limit_hits=stats["limit_hits"],
                 timing={k: stats[k] for k in ("late_ticks", "on_time_fraction", "effort_timeout_s",
                                                "on_missing_effort")} | {"joints": stats["joints"]},
-                node_exit_codes=result.exit_codes)
+                node_exit_codes=result.exit_codes, bag=str(record) if record else None)
             notes = [f"config: `{config_path}`",
                      f"source: ROS 2 node graph, {mode} mode, {reliability} QoS, domain {result.domain_id}; "
-                     "time series rebuilt from /joint_states and the reference topics",
+                     f"time series rebuilt from {source}",
                      _timing_note(stats)]
             if tuple(window) != tuple(cfg["simulation"]["window_s"]):
                 notes.append(f"run shorter than the configured window {list(cfg['simulation']['window_s'])}: "
                              "metrics over the second half instead")
-            write_report(tmp, [run], [metrics], title=f"PA10-7CE node graph run ({mode})", notes=notes)
+            write_report(tmp, [run], [metrics], title=f"PA10-7CE node graph run ({mode})", notes=notes,
+                         chain=UrdfChain.from_file(cfg["plant"]["urdf"]))
     except GraphFailure as exc:
         print(f"pa10-dnbs launch: FAILED: {exc}", file=sys.stderr, flush=True)
+        if record is not None and (record / "metadata.yaml").is_file():
+            print(f"pa10-dnbs launch: the bag recorded so far is closed and readable: {record}", file=sys.stderr)
         return 130 if exc.interrupted else 1
     m = metrics
     print(f"{controller} ({mode}): worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over {m['window_s']} s, "
           f"real-time factor {m['real_time_factor']:.2f}")
+    if record is not None:
+        size = sum(f.stat().st_size for f in record.iterdir())
+        print(f"recorded {record} ({size / 1e6:.1f} MB, {size / 1e6 / (n_steps * dt):.2f} MB per simulated second)")
     print(f"wrote {out}/report.md")
     return 0 if m["all_finite"] and m["torques_within_limits"] else 1
+
+
+def _bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, cfg: dict, wall_time_s: float,
+             lockstep: bool):
+    """(RunData, what is missing or None) rebuilt from the bag just recorded; a bad bag is a failed run.
+
+    In lockstep every per-step topic must hold exactly one message per step (n_steps + 1 with step 0).
+    """
+    try:
+        with Bag(bag_path) as bag:
+            rec = wire_record_from_bag(bag, dt, n_steps)
+            counts = {t: i.count for t, i in bag.topics.items()}
+    except BagError as exc:
+        raise GraphFailure(f"the recorded bag is not readable: {exc}") from None
+    problems = [rec.missing()] if rec.missing() else []
+    if rec.malformed:
+        problems.append(f"{rec.malformed} undecodable messages")
+    if lockstep:
+        per_step = [CLOCK, JOINT_STATES] + [t for j in JOINT_NAMES for t in (state_topic(j), effort_topic(j))]
+        problems += [f"{t} has {counts.get(t, 0)} messages, not one per step ({n_steps + 1})"
+                     for t in per_step if counts.get(t, 0) != n_steps + 1]
+    run = rec.run_data(controller, JOINT_NAMES, cfg["plant"]["torque_limit_nm"], wall_time_s)
+    return run, "; ".join(problems) or None
 
 
 def _timing_note(stats: dict) -> str:

@@ -5,6 +5,7 @@ import math
 from pathlib import Path
 
 from ..config import ConfigError, default_config_path, load_config
+from ..kinematics.urdf_chain import UrdfChain
 from ..report.metrics_file import effective_window, metrics_dict
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..sim.closed_loop import simulate
@@ -37,7 +38,8 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
         notes.append(f"run shorter than the configured window {cfg['simulation']['window_s']}: "
                      f"metrics over the second half instead")
     with atomic_output_dir(out, force) as tmp:
-        write_report(tmp, runs, metrics, title="PA10-7CE closed-loop run", notes=notes)
+        write_report(tmp, runs, metrics, title="PA10-7CE closed-loop run", notes=notes,
+                     chain=UrdfChain.from_file(cfg["plant"]["urdf"]))
     for m in metrics:
         print(f"{m['controller']}: worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over "
               f"{m['window_s']} s, {m['real_time_factor']:.1f}x real time")

@@ -1,7 +1,8 @@
 """Run the whole node graph once: start, wait until ready, run, stop, collect.
 
-Nine node processes (reference, seven joint controllers, plant) and a wire
-monitor that records what they send, on a private ROS_DOMAIN_ID with
+Nine node processes (reference, seven joint controllers, plant) and one
+observer that records what they send (the wire monitor, or with a bag the
+recorder), on a private ROS_DOMAIN_ID with
 discovery limited to this host. The launcher only supervises: it never joins
 DDS itself, so once its children have exited, every shared-memory segment of
 the run is unmapped and a leftover (from a killed node) can be removed.
@@ -17,6 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .. import JOINT_NAMES
+from ..topics import CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, effort_topic, reference_topic, state_topic
 from .processes import ManagedProcess, stop_all
 from .shm_cleanup import fastdds_segments, remove_stale
 
@@ -43,6 +45,8 @@ class GraphOptions:
     on_missing_effort: str = "hold"
     progress: bool = False
     dt_s: float = 1e-3
+    record_bag: Path | None = None   # record every topic into this rosbag2 MCAP bag directory
+    force_bag: bool = False
 
 
 @dataclass
@@ -51,7 +55,8 @@ class GraphResult:
     exit_codes: dict[str, int]
     domain_id: int
     wall_total_s: float
-    wire_file: Path
+    wire_file: Path | None   # the wire monitor's record; None when the run went into the bag
+    bag: Path | None = None
 
 
 class _StopRequest:
@@ -94,30 +99,55 @@ def _ros_args(node: str, params: dict) -> list[str]:
     return args
 
 
+def graph_topics() -> list[str]:
+    """Every topic of the graph as recorder specs ('/name:pkg/msg/Type')."""
+    specs = [f"{CLOCK}:rosgraph_msgs/msg/Clock", f"{JOINT_STATES}:sensor_msgs/msg/JointState",
+             f"{ROBOT_DESCRIPTION}:std_msgs/msg/String"]
+    for j in JOINT_NAMES:
+        specs += [f"{state_topic(j)}:sensor_msgs/msg/JointState", f"{effort_topic(j)}:sensor_msgs/msg/JointState",
+                  f"{reference_topic(j)}:trajectory_msgs/msg/JointTrajectory"]
+    return specs
+
+
+def _yaml_list(items: list[str]) -> str:
+    return "[" + ",".join(f"'{i}'" for i in items) + "]"
+
+
 def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[tuple[str, list[str]]]:
-    """(name, argv) of every process: the wire monitor, the nine nodes, the plant last (it starts
-    stepping once the others are matched)."""
+    """(name, argv) of every process: the wire monitor, the recorder (with --record), the nine nodes,
+    the plant last (it starts stepping once the others are matched)."""
     py = [sys.executable, "-m"]
     cfg = str(opt.config_path)
-    cmds = [("wire_monitor", py + ["pa10_dnbs.ros.wire_monitor"] + _ros_args("wire_monitor", {
-                "config_file": cfg, "duration_s": opt.duration_s, "out_file": str(wire_file)})),
-            ("reference", py + ["pa10_dnbs.ros.reference_node"] + _ros_args("reference", {"config_file": cfg}))]
+    if opt.record_bag is None:
+        cmds = [("wire_monitor", py + ["pa10_dnbs.ros.wire_monitor"] + _ros_args("wire_monitor", {
+                    "config_file": cfg, "duration_s": opt.duration_s, "out_file": str(wire_file)}))]
+    else:  # the recorder is the observer: the run is rebuilt from the bag
+        end_ns = int(round(opt.duration_s / opt.dt_s)) * int(round(opt.dt_s * 1e9))
+        custom = [f"controller={opt.controller}", f"mode={opt.mode}", f"duration_s={opt.duration_s!r}",
+                  f"reliability={opt.reliability}", f"config_file={cfg}"]
+        cmds = [("recorder", py + ["pa10_dnbs.ros.recorder_node"] + _ros_args("recorder", {
+            "config_file": cfg, "bag": str(opt.record_bag), "force": str(opt.force_bag).lower(),
+            "topics": _yaml_list(graph_topics()), "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns}))]
+    cmds.append(("reference", py + ["pa10_dnbs.ros.reference_node"] + _ros_args(
+        "reference", {"config_file": cfg, "duration_s": opt.duration_s})))
     for j in JOINT_NAMES:
         cmds.append((f"joint_controller_{j}", py + ["pa10_dnbs.ros.joint_controller_node"] + _ros_args(
             f"joint_controller_{j}", {"config_file": cfg, "joint": j, "controller": opt.controller,
                                       "reliability": opt.reliability,
-                                      "queue_depth": 1 if opt.mode == "realtime" else 10})))
+                                      "queue_depth": 1 if opt.mode == "realtime" else 2000})))
     cmds.append(("plant", py + ["pa10_dnbs.ros.plant_node"] + _ros_args("plant", {
         "config_file": cfg, "mode": opt.mode, "duration_s": opt.duration_s, "reliability": opt.reliability,
         "effort_timeout_s": opt.effort_timeout_s, "on_missing_effort": opt.on_missing_effort,
-        "stats_file": str(stats_file), "min_joint_states_subscribers": 1})))
+        "stats_file": str(stats_file), "min_joint_states_subscribers": int(opt.record_bag is None),
+        "recorders": int(opt.record_bag is not None)})))
     return cmds
 
 
 def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
-    """Run the graph; logs go to ``workdir/logs``, the wire record to ``workdir/wire.npz``. Raises GraphFailure.
+    """Run the graph; logs go to ``workdir/logs``, the wire record to ``workdir/wire.npz`` (or, with
+    ``opt.record_bag``, everything into the bag). Raises GraphFailure.
 
-    The launcher itself never joins DDS: the wire monitor is one of its child processes.
+    The launcher itself never joins DDS: the observer is one of its child processes.
     """
     domain = opt.domain_id if opt.domain_id is not None else pick_domain_id()
     env = node_env(domain)
@@ -138,7 +168,7 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
             procs.append(ManagedProcess(name, argv, env, logs / f"{name}.log"))
         if not stop.signal_name:
             say(f"launch: domain {domain}, {len(procs) - 1} nodes: "
-                + ", ".join(f"{p.name}={p.pid}" for p in procs[1:]) + f"; wire_monitor={procs[0].pid}")
+                + ", ".join(f"{p.name}={p.pid}" for p in procs[1:]) + f"; observer {procs[0].name}={procs[0].pid}")
             failure = _wait_ready(procs, stop)
         if failure is None and not stop.signal_name:
             say("launch: graph ready (every node printed READY)")
@@ -162,7 +192,7 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
         raise GraphFailure(failure, interrupted=failure.startswith("interrupted"))
     stats = json.loads(stats_file.read_text())
     return GraphResult(stats=stats, exit_codes=codes, domain_id=domain, wall_total_s=time.monotonic() - t_start,
-                       wire_file=wire_file)
+                       wire_file=wire_file if opt.record_bag is None else None, bag=opt.record_bag)
 
 
 def _describe(p: ManagedProcess) -> str:
@@ -219,7 +249,7 @@ def _watch(procs: list[ManagedProcess], opt: GraphOptions, say, stop: _StopReque
         while not monitor.saw("COMPLETE") and time.monotonic() < end and not stop.signal_name:
             time.sleep(0.05)
         if not monitor.saw("COMPLETE") and not stop.signal_name:
-            return ("the wire monitor did not receive the whole run\n--- last lines of its log ---\n"
+            return (f"the {monitor.name} did not receive the whole run\n--- last lines of its log ---\n"
                     + monitor.tail())
         return None
     finally:

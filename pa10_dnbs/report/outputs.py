@@ -13,7 +13,9 @@ import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
+from ..kinematics.urdf_chain import UrdfChain
 from ..sim.run_data import RunData
+from .arm_figure import arm_figure
 from .figures import error_figure, torque_figure, tracking_figure
 from .markdown import report_markdown
 
@@ -59,8 +61,9 @@ def atomic_output_dir(out: Path, force: bool):
         shutil.rmtree(old, ignore_errors=True)
 
 
-def write_run(directory: Path, run: RunData, metrics: dict) -> list[tuple[str, str]]:
-    """metrics.json, timeseries.npz and the three figures of one run; returns (caption, file) pairs."""
+def write_run(directory: Path, run: RunData, metrics: dict, chain: UrdfChain | None = None) -> list[tuple[str, str]]:
+    """metrics.json, timeseries.npz and the figures of one run (the arm in 3D when ``chain`` is given);
+    returns (caption, file) pairs."""
     directory.mkdir(parents=True, exist_ok=True)
     (directory / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
     run.save_npz(directory / "timeseries.npz")
@@ -71,19 +74,23 @@ def write_run(directory: Path, run: RunData, metrics: dict) -> list[tuple[str, s
     tracking_figure(run, directory / "tracking.png")
     error_figure([run], directory / "errors.png", tuple(metrics["window_s"]))
     torque_figure(run, directory / "torques.png")
+    if chain is not None:
+        arm_figure(run, chain, directory / "arm.png")
+        figs.insert(0, (f"{tag}: the arm at six instants and its flange path (forward kinematics of the URDF)",
+                        "arm.png"))
     return figs
 
 
 def write_report(directory: Path, runs: list[RunData], metrics: list[dict], title: str,
-                 notes: list[str]) -> None:
+                 notes: list[str], chain: UrdfChain | None = None) -> None:
     """A single run's files at the top of ``directory``; several runs in sub-directories plus a comparison."""
     if len(runs) == 1:
-        figs = write_run(directory, runs[0], metrics[0])
+        figs = write_run(directory, runs[0], metrics[0], chain)
     else:
         figs = []
         for run, m in zip(runs, metrics):
             sub = run.controller
-            figs += [(c, f"{sub}/{f}") for c, f in write_run(directory / sub, run, m)]
+            figs += [(c, f"{sub}/{f}") for c, f in write_run(directory / sub, run, m, chain)]
         error_figure(runs, directory / "errors_compare.png", tuple(metrics[0]["window_s"]))
         figs.insert(0, ("Tracking errors of " + " and ".join(r.controller.upper() for r in runs)
                         + " overlaid (metrics window shaded)", "errors_compare.png"))

@@ -4,6 +4,8 @@ Lockstep: step k is applied when every joint's effort answering state k has
 arrived, or when the timeout expires; a missing effort is replaced by the
 joint's last applied torque ("hold") or zero, and counted; so is a non-finite
 one, at once.
+An effort for a later step (a player re-driving the plant from a bag sends
+ahead) is kept until that step comes, up to ``max_pending`` steps.
 Realtime: at the tick that advances the plant from state k to k+1, the latest
 effort of each joint is applied (zero-order hold); a joint whose effort
 answering state k (the state published one tick earlier) has not arrived
@@ -19,7 +21,7 @@ import numpy as np
 class EffortGate:
     """Collects efforts by step for ``n_joints`` joints."""
 
-    def __init__(self, n_joints: int, on_missing: str = "hold"):
+    def __init__(self, n_joints: int, on_missing: str = "hold", max_pending: int = 100_000):
         if on_missing not in ("hold", "zero"):
             raise ValueError(f"on_missing must be 'hold' or 'zero', got {on_missing!r}")
         self.n = n_joints
@@ -36,6 +38,9 @@ class EffortGate:
         self.misses = np.zeros(n_joints, dtype=np.int64)       # realtime: previous state not answered at a tick
         self.ticks = 0
         self.ticks_all_on_time = 0
+        self.max_pending = max_pending
+        self._pending: dict[int, dict[int, float]] = {}      # lockstep: step -> {joint: effort} ahead of time
+        self.dropped_ahead = np.zeros(n_joints, dtype=np.int64)  # efforts ahead beyond max_pending steps
 
     def offer(self, joint: int, step: int, effort: float) -> bool:
         """Record an effort; True when all joints have answered the current step.
@@ -57,7 +62,13 @@ class EffortGate:
         if step != self.step:
             if step < self.step:
                 self.stale[joint] += 1
+            elif step in self._pending or len(self._pending) < self.max_pending:
+                self._pending.setdefault(step, {}).setdefault(joint, effort)
+            else:
+                self.dropped_ahead[joint] += 1
             return False
+        if self._have[joint]:
+            return False  # a duplicate answer: the first one counts
         self._efforts[joint] = effort
         self._have[joint] = True
         return bool(self._have.all())
@@ -77,7 +88,15 @@ class EffortGate:
         self.applied = self._efforts.copy()
         self._have[:] = False
         self.step += 1
+        for j, u in self._pending.pop(self.step, {}).items():
+            self._efforts[j] = u
+            self._have[j] = True
         return self.applied
+
+    @property
+    def ready(self) -> bool:
+        """Lockstep: every joint has answered the current step."""
+        return bool(self._have.all())
 
     def take_realtime(self) -> np.ndarray:
         """Torques at the tick that applies step ``self.step``: the latest efforts, counting misses."""

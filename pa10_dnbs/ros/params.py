@@ -6,6 +6,10 @@ from rclpy.node import Node
 from ..config import ConfigError, default_config_path, load_config
 
 
+class ParameterError(ValueError):
+    """A node parameter with a missing or bad value: reported in one line, exit code 2."""
+
+
 def declare(node: Node, defaults: dict) -> dict:
     """Declare every parameter of ``defaults`` and return their current values."""
     for name, value in defaults.items():
@@ -23,4 +27,4 @@ def load_node_config(path: str) -> dict:
 
 def check_choice(name: str, value, choices) -> None:
     if value not in choices:
-        raise ValueError(f"parameter {name} must be one of {', '.join(map(str, choices))}, got {value!r}")
+        raise ParameterError(f"parameter {name} must be one of {', '.join(map(str, choices))}, got {value!r}")

@@ -1,7 +1,8 @@
 """plant_node: the PyBullet PA10 plant on the wire.
 
-Publishes /clock, /joint_states (all 7: position, velocity, and as effort the
-torque applied over the step that led to this state) and per joint
+Publishes /robot_description (the URDF, transient-local), /clock,
+/joint_states (all 7: position, velocity, and as effort the torque applied
+over the step that led to this state) and per joint
 /pa10/<joint>/state (that joint only, stamped k T). Subscribes to the seven
 /pa10/<joint>/effort topics and applies them, saturated at Table 2.
 
@@ -20,12 +21,14 @@ import os
 import struct
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 from rclpy.node import Node
 from rclpy.task import Future
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
+from std_msgs.msg import String
 
 from .. import JOINT_NAMES
 from ..plant.from_config import open_client, plant_from_config
@@ -33,7 +36,8 @@ from . import joint_state_cdr
 from .effort_gate import EffortGate
 from .params import check_choice, declare, load_node_config
 from .runtime import announce_ready, run_node, spin_until
-from .wire import CLOCK, JOINT_STATES, StepClock, effort_topic, loop_qos, record_qos, state_topic
+from .wire import (CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, StepClock, description_qos, effort_topic, loop_qos,
+                   record_qos, state_topic)
 
 
 class PlantNode(Node):
@@ -43,6 +47,7 @@ class PlantNode(Node):
             "config_file": "", "mode": "lockstep", "duration_s": 0.0, "effort_timeout_s": 1.0,
             "resend_s": 0.25, "on_missing_effort": "hold", "reliability": "reliable", "stats_file": "",
             "min_joint_states_subscribers": 0, "start_timeout_s": 30.0, "settle_s": 0.3,
+            "state_subscribers": 1, "clock_subscribers": 1, "recorders": 0, "effort_queue_depth": 1000,
         })
         check_choice("mode", p["mode"], ("lockstep", "realtime"))
         check_choice("on_missing_effort", p["on_missing_effort"], ("hold", "zero"))
@@ -56,14 +61,21 @@ class PlantNode(Node):
         self._client = open_client()
         self.plant = plant_from_config(cfg, self._client)
         self.gate = EffortGate(len(JOINT_NAMES), p["on_missing_effort"])
-        # realtime: latest value only (depth 1), a late reader skips stale states
-        qos = loop_qos(p["reliability"], depth=1 if p["mode"] == "realtime" else 10)
+        # realtime: latest value only (depth 1), a late reader skips stale states. lockstep: a deep
+        # history, so a recorder that falls behind for a while still gets every message.
+        realtime = p["mode"] == "realtime"
+        qos = loop_qos(p["reliability"], depth=1 if realtime else record_qos().depth)
+        effort_qos = loop_qos(p["reliability"], depth=1 if realtime else p["effort_queue_depth"])
         self._state_pubs = [self.create_publisher(JointState, state_topic(j), qos) for j in JOINT_NAMES]
-        self._clock_pub = self.create_publisher(Clock, CLOCK, loop_qos("reliable"))
+        self._clock_pub = self.create_publisher(Clock, CLOCK, loop_qos("reliable", depth=record_qos().depth))
         self._js_pub = self.create_publisher(JointState, JOINT_STATES, record_qos())
         self._effort_subs = [
-            self.create_subscription(JointState, effort_topic(j), lambda m, i=i: self._on_effort(i, m), qos, raw=True)
+            self.create_subscription(JointState, effort_topic(j), lambda m, i=i: self._on_effort(i, m), effort_qos,
+                                     raw=True)
             for i, j in enumerate(JOINT_NAMES)]
+        # the URDF, latched, as robot_state_publisher offers it (Foxglove and the recorder read it)
+        self._description_pub = self.create_publisher(String, ROBOT_DESCRIPTION, description_qos())
+        self._description_pub.publish(String(data=Path(cfg["plant"]["urdf"]).read_text()))
         self._names = [[j] for j in JOINT_NAMES]
         self._clock_msg = Clock()
         self.malformed = np.zeros(len(JOINT_NAMES), dtype=np.int64)
@@ -71,6 +83,7 @@ class PlantNode(Node):
         self.latency = np.full((self.n_steps + 1, len(JOINT_NAMES)), np.nan)  # state k -> effort k [s]
         self.resends = np.zeros(len(JOINT_NAMES), dtype=np.int64)
         self.late_ticks = 0
+        self.running = False  # set once state 0 is out; efforts arriving before are kept, not applied
         self.finished = False
         self._finished_future = Future()  # done when the last step is applied (lockstep spin ends on it)
         self.exit_code = 0  # a signal before the end is a clean stop; "completed" in the stats says if it ran out
@@ -102,7 +115,11 @@ class PlantNode(Node):
         k = self.clock_.step_of_sec_nanosec(sec, nanosec)
         if 0 <= k <= self.n_steps and math.isnan(self.latency[k, joint]):
             self.latency[k, joint] = time.perf_counter() - self.t_pub[k]
-        if self.gate.offer(joint, k, u) and self.p["mode"] == "lockstep" and not self.finished:
+        if self.gate.offer(joint, k, u) and self.p["mode"] == "lockstep" and self.running:
+            self._advance_while_ready()
+
+    def _advance_while_ready(self) -> None:
+        while self.gate.ready and not self.finished:  # efforts sent ahead may complete later steps too
             self._advance(timed_out=False)
 
     # ---------------------------------------------------------------- stepping
@@ -122,14 +139,18 @@ class PlantNode(Node):
 
     def _wait_for_graph(self, executor, stop) -> bool:
         t0 = time.perf_counter()
-        need_js = self.p["min_joint_states_subscribers"]
+        rec = self.p["recorders"]  # each recorder subscribes to every topic, efforts included
+        need_state, need_clock = self.p["state_subscribers"] + rec, self.p["clock_subscribers"] + rec
+        need_js = self.p["min_joint_states_subscribers"] + rec
         while not stop.done():
-            lacking = [f"{state_topic(j)} (no subscriber)" for j, pub in zip(JOINT_NAMES, self._state_pubs)
-                       if pub.get_subscription_count() < 1]
+            lacking = [f"{state_topic(j)} (fewer than {need_state} subscribers)"
+                       for j, pub in zip(JOINT_NAMES, self._state_pubs) if pub.get_subscription_count() < need_state]
             lacking += [f"{effort_topic(j)} (no publisher)" for j, sub in zip(JOINT_NAMES, self._effort_subs)
                         if sub.get_publisher_count() < 1]
-            if self._clock_pub.get_subscription_count() < 1:
-                lacking.append(f"{CLOCK} (no subscriber: reference node)")
+            lacking += [f"{effort_topic(j)} (fewer than {rec} recorders)" for j in JOINT_NAMES
+                        if self.count_subscribers(effort_topic(j)) < 1 + rec]
+            if self._clock_pub.get_subscription_count() < need_clock:
+                lacking.append(f"{CLOCK} (fewer than {need_clock} subscribers)")
             if self._js_pub.get_subscription_count() < need_js:
                 lacking.append(f"{JOINT_STATES} (fewer than {need_js} subscribers)")
             if not lacking:
@@ -148,7 +169,9 @@ class PlantNode(Node):
         print("RUNNING plant", flush=True)
         self.wall_start = time.perf_counter()
         self._publish_state(0)
+        self.running = True
         if self.p["mode"] == "lockstep":
+            self._advance_while_ready()
             self._loop_lockstep(executor, stop)
         else:
             self._loop_realtime(executor, stop)
@@ -212,6 +235,7 @@ class PlantNode(Node):
                 "missed_ticks": int(self.gate.misses[i]),
                 "nonfinite_efforts": int(self.gate.nonfinite[i]),
                 "stale_efforts": int(self.gate.stale[i]),
+                "ahead_efforts_dropped": int(self.gate.dropped_ahead[i]),
                 "resent_states": int(self.resends[i]),
                 "malformed_efforts": int(self.malformed[i]),
                 "latency_median_us": float(np.median(li) * 1e6) if li.size else None,

@@ -3,7 +3,8 @@
 On /pa10/<joint>/reference (trajectory_msgs/JointTrajectory, one joint,
 reliable + transient-local) in batches of ``batch_steps`` points; header.stamp
 is the time of the first point, time_from_start counts from it. Paced by
-/clock: it keeps at least ``lookahead_steps`` published beyond the current step.
+/clock: it keeps at least ``lookahead_steps`` published beyond the current step
+(and, given ``duration_s``, stops lookahead_steps past the run's last step).
 """
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from .. import JOINT_NAMES
 from ..controller_factory import build_reference
-from .params import declare, load_node_config
+from .params import ParameterError, declare, load_node_config
 from .runtime import announce_ready, run_node
 from .wire import CLOCK, StepClock, loop_qos, reference_qos, reference_topic
 
@@ -24,16 +25,19 @@ from .wire import CLOCK, StepClock, loop_qos, reference_qos, reference_topic
 class ReferenceNode(Node):
     def __init__(self):
         super().__init__("reference")
-        p = declare(self, {"config_file": "", "batch_steps": 100, "lookahead_steps": 150})
+        p = declare(self, {"config_file": "", "batch_steps": 100, "lookahead_steps": 150, "duration_s": 0.0})
         cfg = load_node_config(p["config_file"])
         preview = cfg["reference"]["preview_steps"]
         if p["batch_steps"] < 1 or p["lookahead_steps"] <= preview:
-            raise ValueError(f"batch_steps must be >= 1 and lookahead_steps > reference.preview_steps = {preview}")
+            raise ParameterError(f"batch_steps must be >= 1 and lookahead_steps > reference.preview_steps = {preview}")
         self.reference = build_reference(cfg)
         self.clock_ = StepClock(cfg["simulation"]["dt_s"])
         self.batch = p["batch_steps"]
         self.lookahead = p["lookahead_steps"]
         self.published_until = 0  # steps [0, published_until) are out
+        dt = cfg["simulation"]["dt_s"]
+        # a run of known length: nothing past its last step + lookahead (so a bag's count is fixed)
+        self.last_step = int(round(p["duration_s"] / dt)) + self.lookahead if p["duration_s"] > 0 else None
         self._pubs = [self.create_publisher(JointTrajectory, reference_topic(j), reference_qos()) for j in JOINT_NAMES]
         self.create_subscription(Clock, CLOCK, self._on_clock, loop_qos("reliable"))
         self._publish_through(self.lookahead)
@@ -43,6 +47,8 @@ class ReferenceNode(Node):
         self._publish_through(self.clock_.step_of(msg.clock) + self.lookahead)
 
     def _publish_through(self, last_step: int) -> None:
+        if self.last_step is not None:
+            last_step = min(last_step, self.last_step)
         while self.published_until <= last_step:
             k0 = self.published_until
             steps = np.arange(k0, k0 + self.batch)

@@ -23,6 +23,8 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
 from rclpy.task import Future
 
+from .params import ParameterError
+
 SLICE_S = 0.2  # longest a spin call runs before the stop future is checked again
 TEARDOWN_LIMIT_S = 5.0  # a teardown that takes longer is cut short
 
@@ -67,6 +69,9 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
         code = getattr(node, "exit_code", 0)
     except (KeyboardInterrupt, ExternalShutdownException):
         code = 0
+    except (ParameterError, FileExistsError) as exc:  # the user's input: one line, no traceback
+        print(f"FAILED {exc}", file=sys.stderr, flush=True)
+        code = 2
     except Exception as exc:  # a node that fails says why and exits non-zero
         print(f"FAILED {type(exc).__name__}: {exc}", file=sys.stderr, flush=True)
         import traceback

@@ -8,21 +8,8 @@ from __future__ import annotations
 from builtin_interfaces.msg import Duration, Time
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-ARM_NS = "/pa10"
-JOINT_STATES = "/joint_states"
-CLOCK = "/clock"
-
-
-def state_topic(joint: str) -> str:
-    return f"{ARM_NS}/{joint}/state"
-
-
-def effort_topic(joint: str) -> str:
-    return f"{ARM_NS}/{joint}/effort"
-
-
-def reference_topic(joint: str) -> str:
-    return f"{ARM_NS}/{joint}/reference"
+from ..topics import (ARM_NS, CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, TF, TF_STATIC,  # noqa: F401 (re-exported)
+                      effort_topic, reference_topic, state_topic)
 
 
 def loop_qos(reliability: str, depth: int = 10) -> QoSProfile:
@@ -42,6 +29,12 @@ def record_qos(depth: int = 2000) -> QoSProfile:
     """Monitoring /joint_states: reliable with a deep queue so nothing is lost."""
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.VOLATILE)
+
+
+def description_qos() -> QoSProfile:
+    """/robot_description: reliable, transient-local, depth 1 (latched), as robot_state_publisher offers it."""
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 class StepClock:

@@ -1,0 +1,86 @@
+"""A run rebuilt from a bag alone: /joint_states and the reference topics -> RunData.
+
+The same WireRecord as the live wire monitor, so a bag of a run gives the
+same time series, metrics and figures as the run itself. The run's config
+travels in the bag (metadata custom_data ``pa10_dnbs.config``, JSON); a bag
+without it is read with the config given (or the shipped default).
+"""
+from __future__ import annotations
+
+import json
+import struct
+from pathlib import Path
+
+from rosbags.typesys import Stores, get_typestore
+
+from .. import JOINT_NAMES
+from ..sim.wire_record import WireRecord
+from ..ros import joint_state_cdr
+from ..kinematics.urdf_chain import UrdfChain
+from ..topics import JOINT_STATES, ROBOT_DESCRIPTION, reference_topic
+from .bag_reader import Bag, BagError
+
+CUSTOM_CONFIG = "pa10_dnbs.config"
+CUSTOM_PREFIX = "pa10_dnbs."
+
+
+def run_info(bag: Bag) -> dict:
+    """What the launcher stored about the run: controller, mode, duration_s, ... (strings), config (dict or None)."""
+    info = {k[len(CUSTOM_PREFIX):]: v for k, v in bag.custom_data.items() if k.startswith(CUSTOM_PREFIX)}
+    raw = info.pop("config", None)
+    try:
+        info["config"] = json.loads(raw) if raw else None
+    except json.JSONDecodeError:
+        raise BagError(f"{bag.path}: custom_data {CUSTOM_CONFIG} is not valid JSON") from None
+    return info
+
+
+def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None) -> WireRecord:
+    """Fill a WireRecord from the bag; ``n_steps`` None means up to the last /joint_states stamp."""
+    needed = [JOINT_STATES] + [reference_topic(j) for j in JOINT_NAMES]
+    bag.require_topics(needed, "analysis")
+    dt_ns = int(round(dt_s * 1e9))
+    states = []
+    malformed = 0
+    for _, _, _, data in bag.messages([JOINT_STATES]):
+        try:
+            sec, nanosec, _, pos, vel, eff = joint_state_cdr.decode(data)
+        except (ValueError, struct.error, UnicodeDecodeError):
+            malformed += 1
+            continue
+        if len(pos) != len(JOINT_NAMES) or len(vel) != len(JOINT_NAMES) or len(eff) != len(JOINT_NAMES):
+            malformed += 1
+            continue
+        states.append((round((sec * 1_000_000_000 + nanosec) / dt_ns), pos, vel, eff))
+    if not states:
+        raise BagError(f"{bag.path}: no readable /joint_states message")
+    n = n_steps if n_steps is not None else max(k for k, *_ in states)
+    rec = WireRecord(n, dt_s, len(JOINT_NAMES))
+    rec.malformed = malformed
+    for k, pos, vel, eff in states:
+        rec.add_joint_states(k, pos, vel, eff)
+    store = get_typestore(Stores.ROS2_JAZZY)
+    for j, name in enumerate(JOINT_NAMES):
+        for _, msgtype, _, data in bag.messages([reference_topic(name)]):
+            try:
+                msg = store.deserialize_cdr(data, msgtype)
+            except Exception:
+                rec.malformed += 1
+                continue
+            k0 = round((msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec) / dt_ns)
+            offsets = [round((p.time_from_start.sec * 1_000_000_000 + p.time_from_start.nanosec) / dt_ns)
+                       for p in msg.points]
+            rec.add_reference(j, k0, offsets, [float(p.positions[0]) for p in msg.points])
+    return rec
+
+
+def robot_chain(bag: Bag, cfg: dict) -> UrdfChain | None:
+    """The arm's kinematics for the 3D figure: the bag's /robot_description, else the config's URDF file."""
+    if ROBOT_DESCRIPTION in bag.topics:
+        for _, msgtype, _, data in bag.messages([ROBOT_DESCRIPTION]):
+            try:
+                return UrdfChain(get_typestore(Stores.ROS2_JAZZY).deserialize_cdr(data, msgtype).data)
+            except Exception:
+                raise BagError(f"{bag.path}: /robot_description does not hold a readable URDF") from None
+    urdf = Path(cfg["plant"].get("urdf", ""))
+    return UrdfChain.from_file(urdf) if urdf.is_file() else None

@@ -1,0 +1,145 @@
+"""Open a rosbag2 MCAP bag for reading, turning every way it can be broken into one clear BagError.
+
+Checks, in order: the path exists; it is a bag directory (``metadata.yaml``)
+or an ``.mcap`` file inside one; metadata.yaml parses; each storage file ends
+with the MCAP footer magic (a recording cut off before it closed does not);
+the MCAP summary's message count equals metadata.yaml's; rosbags opens it.
+Reading messages later converts decoding failures into BagError as well.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterator
+
+import yaml
+
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+
+
+class BagError(Exception):
+    """The bag is missing, not a bag, truncated, corrupt, or lacks what is needed."""
+
+
+@dataclass
+class TopicInfo:
+    msgtype: str
+    count: int
+
+
+class Bag:
+    """A validated, open bag. Use as a context manager or call ``close()``."""
+
+    def __init__(self, path: Path):
+        from rosbags.rosbag2 import Reader
+
+        self.path = _bag_dir(Path(path))
+        meta = _load_metadata(self.path)
+        info = meta["rosbag2_bagfile_information"]
+        files = [self.path / f for f in info.get("relative_file_paths") or []]
+        if not files:
+            raise BagError(f"{self.path}: metadata.yaml lists no storage files")
+        if info.get("storage_identifier") != "mcap":
+            raise BagError(f"{self.path}: storage is {info.get('storage_identifier')!r}, expected mcap")
+        for f in files:
+            _check_mcap_file(f)
+        expected = int(info.get("message_count", -1))
+        in_files = sum(_summary_message_count(f) for f in files)
+        if expected != in_files:
+            raise BagError(f"{self.path}: metadata.yaml counts {expected} messages but the MCAP "
+                           f"summary holds {in_files}; the bag is inconsistent")
+        self.custom_data: dict[str, str] = dict(info.get("custom_data") or {})
+        try:
+            self._reader = Reader(self.path)
+            self._reader.open()
+        except Exception as exc:  # rosbags raises several types for damaged files
+            raise BagError(f"{self.path}: cannot open bag: {exc}") from None
+        self.topics = {c.topic: TopicInfo(c.msgtype, c.msgcount) for c in self._reader.connections}
+        self.start_ns = self._reader.start_time
+        self.end_ns = self._reader.end_time
+        self.message_count = self._reader.message_count
+
+    def __enter__(self) -> "Bag":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        self._reader.close()
+
+    def require_topics(self, topics, why: str) -> None:
+        """BagError naming every topic of ``topics`` the bag lacks (or holds no message of)."""
+        lacking = [t for t in topics if t not in self.topics or self.topics[t].count == 0]
+        if lacking:
+            raise BagError(f"{self.path}: {why} needs topics the bag does not have: {', '.join(lacking)}")
+
+    def qos_profiles(self, topic: str):
+        """The offered QoS profiles recorded for ``topic`` (rosbags Qos tuples)."""
+        for c in self._reader.connections:
+            if c.topic == topic:
+                return list(c.ext.offered_qos_profiles)
+        raise KeyError(topic)
+
+    def messages(self, topics=None, start_ns: int | None = None) -> Iterator[tuple[str, str, int, bytes]]:
+        """(topic, msgtype, log time [ns], CDR bytes) in log-time order."""
+        conns = [c for c in self._reader.connections if topics is None or c.topic in topics]
+        if not conns:
+            return
+        try:
+            for conn, t_ns, data in self._reader.messages(connections=conns, start=start_ns):
+                yield conn.topic, conn.msgtype, t_ns, data
+        except BagError:
+            raise
+        except Exception as exc:
+            raise BagError(f"{self.path}: corrupt data while reading messages: {type(exc).__name__}: {exc}") from None
+
+
+def _bag_dir(path: Path) -> Path:
+    if not path.exists():
+        raise BagError(f"{path}: no such bag (the path does not exist)")
+    if path.is_file():
+        if path.suffix == ".mcap" and (path.parent / "metadata.yaml").is_file():
+            return path.parent
+        raise BagError(f"{path}: not a rosbag2 bag (expected a bag directory holding metadata.yaml)")
+    if not (path / "metadata.yaml").is_file():
+        raise BagError(f"{path}: not a rosbag2 bag directory (no metadata.yaml)")
+    return path
+
+
+def _load_metadata(bag: Path) -> dict:
+    try:
+        meta = yaml.safe_load((bag / "metadata.yaml").read_text())
+    except (yaml.YAMLError, UnicodeDecodeError) as exc:
+        raise BagError(f"{bag}/metadata.yaml: not valid YAML: {exc}") from None
+    if not isinstance(meta, dict) or not isinstance(meta.get("rosbag2_bagfile_information"), dict):
+        raise BagError(f"{bag}/metadata.yaml: no rosbag2_bagfile_information mapping")
+    return meta
+
+
+def _check_mcap_file(f: Path) -> None:
+    if not f.is_file():
+        raise BagError(f"{f}: storage file listed in metadata.yaml is missing")
+    size = f.stat().st_size
+    with f.open("rb") as fh:
+        head = fh.read(len(MCAP_MAGIC))
+        fh.seek(max(0, size - len(MCAP_MAGIC)))
+        tail = fh.read(len(MCAP_MAGIC))
+    if head != MCAP_MAGIC:
+        raise BagError(f"{f}: not an MCAP file (bad magic at the start)")
+    if size < 2 * len(MCAP_MAGIC) or tail != MCAP_MAGIC:
+        raise BagError(f"{f}: truncated MCAP file (no footer magic at the end): the recording was cut off "
+                       "before the bag was closed")
+
+
+def _summary_message_count(f: Path) -> int:
+    from mcap.reader import make_reader
+
+    try:
+        with f.open("rb") as fh:
+            summary = make_reader(fh).get_summary()
+    except Exception as exc:
+        raise BagError(f"{f}: corrupt MCAP summary: {type(exc).__name__}: {exc}") from None
+    if summary is None or summary.statistics is None:
+        raise BagError(f"{f}: MCAP file has no summary statistics (not closed properly)")
+    return summary.statistics.message_count

@@ -1,0 +1,64 @@
+"""``pa10-dnbs analyse BAG --out DIR``: metrics, figures and report of a run, from its bag alone."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from .. import JOINT_NAMES
+from ..bag.analysis import robot_chain, run_info, wire_record_from_bag
+from ..bag.bag_reader import Bag, BagError
+from ..config import default_config_path, load_config
+from ..report.metrics_file import effective_window, metrics_dict
+from ..report.outputs import atomic_output_dir, check_output_dir, write_report
+
+
+def _run_config(info: dict, config_path: Path | None, bag: Bag) -> tuple[dict, str]:
+    if config_path is not None:
+        return load_config(config_path), str(Path(config_path).resolve())
+    cfg = info.get("config")
+    if cfg is None:
+        path = default_config_path()
+        return load_config(path), f"{path} (the bag carries no config)"
+    try:
+        float(cfg["simulation"]["dt_s"]), list(cfg["simulation"]["window_s"]), list(cfg["plant"]["torque_limit_nm"])
+    except (KeyError, TypeError, ValueError):
+        raise BagError(f"{bag.path}: the config stored in the bag lacks simulation.dt_s, simulation.window_s or "
+                       "plant.torque_limit_nm; pass --config") from None
+    return cfg, f"stored in the bag (recorded from {info.get('config_file', '?')})"
+
+
+def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None = None) -> int:
+    """Rebuild the run from the bag and write the report into ``out``. Raises BagError on a bad bag."""
+    check_output_dir(out, force)
+    with Bag(bag_path) as bag:
+        info = run_info(bag)
+        cfg, cfg_note = _run_config(info, config_path, bag)
+        dt = float(cfg["simulation"]["dt_s"])
+        n_steps = None
+        if "duration_s" in info:
+            try:
+                n_steps = int(round(float(info["duration_s"]) / dt))
+            except ValueError:
+                raise BagError(f"{bag.path}: custom_data duration_s is not a number: {info['duration_s']!r}") from None
+        rec = wire_record_from_bag(bag, dt, n_steps)
+        if rec.malformed:
+            raise BagError(f"{bag.path}: corrupt bag: {rec.malformed} messages on /joint_states or the reference "
+                           "topics could not be decoded")
+        missing = rec.missing()
+        if missing:
+            raise BagError(f"{bag.path}: the bag does not hold the whole run: {missing}")
+        controller = info.get("controller", "unknown")
+        run = rec.run_data(controller, JOINT_NAMES, cfg["plant"]["torque_limit_nm"], math.nan)
+        window = effective_window(rec.n * dt, tuple(cfg["simulation"]["window_s"]))
+        metrics = metrics_dict(run, window, source="bag", bag=str(bag.path.resolve()), mode=info.get("mode"),
+                               seed=cfg["simulation"].get("seed"), malformed_messages=rec.malformed)
+        notes = [f"bag: `{bag.path}` ({bag.message_count} messages on {len(bag.topics)} topics)",
+                 f"config: {cfg_note}",
+                 f"source: rebuilt from the bag's /joint_states and reference topics ({info.get('mode', '?')} run)"]
+        chain = robot_chain(bag, cfg)
+        with atomic_output_dir(out, force) as tmp:
+            write_report(tmp, [run], [metrics], title="PA10-7CE run from a bag", notes=notes, chain=chain)
+    print(f"{controller}: worst-joint RMS error {metrics['worst_rms_error_rad']:.3e} rad over {metrics['window_s']} s "
+          f"({rec.n} steps from {bag.path})")
+    print(f"wrote {out}/report.md")
+    return 0 if metrics["all_finite"] and metrics["torques_within_limits"] else 1

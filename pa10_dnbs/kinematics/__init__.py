@@ -1,0 +1,1 @@
+"""Forward kinematics from the URDF (numpy and the standard library only)."""

@@ -1,0 +1,146 @@
+"""Forward kinematics of a URDF joint tree, one transform per joint (what /tf carries).
+
+Parses the ``<joint>`` elements of a URDF (origin xyz/rpy, axis, type) with
+the standard library and evaluates, for joint positions q [rad], the pose of
+each child link frame in its parent link frame: translation [m], shape (3,),
+and rotation as a unit quaternion (x, y, z, w), shape (4,). This is what
+robot_state_publisher would put on /tf and /tf_static; numpy only.
+"""
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class UrdfJoint:
+    name: str
+    kind: str                 # revolute, continuous, prismatic or fixed
+    parent: str
+    child: str
+    origin_xyz: np.ndarray    # (3,) [m]
+    origin_rot: np.ndarray    # (3, 3) rotation of the joint frame in the parent frame
+    axis: np.ndarray          # (3,) unit axis in the joint frame
+
+
+@dataclass(frozen=True)
+class FrameTransform:
+    parent: str
+    child: str
+    translation_m: tuple[float, float, float]
+    rotation_xyzw: tuple[float, float, float, float]
+
+
+def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """URDF rpy (fixed axes x, y, z) as a 3x3 rotation: Rz(yaw) Ry(pitch) Rx(roll)."""
+    cr, sr, cp, sp, cy, sy = math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch), math.cos(yaw), math.sin(yaw)
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+def axis_angle_matrix(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rodrigues' rotation about the unit ``axis`` by ``angle`` [rad]."""
+    x, y, z = axis
+    k = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+    return np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * (k @ k)
+
+
+def matrix_quaternion(r: np.ndarray) -> tuple[float, float, float, float]:
+    """Unit quaternion (x, y, z, w) of a rotation matrix, w >= 0."""
+    t = r[0, 0] + r[1, 1] + r[2, 2]
+    if t > 0.0:
+        s = 2.0 * math.sqrt(t + 1.0)
+        q = ((r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, 0.25 * s)
+    elif r[0, 0] >= r[1, 1] and r[0, 0] >= r[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
+        q = (0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s, (r[2, 1] - r[1, 2]) / s)
+    elif r[1, 1] >= r[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2])
+        q = ((r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s, (r[0, 2] - r[2, 0]) / s)
+    else:
+        s = 2.0 * math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1])
+        q = ((r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s, (r[1, 0] - r[0, 1]) / s)
+    n = math.sqrt(sum(c * c for c in q))
+    sign = -1.0 if q[3] < 0 else 1.0
+    return tuple(sign * c / n for c in q)
+
+
+def _floats(text: str | None, default: str) -> np.ndarray:
+    return np.array([float(v) for v in (text or default).split()], dtype=float)
+
+
+class UrdfChain:
+    """The joints of a URDF and their transforms at given joint positions."""
+
+    def __init__(self, urdf_xml: str):
+        root = ET.fromstring(urdf_xml)
+        if root.tag != "robot":
+            raise ValueError(f"not a URDF: root element is <{root.tag}>, expected <robot>")
+        self.robot_name = root.get("name", "")
+        joints = []
+        for el in root.findall("joint"):
+            origin = el.find("origin")
+            xyz = _floats(origin.get("xyz") if origin is not None else None, "0 0 0")
+            rpy = _floats(origin.get("rpy") if origin is not None else None, "0 0 0")
+            axis_el = el.find("axis")
+            axis = _floats(axis_el.get("xyz") if axis_el is not None else None, "1 0 0")
+            norm = np.linalg.norm(axis)
+            if norm == 0.0:
+                raise ValueError(f"joint {el.get('name')}: zero axis")
+            joints.append(UrdfJoint(name=el.get("name"), kind=el.get("type"), parent=el.find("parent").get("link"),
+                                    child=el.find("child").get("link"), origin_xyz=xyz,
+                                    origin_rot=rpy_matrix(*rpy), axis=axis / norm))
+        self.joints = joints
+        self.movable = [j for j in joints if j.kind != "fixed"]
+        self.fixed = [j for j in joints if j.kind == "fixed"]
+        self.root_link = next(iter({j.parent for j in joints} - {j.child for j in joints}), "")
+
+    @classmethod
+    def from_file(cls, path: Path) -> "UrdfChain":
+        return cls(Path(path).read_text())
+
+    @staticmethod
+    def _transform(j: UrdfJoint, q: float) -> FrameTransform:
+        if j.kind == "prismatic":
+            t = j.origin_xyz + j.origin_rot @ (j.axis * q)
+            r = j.origin_rot
+        elif j.kind == "fixed":
+            t, r = j.origin_xyz, j.origin_rot
+        else:  # revolute, continuous
+            t, r = j.origin_xyz, j.origin_rot @ axis_angle_matrix(j.axis, q)
+        return FrameTransform(j.parent, j.child, tuple(float(v) for v in t), matrix_quaternion(r))
+
+    def moving_transforms(self, positions: dict[str, float]) -> list[FrameTransform]:
+        """Parent-to-child transforms of the movable joints; a joint missing from ``positions`` is at 0."""
+        return [self._transform(j, float(positions.get(j.name, 0.0))) for j in self.movable]
+
+    def fixed_transforms(self) -> list[FrameTransform]:
+        """Parent-to-child transforms of the fixed joints (/tf_static)."""
+        return [self._transform(j, 0.0) for j in self.fixed]
+
+    def link_poses(self, positions: dict[str, float]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Pose (translation (3,), rotation (3, 3)) of every link in the root link's frame."""
+        poses = {self.root_link: (np.zeros(3), np.eye(3))}
+        pending = list(self.joints)
+        while pending:
+            rest = []
+            for j in pending:
+                if j.parent not in poses:
+                    rest.append(j)
+                    continue
+                tr = self._transform(j, float(positions.get(j.name, 0.0)))
+                x, y, z, w = tr.rotation_xyzw
+                r_local = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                                    [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                                    [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+                p_pos, p_rot = poses[j.parent]
+                poses[j.child] = (p_pos + p_rot @ np.array(tr.translation_m), p_rot @ r_local)
+            if len(rest) == len(pending):
+                raise ValueError("URDF joints do not form a tree from one root link")
+            pending = rest
+        return poses

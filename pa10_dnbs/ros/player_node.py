@@ -1,0 +1,121 @@
+"""player node: publishes a bag's messages with their recorded timing, like ``ros2 bag play``.
+
+Payloads go out as recorded (raw CDR). Timing: a message logged at t is
+published at wall time w0 + (t - t_first) / rate. Options: topic selection,
+start offset [s], loop, /clock from the bag's timeline at ``clock_hz``
+(the recorded /clock is then not replayed), and waiting until every
+publisher has a subscriber. Publishers use the recorded reliability and
+durability, keep_last with at least ``queue_depth``. Topics whose message
+package is not installed (tf2_msgs) are skipped, with a warning.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+from rclpy.duration import Duration
+from rclpy.node import Node
+from rclpy.qos import QoSProfile
+from rosgraph_msgs.msg import Clock
+
+from ..bag.bag_reader import Bag
+from ..topics import CLOCK
+from .bag_qos import from_bag_qos
+from .msg_types import message_class
+from .runtime import announce_ready
+
+WAIT_SLICE_S = 0.02
+
+
+@dataclass
+class PlayOptions:
+    rate: float = 1.0
+    topics: list[str] = field(default_factory=list)   # empty: every topic
+    start_offset_s: float = 0.0
+    loop: bool = False
+    clock_hz: float = 0.0                               # 0: no /clock from the player
+    wait_for_subscribers_s: float = 0.0                 # 0: do not wait
+    queue_depth: int = 1000
+
+
+class PlayerNode(Node):
+    def __init__(self, bag: Bag, opt: PlayOptions):
+        super().__init__("player")
+        self.bag, self.opt = bag, opt
+        topics = opt.topics or sorted(bag.topics)
+        if opt.clock_hz > 0:
+            topics = [t for t in topics if t != CLOCK]
+        self.pubs = {}
+        self.skipped = []
+        for t in topics:
+            try:
+                cls = message_class(bag.topics[t].msgtype)
+            except LookupError as exc:
+                self.skipped.append(t)
+                self.get_logger().warning(f"not playing {t}: {exc}")
+                continue
+            self.pubs[t] = self.create_publisher(cls, t, from_bag_qos(bag.qos_profiles(t), opt.queue_depth))
+        self._clock_pub = self.create_publisher(Clock, CLOCK, QoSProfile(depth=10)) if opt.clock_hz > 0 else None
+        self.published = 0
+        self.exit_code = 0
+        announce_ready("player")
+
+    def _wait_for_subscribers(self, stop) -> bool:
+        deadline = time.monotonic() + self.opt.wait_for_subscribers_s
+        while not stop.done():
+            lacking = [t for t, p in self.pubs.items() if p.get_subscription_count() < 1]
+            if not lacking:
+                return True
+            if time.monotonic() > deadline:
+                self.get_logger().error(f"no subscriber after {self.opt.wait_for_subscribers_s:g} s on: "
+                                        + ", ".join(lacking))
+                self.exit_code = 1
+                return False
+            time.sleep(WAIT_SLICE_S)
+        return False
+
+    def _publish_clock(self, t_ns: int) -> None:
+        msg = Clock()
+        msg.clock.sec, msg.clock.nanosec = divmod(t_ns, 1_000_000_000)
+        self._clock_pub.publish(msg)
+
+    def _play_once(self, stop) -> bool:
+        """One pass over the bag; False when stopped."""
+        t_first = self.bag.start_ns + int(round(self.opt.start_offset_s * 1e9))
+        rate = self.opt.rate
+        w0 = time.perf_counter()
+        clock_period = 1.0 / self.opt.clock_hz if self._clock_pub else None
+        next_clock = w0
+        for topic, _, t_ns, data in self.bag.messages(list(self.pubs), start_ns=t_first):
+            target = w0 + (t_ns - t_first) / 1e9 / rate
+            while True:
+                if stop.done():
+                    return False
+                now = time.perf_counter()
+                if clock_period is not None and next_clock <= min(now, target):
+                    self._publish_clock(t_first + int((next_clock - w0) * rate * 1e9))
+                    next_clock += clock_period
+                    continue
+                if now >= target:
+                    break
+                wake = target if clock_period is None else min(target, next_clock)
+                time.sleep(min(max(wake - now, 0.0), WAIT_SLICE_S))
+            self.pubs[topic].publish(bytes(data))
+            self.published += 1
+        return True
+
+    def loop(self, executor, stop) -> None:
+        if self.opt.wait_for_subscribers_s > 0 and not self._wait_for_subscribers(stop):
+            return
+        print(f"PLAYING {len(self.pubs)} topics at rate {self.opt.rate:g}", flush=True)
+        while self._play_once(stop) and self.opt.loop:
+            pass
+        # let reliable subscribers take the last messages before the writers go away
+        deadline = time.monotonic() + 2.0
+        while not stop.done() and time.monotonic() < deadline and any(
+                not p.wait_for_all_acked(Duration(seconds=0.1)) for p in self.pubs.values()):
+            pass
+
+    def close(self) -> None:
+        print(f"PLAYED {self.published} messages" + (f"; skipped {', '.join(self.skipped)}" if self.skipped else ""),
+              flush=True)

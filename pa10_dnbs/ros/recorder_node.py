@@ -1,0 +1,195 @@
+"""recorder node: records topics into a rosbag2 MCAP bag, payloads as they come off the wire.
+
+Like ``ros2 bag record``: each topic is subscribed (raw, no deserialising)
+once a publisher is discovered, with reliable / transient-local QoS only if
+every publisher offers it, and the publishers' offered QoS profiles go into
+the bag. Log time is the latest /clock (``time_source: clock``, what
+``--use-sim-time`` gives) or the system clock. It also writes /tf (at
+``tf_rate_hz`` of simulated time) and /tf_static from /joint_states and the
+URDF's forward kinematics, since tf2_msgs has no Python wheel here.
+On SIGINT/SIGTERM it takes what is still queued, then closes the bag
+(summary + metadata.yaml). It prints ``PROGRESS k`` (the step of
+/joint_states) now and then and, with ``end_stamp_ns`` >= 0, ``COMPLETE``
+once every stamped topic has a message stamped at or after it: started by
+the launcher, it is the run's observer.
+"""
+from __future__ import annotations
+
+import json
+import struct
+import sys
+import time
+from pathlib import Path
+
+from rclpy.node import Node
+
+from .. import JOINT_NAMES
+from ..bag.analysis import CUSTOM_CONFIG, CUSTOM_PREFIX
+from ..bag.bag_writer import BagWriter
+from ..bag.tf_messages import tf_message_cdr
+from ..kinematics.urdf_chain import UrdfChain
+from . import joint_state_cdr
+from .bag_qos import bag_qos, subscription_qos, to_bag_qos
+from .msg_types import message_class
+from .params import ParameterError, declare, load_node_config
+from .runtime import announce_ready, run_node, spin_until
+from .wire import CLOCK, JOINT_STATES, TF, TF_STATIC
+
+_STAMP = struct.Struct("<iI")
+# types whose CDR body starts with a stamp (header.stamp, or the Clock's time)
+STAMPED_TYPES = {"sensor_msgs/msg/JointState", "trajectory_msgs/msg/JointTrajectory", "rosgraph_msgs/msg/Clock",
+                 "diagnostic_msgs/msg/DiagnosticArray", "std_msgs/msg/Header"}
+PROGRESS_PERIOD_NS = 500_000_000  # a PROGRESS line (step of /joint_states) per 0.5 s of stamps
+DRAIN_IDLE_S = 0.3   # at stop: take queued messages until none came for this long
+DRAIN_LIMIT_S = 5.0
+
+
+def parse_topic_spec(spec: str) -> tuple[str, str | None]:
+    """'/name' or '/name:pkg/msg/Type' -> (name, type or None)."""
+    name, _, type_name = spec.partition(":")
+    if not name.startswith("/"):
+        raise ParameterError(f"topic {name!r}: give the full name, starting with '/'")
+    return name, type_name or None
+
+
+class RecorderNode(Node):
+    def __init__(self):
+        super().__init__("recorder")
+        p = declare(self, {
+            "bag": "", "force": False, "topics": [""], "all_topics": False, "time_source": "clock",
+            "config_file": "", "custom_data": [""], "tf_rate_hz": 100.0, "end_stamp_ns": -1, "qos_depth": 2000,
+        })
+        if not p["bag"]:
+            raise ParameterError("parameter bag is required (the bag directory to write)")
+        if p["time_source"] not in ("clock", "system"):
+            raise ParameterError(f"parameter time_source must be clock or system, got {p['time_source']!r}")
+        specs = [parse_topic_spec(s) for s in p["topics"] if s]
+        if not specs and not p["all_topics"]:
+            raise ParameterError("give parameter topics (a list of /names) or all_topics:=true")
+        self.p = p
+        cfg = load_node_config(p["config_file"])
+        custom = {CUSTOM_CONFIG: json.dumps(cfg)}
+        for item in (s for s in p["custom_data"] if s):
+            key, sep, value = item.partition("=")
+            if not sep:
+                raise ParameterError(f"custom_data entry {item!r} is not key=value")
+            custom[CUSTOM_PREFIX + key] = value
+        self.wanted = dict(specs)                    # topic -> type (None: from discovery)
+        if p["time_source"] == "clock":
+            self.wanted.setdefault(CLOCK, "rosgraph_msgs/msg/Clock")
+        self.now_ns = 0
+        self.end_ns = p["end_stamp_ns"]
+        self.reached: dict[str, bool] = {}
+        self.received = 0
+        self._subs = {}
+        self._announced = False
+        self.chain = UrdfChain.from_file(cfg["plant"]["urdf"]) if p["tf_rate_hz"] > 0 else None
+        self._tf_period_ns = int(round(1e9 / p["tf_rate_hz"])) if self.chain else 0
+        self._next_tf_ns = 0
+        self._next_progress_ns = 0
+        self.dt_ns = int(round(cfg["simulation"]["dt_s"] * 1e9))
+        self.writer = BagWriter(Path(p["bag"]), force=p["force"], custom_data=custom)
+        self._discover()
+        self._timer = self.create_timer(0.2, self._discover)
+        announce_ready("recorder")
+
+    # ------------------------------------------------------------- discovery
+    def _discover(self) -> None:
+        types = dict(self.get_topic_names_and_types())
+        names = set(self.wanted) | (set(types) if self.p["all_topics"] else set())
+        for topic in sorted(names - set(self._subs)):
+            if topic in (TF, TF_STATIC) and self.chain is not None:
+                continue  # written by the recorder itself
+            pubs = self.get_publishers_info_by_topic(topic)
+            if not pubs:
+                continue
+            type_name = self.wanted.get(topic) or pubs[0].topic_type
+            try:
+                cls = message_class(type_name)
+                profiles = [pi.qos_profile for pi in pubs]
+                self.writer.add_topic(topic, type_name, [to_bag_qos(q, self.p["qos_depth"]) for q in profiles])
+            except (LookupError, KeyError) as exc:
+                self.get_logger().warning(f"not recording {topic}: {exc}")
+                self._subs[topic] = None
+                continue
+            stamped = type_name in STAMPED_TYPES
+            if stamped and self.end_ns >= 0:
+                self.reached[topic] = False
+            self._subs[topic] = self.create_subscription(
+                cls, topic, lambda data, t=topic, s=stamped: self._on_message(t, s, data),
+                subscription_qos(profiles, self.p["qos_depth"]), raw=True)
+            self.get_logger().info(f"recording {topic} ({type_name})")
+
+    # ------------------------------------------------------------- messages
+    def _on_message(self, topic: str, stamped: bool, data: bytes) -> None:
+        if topic == CLOCK and self.p["time_source"] == "clock" and len(data) >= 12:
+            sec, nanosec = _STAMP.unpack_from(data, 4)
+            self.now_ns = max(self.now_ns, sec * 1_000_000_000 + nanosec)
+        t_ns = self.now_ns if self.p["time_source"] == "clock" else time.time_ns()
+        self.writer.write(topic, t_ns, data)
+        self.received += 1
+        if topic == JOINT_STATES:
+            self._on_joint_states(data, t_ns)
+        if stamped and self.end_ns >= 0 and not self.reached.get(topic, True) and len(data) >= 12:
+            sec, nanosec = _STAMP.unpack_from(data, 4)
+            if sec * 1_000_000_000 + nanosec >= self.end_ns:
+                self.reached[topic] = True
+                if not self._announced and all(self.reached.values()) and all(
+                        self._subs.get(t) for t in self.wanted):
+                    self._announced = True
+                    print("COMPLETE", flush=True)
+
+    def _on_joint_states(self, data: bytes, t_ns: int) -> None:
+        """PROGRESS (every PROGRESS_PERIOD_NS of stamps) and /tf (at tf_rate_hz) from /joint_states."""
+        if len(data) < 12:
+            return
+        sec, nanosec = _STAMP.unpack_from(data, 4)
+        stamp_ns = sec * 1_000_000_000 + nanosec
+        if stamp_ns >= self._next_progress_ns:
+            self._next_progress_ns = stamp_ns + PROGRESS_PERIOD_NS
+            print(f"PROGRESS {stamp_ns // self.dt_ns}", flush=True)
+        if self.chain is not None and stamp_ns >= self._next_tf_ns:
+            self._write_tf(data, t_ns)
+
+    def _write_tf(self, data: bytes, t_ns: int) -> None:
+        try:
+            sec, nanosec, names, pos, _, _ = joint_state_cdr.decode(data)
+        except (ValueError, struct.error, UnicodeDecodeError):
+            return
+        stamp_ns = sec * 1_000_000_000 + nanosec
+        if stamp_ns < self._next_tf_ns:
+            return
+        self._next_tf_ns = stamp_ns + self._tf_period_ns
+        if not self.writer.has_topic(TF):
+            self.writer.add_topic(TF_STATIC, "tf2_msgs/msg/TFMessage", [bag_qos(True, True, 1)])
+            self.writer.write(TF_STATIC, t_ns, tf_message_cdr(self.chain.fixed_transforms(), sec, nanosec))
+            self.writer.add_topic(TF, "tf2_msgs/msg/TFMessage", [bag_qos(True, False, 100)])
+        positions = dict(zip(names or JOINT_NAMES, pos))
+        self.writer.write(TF, t_ns, tf_message_cdr(self.chain.moving_transforms(positions), sec, nanosec))
+
+    # ------------------------------------------------------------- run / stop
+    def loop(self, executor, stop) -> None:
+        spin_until(executor, stop, stop)
+        # take what is still queued before closing the bag
+        self.destroy_timer(self._timer)
+        t_end = time.monotonic() + DRAIN_LIMIT_S
+        idle_since = time.monotonic()
+        last = self.received
+        while time.monotonic() < t_end and time.monotonic() - idle_since < DRAIN_IDLE_S:
+            executor.spin_once(timeout_sec=0.05)
+            if self.received != last:
+                last, idle_since = self.received, time.monotonic()
+
+    def close(self) -> None:
+        self.writer.close()
+        missing = [t for t in self.wanted if not self._subs.get(t)]
+        print(f"RECORDED {sum(self.writer.counts.values())} messages on {len(self.writer.counts)} topics into "
+              f"{self.writer.path}" + (f"; never seen: {', '.join(missing)}" if missing else ""), flush=True)
+
+
+def main(args=None) -> int:
+    return run_node(RecorderNode, args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,181 @@
+"""Bag files without ROS: what the writer produces, and a clear error (exit 2, no traceback) for each broken bag."""
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+
+from pa10_dnbs import JOINT_NAMES
+from pa10_dnbs.bag.bag_reader import Bag
+from pa10_dnbs.bag.bag_writer import BagExistsError, BagWriter
+from pa10_dnbs.ros import joint_state_cdr
+
+REPO = Path(__file__).resolve().parent.parent
+ZERO = QosTime(0, 0)
+QOS = Qos(QosHistory.KEEP_LAST, 10, QosReliability.RELIABLE, QosDurability.VOLATILE, ZERO, ZERO,
+          QosLiveliness.AUTOMATIC, ZERO, False)
+
+
+def _write_bag(path, n=200, topic="/joint_states"):
+    w = BagWriter(path, custom_data={"pa10_dnbs.controller": "dnbs"})
+    w.add_topic(topic, "sensor_msgs/msg/JointState", [QOS])
+    for k in range(n):
+        w.write(topic, k * 1_000_000, joint_state_cdr.encode(0, k * 1_000_000, ["s1"], [0.1 * k], [1.0], [2.0]))
+    w.close()
+    return path
+
+
+def _write_run_bag(path, n=300):
+    """A complete little run: /joint_states (7 joints) and one reference batch per joint, as the graph sends them."""
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    T = store.types
+    w = BagWriter(path)
+    w.add_topic("/joint_states", "sensor_msgs/msg/JointState", [QOS])
+    for k in range(n + 1):
+        w.write("/joint_states", k * 1_000_000, joint_state_cdr.encode(
+            0, k * 1_000_000, list(JOINT_NAMES), [0.001 * k] * 7, [1.0] * 7, [2.0] * 7))
+    for j in JOINT_NAMES:
+        pts = [T["trajectory_msgs/msg/JointTrajectoryPoint"](
+            positions=np.array([0.0]), velocities=np.array([0.0]), accelerations=np.array([], dtype=float),
+            effort=np.array([], dtype=float), time_from_start=T["builtin_interfaces/msg/Duration"](sec=0, nanosec=i * 1_000_000))
+            for i in range(n + 10)]
+        msg = T["trajectory_msgs/msg/JointTrajectory"](
+            header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=0, nanosec=0), frame_id=""),
+            joint_names=[j], points=pts)
+        w.add_topic(f"/pa10/{j}/reference", "trajectory_msgs/msg/JointTrajectory", [QOS])
+        w.write(f"/pa10/{j}/reference", 0, bytes(store.serialize_cdr(msg, "trajectory_msgs/msg/JointTrajectory")))
+    w.close()
+    return path
+
+
+def _analyse(bag, tmp_path):
+    return subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "analyse", str(bag), "--out", str(tmp_path / "out")],
+                          cwd=REPO, capture_output=True, text=True, timeout=60)
+
+
+def _assert_clear_error(r, *words):
+    assert r.returncode == 2, r.stderr
+    assert "Traceback" not in r.stderr, r.stderr
+    for w in words:
+        assert w in r.stderr, r.stderr
+
+
+def test_written_bag_reads_back(tmp_path):
+    bag = _write_bag(tmp_path / "b")
+    with Bag(bag) as b:
+        assert b.topics["/joint_states"].count == 200 and b.message_count == 200
+        assert b.custom_data["pa10_dnbs.controller"] == "dnbs"
+        stamps = [joint_state_cdr.decode(bytes(d))[1] for _, _, _, d in b.messages()]
+        assert stamps == [k * 1_000_000 for k in range(200)]
+    meta = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    assert meta["version"] == 9 and meta["storage_identifier"] == "mcap"
+
+
+def test_writer_refuses_an_existing_path_without_force(tmp_path):
+    bag = _write_bag(tmp_path / "b")
+    with pytest.raises(BagExistsError, match="--force"):
+        BagWriter(bag)
+    w = BagWriter(bag, force=True)
+    w.close()
+    with Bag(bag) as b:
+        assert b.message_count == 0
+
+
+def test_a_complete_run_bag_analyses(tmp_path):
+    """The baseline for the corruption tests below: undamaged, the same bag analyses with exit 0."""
+    r = _analyse(_write_run_bag(tmp_path / "b"), tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "out" / "metrics.json").is_file()
+
+
+def test_missing_path_and_not_a_bag(tmp_path):
+    _assert_clear_error(_analyse(tmp_path / "nothing", tmp_path), "does not exist")
+    (tmp_path / "plain").mkdir()
+    (tmp_path / "plain" / "x.txt").write_text("hello")
+    _assert_clear_error(_analyse(tmp_path / "plain", tmp_path), "not a rosbag2 bag directory")
+    _assert_clear_error(_analyse(tmp_path / "plain" / "x.txt", tmp_path), "not a rosbag2 bag")
+
+
+def test_truncated_bag(tmp_path):
+    bag = _write_bag(tmp_path / "b")
+    mcap = bag / "b.mcap"
+    data = mcap.read_bytes()
+    mcap.write_bytes(data[: len(data) // 2])
+    _assert_clear_error(_analyse(bag, tmp_path), "truncated")
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("where", [0.02, 0.5, 0.9])
+def test_corrupt_bag(tmp_path, where):
+    """Garbage over part of the file (record headers, payloads, summary): a clear error, whatever got hit."""
+    bag = _write_run_bag(tmp_path / "b")
+    mcap = bag / "b.mcap"
+    data = bytearray(mcap.read_bytes())
+    at = int(len(data) * where)
+    data[at:at + 64] = b"\xff" * 64
+    mcap.write_bytes(bytes(data))
+    r = _analyse(bag, tmp_path)
+    _assert_clear_error(r, "pa10-dnbs: error:", str(bag))
+    assert not (tmp_path / "out").exists()
+
+
+def test_inconsistent_metadata(tmp_path):
+    bag = _write_bag(tmp_path / "b")
+    meta_path = bag / "metadata.yaml"
+    meta = yaml.safe_load(meta_path.read_text())
+    meta["rosbag2_bagfile_information"]["message_count"] = 999
+    meta_path.write_text(yaml.safe_dump(meta))
+    _assert_clear_error(_analyse(bag, tmp_path), "metadata.yaml counts 999")
+    meta_path.write_text("rosbag2_bagfile_information: [unclosed")
+    _assert_clear_error(_analyse(bag, tmp_path), "not valid YAML")
+
+
+def test_bag_missing_the_needed_topics(tmp_path):
+    bag = _write_bag(tmp_path / "b", topic="/other")
+    _assert_clear_error(_analyse(bag, tmp_path), "needs topics", "/joint_states", "/pa10/s1/reference")
+
+
+def test_replay_rejects_unknown_topics_before_joining_ros(tmp_path):
+    bag = _write_bag(tmp_path / "b")
+    r = subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "replay", str(bag), "--topics", "/nope"],
+                       cwd=REPO, capture_output=True, text=True, timeout=60)
+    _assert_clear_error(r, "no such topic in the bag: /nope")
+    r = subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "replay", str(bag), "--rate", "0"],
+                       cwd=REPO, capture_output=True, text=True, timeout=60)
+    _assert_clear_error(r, "--rate")
+
+
+def _recorder(tmp_path, *params):
+    env = {**os.environ, "ROS_DOMAIN_ID": "71", "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    args = [a for p in params for a in ("-p", p)]
+    return subprocess.run([sys.executable, "-m", "pa10_dnbs.ros.recorder_node", "--ros-args", *args],
+                          cwd=REPO, env=env, capture_output=True, text=True, timeout=60)
+
+
+def test_standalone_recorder_rejects_bad_parameters(tmp_path):
+    _assert_clear_error(_recorder(tmp_path), "parameter bag is required")
+    _assert_clear_error(_recorder(tmp_path, f"bag:={tmp_path / 'b'}"), "all_topics")
+    _assert_clear_error(_recorder(tmp_path, f"bag:={tmp_path / 'b'}", "topics:=[joint_states]"), "starting with '/'")
+    existing = _write_bag(tmp_path / "old")
+    before = sorted(p.name for p in existing.iterdir())
+    _assert_clear_error(_recorder(tmp_path, f"bag:={existing}", "all_topics:=true"), "exists", "--force")
+    assert sorted(p.name for p in existing.iterdir()) == before
+    assert not (tmp_path / "b").exists()
+
+
+def test_launcher_rejects_a_lockstep_bag_that_lost_messages(tmp_path, cfg):
+    """A lockstep recording must hold one message per step on every per-step topic, or the run fails."""
+    from pa10_dnbs.commands.launch import _bag_run
+
+    bag = _write_run_bag(tmp_path / "b", n=300)
+    run, missing = _bag_run(bag, 1e-3, 300, "dnbs", cfg, 1.0, lockstep=False)
+    assert missing is None and run.n_steps == 300
+    _, missing = _bag_run(bag, 1e-3, 300, "dnbs", cfg, 1.0, lockstep=True)
+    assert "/pa10/s1/effort has 0 messages, not one per step (301)" in missing
+    assert "/joint_states" not in missing  # that one is complete
