@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from .config import ConfigError, default_config_path
+from .launch.fault_flags import add_fault_arguments
 from .bag.bag_reader import BagError
 from .bag.bag_writer import BagExistsError
 from .report.outputs import OutputExistsError
@@ -28,7 +29,8 @@ def _launch(args: argparse.Namespace) -> int:
                       duration_s=args.duration, out=args.out, force=args.force,
                       progress=not args.no_progress and sys.stderr.isatty(), domain_id=args.domain_id,
                       reliability=args.reliability, effort_timeout_s=args.effort_timeout,
-                      on_missing_effort=args.on_missing_effort, record=args.record)
+                      on_missing_effort=args.on_missing_effort, record=args.record, fault_args=args,
+                      restart=args.restart, netns=args.netns)
 
 
 def _analyse(args: argparse.Namespace) -> int:
@@ -75,6 +77,13 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--on-missing-effort", choices=("hold", "zero"), default="hold")
     la.add_argument("--record", type=Path, default=None, metavar="BAG_DIR",
                     help="record every topic into a rosbag2 MCAP bag (replaced only with --force)")
+    la.add_argument("--restart", nargs="?", const="resume", choices=("resume", "fresh"), default=None,
+                    help="restart a joint controller that dies (up to 3 times per joint), resuming from its "
+                         "last checkpoint (default) or fresh")
+    la.add_argument("--netns", action="append", default=[], metavar="GROUP=NAMESPACE",
+                    help="run a node group (observer, reference, controllers, plant) in a network namespace "
+                         "(ip netns), with discovery range SUBNET: several hosts on one machine; repeatable")
+    add_fault_arguments(la)
     la.set_defaults(func=_launch)
 
     an = sub.add_parser("analyse", help="metrics, figures and report of a recorded run, from its bag alone")

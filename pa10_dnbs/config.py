@@ -59,6 +59,7 @@ class Text:
 POS = Num(0.0)
 NONNEG = Num(0.0, strict=False)
 ANY = Num()
+FRACTION = Num(0.0, strict=False, high=1.0)
 
 
 def _net_schema() -> dict:
@@ -70,6 +71,17 @@ def _net_schema() -> dict:
         "q": Joints(NONNEG),
         "r": Joints(POS),
         "eta": Joints(POS),
+    }
+
+
+def _link_faults() -> dict:
+    """Faults injected on one direction of each joint's link (plant -> controller states, or efforts back)."""
+    return {
+        "drop_fraction": Joints(FRACTION),
+        "delay_ms": Joints(NONNEG),
+        "jitter_ms": Joints(NONNEG),
+        "corrupt_fraction": Joints(FRACTION),
+        "corrupt_kind": Text(("nan", "inf", "out_of_range")),
     }
 
 
@@ -104,6 +116,19 @@ SCHEMA: dict[str, Any] = {
     },
     "dnbs": {"anti_windup": Flag(), "alpha_net": _alpha, "torque_net": _torque},
     "pid": {"kp": Joints(NONNEG), "ki": Joints(NONNEG), "kd": Joints(NONNEG)},
+    "guards": {
+        "position_margin_rad": NONNEG,
+        "max_speed_rad_s": Joints(POS),
+        "on_bad_state": Text(("hold", "zero")),
+        "ekf_full_check_every": Num(0, strict=False, integer=True),
+    },
+    "checkpoint": {"period_s": POS},
+    "faults": {
+        "seed": Num(0, strict=False, integer=True),
+        "state": _link_faults(),
+        "effort": _link_faults(),
+        "kill_controller_at_s": Joints(ANY),
+    },
 }
 
 

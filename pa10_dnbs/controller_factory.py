@@ -28,7 +28,8 @@ def build_controller(cfg: dict, kind: str, joint: int):
     if kind == "dnbs":
         params = DNBSParams(alpha_net=_network(cfg["dnbs"]["alpha_net"], joint),
                             torque_net=_network(cfg["dnbs"]["torque_net"], joint),
-                            torque_limit_nm=limit, anti_windup=cfg["dnbs"]["anti_windup"])
+                            torque_limit_nm=limit, anti_windup=cfg["dnbs"]["anti_windup"],
+                            ekf_full_check_every=cfg["guards"]["ekf_full_check_every"])
         return DNBSJointController(params, seed=(cfg["simulation"]["seed"], joint))
     if kind == "pid":
         pid = cfg["pid"]

@@ -174,8 +174,9 @@ def test_launcher_rejects_a_lockstep_bag_that_lost_messages(tmp_path, cfg):
     from pa10_dnbs.commands.launch import _bag_run
 
     bag = _write_run_bag(tmp_path / "b", n=300)
-    run, missing = _bag_run(bag, 1e-3, 300, "dnbs", cfg, 1.0, lockstep=False)
+    run, missing = _bag_run(bag, 1e-3, 300, "dnbs", cfg, 1.0, lockstep_stats=None)
     assert missing is None and run.n_steps == 300
-    _, missing = _bag_run(bag, 1e-3, 300, "dnbs", cfg, 1.0, lockstep=True)
-    assert "/pa10/s1/effort has 0 messages, not one per step (301)" in missing
+    stats = {"joints": [{"timeout_ranges": []} for _ in JOINT_NAMES]}
+    _, missing = _bag_run(bag, 1e-3, 300, "dnbs", cfg, 1.0, lockstep_stats=stats)
+    assert "/pa10/s1/effort lacks 300 steps (first 0)" in missing and "/clock lacks 301 steps" in missing
     assert "/joint_states" not in missing  # that one is complete

@@ -103,7 +103,12 @@ def test_realtime_mode_runs_and_reports_misses_and_latency(tmp_path):
     # a tick counts as on time only if no joint missed it
     worst_miss = max(j["missed_ticks"] for j in t["joints"])
     assert t["on_time_fraction"] <= 1.0 - worst_miss / 1500 + 1e-12
+    answered = [j for j in t["joints"] if j["latency_median_us"] is not None]
+    assert answered, t["joints"]
     for j in t["joints"]:
-        assert j["latency_median_us"] > 0 and j["latency_p99_us"] >= j["latency_median_us"]
+        if j["latency_median_us"] is None:  # a controller starved of CPU for the whole (short) run
+            assert j["missed_ticks"] == 1500, j  # then it missed every tick, and says so
+        else:
+            assert j["latency_median_us"] > 0 and j["latency_p99_us"] >= j["latency_median_us"]
         assert j["effort_timeouts"] == 0  # realtime never waits: it holds
     assert all(c == 0 for c in exit_codes(la.output).values())

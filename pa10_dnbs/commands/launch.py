@@ -1,9 +1,13 @@
 """``pa10-dnbs launch``: the ROS 2 node graph, with the same outputs as ``simulate``."""
 from __future__ import annotations
 
+import dataclasses
 import math
+import struct
 import sys
 from pathlib import Path
+
+import yaml
 
 from .. import JOINT_NAMES
 from ..bag.analysis import wire_record_from_bag
@@ -11,19 +15,34 @@ from ..bag.bag_reader import Bag, BagError
 from ..bag.bag_writer import check_bag_path
 from ..config import ConfigError, default_config_path, load_config
 from ..kinematics.urdf_chain import UrdfChain
-from ..launch.graph_run import GraphFailure, GraphOptions, run_graph
+from ..launch.fault_flags import apply_fault_flags, faults_active, plain
+from ..launch.fault_report import fault_note, fault_report
+from ..launch.graph_run import GraphFailure, GraphOptions, parse_netns, run_graph
 from ..report.metrics_file import effective_window, metrics_dict
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..topics import CLOCK, JOINT_STATES, effort_topic, state_topic
+
+_STAMP = struct.Struct("<iI")  # header.stamp (or Clock.clock) right after the 4-byte CDR header
 from ..ros.wire_monitor import load_wire_run
 
 
 def run_launch(config_path: Path | None, mode: str, controller: str, duration_s: float | None, out: Path,
                force: bool, progress: bool, domain_id: int | None, reliability: str, effort_timeout_s: float,
-               on_missing_effort: str, record: Path | None = None) -> int:
-    """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code."""
+               on_missing_effort: str, record: Path | None = None, fault_args=None, restart: str | None = None,
+               netns: list[str] | None = None) -> int:
+    """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code.
+
+    ``fault_args``: the parsed fault flags (launch/fault_flags.py) applied to the config; the config the
+    nodes run with is written to ``out/config_used.yaml``. ``restart``: 'resume' or 'fresh'.
+    ``netns``: ['GROUP=NAMESPACE', ...] to run node groups in network namespaces.
+    """
     config_path = Path(config_path).resolve() if config_path else default_config_path()
     cfg = load_config(config_path)
+    if fault_args is not None:
+        cfg = apply_fault_flags(cfg, fault_args)
+    if restart not in (None, "resume", "fresh"):
+        raise ConfigError(f"--restart: expected resume or fresh, got {restart!r}")
+    namespaces = parse_netns(netns or [])
     if duration_s is None:
         duration_s = cfg["simulation"]["duration_s"]
     if not (math.isfinite(duration_s) and duration_s > 0):
@@ -45,12 +64,14 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     opt = GraphOptions(config_path=config_path, mode=mode, controller=controller, duration_s=n_steps * dt,
                        domain_id=domain_id, reliability=reliability, effort_timeout_s=effort_timeout_s,
                        on_missing_effort=on_missing_effort, progress=progress, dt_s=dt, record_bag=record,
-                       force_bag=force)
+                       force_bag=force, restart=restart, netns=namespaces)
     window = effective_window(n_steps * dt, cfg["simulation"]["window_s"])
 
     try:
         with atomic_output_dir(out, force) as tmp:
-            result = run_graph(opt, tmp, say=lambda s: print(s, flush=True))
+            used = tmp / "config_used.yaml"
+            used.write_text(yaml.safe_dump(plain(cfg), sort_keys=False))
+            result = run_graph(dataclasses.replace(opt, config_path=used), tmp, say=lambda s: print(s, flush=True))
             stats = result.stats
             if record is None:
                 run, missing = load_wire_run(result.wire_file, controller, cfg["plant"]["torque_limit_nm"],
@@ -58,7 +79,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                 source = "the wire monitor's record of /joint_states and the reference topics"
             else:
                 run, missing = _bag_run(record, dt, n_steps, controller, cfg, stats["wall_time_s"],
-                                        lockstep=mode == "lockstep")
+                                        lockstep_stats=stats if mode == "lockstep" else None)
                 source = f"the bag's /joint_states and reference topics ({record})"
             if missing:
                 raise GraphFailure(f"the record of the run is incomplete: {missing}")
@@ -68,11 +89,14 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                 wall_time_total_s=result.wall_total_s, limit_hits=stats["limit_hits"],
                 timing={k: stats[k] for k in ("late_ticks", "on_time_fraction", "effort_timeout_s",
                                                "on_missing_effort")} | {"joints": stats["joints"]},
-                node_exit_codes=result.exit_codes, bag=str(record) if record else None)
+                node_exit_codes=result.exit_codes, bag=str(record) if record else None,
+                faults=fault_report(cfg, stats, result))
             notes = [f"config: `{config_path}`",
                      f"source: ROS 2 node graph, {mode} mode, {reliability} QoS, domain {result.domain_id}; "
                      f"time series rebuilt from {source}",
                      _timing_note(stats)]
+            if faults_active(cfg) or result.restarts:
+                notes.append(fault_note(metrics["faults"]))
             if tuple(window) != tuple(cfg["simulation"]["window_s"]):
                 notes.append(f"run shorter than the configured window {list(cfg['simulation']['window_s'])}: "
                              "metrics over the second half instead")
@@ -94,24 +118,40 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
 
 
 def _bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, cfg: dict, wall_time_s: float,
-             lockstep: bool):
+             lockstep_stats: dict | None):
     """(RunData, what is missing or None) rebuilt from the bag just recorded; a bad bag is a failed run.
 
-    In lockstep every per-step topic must hold exactly one message per step (n_steps + 1 with step 0).
+    With ``lockstep_stats`` (the plant's stats of a lockstep run) every step 0..n_steps must be in the bag
+    on /clock, /joint_states and each joint's state topic, and on each effort topic except the steps the
+    plant filled in after a timeout. (Resent states and repeated answers add messages; none may be lost.)
     """
+    dt_ns = int(round(dt * 1e9))
     try:
         with Bag(bag_path) as bag:
             rec = wire_record_from_bag(bag, dt, n_steps)
-            counts = {t: i.count for t, i in bag.topics.items()}
+            steps = {}
+            if lockstep_stats is not None:
+                per_step = [CLOCK, JOINT_STATES] + [t for j in JOINT_NAMES for t in (state_topic(j), effort_topic(j))]
+                steps = {t: set() for t in per_step}
+                for topic, _, _, data in bag.messages([t for t in per_step if t in bag.topics]):
+                    if len(data) >= 12:
+                        sec, nanosec = _STAMP.unpack_from(data, 4)
+                        steps[topic].add(round((sec * 1_000_000_000 + nanosec) / dt_ns))
     except BagError as exc:
         raise GraphFailure(f"the recorded bag is not readable: {exc}") from None
     problems = [rec.missing()] if rec.missing() else []
     if rec.malformed:
         problems.append(f"{rec.malformed} undecodable messages")
-    if lockstep:
-        per_step = [CLOCK, JOINT_STATES] + [t for j in JOINT_NAMES for t in (state_topic(j), effort_topic(j))]
-        problems += [f"{t} has {counts.get(t, 0)} messages, not one per step ({n_steps + 1})"
-                     for t in per_step if counts.get(t, 0) != n_steps + 1]
+    everything = set(range(n_steps + 1))
+    for topic, seen in steps.items():
+        expected = everything
+        if topic.endswith("/effort"):
+            joint = JOINT_NAMES.index(topic.split("/")[2])
+            filled = {k for a, b in lockstep_stats["joints"][joint]["timeout_ranges"] for k in range(a, b + 1)}
+            expected = everything - filled - {n_steps}  # the answer to the last state may come after the end
+        lost = expected - seen
+        if lost:
+            problems.append(f"{topic} lacks {len(lost)} steps (first {min(lost)})")
     run = rec.run_data(controller, JOINT_NAMES, cfg["plant"]["torque_limit_nm"], wall_time_s)
     return run, "; ".join(problems) or None
 

@@ -10,6 +10,12 @@ an update that would push an already saturated torque further out). e2 has the o
 the paper's printed eq. 26: with H = S(z) and w <- w + eta K e the printed
 x2 - alpha is positive feedback (test/test_dnbs_controller.py shows it).
 The torque is saturated at the joint's Table 2 limit.
+
+EKF guard: after every step both trainers are checked (finite w and P, and
+every ``ekf_full_check_every`` steps P symmetric positive definite); a
+network that fails is reset to its initial weights and P0, and counted in
+``ekf_resets``. ``state_dict()`` / ``load_state_dict()`` carry everything a
+restarted controller needs to resume (weights, covariances, step count).
 """
 from __future__ import annotations
 
@@ -46,6 +52,7 @@ class DNBSParams:
     torque_limit_nm: float
     anti_windup: bool = True       # skip updates that would push a saturated torque further out
     printed_e2_sign: bool = False  # True reproduces the paper's printed e2 = x2 - alpha (diverges)
+    ekf_full_check_every: int = 100  # steps between Cholesky checks of P (0: never; finiteness every step)
 
 
 class DNBSJointController:
@@ -65,6 +72,8 @@ class DNBSJointController:
         self.torque_ekf = EKFTrainer(w2, params.torque_net.ekf)
         self.alpha = 0.0
         self.torque_unsaturated = 0.0
+        self.steps = 0
+        self.ekf_resets = {"alpha": 0, "torque": 0}
 
     def step(self, x1: float, x2: float, ref: ReferenceSample) -> float:
         """Compute the torque [N m] for state (x1, x2) and train both networks."""
@@ -87,4 +96,36 @@ class DNBSJointController:
 
         self.alpha = alpha
         self.torque_unsaturated = u
+        self.steps += 1
+        self._guard()
         return min(max(u, -lim), lim)
+
+    def _guard(self) -> None:
+        every = self.params.ekf_full_check_every
+        full = every > 0 and self.steps % every == 0
+        for name, ekf in (("alpha", self.alpha_ekf), ("torque", self.torque_ekf)):
+            if not ekf.healthy(full):
+                ekf.reset()
+                self.ekf_resets[name] += 1
+
+    def state_dict(self) -> dict[str, np.ndarray]:
+        """Weights (L,), covariances (L, L), initial weights and counters, as arrays (for np.savez)."""
+        return {"alpha_w": self.alpha_ekf.w.copy(), "alpha_P": self.alpha_ekf.P.copy(),
+                "alpha_w0": self.alpha_ekf.w0.copy(), "torque_w": self.torque_ekf.w.copy(),
+                "torque_P": self.torque_ekf.P.copy(), "torque_w0": self.torque_ekf.w0.copy(),
+                "steps": np.array(self.steps), "alpha": np.array(self.alpha),
+                "ekf_resets": np.array([self.ekf_resets["alpha"], self.ekf_resets["torque"]])}
+
+    def load_state_dict(self, state: dict) -> None:
+        """Resume from ``state_dict()`` output; shapes must match this controller's networks."""
+        for name, ekf in (("alpha", self.alpha_ekf), ("torque", self.torque_ekf)):
+            w, P = np.asarray(state[f"{name}_w"], float), np.asarray(state[f"{name}_P"], float)
+            if w.shape != ekf.w.shape or P.shape != ekf.P.shape:
+                raise ValueError(f"checkpoint {name} network has shape {w.shape}/{P.shape}, expected "
+                                 f"{ekf.w.shape}/{ekf.P.shape}")
+            ekf.w[:] = w
+            ekf.P[:] = P
+            ekf.w0[:] = np.asarray(state[f"{name}_w0"], float)
+        self.steps = int(state["steps"])
+        self.alpha = float(state["alpha"])
+        self.ekf_resets = dict(zip(("alpha", "torque"), (int(v) for v in state["ekf_resets"])))

@@ -25,6 +25,9 @@ class UrdfJoint:
     origin_xyz: np.ndarray    # (3,) [m]
     origin_rot: np.ndarray    # (3, 3) rotation of the joint frame in the parent frame
     axis: np.ndarray          # (3,) unit axis in the joint frame
+    lower: float = -math.inf  # <limit lower> [rad or m]; +/-inf when absent (continuous)
+    upper: float = math.inf
+    velocity: float = math.inf  # <limit velocity> [rad/s or m/s]
 
 
 @dataclass(frozen=True)
@@ -92,13 +95,24 @@ class UrdfChain:
             norm = np.linalg.norm(axis)
             if norm == 0.0:
                 raise ValueError(f"joint {el.get('name')}: zero axis")
+            limit = el.find("limit")
+            bounds = {}
+            if limit is not None and el.get("type") != "continuous":
+                bounds = {k: float(limit.get(k)) for k in ("lower", "upper", "velocity") if limit.get(k) is not None}
             joints.append(UrdfJoint(name=el.get("name"), kind=el.get("type"), parent=el.find("parent").get("link"),
                                     child=el.find("child").get("link"), origin_xyz=xyz,
-                                    origin_rot=rpy_matrix(*rpy), axis=axis / norm))
+                                    origin_rot=rpy_matrix(*rpy), axis=axis / norm, **bounds))
         self.joints = joints
         self.movable = [j for j in joints if j.kind != "fixed"]
         self.fixed = [j for j in joints if j.kind == "fixed"]
         self.root_link = next(iter({j.parent for j in joints} - {j.child for j in joints}), "")
+
+    def joint(self, name: str) -> UrdfJoint:
+        """The joint called ``name``; KeyError if the URDF has none."""
+        for j in self.joints:
+            if j.name == name:
+                return j
+        raise KeyError(f"no joint {name!r} in the URDF")
 
     @classmethod
     def from_file(cls, path: Path) -> "UrdfChain":

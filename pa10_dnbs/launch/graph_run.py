@@ -14,11 +14,11 @@ import os
 import signal
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from .. import JOINT_NAMES
-from ..topics import CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, effort_topic, reference_topic, state_topic
+from ..topics import CLOCK, DIAGNOSTICS, JOINT_STATES, ROBOT_DESCRIPTION, effort_topic, reference_topic, state_topic
 from .processes import ManagedProcess, stop_all
 from .shm_cleanup import fastdds_segments, remove_stale
 
@@ -47,6 +47,9 @@ class GraphOptions:
     dt_s: float = 1e-3
     record_bag: Path | None = None   # record every topic into this rosbag2 MCAP bag directory
     force_bag: bool = False
+    restart: str | None = None       # 'resume' or 'fresh': restart a joint controller that died
+    max_restarts: int = 3            # per joint
+    netns: dict[str, str] = field(default_factory=dict)  # node group -> network namespace (multi-host)
 
 
 @dataclass
@@ -57,6 +60,8 @@ class GraphResult:
     wall_total_s: float
     wire_file: Path | None   # the wire monitor's record; None when the run went into the bag
     bag: Path | None = None
+    restarts: list[dict] = field(default_factory=list)   # joint, exit code, wall time, resumed step
+    controllers: dict[str, dict] = field(default_factory=dict)  # joint -> counters of its last incarnation
 
 
 class _StopRequest:
@@ -85,8 +90,18 @@ def pick_domain_id() -> int:
     return 1 + os.getpid() % 101
 
 
-def node_env(domain_id: int) -> dict:
-    env = {**os.environ, "ROS_DOMAIN_ID": str(domain_id), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+NODE_GROUPS = ("observer", "reference", "controllers", "plant")
+
+
+def node_group(name: str) -> str:
+    if name.startswith("joint_controller_"):
+        return "controllers"
+    return name if name in ("reference", "plant") else "observer"
+
+
+def node_env(domain_id: int, discovery_range: str = "LOCALHOST") -> dict:
+    """Children's environment: ``discovery_range`` LOCALHOST on one host, SUBNET across (network namespaces)."""
+    env = {**os.environ, "ROS_DOMAIN_ID": str(domain_id), "ROS_AUTOMATIC_DISCOVERY_RANGE": discovery_range,
            "PYTHONUNBUFFERED": "1"}
     env.pop("ROS_LOCALHOST_ONLY", None)  # deprecated in Jazzy; conflicts with the discovery range
     return env
@@ -102,7 +117,7 @@ def _ros_args(node: str, params: dict) -> list[str]:
 def graph_topics() -> list[str]:
     """Every topic of the graph as recorder specs ('/name:pkg/msg/Type')."""
     specs = [f"{CLOCK}:rosgraph_msgs/msg/Clock", f"{JOINT_STATES}:sensor_msgs/msg/JointState",
-             f"{ROBOT_DESCRIPTION}:std_msgs/msg/String"]
+             f"{ROBOT_DESCRIPTION}:std_msgs/msg/String", f"{DIAGNOSTICS}:diagnostic_msgs/msg/DiagnosticArray"]
     for j in JOINT_NAMES:
         specs += [f"{state_topic(j)}:sensor_msgs/msg/JointState", f"{effort_topic(j)}:sensor_msgs/msg/JointState",
                   f"{reference_topic(j)}:trajectory_msgs/msg/JointTrajectory"]
@@ -111,6 +126,19 @@ def graph_topics() -> list[str]:
 
 def _yaml_list(items: list[str]) -> str:
     return "[" + ",".join(f"'{i}'" for i in items) + "]"
+
+
+def controller_command(opt: GraphOptions, workdir: Path, joint: str, incarnation: int = 0) -> list[str]:
+    """argv of joint ``joint``'s controller; a restarted one (incarnation > 0) resumes unless opt.restart is
+    'fresh', and is not killed again by faults.kill_controller_at_s."""
+    params = {"config_file": str(opt.config_path), "joint": joint, "controller": opt.controller,
+              "reliability": opt.reliability, "queue_depth": 1 if opt.mode == "realtime" else 2000,
+              "stats_file": str(workdir / f"controller_{joint}.json"), "incarnation": incarnation,
+              "resume": str(incarnation > 0 and opt.restart != "fresh").lower()}
+    if opt.controller == "dnbs":
+        params["checkpoint_file"] = str(workdir / "checkpoints" / f"{joint}.npz")
+    return [sys.executable, "-m", "pa10_dnbs.ros.joint_controller_node"] + _ros_args(f"joint_controller_{joint}",
+                                                                                    params)
 
 
 def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[tuple[str, list[str]]]:
@@ -131,10 +159,7 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
     cmds.append(("reference", py + ["pa10_dnbs.ros.reference_node"] + _ros_args(
         "reference", {"config_file": cfg, "duration_s": opt.duration_s})))
     for j in JOINT_NAMES:
-        cmds.append((f"joint_controller_{j}", py + ["pa10_dnbs.ros.joint_controller_node"] + _ros_args(
-            f"joint_controller_{j}", {"config_file": cfg, "joint": j, "controller": opt.controller,
-                                      "reliability": opt.reliability,
-                                      "queue_depth": 1 if opt.mode == "realtime" else 2000})))
+        cmds.append((f"joint_controller_{j}", controller_command(opt, stats_file.parent, j)))
     cmds.append(("plant", py + ["pa10_dnbs.ros.plant_node"] + _ros_args("plant", {
         "config_file": cfg, "mode": opt.mode, "duration_s": opt.duration_s, "reliability": opt.reliability,
         "effort_timeout_s": opt.effort_timeout_s, "on_missing_effort": opt.on_missing_effort,
@@ -150,9 +175,11 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
     The launcher itself never joins DDS: the observer is one of its child processes.
     """
     domain = opt.domain_id if opt.domain_id is not None else pick_domain_id()
-    env = node_env(domain)
+    env = node_env(domain, "SUBNET" if opt.netns else "LOCALHOST")
     logs = workdir / "logs"
     logs.mkdir(parents=True, exist_ok=True)
+    (workdir / "checkpoints").mkdir(exist_ok=True)
+    restarts: list[dict] = []
     stats_file = workdir / "plant_stats.json"
     wire_file = workdir / "wire.npz"
     shm_before = fastdds_segments()
@@ -165,14 +192,14 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
         for name, argv in node_commands(opt, stats_file, wire_file):
             if stop.signal_name:
                 break
-            procs.append(ManagedProcess(name, argv, env, logs / f"{name}.log"))
+            procs.append(ManagedProcess(name, _in_netns(opt, name, argv), env, logs / f"{name}.log"))
         if not stop.signal_name:
             say(f"launch: domain {domain}, {len(procs) - 1} nodes: "
                 + ", ".join(f"{p.name}={p.pid}" for p in procs[1:]) + f"; observer {procs[0].name}={procs[0].pid}")
             failure = _wait_ready(procs, stop)
         if failure is None and not stop.signal_name:
             say("launch: graph ready (every node printed READY)")
-            failure = _watch(procs, opt, say, stop)
+            failure = _watch(procs, opt, say, stop, _Restarter(opt, workdir, env, restarts, say))
     finally:
         codes = stop_all(procs)
         shm_removed = remove_stale(fastdds_segments() - shm_before)
@@ -191,8 +218,61 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
     if failure is not None:
         raise GraphFailure(failure, interrupted=failure.startswith("interrupted"))
     stats = json.loads(stats_file.read_text())
+    controllers = {}
+    for j in JOINT_NAMES:
+        f = workdir / f"controller_{j}.json"
+        controllers[j] = json.loads(f.read_text()) if f.is_file() else None
     return GraphResult(stats=stats, exit_codes=codes, domain_id=domain, wall_total_s=time.monotonic() - t_start,
-                       wire_file=wire_file if opt.record_bag is None else None, bag=opt.record_bag)
+                       wire_file=wire_file if opt.record_bag is None else None, bag=opt.record_bag,
+                       restarts=restarts, controllers=controllers)
+
+
+def parse_netns(specs: list[str]) -> dict[str, str]:
+    """['controllers=hostb', ...] -> {'controllers': 'hostb'}; ConfigError naming --netns on bad input."""
+    from ..config import ConfigError
+
+    out = {}
+    for spec in specs:
+        group, sep, ns = spec.partition("=")
+        if not sep or group not in NODE_GROUPS or not ns:
+            raise ConfigError(f"--netns: expected GROUP=NAMESPACE with GROUP one of {', '.join(NODE_GROUPS)}, "
+                              f"got {spec!r}")
+        if not Path(f"/var/run/netns/{ns}").exists():
+            raise ConfigError(f"--netns: no network namespace {ns!r} (see `ip netns list`)")
+        out[group] = ns
+    return out
+
+
+def _in_netns(opt: GraphOptions, name: str, argv: list[str]) -> list[str]:
+    ns = opt.netns.get(node_group(name))
+    return ["ip", "netns", "exec", ns] + argv if ns else argv
+
+
+class _Restarter:
+    """Starts a dead joint controller again (``opt.restart``), at most ``opt.max_restarts`` times per joint."""
+
+    def __init__(self, opt: GraphOptions, workdir: Path, env: dict, log: list[dict], say):
+        self.opt, self.workdir, self.env, self.log, self.say = opt, workdir, env, log, say
+        self.count: dict[str, int] = {}
+
+    def __call__(self, procs: list[ManagedProcess], dead: ManagedProcess) -> bool:
+        """Replace ``dead`` in ``procs`` by a new incarnation; False when restarts are off or used up."""
+        if self.opt.restart is None or not dead.name.startswith("joint_controller_"):
+            return False
+        joint = dead.name.rsplit("_", 1)[1]
+        n = self.count.get(joint, 0) + 1
+        if n > self.opt.max_restarts:
+            return False
+        self.count[joint] = n
+        argv = _in_netns(self.opt, dead.name, controller_command(self.opt, self.workdir, joint, incarnation=n))
+        new = ManagedProcess(dead.name, argv, self.env, self.workdir / "logs" / f"{dead.name}.restart{n}.log")
+        procs[procs.index(dead)] = new
+        dead.close_log()
+        self.log.append({"joint": joint, "incarnation": n, "exit_code": dead.returncode,
+                         "wall_time": time.time(), "mode": self.opt.restart, "pid": new.pid})
+        self.say(f"launch: joint {joint} controller exited with code {dead.returncode}; restarted "
+                 f"({self.opt.restart}, restart {n} of at most {self.opt.max_restarts}), pid {new.pid}")
+        return True
 
 
 def _describe(p: ManagedProcess) -> str:
@@ -215,7 +295,7 @@ def _wait_ready(procs: list[ManagedProcess], stop: _StopRequest) -> str | None:
     return f"not ready after {READY_TIMEOUT_S:g} s: {', '.join(late)}"
 
 
-def _watch(procs: list[ManagedProcess], opt: GraphOptions, say, stop: _StopRequest) -> str | None:
+def _watch(procs: list[ManagedProcess], opt: GraphOptions, say, stop: _StopRequest, restart=None) -> str | None:
     monitor, plant = procs[0], procs[-1]
     limit_s = 120.0 + 50.0 * opt.duration_s  # generous: a run slower than 1/50 real time is broken
     deadline = time.monotonic() + limit_s
@@ -233,9 +313,11 @@ def _watch(procs: list[ManagedProcess], opt: GraphOptions, say, stop: _StopReque
             if not announced and plant.saw("RUNNING"):
                 say("launch: plant running")
                 announced = True
-            for p in procs:
+            for p in list(procs):
                 rc = p.returncode
                 if rc is None or (p is plant and rc == 0):
+                    continue
+                if plant.returncode is None and restart is not None and restart(procs, p):
                     continue
                 return _describe(p)
             if plant.returncode == 0:

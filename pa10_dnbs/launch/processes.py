@@ -36,7 +36,7 @@ class ManagedProcess:
                     self.progress = int(line.split()[1])
                 except (IndexError, ValueError):
                     pass
-            elif line.startswith(("READY", "RUNNING", "FAILED", "COMPLETE")):
+            elif line.startswith(("READY", "RUNNING", "FAILED", "COMPLETE", "RESUMED", "KILLED")):
                 self.lines.append(line.strip())
 
     def saw(self, prefix: str) -> bool:
@@ -51,7 +51,8 @@ class ManagedProcess:
         return self.proc.poll()
 
     def tail(self, n: int = 12) -> str:
-        self._log.flush()
+        if not self._log.closed:
+            self._log.flush()
         try:
             return "".join(self.log_path.read_text(errors="replace").splitlines(True)[-n:])
         except OSError:

@@ -41,6 +41,10 @@ class EffortGate:
         self.max_pending = max_pending
         self._pending: dict[int, dict[int, float]] = {}      # lockstep: step -> {joint: effort} ahead of time
         self.dropped_ahead = np.zeros(n_joints, dtype=np.int64)  # efforts ahead beyond max_pending steps
+        self.timeout_steps: list[list[int]] = [[] for _ in range(n_joints)]  # lockstep: steps filled in, per joint
+        self.bin_steps = 60_000  # realtime: on-time ticks are also counted per bin of this many steps
+        self.ticks_per_bin: list[int] = []
+        self.on_time_per_bin: list[int] = []
 
     def offer(self, joint: int, step: int, effort: float) -> bool:
         """Record an effort; True when all joints have answered the current step.
@@ -84,6 +88,7 @@ class EffortGate:
             raise RuntimeError("take_lockstep before all efforts arrived")
         for j in np.flatnonzero(~self._have):
             self.timeouts[j] += 1
+            self.timeout_steps[j].append(self.step)
             self._efforts[j] = self.applied[j] if self.on_missing == "hold" else 0.0
         self.applied = self._efforts.copy()
         self._have[:] = False
@@ -103,7 +108,14 @@ class EffortGate:
         missed = self.latest_step < self.step
         self.misses += missed
         self.ticks += 1
-        self.ticks_all_on_time += not missed.any()
+        on_time = not missed.any()
+        self.ticks_all_on_time += on_time
+        b = self.step // self.bin_steps
+        while len(self.ticks_per_bin) <= b:
+            self.ticks_per_bin.append(0)
+            self.on_time_per_bin.append(0)
+        self.ticks_per_bin[b] += 1
+        self.on_time_per_bin[b] += on_time
         self.applied = self.latest.copy()
         self.step += 1
         return self.applied

@@ -2,12 +2,26 @@
 
 Subscribes only to /pa10/<joint>/state and /pa10/<joint>/reference; publishes
 /pa10/<joint>/effort (sensor_msgs/JointState, effort only) stamped with the
-stamp of the state it answers.
+stamp of the state it answers, and its fault counters on /diagnostics.
+
+Defensive: implausible states are answered with the last torque or zero
+(JointLoop + StateGuard), the EKF guard resets a broken network; neither
+ever lets a non-finite torque out. Faults configured in ``faults.effort`` are
+injected on the effort link; ``faults.kill_controller_at_s`` makes the
+process kill itself (SIGKILL) on the first state at or after that time
+(``incarnation`` 0 only: the launcher numbers restarts 1, 2, ...).
+With ``checkpoint_file`` the DNBS weights and covariances are saved every
+``checkpoint.period_s`` of simulated time and at exit, and ``resume:=true``
+starts from that file when it exists. Counters go to ``stats_file`` (JSON).
 """
 from __future__ import annotations
 
+import json
+import os
+import signal
 import struct
 import sys
+from pathlib import Path
 
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
@@ -15,33 +29,68 @@ from trajectory_msgs.msg import JointTrajectory
 
 from .. import JOINT_NAMES
 from ..controller_factory import CONTROLLER_KINDS, build_controller
+from ..core.checkpoint import load_checkpoint, save_checkpoint
+from ..core.state_guard import StateGuard
+from ..faults.faulty_link import links_from_config
+from ..kinematics.urdf_chain import UrdfChain
 from . import joint_state_cdr
+from .diagnostics import DiagnosticsReporter, status
 from .joint_loop import JointLoop
-from .params import check_choice, declare, load_node_config
+from .params import ParameterError, check_choice, declare, load_node_config
 from .runtime import announce_ready, run_node
 from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
+
+FAULT_KEYS = ("bad_states_nonfinite", "bad_states_position", "bad_states_speed", "nonfinite_torques",
+              "ekf_resets_alpha", "ekf_resets_torque", "malformed_states")
 
 
 class JointControllerNode(Node):
     def __init__(self):
         super().__init__("joint_controller")
         p = declare(self, {"config_file": "", "joint": "", "controller": "dnbs", "reliability": "reliable",
-                           "queue_depth": 10})
+                           "queue_depth": 10, "stats_file": "", "checkpoint_file": "", "resume": False,
+                           "incarnation": 0})
         check_choice("joint", p["joint"], JOINT_NAMES)
         check_choice("controller", p["controller"], CONTROLLER_KINDS)
         cfg = load_node_config(p["config_file"])
+        self.p = p
         self.joint = p["joint"]
         index = JOINT_NAMES.index(self.joint)
         self.clock_ = StepClock(cfg["simulation"]["dt_s"])
-        self.loop_ = JointLoop(build_controller(cfg, p["controller"], index), cfg["reference"]["preview_steps"])
+        urdf_joint = UrdfChain.from_file(cfg["plant"]["urdf"]).joint(self.joint)
+        g = cfg["guards"]
+        guard = StateGuard(urdf_joint.lower, urdf_joint.upper, g["position_margin_rad"], g["max_speed_rad_s"][index])
+        controller = build_controller(cfg, p["controller"], index)
+        self.loop_ = JointLoop(controller, cfg["reference"]["preview_steps"], guard, g["on_bad_state"])
+        self.checkpoint = Path(p["checkpoint_file"]) if p["checkpoint_file"] else None
+        if self.checkpoint is not None and not hasattr(controller, "state_dict"):
+            raise ParameterError(f"checkpoint_file: the {p['controller']} controller has no learned state to save")
+        self.checkpoint_every = max(1, int(round(cfg["checkpoint"]["period_s"] / cfg["simulation"]["dt_s"])))
+        self.resumed_from = None
+        if p["resume"] and self.checkpoint is not None and self.checkpoint.is_file():
+            try:
+                state, step = load_checkpoint(self.checkpoint)
+                controller.load_state_dict(state)
+            except (ValueError, KeyError) as exc:
+                raise ParameterError(f"resume: {exc}") from None
+            self.resumed_from = step
+            print(f"RESUMED joint_controller {self.joint} from the checkpoint of step {step}", flush=True)
+        kill_s = cfg["faults"]["kill_controller_at_s"][index]
+        # the injected crash hits the first incarnation only (a restarted controller is not killed again)
+        self.kill_step = (int(round(kill_s / cfg["simulation"]["dt_s"])) if kill_s >= 0 and p["incarnation"] == 0
+                          else None)
         self.malformed = 0
         self.states_received = 0
         self.efforts_sent = 0
         self._names = [self.joint]
         qos = loop_qos(p["reliability"], depth=p["queue_depth"])
         self._pub = self.create_publisher(JointState, effort_topic(self.joint), qos)
+        self.torque_limit = cfg["plant"]["torque_limit_nm"][index]
+        self._link = links_from_config(cfg, "effort", index, self._pub.publish, self.torque_limit)
         self.create_subscription(JointState, state_topic(self.joint), self._on_state, qos, raw=True)
         self.create_subscription(JointTrajectory, reference_topic(self.joint), self._on_reference, reference_qos())
+        self.diagnostics = DiagnosticsReporter(self, lambda: [self._status()],
+                                               lambda: self.clock_.stamp(max(0, self.loop_.last_step)))
         announce_ready(f"joint_controller {self.joint}")
 
     def _on_state(self, data: bytes) -> None:
@@ -52,7 +101,11 @@ class JointControllerNode(Node):
             self.malformed += 1
             return
         self.states_received += 1
-        self._publish(self.loop_.on_state(self.clock_.step_of_sec_nanosec(sec, nanosec), q, qd))
+        step = self.clock_.step_of_sec_nanosec(sec, nanosec)
+        if self.kill_step is not None and step >= self.kill_step:
+            print(f"KILLED joint_controller {self.joint} at step {step} (fault injection)", flush=True)
+            os.kill(os.getpid(), signal.SIGKILL)
+        self._publish(self.loop_.on_state(step, q, qd))
 
     def _on_reference(self, msg: JointTrajectory) -> None:
         first = self.clock_.step_of(msg.header.stamp)
@@ -63,15 +116,51 @@ class JointControllerNode(Node):
     def _publish(self, answers) -> None:
         for step, effort in answers:
             sec, nanosec = self.clock_.sec_nanosec(step)
-            self._pub.publish(joint_state_cdr.encode(sec, nanosec, self._names, (), (), (effort,)))
+            if self._link is None:
+                self._pub.publish(joint_state_cdr.encode(sec, nanosec, self._names, (), (), (effort,)))
+            else:
+                fate = self._link.fate()
+                value = self._link.corrupt_value() if fate.corrupt else effort
+                self._link.send(joint_state_cdr.encode(sec, nanosec, self._names, (), (), (value,)), fate)
             self.efforts_sent += 1
+            if self.checkpoint is not None and step > 0 and step % self.checkpoint_every == 0:
+                self._save_checkpoint()
+
+    def _save_checkpoint(self) -> None:
+        save_checkpoint(self.checkpoint, self.loop_.controller.state_dict(), self.loop_.last_step)
+
+    def counters(self) -> dict:
+        loop = self.loop_
+        c = {f"bad_states_{k}": v for k, v in loop.bad_states.items()}
+        c["nonfinite_torques"] = loop.nonfinite_torques
+        resets = getattr(loop.controller, "ekf_resets", {})
+        c.update({f"ekf_resets_{k}": v for k, v in resets.items()})
+        c.update({"malformed_states": self.malformed, "states": self.states_received, "efforts": self.efforts_sent,
+                  "duplicate_states": loop.duplicates, "last_step": loop.last_step})
+        if self._link is not None:
+            c.update({f"injected_effort_{k}": v for k, v in self._link.counters().items()})
+        return c
+
+    def _status(self):
+        return status(f"pa10/joint_controller/{self.joint}", f"joint_controller_{self.joint}", self.counters(),
+                      FAULT_KEYS)
 
     def close(self) -> None:
+        if self._link is not None:
+            self._link.close()
+        if self.checkpoint is not None and self.loop_.last_step >= 0:
+            self._save_checkpoint()
+        counters = self.counters()
+        counters["resumed_from_step"] = self.resumed_from
+        if self.p["stats_file"]:
+            tmp = f"{self.p['stats_file']}.tmp"
+            with open(tmp, "w") as f:
+                json.dump(counters, f, indent=2)
+            os.replace(tmp, self.p["stats_file"])
         loop = self.loop_
-        print(f"STATS joint_controller {self.joint}: states {self.states_received}, efforts {self.efforts_sent}, "
-              f"last answered step {loop.last_step}, waiting for references {len(loop.pending_steps)}, "
-              f"duplicates {loop.duplicates}, out of order {loop.out_of_order}, malformed {self.malformed}, "
-              f"reference steps buffered {loop.reference_span}", flush=True)
+        print(f"STATS joint_controller {self.joint}: " + ", ".join(f"{k} {v}" for k, v in counters.items())
+              + f", waiting for references {len(loop.pending_steps)}, reference steps buffered "
+              f"{loop.reference_span}", flush=True)
 
 
 def main(args=None) -> int:

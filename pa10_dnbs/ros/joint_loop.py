@@ -5,18 +5,33 @@ answers each state exactly once with an effort. A state that arrives before
 its references (x_d(k) and x_d(k + preview)) waits for them, so the answer
 does not depend on message timing; a state seen again (a resend) gets the
 same effort back without training the networks twice.
+
+Defensive: a state that fails the StateGuard (non-finite, beyond the joint
+limits by more than a margin, faster than the speed limit) is answered with
+the last torque ("hold") or zero, without touching the controller, and
+counted by reason; so is a non-finite torque from the controller. No
+non-finite torque is ever returned.
 """
 from __future__ import annotations
 
+import math
+
 from ..core.reference import ReferenceSample
+from ..core.state_guard import REASONS, StateGuard
 
 
 class JointLoop:
     """Bookkeeping around one joint controller (DNBS or PID, anything with ``step``)."""
 
-    def __init__(self, controller, preview_steps: int):
+    def __init__(self, controller, preview_steps: int, guard: StateGuard | None = None, on_bad_state: str = "hold"):
+        if on_bad_state not in ("hold", "zero"):
+            raise ValueError(f"on_bad_state must be 'hold' or 'zero', got {on_bad_state!r}")
         self.controller = controller
         self.preview_steps = preview_steps
+        self.guard = guard
+        self.on_bad_state = on_bad_state
+        self.bad_states = dict.fromkeys(REASONS, 0)
+        self.nonfinite_torques = 0
         self._ref_pos: dict[int, float] = {}
         self._ref_vel: dict[int, float] = {}
         self._pending: dict[int, tuple[float, float]] = {}
@@ -53,6 +68,19 @@ class JointLoop:
         self._pending[step] = (position, velocity)
         return self._drain()
 
+    def _answer(self, step: int, q: float, qd: float, ahead: int) -> float:
+        safe = self.last_effort if self.on_bad_state == "hold" else 0.0
+        reason = self.guard.check(q, qd) if self.guard is not None else None
+        if reason is not None:
+            self.bad_states[reason] += 1
+            return safe
+        sample = ReferenceSample(self._ref_pos[step], self._ref_vel[step], self._ref_pos[ahead])
+        u = self.controller.step(q, qd, sample)
+        if not math.isfinite(u):
+            self.nonfinite_torques += 1
+            return safe
+        return u
+
     def _drain(self) -> list[tuple[int, float]]:
         out = []
         for step in sorted(self._pending):
@@ -60,8 +88,7 @@ class JointLoop:
             if step not in self._ref_pos or ahead not in self._ref_pos:
                 break
             q, qd = self._pending.pop(step)
-            sample = ReferenceSample(self._ref_pos[step], self._ref_vel[step], self._ref_pos[ahead])
-            self.last_effort = self.controller.step(q, qd, sample)
+            self.last_effort = self._answer(step, q, qd, ahead)
             self.last_step = step
             out.append((step, self.last_effort))
         if len(self._ref_pos) > 4096:  # forget references of answered steps, now and then

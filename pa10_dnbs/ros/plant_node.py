@@ -11,7 +11,11 @@ arrived; a missing one is re-requested after ``resend_s`` and replaced (held
 or zeroed, counted) after ``effort_timeout_s``. mode realtime: the plant
 steps every T of wall time with the latest effort of each joint and counts
 the ticks at which the effort answering the previous state was missing.
-Timing figures go to ``stats_file`` (JSON) at exit.
+Defensive: a non-finite effort counts as missing (hold or zero, counted), an
+out-of-range one is saturated at Table 2 and counted. Faults configured in
+``faults.state`` are injected on each joint's state link (drop, delay,
+corrupt). Fault counters go to /diagnostics every second; timing figures and
+counters go to ``stats_file`` (JSON) at exit.
 """
 from __future__ import annotations
 
@@ -33,6 +37,9 @@ from std_msgs.msg import String
 from .. import JOINT_NAMES
 from ..plant.from_config import open_client, plant_from_config
 from . import joint_state_cdr
+from ..faults.faulty_link import links_from_config
+from ..kinematics.urdf_chain import UrdfChain
+from .diagnostics import DiagnosticsReporter, status
 from .effort_gate import EffortGate
 from .params import check_choice, declare, load_node_config
 from .runtime import announce_ready, run_node, spin_until
@@ -61,6 +68,7 @@ class PlantNode(Node):
         self._client = open_client()
         self.plant = plant_from_config(cfg, self._client)
         self.gate = EffortGate(len(JOINT_NAMES), p["on_missing_effort"])
+        self.gate.bin_steps = max(1, int(round(60.0 / self.dt)))  # realtime on-time fraction per simulated minute
         # realtime: latest value only (depth 1), a late reader skips stale states. lockstep: a deep
         # history, so a recorder that falls behind for a while still gets every message.
         realtime = p["mode"] == "realtime"
@@ -77,6 +85,12 @@ class PlantNode(Node):
         self._description_pub = self.create_publisher(String, ROBOT_DESCRIPTION, description_qos())
         self._description_pub.publish(String(data=Path(cfg["plant"]["urdf"]).read_text()))
         self._names = [[j] for j in JOINT_NAMES]
+        chain = UrdfChain.from_file(cfg["plant"]["urdf"])
+        self.torque_limit = np.array(cfg["plant"]["torque_limit_nm"])
+        self.out_of_range = np.zeros(len(JOINT_NAMES), dtype=np.int64)
+        self._state_links = [
+            links_from_config(cfg, "state", i, self._state_pubs[i].publish, chain.joint(j).upper)
+            for i, j in enumerate(JOINT_NAMES)]
         self._clock_msg = Clock()
         self.malformed = np.zeros(len(JOINT_NAMES), dtype=np.int64)
         self.t_pub = np.full(self.n_steps + 1, np.nan)          # wall time state k was published [s]
@@ -88,6 +102,7 @@ class PlantNode(Node):
         self._finished_future = Future()  # done when the last step is applied (lockstep spin ends on it)
         self.exit_code = 0  # a signal before the end is a clean stop; "completed" in the stats says if it ran out
         self.wall_start = self.wall_end = math.nan
+        self.diagnostics = DiagnosticsReporter(self, self._diagnostics, lambda: self.clock_.stamp(self.gate.step))
         announce_ready("plant")
 
     # ---------------------------------------------------------------- wire
@@ -96,8 +111,14 @@ class PlantNode(Node):
         ql, qdl = q.tolist(), qd.tolist()
         sec, nanosec = self.clock_.sec_nanosec(k)
         for j in (range(len(JOINT_NAMES)) if joints is None else joints):
-            self._state_pubs[j].publish(
-                joint_state_cdr.encode(sec, nanosec, self._names[j], (ql[j],), (qdl[j],), ()))
+            link = self._state_links[j]
+            if link is None:
+                self._state_pubs[j].publish(
+                    joint_state_cdr.encode(sec, nanosec, self._names[j], (ql[j],), (qdl[j],), ()))
+                continue
+            fate = link.fate()
+            pos = link.corrupt_value() if fate.corrupt else ql[j]
+            link.send(joint_state_cdr.encode(sec, nanosec, self._names[j], (pos,), (qdl[j],), ()), fate)
         if joints is not None:
             return
         self.t_pub[k] = time.perf_counter()
@@ -113,6 +134,10 @@ class PlantNode(Node):
             self.malformed[joint] += 1
             return
         k = self.clock_.step_of_sec_nanosec(sec, nanosec)
+        lim = self.torque_limit[joint]
+        if math.isfinite(u) and abs(u) > lim:  # out of range: counted, saturated at Table 2
+            self.out_of_range[joint] += 1
+            u = lim if u > 0 else -lim
         if 0 <= k <= self.n_steps and math.isnan(self.latency[k, joint]):
             self.latency[k, joint] = time.perf_counter() - self.t_pub[k]
         if self.gate.offer(joint, k, u) and self.p["mode"] == "lockstep" and self.running:
@@ -222,6 +247,21 @@ class PlantNode(Node):
                 executor.spin_once(timeout_sec=t_next - now)
 
     # ---------------------------------------------------------------- report
+    FAULT_KEYS = ("effort_timeouts", "nonfinite_efforts", "out_of_range_efforts", "malformed_efforts")
+
+    def _joint_counters(self, i: int) -> dict:
+        c = {"effort_timeouts": int(self.gate.timeouts[i]), "nonfinite_efforts": int(self.gate.nonfinite[i]),
+             "out_of_range_efforts": int(self.out_of_range[i]), "malformed_efforts": int(self.malformed[i]),
+             "missed_ticks": int(self.gate.misses[i]), "resent_states": int(self.resends[i])}
+        link = self._state_links[i]
+        if link is not None:
+            c.update({f"injected_state_{k}": v for k, v in link.counters().items()})
+        return c
+
+    def _diagnostics(self) -> list:
+        return [status(f"pa10/plant/{name}", "plant", self._joint_counters(i), self.FAULT_KEYS)
+                for i, name in enumerate(JOINT_NAMES)]
+
     def stats(self) -> dict:
         k = self.gate.step
         wall = (self.wall_end if self.finished else time.perf_counter()) - self.wall_start
@@ -238,6 +278,10 @@ class PlantNode(Node):
                 "ahead_efforts_dropped": int(self.gate.dropped_ahead[i]),
                 "resent_states": int(self.resends[i]),
                 "malformed_efforts": int(self.malformed[i]),
+                "out_of_range_efforts": int(self.out_of_range[i]),
+                "timeout_ranges": _ranges(self.gate.timeout_steps[i]),
+                "injected_state_faults": (self._state_links[i].counters() if self._state_links[i] is not None
+                                          else None),
                 "latency_median_us": float(np.median(li) * 1e6) if li.size else None,
                 "latency_p99_us": float(np.percentile(li, 99) * 1e6) if li.size else None,
                 "latency_max_us": float(li.max() * 1e6) if li.size else None,
@@ -252,10 +296,15 @@ class PlantNode(Node):
             "real_time_factor": (k * self.dt / wall) if wall and math.isfinite(wall) and wall > 0 else None,
             "on_missing_effort": self.p["on_missing_effort"], "effort_timeout_s": self.p["effort_timeout_s"],
             "late_ticks": int(self.late_ticks), "on_time_fraction": on_time,
+            "on_time_fraction_per_bin": [o / t for o, t in zip(self.gate.on_time_per_bin, self.gate.ticks_per_bin)],
+            "bin_s": self.gate.bin_steps * self.dt,
             "limit_hits": self.plant.limit_hits.tolist(), "joints": joints,
         }
 
     def close(self) -> None:
+        for link in self._state_links:
+            if link is not None:
+                link.close()
         path = self.p["stats_file"]
         if path:
             tmp = f"{path}.tmp"
@@ -263,6 +312,17 @@ class PlantNode(Node):
                 json.dump(self.stats(), f, indent=2)
             os.replace(tmp, path)
         self._client.disconnect()
+
+
+def _ranges(steps: list[int]) -> list[list[int]]:
+    """Sorted steps as [first, last] runs of consecutive steps: [1, 2, 3, 7] -> [[1, 3], [7, 7]]."""
+    out: list[list[int]] = []
+    for k in steps:
+        if out and k == out[-1][1] + 1:
+            out[-1][1] = k
+        else:
+            out.append([k, k])
+    return out
 
 
 def main(args=None) -> int:

@@ -37,8 +37,9 @@ from .wire import CLOCK, JOINT_STATES, TF, TF_STATIC
 
 _STAMP = struct.Struct("<iI")
 # types whose CDR body starts with a stamp (header.stamp, or the Clock's time)
+# (/diagnostics is stamped too, but on a wall-clock timer: it says nothing about completeness)
 STAMPED_TYPES = {"sensor_msgs/msg/JointState", "trajectory_msgs/msg/JointTrajectory", "rosgraph_msgs/msg/Clock",
-                 "diagnostic_msgs/msg/DiagnosticArray", "std_msgs/msg/Header"}
+                 "std_msgs/msg/Header"}
 PROGRESS_PERIOD_NS = 500_000_000  # a PROGRESS line (step of /joint_states) per 0.5 s of stamps
 DRAIN_IDLE_S = 0.3   # at stop: take queued messages until none came for this long
 DRAIN_LIMIT_S = 5.0

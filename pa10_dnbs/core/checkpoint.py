@@ -1,0 +1,31 @@
+"""Save and load a controller's learned state (``state_dict()`` arrays) as one .npz file, atomically.
+
+The file holds the arrays plus ``step`` (the last step answered). Written to
+a temporary sibling and renamed, so a process killed mid-write leaves the
+previous checkpoint intact.
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+
+def save_checkpoint(path: Path, state: dict, step: int) -> None:
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp.npz")
+    np.savez(tmp, step=np.array(step), **state)
+    os.replace(tmp, path)
+
+
+def load_checkpoint(path: Path) -> tuple[dict, int]:
+    """(state dict, step) from ``save_checkpoint``; ValueError if the file is not a readable checkpoint."""
+    try:
+        with np.load(Path(path)) as z:
+            state = {k: z[k] for k in z.files}
+    except (OSError, ValueError, EOFError) as exc:
+        raise ValueError(f"{path}: not a readable checkpoint ({exc})") from None
+    if "step" not in state:
+        raise ValueError(f"{path}: not a checkpoint (no step)")
+    return state, int(state.pop("step"))

@@ -1,0 +1,1 @@
+"""Fault injection on the wire: what a lossy, late or corrupting link does to one joint's messages."""

@@ -1,0 +1,119 @@
+"""Launcher flags for fault injection, applied on top of the config's ``faults`` section.
+
+Each flag sets one value for the joints named by ``--fault-joints`` (all by
+default). Errors name the flag (ConfigError, exit code 2).
+"""
+from __future__ import annotations
+
+import argparse
+import copy
+
+from .. import JOINT_NAMES
+from ..config import ConfigError
+from ..faults.link_faults import CORRUPT_KINDS
+
+LINK_FLAGS = {  # flag dest -> (direction, key)
+    "drop_states": ("state", "drop_fraction"), "drop_efforts": ("effort", "drop_fraction"),
+    "delay_states": ("state", "delay_ms"), "delay_efforts": ("effort", "delay_ms"),
+    "jitter_states": ("state", "jitter_ms"), "jitter_efforts": ("effort", "jitter_ms"),
+}
+
+
+def add_fault_arguments(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("fault injection (override the config's faults section)")
+    g.add_argument("--fault-joints", default=None, metavar="J,J", help="joints the flags below apply to (default all)")
+    g.add_argument("--drop-states", type=float, metavar="FRACTION", help="drop this fraction of state messages")
+    g.add_argument("--drop-efforts", type=float, metavar="FRACTION", help="drop this fraction of effort messages")
+    g.add_argument("--delay-states", type=float, metavar="MS", help="delay every state message by MS")
+    g.add_argument("--delay-efforts", type=float, metavar="MS", help="delay every effort message by MS")
+    g.add_argument("--jitter-states", type=float, metavar="MS", help="plus a uniform random 0..MS")
+    g.add_argument("--jitter-efforts", type=float, metavar="MS", help="plus a uniform random 0..MS")
+    g.add_argument("--corrupt-states", metavar="KIND:FRACTION",
+                   help=f"replace the position in this fraction of states by KIND ({', '.join(CORRUPT_KINDS)})")
+    g.add_argument("--corrupt-efforts", metavar="KIND:FRACTION", help="replace the torque in this fraction of efforts")
+    g.add_argument("--kill", action="append", default=[], metavar="JOINT@SECONDS",
+                   help="the joint's controller process dies (SIGKILL) at this simulated time; repeatable")
+    g.add_argument("--fault-seed", type=int, default=None, metavar="N", help="seed of the injected faults")
+
+
+def _fraction(flag: str, text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise ConfigError(f"{flag}: expected a fraction in [0, 1], got {text!r}") from None
+    if not 0.0 <= v <= 1.0:
+        raise ConfigError(f"{flag}: expected a fraction in [0, 1], got {text!r}")
+    return v
+
+
+def _set(section: dict, key: str, joints: list[int], value) -> None:
+    values = list(section[key])
+    for j in joints:
+        values[j] = value
+    section[key] = tuple(values)
+
+
+def apply_fault_flags(cfg: dict, args: argparse.Namespace) -> dict:
+    """A copy of ``cfg`` with the fault flags of ``args`` applied."""
+    cfg = copy.deepcopy(cfg)
+    faults = cfg["faults"]
+    if args.fault_joints:
+        names = [n.strip() for n in args.fault_joints.split(",") if n.strip()]
+        bad = [n for n in names if n not in JOINT_NAMES]
+        if bad or not names:
+            raise ConfigError(f"--fault-joints: unknown joint {bad[0] if bad else '(none)'!r} "
+                              f"(joints: {', '.join(JOINT_NAMES)})")
+        joints = [JOINT_NAMES.index(n) for n in names]
+    else:
+        joints = list(range(len(JOINT_NAMES)))
+    for dest, (direction, key) in LINK_FLAGS.items():
+        value = getattr(args, dest)
+        if value is None:
+            continue
+        flag = "--" + dest.replace("_", "-")
+        if key == "drop_fraction":
+            value = _fraction(flag, str(value))
+        elif not (value >= 0.0 and value < float("inf")):
+            raise ConfigError(f"{flag}: expected milliseconds >= 0, got {value!r}")
+        _set(faults[direction], key, joints, float(value))
+    for dest, direction in (("corrupt_states", "state"), ("corrupt_efforts", "effort")):
+        spec = getattr(args, dest)
+        if spec is None:
+            continue
+        flag = "--" + dest.replace("_", "-")
+        kind, sep, frac = spec.partition(":")
+        if not sep or kind not in CORRUPT_KINDS:
+            raise ConfigError(f"{flag}: expected KIND:FRACTION with KIND one of {', '.join(CORRUPT_KINDS)}, "
+                              f"got {spec!r}")
+        faults[direction]["corrupt_kind"] = kind
+        _set(faults[direction], "corrupt_fraction", joints, _fraction(flag, frac))
+    for spec in args.kill:
+        joint, sep, t = spec.partition("@")
+        try:
+            t_s = float(t)
+        except ValueError:
+            t_s = float("nan")
+        if not sep or joint not in JOINT_NAMES or not t_s >= 0.0:
+            raise ConfigError(f"--kill: expected JOINT@SECONDS with a joint of {', '.join(JOINT_NAMES)} "
+                              f"and SECONDS >= 0, got {spec!r}")
+        _set(faults, "kill_controller_at_s", [JOINT_NAMES.index(joint)], t_s)
+    if args.fault_seed is not None:
+        if args.fault_seed < 0:
+            raise ConfigError(f"--fault-seed: expected an integer >= 0, got {args.fault_seed}")
+        faults["seed"] = args.fault_seed
+    return cfg
+
+
+def faults_active(cfg: dict) -> bool:
+    f = cfg["faults"]
+    links = any(any(v) for d in ("state", "effort") for k, v in f[d].items() if k != "corrupt_kind")
+    return links or any(t >= 0 for t in f["kill_controller_at_s"])
+
+
+def plain(obj):
+    """Tuples as lists, recursively (for yaml.safe_dump)."""
+    if isinstance(obj, dict):
+        return {k: plain(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [plain(v) for v in obj]
+    return obj

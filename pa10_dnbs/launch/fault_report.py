@@ -1,0 +1,38 @@
+"""What the faults did, for metrics.json and the report: injected, detected, restarts."""
+from __future__ import annotations
+
+from .. import JOINT_NAMES
+from .fault_flags import plain
+
+PLANT_KEYS = ("effort_timeouts", "nonfinite_efforts", "out_of_range_efforts", "malformed_efforts", "resent_states",
+              "missed_ticks", "timeout_ranges", "injected_state_faults")
+
+
+def fault_report(cfg: dict, plant_stats: dict, result) -> dict:
+    """{'configured': the faults section, 'joints': per joint plant + controller counters, 'restarts': [...]}."""
+    joints = []
+    for i, name in enumerate(JOINT_NAMES):
+        pj = plant_stats["joints"][i]
+        ctrl = result.controllers.get(name)
+        joints.append({"name": name, "plant": {k: pj.get(k) for k in PLANT_KEYS}, "controller": ctrl})
+    return {"configured": plain(cfg["faults"]), "guards": plain(cfg["guards"]), "joints": joints,
+            "restarts": result.restarts}
+
+
+def fault_note(faults: dict) -> str:
+    """One Markdown line per joint with anything non-zero."""
+    parts = []
+    for j in faults["joints"]:
+        p, c = j["plant"], j["controller"] or {}
+        items = [f"{k} {p[k]}" for k in ("effort_timeouts", "nonfinite_efforts", "out_of_range_efforts") if p[k]]
+        inj = p.get("injected_state_faults") or {}
+        items += [f"states {k} {v}" for k, v in inj.items() if k != "messages" and v]
+        items += [f"{k} {v}" for k, v in c.items()
+                  if (k.startswith(("bad_states_", "ekf_resets_", "injected_effort_")) or k == "nonfinite_torques")
+                  and not k.endswith("_messages") and v]
+        if j["controller"] is None:
+            items.append("controller counters lost (its last process was killed)")
+        if items:
+            parts.append(f"{j['name']}: " + ", ".join(items))
+    restarts = ", ".join(f"{r['joint']} (exit {r['exit_code']}, {r['mode']})" for r in faults["restarts"])
+    return "faults: " + ("; ".join(parts) or "none detected") + (f"; restarts: {restarts}" if restarts else "")

@@ -1,0 +1,148 @@
+"""The graph under faults: corrupted messages, a killed controller with and without restart,
+lost efforts in realtime, and plant and controllers on two hosts (network namespaces)."""
+import json
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from graph_harness import Launcher
+from pa10_dnbs import JOINT_NAMES
+from pa10_dnbs.bag.bag_reader import Bag
+from pa10_dnbs.sim.closed_loop import simulate
+from pa10_dnbs.sim.run_data import RunData
+
+
+def _launch(tmp_path, name, *args, domain_id, timeout=300):
+    out = tmp_path / name
+    la = Launcher("--out", out, *args, domain_id=domain_id)
+    try:
+        rc = la.wait(timeout=timeout)
+    finally:
+        la.kill()
+    return rc, la.output, out
+
+
+def _faults(out):
+    m = json.loads((out / "metrics.json").read_text())
+    return m, {j["name"]: j for j in m["faults"]["joints"]}
+
+
+@pytest.mark.parametrize("states, efforts, domain", [("nan", "inf", 72), ("inf", "out_of_range", 73),
+                                                     ("out_of_range", "nan", 74)])
+def test_corrupted_states_and_efforts_are_caught_and_counted(tmp_path, states, efforts, domain):
+    rc, output, out = _launch(tmp_path, "run", "--duration", 2, "--corrupt-states", f"{states}:0.01",
+                              "--corrupt-efforts", f"{efforts}:0.01", "--fault-seed", domain, domain_id=domain)
+    assert rc == 0, output
+    m, joints = _faults(out)
+    run = RunData.load_npz(out / "timeseries.npz")
+    assert np.all(np.isfinite(run.torque_nm)) and m["all_finite"] and m["torques_within_limits"]
+    injected_states = injected_efforts = 0
+    for name in JOINT_NAMES:
+        plant, ctrl = joints[name]["plant"], joints[name]["controller"]
+        sent = plant["injected_state_faults"]["corrupted"]
+        caught = ctrl["bad_states_position"] if states == "out_of_range" else ctrl["bad_states_nonfinite"]
+        assert caught == sent and ctrl["bad_states_speed"] == 0, (name, plant, ctrl)
+        bad = plant["out_of_range_efforts"] if efforts == "out_of_range" else plant["nonfinite_efforts"]
+        assert bad == ctrl["injected_effort_corrupted"], (name, plant, ctrl)
+        assert ctrl["nonfinite_torques"] == 0
+        injected_states += sent
+        injected_efforts += bad
+    assert injected_states > 50 and injected_efforts > 50  # ~1 % of 7 x 2000 messages each way
+
+
+def test_killed_controller_is_restarted_from_its_checkpoint(tmp_path):
+    bag = tmp_path / "bag"
+    rc, output, out = _launch(tmp_path, "run", "--duration", 8, "--kill", "e1@5", "--restart", "--record", bag,
+                              domain_id=75)
+    assert rc == 0, output
+    assert "launch: joint e1 controller exited with code -9; restarted (resume" in output
+    m, joints = _faults(out)
+    assert [r["joint"] for r in m["faults"]["restarts"]] == ["e1"]
+    e1 = joints["e1"]
+    assert e1["controller"]["resumed_from_step"] == 4000  # the last periodic checkpoint (every 1 s) before 5 s
+    outage = e1["plant"]["timeout_ranges"]
+    assert len(outage) == 1 and outage[0][0] == 5000, outage
+    assert (outage[0][1] - outage[0][0] + 1) * 1e-3 < 2.0  # back within 2 s of simulated time
+    assert all(not joints[j]["plant"]["timeout_ranges"] for j in JOINT_NAMES if j != "e1")
+    run = RunData.load_npz(out / "timeseries.npz")
+    err = np.abs(run.error_rad)
+    assert m["torques_within_limits"] and m["all_finite"]
+    assert err[7000:].max() < 0.02, err[7000:].max(axis=0)  # recovered: bounded errors after the restart
+    with Bag(bag) as b:
+        assert b.topics["/pa10/e1/effort"].count >= 7990
+
+
+def test_killed_controller_without_restart_stops_the_run_and_keeps_the_bag(tmp_path):
+    bag = tmp_path / "bag"
+    rc, output, out = _launch(tmp_path, "run", "--duration", 10, "--kill", "e1@1", "--record", bag, domain_id=76)
+    assert rc == 1, output
+    assert "joint e1 controller (joint_controller_e1) exited early with code -9" in output
+    assert "the bag recorded so far is closed and readable" in output
+    assert not out.exists()
+    with Bag(bag) as b:  # footer, summary and metadata.yaml agree
+        n = b.topics["/joint_states"].count
+        assert 1000 <= n < 10001
+
+
+def _worst_rms_ratio(tmp_path, domain):
+    base = _launch(tmp_path, "clean", "--mode", "realtime", "--duration", 20, domain_id=domain)
+    lossy = _launch(tmp_path, "lossy", "--mode", "realtime", "--duration", 20, "--drop-efforts", "0.01",
+                    domain_id=domain)
+    for rc, output, _ in (base, lossy):
+        assert rc == 0, output
+    (m0, _), (m1, j1) = _faults(base[2]), _faults(lossy[2])
+    return m0, m1, j1
+
+
+def test_realtime_with_one_percent_of_efforts_lost(tmp_path):
+    m0, m1, joints = _worst_rms_ratio(tmp_path, 77)
+    dropped = sum(joints[j]["controller"]["injected_effort_dropped"] for j in JOINT_NAMES)
+    assert 0.005 * 7 * 20000 < dropped < 0.02 * 7 * 20000
+    assert m1["torques_within_limits"] and m1["all_finite"]
+    for a, b in zip(m0["joints"], m1["joints"]):
+        assert b["rms_error_rad"] < 2 * a["rms_error_rad"], (a["name"], a["rms_error_rad"], b["rms_error_rad"])
+
+
+NS = ("pa10t_a", "pa10t_b")
+
+
+@pytest.fixture
+def two_hosts():
+    """Two network namespaces joined by a veth pair (10.77.1.1/24 <-> 10.77.1.2/24): two 'hosts'."""
+    if shutil.which("ip") is None:
+        pytest.skip("iproute2 is not installed")
+    cmds = [f"netns add {NS[0]}", f"netns add {NS[1]}", "link add pa10ta type veth peer name pa10tb",
+            f"link set pa10ta netns {NS[0]}", f"link set pa10tb netns {NS[1]}",
+            f"-n {NS[0]} addr add 10.77.1.1/24 dev pa10ta", f"-n {NS[1]} addr add 10.77.1.2/24 dev pa10tb",
+            f"-n {NS[0]} link set pa10ta up", f"-n {NS[1]} link set pa10tb up",
+            f"-n {NS[0]} link set lo up", f"-n {NS[1]} link set lo up"]
+    try:
+        for c in cmds:
+            subprocess.run(["ip", *c.split()], check=True, capture_output=True, text=True)
+        yield NS
+    finally:
+        for ns in NS:
+            subprocess.run(["ip", "netns", "del", ns], capture_output=True)
+
+
+def _veth_packets(ns: str, dev: str) -> int:
+    out = subprocess.run(["ip", "-n", ns, "-s", "-j", "link", "show", dev], capture_output=True, text=True,
+                         check=True).stdout
+    s = json.loads(out)[0]["stats64"]
+    return s["rx"]["packets"] + s["tx"]["packets"]
+
+
+def test_two_hosts_give_the_single_host_trajectory_bit_for_bit(tmp_path, two_hosts, _default_cfg):
+    a, b = two_hosts
+    before = _veth_packets(a, "pa10ta")
+    rc, output, out = _launch(tmp_path, "run", "--duration", 2, "--netns", f"plant={a}", "--netns", f"reference={a}",
+                              "--netns", f"observer={a}", "--netns", f"controllers={b}", domain_id=78)
+    assert rc == 0, output
+    # every state and effort crossed the link: at least 2 x 7 x 2000 packets
+    assert _veth_packets(a, "pa10ta") - before > 2 * 7 * 2000
+    wire = RunData.load_npz(out / "timeseries.npz")
+    local = simulate(_default_cfg, "dnbs", 2.0)
+    for field in ("position_rad", "velocity_rad_s", "reference_rad", "torque_nm"):
+        assert np.array_equal(getattr(local, field), getattr(wire, field)), field
