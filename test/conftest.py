@@ -1,13 +1,32 @@
-"""Shared fixtures: the default config, and one recorded lockstep graph run, each made once per session."""
+"""Shared fixtures (the default config, one recorded lockstep graph run, each made once per session) and
+the session's /dev/shm cleanup."""
 from __future__ import annotations
 
 import copy
+import os
 
 import pytest
 
 from pa10_dnbs.config import default_config_path, load_config
 
 LOCKSTEP_DURATION_S = 6.0
+
+
+_SHM_AT_START: set[str] = set()
+
+
+def pytest_configure(config):
+    from pa10_dnbs.launch.shm_cleanup import shm_files
+
+    _SHM_AT_START.update(shm_files())
+
+
+def pytest_unconfigure(config):
+    """Remove the /dev/shm files this session created that no other process maps: the LTTng-UST wait
+    files rcl creates in this process when a test loads rclpy (the launcher cleans up after its nodes)."""
+    from pa10_dnbs.launch.shm_cleanup import remove_stale, shm_files
+
+    remove_stale(shm_files() - _SHM_AT_START, ignore_pids=frozenset({os.getpid()}))
 
 
 @pytest.fixture(scope="session")
@@ -26,11 +45,11 @@ def lockstep_run(tmp_path_factory):
     """A 6 s lockstep DNBS run of the node graph, recorded into a bag: output dir, bag, exit code, output."""
     from graph_harness import Launcher
 
-    from pa10_dnbs.launch.shm_cleanup import fastdds_segments
+    from pa10_dnbs.launch.shm_cleanup import shm_files
 
     base = tmp_path_factory.mktemp("graph")
     out, bag = base / "run", base / "bag"
-    shm_before = fastdds_segments()
+    shm_before = shm_files()
     la = Launcher("--mode", "lockstep", "--controller", "dnbs", "--duration", LOCKSTEP_DURATION_S, "--out", out,
                   "--record", bag, domain_id=61)
     try:

@@ -6,6 +6,7 @@ import subprocess
 
 import numpy as np
 import pytest
+from rosbags.typesys import Stores, get_typestore
 
 from graph_harness import Launcher
 from pa10_dnbs import JOINT_NAMES
@@ -52,6 +53,16 @@ def test_corrupted_states_and_efforts_are_caught_and_counted(tmp_path, states, e
     assert injected_states > 50 and injected_efforts > 50  # ~1 % of 7 x 2000 messages each way
 
 
+def _last_diagnostics(bag) -> dict:
+    """{status name: the last DiagnosticStatus recorded under it on /diagnostics}."""
+    store, last = get_typestore(Stores.ROS2_JAZZY), {}
+    with Bag(bag) as b:
+        for _, msgtype, _, data in b.messages(["/diagnostics"]):
+            for st in store.deserialize_cdr(data, msgtype).status:
+                last[st.name] = st
+    return last
+
+
 def test_killed_controller_is_restarted_from_its_checkpoint(tmp_path):
     bag = tmp_path / "bag"
     rc, output, out = _launch(tmp_path, "run", "--duration", 8, "--kill", "e1@5", "--restart", "--record", bag,
@@ -72,6 +83,17 @@ def test_killed_controller_is_restarted_from_its_checkpoint(tmp_path):
     assert err[7000:].max() < 0.02, err[7000:].max(axis=0)  # recovered: bounded errors after the restart
     with Bag(bag) as b:
         assert b.topics["/pa10/e1/effort"].count >= 7990
+    # every node said what happened on /diagnostics: the plant WARNs about e1's outage, and only e1's
+    diag = _last_diagnostics(bag)
+    assert {f"pa10/{node}/{j}" for node in ("plant", "joint_controller") for j in JOINT_NAMES} | {"pa10/reference"} \
+        <= set(diag), sorted(diag)
+    for j in JOINT_NAMES:
+        st = diag[f"pa10/plant/{j}"]
+        values = {kv.key: kv.value for kv in st.values}
+        timeouts = outage[0][1] - outage[0][0] + 1 if j == "e1" else 0
+        assert int(values["effort_timeouts"]) == timeouts, (j, values)
+        assert int(st.level) == (1 if j == "e1" else 0), (j, st.level, st.message)  # WARN / OK
+    assert int(diag["pa10/reference"].level) == 0
 
 
 def test_killed_controller_without_restart_stops_the_run_and_keeps_the_bag(tmp_path):
@@ -84,6 +106,32 @@ def test_killed_controller_without_restart_stops_the_run_and_keeps_the_bag(tmp_p
     with Bag(bag) as b:  # footer, summary and metadata.yaml agree
         n = b.topics["/joint_states"].count
         assert 1000 <= n < 10001
+
+
+def test_lost_and_late_messages_in_lockstep_change_nothing(tmp_path, _default_cfg):
+    """Dropped and delayed states and efforts on two joints: every loss is recovered by a resend, so the
+    lockstep trajectory is the in-process one bit for bit."""
+    rc, output, out = _launch(tmp_path, "run", "--duration", 1.5, "--fault-joints", "s2,w1",
+                              "--drop-states", 0.01, "--drop-efforts", 0.01, "--delay-states", 1,
+                              "--jitter-efforts", 2, "--fault-seed", 79, domain_id=79)
+    assert rc == 0, output
+    _, joints = _faults(out)
+    for name in JOINT_NAMES:
+        plant, ctrl = joints[name]["plant"], joints[name]["controller"]
+        assert plant["effort_timeouts"] == 0, (name, plant)
+        if name not in ("s2", "w1"):
+            assert plant["resent_states"] == 0 and plant["injected_state_faults"] is None, (name, plant)
+            continue
+        sent = plant["injected_state_faults"]
+        assert sent["dropped"] > 0 and ctrl["injected_effort_dropped"] > 0, (name, plant, ctrl)
+        assert sent["delayed"] == sent["messages"] - sent["dropped"]  # every state that went out was late
+        assert ctrl["injected_effort_delayed"] > 0
+        # one resend per lost message, whichever way it was going
+        assert plant["resent_states"] == sent["dropped"] + ctrl["injected_effort_dropped"], (name, plant, ctrl)
+    wire = RunData.load_npz(out / "timeseries.npz")
+    local = simulate(_default_cfg, "dnbs", 1.5)
+    for field in ("position_rad", "velocity_rad_s", "reference_rad", "torque_nm"):
+        assert np.array_equal(getattr(local, field), getattr(wire, field)), field
 
 
 def _worst_rms_ratio(tmp_path, domain):

@@ -6,21 +6,22 @@ import subprocess
 import sys
 import time
 
-from graph_harness import REPO, Launcher, alive, exit_codes
+from graph_harness import REPO, Launcher, Proc, alive, exit_codes
 from pa10_dnbs import JOINT_NAMES
-from pa10_dnbs.launch.shm_cleanup import fastdds_segments
+from pa10_dnbs.config import default_config_path
+from pa10_dnbs.launch.shm_cleanup import shm_files
 
 
-def _introspect(domain_id: int, timeout: float = 20.0) -> dict:
+def _introspect(domain_id: int, timeout: float = 20.0, joints: str = "") -> dict:
     """Each controller's (subscribed, published) topic sets, from a probe node in its own process."""
     env = {**os.environ, "PYTHONPATH": str(REPO)}
-    out = subprocess.run([sys.executable, str(REPO / "test" / "graph_probe.py"), str(domain_id), str(timeout)],
+    out = subprocess.run([sys.executable, str(REPO / "test" / "graph_probe.py"), str(domain_id), str(timeout), joints],
                          capture_output=True, text=True, env=env, timeout=timeout + 30, check=True)
     return {j: (set(v["subscribes"]), set(v["publishes"])) for j, v in json.loads(out.stdout).items()}
 
 
 def test_each_controller_sees_only_its_own_joint_and_sigint_stops_cleanly(tmp_path):
-    shm_before = fastdds_segments()
+    shm_before = shm_files()
     la = Launcher("--duration", 120, "--out", tmp_path / "never_written", domain_id=62)
     try:
         pids = la.wait_running()
@@ -40,12 +41,62 @@ def test_each_controller_sees_only_its_own_joint_and_sigint_stops_cleanly(tmp_pa
     codes = exit_codes(la.output)
     assert all(c == 0 for c in codes.values()), la.output
     assert not [n for n, pid in pids.items() if alive(pid)]
-    assert not (fastdds_segments() - shm_before)
+    assert not (shm_files() - shm_before)
     assert not (tmp_path / "never_written").exists() and not list(tmp_path.iterdir())
 
 
+def _node(module: str, name: str, domain_id: int, **params) -> Proc:
+    args = [f"{k}:={v}" for k, v in {"config_file": default_config_path(), **params}.items()]
+    return Proc([sys.executable, "-m", f"pa10_dnbs.ros.{module}", "--ros-args", "-r", f"__node:={name}",
+                 "-r", "__ns:=/pa10"] + [a for kv in args for a in ("-p", kv)], domain_id)
+
+
+def test_controller_offers_its_effort_only_once_it_holds_references():
+    """The plant starts when every effort topic has a publisher; a controller creates its publisher when
+    its first reference batch arrives, so state 0 never waits for a reference still in discovery."""
+    nodes = [_node("joint_controller_node", "joint_controller_e1", 85, joint="e1")]
+    try:
+        nodes[0].wait_for("READY joint_controller e1", 60)
+        subs, pubs = _introspect(85, joints="e1")["e1"]
+        assert {"/pa10/e1/state", "/pa10/e1/reference"} <= subs and "/pa10/e1/effort" not in pubs, (subs, pubs)
+        nodes.append(_node("reference_node", "reference", 85, duration_s=1.0))
+        nodes[1].wait_for("READY reference", 60)
+        subs, pubs = _introspect(85, joints="e1")["e1"]
+        assert "/pa10/e1/effort" in pubs, pubs
+        for n in nodes:
+            n.interrupt()
+        codes = [n.wait(timeout=30) for n in nodes]
+    finally:
+        for n in nodes:
+            n.kill()
+    assert codes == [0, 0], "\n".join(n.output for n in nodes)
+
+
+def test_controller_holds_its_answers_until_plant_and_recorder_have_matched():
+    """A restarted controller's first efforts must reach the recorder too: with effort_subscribers:=2 the
+    answer to a state waits while only the plant has matched, and reaches both once the recorder has."""
+    nodes = [_node("joint_controller_node", "joint_controller_e1", 86, joint="e1", effort_subscribers=2),
+             _node("reference_node", "reference", 86, duration_s=1.0)]
+    try:
+        nodes[0].wait_for("READY joint_controller e1", 60)
+        env = {**os.environ, "PYTHONPATH": str(REPO)}
+        out = subprocess.run([sys.executable, str(REPO / "test" / "effort_hold_probe.py"), "86", "e1", "1.5"],
+                             capture_output=True, text=True, env=env, timeout=120)
+        for n in nodes:
+            n.interrupt()
+        codes = [n.wait(timeout=30) for n in nodes]
+    finally:
+        for n in nodes:
+            n.kill()
+    assert out.returncode == 0, out.stdout + out.stderr
+    got = json.loads(out.stdout)
+    assert got["plant_before"] == 0 and got["plant_after"] >= 1 and got["recorder_after"] >= 1, got
+    assert codes == [0, 0], "\n".join(n.output for n in nodes)
+    assert "held_until_matched 1," in nodes[0].output, nodes[0].output
+
+
 def test_killed_controller_stops_the_launcher_naming_the_joint(tmp_path):
-    shm_before = fastdds_segments()
+    shm_before = shm_files()
     la = Launcher("--duration", 120, "--out", tmp_path / "o", domain_id=63)
     try:
         pids = la.wait_running()
@@ -60,7 +111,7 @@ def test_killed_controller_stops_the_launcher_naming_the_joint(tmp_path):
     assert took < 10, took
     assert "joint e1 controller (joint_controller_e1) exited early with code -9" in la.output
     assert not [n for n, pid in pids.items() if alive(pid)]
-    assert not (fastdds_segments() - shm_before)  # the killed process's segments were removed
+    assert not (shm_files() - shm_before)  # the killed process's segments were removed
     assert not (tmp_path / "o").exists()
 
 

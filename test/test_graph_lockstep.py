@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from graph_harness import alive, exit_codes
-from pa10_dnbs.launch.shm_cleanup import fastdds_segments
+from pa10_dnbs.launch.shm_cleanup import shm_files
 from pa10_dnbs.sim.closed_loop import simulate
 from pa10_dnbs.sim.run_data import RunData
 
@@ -53,5 +53,5 @@ def test_clean_shutdown(lockstep_run):
     codes = exit_codes(lockstep_run["output"])
     assert len(codes) == 10 and all(c == 0 for c in codes.values()), codes  # 9 nodes and the recorder
     assert not [n for n, pid in lockstep_run["pids"].items() if alive(pid)]
-    leaked = fastdds_segments() - lockstep_run["shm_before"]
+    leaked = shm_files() - lockstep_run["shm_before"]
     assert not leaked, leaked

@@ -20,10 +20,10 @@ from ..launch.fault_report import fault_note, fault_report
 from ..launch.graph_run import GraphFailure, GraphOptions, parse_netns, run_graph
 from ..report.metrics_file import effective_window, metrics_dict
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
+from ..sim.wire_record import load_wire_run
 from ..topics import CLOCK, JOINT_STATES, effort_topic, state_topic
 
 _STAMP = struct.Struct("<iI")  # header.stamp (or Clock.clock) right after the 4-byte CDR header
-from ..ros.wire_monitor import load_wire_run
 
 
 def run_launch(config_path: Path | None, mode: str, controller: str, duration_s: float | None, out: Path,
@@ -74,8 +74,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
             result = run_graph(dataclasses.replace(opt, config_path=used), tmp, say=lambda s: print(s, flush=True))
             stats = result.stats
             if record is None:
-                run, missing = load_wire_run(result.wire_file, controller, cfg["plant"]["torque_limit_nm"],
-                                             stats["wall_time_s"])
+                run, missing = load_wire_run(result.wire_file, controller, JOINT_NAMES,
+                                             cfg["plant"]["torque_limit_nm"], stats["wall_time_s"])
                 source = "the wire monitor's record of /joint_states and the reference topics"
             else:
                 run, missing = _bag_run(record, dt, n_steps, controller, cfg, stats["wall_time_s"],

@@ -4,8 +4,9 @@ Nine node processes (reference, seven joint controllers, plant) and one
 observer that records what they send (the wire monitor, or with a bag the
 recorder), on a private ROS_DOMAIN_ID with
 discovery limited to this host. The launcher only supervises: it never joins
-DDS itself, so once its children have exited, every shared-memory segment of
-the run is unmapped and a leftover (from a killed node) can be removed.
+DDS nor loads rclpy, so once its children have exited every shared-memory file
+of the run is unmapped, and a leftover (a killed node's Fast DDS segment, the
+LTTng-UST wait files) can be removed.
 """
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ from pathlib import Path
 from .. import JOINT_NAMES
 from ..topics import CLOCK, DIAGNOSTICS, JOINT_STATES, ROBOT_DESCRIPTION, effort_topic, reference_topic, state_topic
 from .processes import ManagedProcess, stop_all
-from .shm_cleanup import fastdds_segments, remove_stale
+from .shm_cleanup import remove_stale, shm_files
 
 READY_TIMEOUT_S = 60.0
 
@@ -134,7 +135,8 @@ def controller_command(opt: GraphOptions, workdir: Path, joint: str, incarnation
     params = {"config_file": str(opt.config_path), "joint": joint, "controller": opt.controller,
               "reliability": opt.reliability, "queue_depth": 1 if opt.mode == "realtime" else 2000,
               "stats_file": str(workdir / f"controller_{joint}.json"), "incarnation": incarnation,
-              "resume": str(incarnation > 0 and opt.restart != "fresh").lower()}
+              "resume": str(incarnation > 0 and opt.restart != "fresh").lower(),
+              "effort_subscribers": 1 + int(opt.record_bag is not None)}  # the plant and the recorder
     if opt.controller == "dnbs":
         params["checkpoint_file"] = str(workdir / "checkpoints" / f"{joint}.npz")
     return [sys.executable, "-m", "pa10_dnbs.ros.joint_controller_node"] + _ros_args(f"joint_controller_{joint}",
@@ -182,7 +184,7 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
     restarts: list[dict] = []
     stats_file = workdir / "plant_stats.json"
     wire_file = workdir / "wire.npz"
-    shm_before = fastdds_segments()
+    shm_before = shm_files()
     t_start = time.monotonic()
     procs: list[ManagedProcess] = []
     failure: str | None = None
@@ -202,13 +204,13 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
             failure = _watch(procs, opt, say, stop, _Restarter(opt, workdir, env, restarts, say))
     finally:
         codes = stop_all(procs)
-        shm_removed = remove_stale(fastdds_segments() - shm_before)
+        shm_removed = remove_stale(shm_files() - shm_before)
         for signum, handler in previous.items():
             signal.signal(signum, handler)
     if stop.signal_name:
         failure = f"interrupted ({stop.signal_name})"
     say("launch: stopped: " + " ".join(f"{n}={c}" for n, c in codes.items())
-        + (f"; removed {len(shm_removed)} stale shared-memory segments" if shm_removed else ""))
+        + (f"; removed {len(shm_removed)} shared-memory files the nodes left in /dev/shm" if shm_removed else ""))
     bad = {n: c for n, c in codes.items() if c != 0}
     if failure is None and bad:
         failure = "nodes exited with non-zero codes: " + ", ".join(f"{n}={c}" for n, c in bad.items())

@@ -1,4 +1,4 @@
-"""Remove the Fast DDS shared-memory segments a run left behind, and only those.
+"""Remove the shared-memory files a run's ROS processes left behind, and only those.
 
 Fast DDS keeps segments in /dev/shm (``fastrtps_<hex>``, ``fastrtps_port<N>``
 with ``_el`` lock files and ``sem.fastrtps_port<N>_mutex`` semaphores). A clean
@@ -6,6 +6,11 @@ exit removes them; a killed process does not. Port segments are numbered
 across all domains, so deleting by pattern would break other live graphs: a
 segment is removed only if it appeared during this run and no live process
 maps it (a semaphore counts as in use while its port segment is mapped).
+
+The ROS wheels' rcl and rmw also load LTTng-UST (tracetools), which creates
+``lttng-ust-wait-<version>[-<uid>]`` (4 KB each, for waking traced apps when
+an LTTng session daemon starts) and never removes it. The same rule applies:
+removed if this run created it and no live process maps it.
 """
 from __future__ import annotations
 
@@ -15,17 +20,21 @@ import os
 SHM_DIR = "/dev/shm"
 
 
-def fastdds_segments() -> set[str]:
-    """Names of the Fast DDS files in /dev/shm now."""
+def shm_files() -> set[str]:
+    """Names of the Fast DDS and LTTng-UST files in /dev/shm now."""
     try:
-        return {f for f in os.listdir(SHM_DIR) if "fastrtps" in f or "fast_datasharing" in f}
+        return {f for f in os.listdir(SHM_DIR)
+                if "fastrtps" in f or "fast_datasharing" in f or f.startswith("lttng-ust-wait-")}
     except FileNotFoundError:
         return set()
 
 
-def _mapped_segments() -> set[str]:
+def _mapped_segments(ignore_pids: frozenset[int] = frozenset()) -> set[str]:
+    """Names of the /dev/shm files some live process (other than ignore_pids) maps."""
     names = set()
     for maps in glob.glob("/proc/[0-9]*/maps"):
+        if int(maps.split("/")[2]) in ignore_pids:
+            continue
         try:
             with open(maps) as fh:
                 for line in fh:
@@ -46,9 +55,13 @@ def _owner(name: str) -> str:
     return name
 
 
-def remove_stale(created_during_run: set[str]) -> list[str]:
-    """Delete the given segments that no live process uses; return what was removed."""
-    busy = _mapped_segments()
+def remove_stale(created_during_run: set[str], ignore_pids: frozenset[int] = frozenset()) -> list[str]:
+    """Delete the given files that no live process uses; return what was removed.
+
+    ignore_pids: processes about to exit whose mappings do not count (a test
+    session that loaded rclpy itself, at its end).
+    """
+    busy = _mapped_segments(ignore_pids)
     removed = []
     for name in sorted(created_during_run):
         if name in busy or _owner(name) in busy:

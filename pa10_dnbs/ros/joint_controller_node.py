@@ -2,7 +2,13 @@
 
 Subscribes only to /pa10/<joint>/state and /pa10/<joint>/reference; publishes
 /pa10/<joint>/effort (sensor_msgs/JointState, effort only) stamped with the
-stamp of the state it answers, and its fault counters on /diagnostics.
+stamp of the state it answers, and its fault counters on /diagnostics. The
+effort publisher is created when the first reference batch arrives, so a
+plant that waits for every effort publisher starts with references in place;
+answers are held until ``effort_subscribers`` subscriptions (the plant and
+each recorder) have matched it, so a recorder never misses the first efforts
+of a restarted controller (after ``match_timeout_s`` they go out regardless,
+with a warning).
 
 Defensive: implausible states are answered with the last torque or zero
 (JointLoop + StateGuard), the EKF guard resets a broken network; neither
@@ -21,6 +27,7 @@ import os
 import signal
 import struct
 import sys
+import time
 from pathlib import Path
 
 from rclpy.node import Node
@@ -49,7 +56,9 @@ class JointControllerNode(Node):
         super().__init__("joint_controller")
         p = declare(self, {"config_file": "", "joint": "", "controller": "dnbs", "reliability": "reliable",
                            "queue_depth": 10, "stats_file": "", "checkpoint_file": "", "resume": False,
-                           "incarnation": 0})
+                           "incarnation": 0, "effort_subscribers": 1, "match_timeout_s": 10.0})
+        if p["effort_subscribers"] < 1 or p["match_timeout_s"] <= 0:
+            raise ParameterError("effort_subscribers must be >= 1 and match_timeout_s > 0 s")
         check_choice("joint", p["joint"], JOINT_NAMES)
         check_choice("controller", p["controller"], CONTROLLER_KINDS)
         cfg = load_node_config(p["config_file"])
@@ -84,9 +93,15 @@ class JointControllerNode(Node):
         self.efforts_sent = 0
         self._names = [self.joint]
         qos = loop_qos(p["reliability"], depth=p["queue_depth"])
-        self._pub = self.create_publisher(JointState, effort_topic(self.joint), qos)
         self.torque_limit = cfg["plant"]["torque_limit_nm"][index]
-        self._link = links_from_config(cfg, "effort", index, self._pub.publish, self.torque_limit)
+        # The effort topic is offered only once the first reference batch is in: the plant starts when
+        # every effort topic has its publisher, so its state 0 never waits on a reference still in discovery.
+        self._pub = None
+        self._link = None
+        self._effort_setup = (cfg, index, qos)
+        self._held: list[tuple[int, float]] = []  # (step, torque N m) answers waiting for the subscribers
+        self._matched = False
+        self.held_answers = 0
         self.create_subscription(JointState, state_topic(self.joint), self._on_state, qos, raw=True)
         self.create_subscription(JointTrajectory, reference_topic(self.joint), self._on_reference, reference_qos())
         self.diagnostics = DiagnosticsReporter(self, lambda: [self._status()],
@@ -107,13 +122,46 @@ class JointControllerNode(Node):
             os.kill(os.getpid(), signal.SIGKILL)
         self._publish(self.loop_.on_state(step, q, qd))
 
+    def _offer_effort(self) -> None:
+        """Create the effort publisher (and its fault-injecting link, if configured)."""
+        cfg, index, qos = self._effort_setup
+        self._pub = self.create_publisher(JointState, effort_topic(self.joint), qos)
+        self._link = links_from_config(cfg, "effort", index, self._pub.publish, self.torque_limit)
+        self._offered_at = time.monotonic()
+        self._match_timer = self.create_timer(0.005, self._check_matched)
+
+    def _check_matched(self) -> None:
+        """Release the held answers once every expected subscriber has matched the effort publisher."""
+        n = self._pub.get_subscription_count()
+        waited = time.monotonic() - self._offered_at
+        if n < self.p["effort_subscribers"] and waited < self.p["match_timeout_s"]:
+            return
+        if n < self.p["effort_subscribers"]:
+            self.get_logger().warning(f"{effort_topic(self.joint)}: {n} of {self.p['effort_subscribers']} "
+                                      f"subscribers after {waited:.1f} s; publishing anyway")
+        self.destroy_timer(self._match_timer)
+        self._matched = True
+        held, self._held = self._held, []
+        self._send(held)
+
     def _on_reference(self, msg: JointTrajectory) -> None:
+        if self._pub is None:
+            self._offer_effort()
         first = self.clock_.step_of(msg.header.stamp)
         pts = msg.points
         self._publish(self.loop_.add_reference(first, [pt.positions[0] for pt in pts],
                                                [pt.velocities[0] for pt in pts]))
 
     def _publish(self, answers) -> None:
+        if answers and self._pub is None:  # a bad state answered before any reference came
+            self._offer_effort()
+        if self._matched:
+            self._send(answers)
+        else:
+            self._held.extend(answers)
+            self.held_answers += len(answers)
+
+    def _send(self, answers) -> None:
         for step, effort in answers:
             sec, nanosec = self.clock_.sec_nanosec(step)
             if self._link is None:
@@ -136,7 +184,8 @@ class JointControllerNode(Node):
         resets = getattr(loop.controller, "ekf_resets", {})
         c.update({f"ekf_resets_{k}": v for k, v in resets.items()})
         c.update({"malformed_states": self.malformed, "states": self.states_received, "efforts": self.efforts_sent,
-                  "duplicate_states": loop.duplicates, "last_step": loop.last_step})
+                  "duplicate_states": loop.duplicates, "last_step": loop.last_step,
+                  "held_until_matched": self.held_answers})
         if self._link is not None:
             c.update({f"injected_effort_{k}": v for k, v in self._link.counters().items()})
         return c

@@ -5,6 +5,8 @@ reliable + transient-local) in batches of ``batch_steps`` points; header.stamp
 is the time of the first point, time_from_start counts from it. Paced by
 /clock: it keeps at least ``lookahead_steps`` published beyond the current step
 (and, given ``duration_s``, stops lookahead_steps past the run's last step).
+Reports on /diagnostics the /clock messages it saw and those that went back
+in time (a fault: the reference it already sent cannot be taken back).
 """
 from __future__ import annotations
 
@@ -17,9 +19,13 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from .. import JOINT_NAMES
 from ..controller_factory import build_reference
+from .diagnostics import DiagnosticsReporter, status
 from .params import ParameterError, declare, load_node_config
 from .runtime import announce_ready, run_node
 from .wire import CLOCK, StepClock, loop_qos, reference_qos, reference_topic
+
+
+FAULT_KEYS = ("clock_backwards",)
 
 
 class ReferenceNode(Node):
@@ -35,16 +41,31 @@ class ReferenceNode(Node):
         self.batch = p["batch_steps"]
         self.lookahead = p["lookahead_steps"]
         self.published_until = 0  # steps [0, published_until) are out
+        self.clock_step = -1  # the latest step seen on /clock
+        self.clock_messages = 0
+        self.clock_backwards = 0
         dt = cfg["simulation"]["dt_s"]
         # a run of known length: nothing past its last step + lookahead (so a bag's count is fixed)
         self.last_step = int(round(p["duration_s"] / dt)) + self.lookahead if p["duration_s"] > 0 else None
         self._pubs = [self.create_publisher(JointTrajectory, reference_topic(j), reference_qos()) for j in JOINT_NAMES]
         self.create_subscription(Clock, CLOCK, self._on_clock, loop_qos("reliable"))
         self._publish_through(self.lookahead)
+        self.diagnostics = DiagnosticsReporter(self, self._diagnostics,
+                                               lambda: self.clock_.stamp(max(0, self.clock_step)))
         announce_ready("reference")
 
     def _on_clock(self, msg: Clock) -> None:
-        self._publish_through(self.clock_.step_of(msg.clock) + self.lookahead)
+        step = self.clock_.step_of(msg.clock)
+        self.clock_messages += 1
+        if step < self.clock_step:
+            self.clock_backwards += 1
+        self.clock_step = max(self.clock_step, step)
+        self._publish_through(step + self.lookahead)
+
+    def _diagnostics(self) -> list:
+        counters = {"clock_messages": self.clock_messages, "clock_backwards": self.clock_backwards,
+                    "clock_step": self.clock_step, "published_through_step": self.published_until - 1}
+        return [status("pa10/reference", "reference", counters, FAULT_KEYS)]
 
     def _publish_through(self, last_step: int) -> None:
         if self.last_step is not None:

@@ -18,7 +18,6 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from .. import JOINT_NAMES
-from ..sim.run_data import RunData
 from ..sim.wire_record import WireRecord
 from . import joint_state_cdr
 from .params import ParameterError, declare, load_node_config
@@ -70,12 +69,6 @@ class WireMonitorNode(Node):
 
     def close(self) -> None:
         self.record.save(Path(self.out_file))
-
-
-def load_wire_run(path: Path, controller: str, torque_limit_nm, wall_time_s: float) -> tuple[RunData, str | None]:
-    """RunData from the monitor's file, and a description of what is missing (None when complete)."""
-    rec = WireRecord.load(path)
-    return rec.run_data(controller, JOINT_NAMES, torque_limit_nm, wall_time_s), rec.missing()
 
 
 def main(args=None) -> int:

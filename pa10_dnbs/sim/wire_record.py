@@ -84,3 +84,10 @@ class WireRecord:
                        torque_limit_nm=np.asarray(torque_limit_nm), position_rad=self.pos[:n].copy(),
                        velocity_rad_s=self.vel[:n].copy(), reference_rad=self.ref[:n].copy(),
                        torque_nm=self.eff[1:n + 1].copy(), wall_time_s=wall_time_s)
+
+
+def load_wire_run(path: Path, controller: str, joint_names, torque_limit_nm,
+                  wall_time_s: float) -> tuple[RunData, str | None]:
+    """RunData from a saved WireRecord (the wire monitor's file), and what is missing (None when complete)."""
+    rec = WireRecord.load(path)
+    return rec.run_data(controller, joint_names, torque_limit_nm, wall_time_s), rec.missing()

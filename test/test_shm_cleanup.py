@@ -1,0 +1,51 @@
+"""The /dev/shm cleanup removes only files nobody maps, and counts a mapping in another process."""
+import mmap
+import os
+import subprocess
+import sys
+
+import pytest
+
+from pa10_dnbs.launch.shm_cleanup import SHM_DIR, remove_stale, shm_files
+
+
+@pytest.fixture
+def shm_file():
+    name = f"lttng-ust-wait-test-{os.getpid()}"
+    path = os.path.join(SHM_DIR, name)
+    with open(path, "wb") as fh:
+        fh.write(b"\0" * mmap.PAGESIZE)
+    yield name, path
+    if os.path.exists(path):
+        os.unlink(path)
+
+
+def test_unmapped_file_is_removed_and_listed(shm_file):
+    name, path = shm_file
+    assert name in shm_files()
+    assert remove_stale({name}) == [name]
+    assert not os.path.exists(path)
+
+
+def test_file_mapped_here_is_kept_unless_this_process_is_ignored(shm_file):
+    name, path = shm_file
+    with open(path, "r+b") as fh, mmap.mmap(fh.fileno(), mmap.PAGESIZE) as _:
+        assert remove_stale({name}) == []
+        assert os.path.exists(path)
+        assert remove_stale({name}, ignore_pids=frozenset({os.getpid()})) == [name]
+    assert not os.path.exists(path)
+
+
+def test_file_mapped_by_another_process_is_kept(shm_file):
+    name, path = shm_file
+    code = (f"import mmap, sys; fh = open({path!r}, 'r+b'); m = mmap.mmap(fh.fileno(), {mmap.PAGESIZE}); "
+            "print('mapped', flush=True); sys.stdin.read()")
+    child = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout.readline().strip() == "mapped"
+        assert remove_stale({name}, ignore_pids=frozenset({os.getpid()})) == []
+        assert os.path.exists(path)
+    finally:
+        child.stdin.close()
+        child.wait(timeout=10)
+    assert remove_stale({name}) == [name]
