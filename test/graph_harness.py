@@ -64,10 +64,15 @@ class Proc:
     def interrupt(self):
         self.proc.send_signal(signal.SIGINT)
 
-    def kill(self):
+    def kill(self, grace_s: float = 10.0):
+        """Stop the process if it still runs: SIGINT first, SIGKILL after ``grace_s`` s."""
         if self.proc.poll() is None:
-            self.proc.kill()
-            self.proc.wait()
+            self.proc.send_signal(signal.SIGINT)
+            try:
+                self.proc.wait(timeout=grace_s)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
 
 
 class Launcher(Proc):

@@ -12,10 +12,11 @@ from pa10_dnbs.config import default_config_path
 from pa10_dnbs.launch.shm_cleanup import shm_files
 
 
-def _introspect(domain_id: int, timeout: float = 20.0, joints: str = "") -> dict:
+def _introspect(domain_id: int, timeout: float = 20.0, joints: str = "", settle_s: float = 1.0) -> dict:
     """Each controller's (subscribed, published) topic sets, from a probe node in its own process."""
     env = {**os.environ, "PYTHONPATH": str(REPO)}
-    out = subprocess.run([sys.executable, str(REPO / "test" / "graph_probe.py"), str(domain_id), str(timeout), joints],
+    out = subprocess.run([sys.executable, str(REPO / "test" / "graph_probe.py"), str(domain_id), str(timeout), joints,
+                          str(settle_s)],
                          capture_output=True, text=True, env=env, timeout=timeout + 30, check=True)
     return {j: (set(v["subscribes"]), set(v["publishes"])) for j, v in json.loads(out.stdout).items()}
 
@@ -61,7 +62,8 @@ def test_controller_offers_its_effort_only_once_it_holds_references():
         assert {"/pa10/e1/state", "/pa10/e1/reference"} <= subs and "/pa10/e1/effort" not in pubs, (subs, pubs)
         nodes.append(_node("reference_node", "reference", 85, duration_s=1.0))
         nodes[1].wait_for("READY reference", 60)
-        subs, pubs = _introspect(85, joints="e1")["e1"]
+        nodes[0].wait_for("OFFERED joint_controller e1 /pa10/e1/effort", 60)
+        subs, pubs = _introspect(85, joints="e1", settle_s=2.0)["e1"]
         assert "/pa10/e1/effort" in pubs, pubs
         for n in nodes:
             n.interrupt()

@@ -129,6 +129,7 @@ class JointControllerNode(Node):
         self._link = links_from_config(cfg, "effort", index, self._pub.publish, self.torque_limit)
         self._offered_at = time.monotonic()
         self._match_timer = self.create_timer(0.005, self._check_matched)
+        print(f"OFFERED joint_controller {self.joint} {effort_topic(self.joint)}", flush=True)
 
     def _check_matched(self) -> None:
         """Release the held answers once every expected subscriber has matched the effort publisher."""
