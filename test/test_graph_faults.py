@@ -134,23 +134,36 @@ def test_lost_and_late_messages_in_lockstep_change_nothing(tmp_path, _default_cf
         assert np.array_equal(getattr(local, field), getattr(wire, field)), field
 
 
-def _worst_rms_ratio(tmp_path, domain):
-    base = _launch(tmp_path, "clean", "--mode", "realtime", "--duration", 20, domain_id=domain)
-    lossy = _launch(tmp_path, "lossy", "--mode", "realtime", "--duration", 20, "--drop-efforts", "0.01",
-                    domain_id=domain)
-    for rc, output, _ in (base, lossy):
-        assert rc == 0, output
-    (m0, _), (m1, j1) = _faults(base[2]), _faults(lossy[2])
-    return m0, m1, j1
+def _realtime_rms(tmp_path, domain, pairs: int = 2):
+    """Per-joint RMS error [rad] over [10, 20] s, mean of ``pairs`` clean and ``pairs`` lossy (1 % of efforts
+    dropped) realtime runs of 20 s, run alternately; also each lossy run's fault report.
+
+    One clean realtime run alone is no fair baseline here: ~99 % of ticks are late on 2 cores (issue 3), and
+    a joint's RMS varies by up to 2.3x between identical clean runs (e1 3.1e-3 to 7.3e-3 rad measured), so
+    the mean of two runs of each is compared.
+    """
+    rms = {"clean": [], "lossy": []}
+    lossy_faults = []
+    for i in range(pairs):
+        for kind, extra in (("clean", ()), ("lossy", ("--drop-efforts", "0.01"))):
+            rc, output, out = _launch(tmp_path, f"{kind}{i}", "--mode", "realtime", "--duration", 20, *extra,
+                                      domain_id=domain)
+            assert rc == 0, output
+            m, joints = _faults(out)
+            assert m["torques_within_limits"] and m["all_finite"], (kind, i)
+            rms[kind].append([j["rms_error_rad"] for j in m["joints"]])
+            if kind == "lossy":
+                lossy_faults.append(joints)
+    return np.mean(rms["clean"], axis=0), np.mean(rms["lossy"], axis=0), lossy_faults
 
 
 def test_realtime_with_one_percent_of_efforts_lost(tmp_path):
-    m0, m1, joints = _worst_rms_ratio(tmp_path, 77)
-    dropped = sum(joints[j]["controller"]["injected_effort_dropped"] for j in JOINT_NAMES)
-    assert 0.005 * 7 * 20000 < dropped < 0.02 * 7 * 20000
-    assert m1["torques_within_limits"] and m1["all_finite"]
-    for a, b in zip(m0["joints"], m1["joints"]):
-        assert b["rms_error_rad"] < 2 * a["rms_error_rad"], (a["name"], a["rms_error_rad"], b["rms_error_rad"])
+    clean, lossy, faults = _realtime_rms(tmp_path, 77)
+    for joints in faults:
+        dropped = sum(joints[j]["controller"]["injected_effort_dropped"] for j in JOINT_NAMES)
+        assert 0.005 * 7 * 20000 < dropped < 0.02 * 7 * 20000
+    for name, a, b in zip(JOINT_NAMES, clean, lossy):
+        assert b < 2 * a, (name, a, b)
 
 
 NS = ("pa10t_a", "pa10t_b")
