@@ -52,6 +52,13 @@ def _node(module: str, name: str, domain_id: int, **params) -> Proc:
                  "-r", "__ns:=/pa10"] + [a for kv in args for a in ("-p", kv)], domain_id)
 
 
+def _stop(nodes: list[Proc]) -> list[int]:
+    """SIGINT to every node, then their exit codes."""
+    for n in nodes:
+        n.interrupt()
+    return [n.wait(timeout=30) for n in nodes]
+
+
 def test_controller_offers_its_effort_only_once_it_holds_references():
     """The plant starts when every effort topic has a publisher; a controller creates its publisher when
     its first reference batch arrives, so state 0 never waits for a reference still in discovery."""
@@ -65,9 +72,7 @@ def test_controller_offers_its_effort_only_once_it_holds_references():
         nodes[0].wait_for("OFFERED joint_controller e1 /pa10/e1/effort", 60)
         subs, pubs = _introspect(85, joints="e1", settle_s=2.0)["e1"]
         assert "/pa10/e1/effort" in pubs, pubs
-        for n in nodes:
-            n.interrupt()
-        codes = [n.wait(timeout=30) for n in nodes]
+        codes = _stop(nodes)
     finally:
         for n in nodes:
             n.kill()
@@ -84,9 +89,7 @@ def test_controller_holds_its_answers_until_plant_and_recorder_have_matched():
         env = {**os.environ, "PYTHONPATH": str(REPO)}
         out = subprocess.run([sys.executable, str(REPO / "test" / "effort_hold_probe.py"), "86", "e1", "1.5"],
                              capture_output=True, text=True, env=env, timeout=120)
-        for n in nodes:
-            n.interrupt()
-        codes = [n.wait(timeout=30) for n in nodes]
+        codes = _stop(nodes)
     finally:
         for n in nodes:
             n.kill()
