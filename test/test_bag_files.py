@@ -12,7 +12,7 @@ from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, Qo
 from pa10_dnbs import JOINT_NAMES
 from pa10_dnbs.bag.bag_reader import Bag
 from pa10_dnbs.bag.bag_writer import BagExistsError, BagWriter
-from pa10_dnbs.ros import joint_state_cdr
+from pa10_dnbs.wire import joint_state_cdr
 
 REPO = Path(__file__).resolve().parent.parent
 ZERO = QosTime(0, 0)

@@ -29,3 +29,57 @@ def test_launcher_does_not_load_rclpy():
     whose /dev/shm files it could not then clean up while it still maps them)."""
     out = subprocess.run([sys.executable, "-c", LAUNCHER], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "", f"the launcher imported: {out.stdout.strip()}"
+
+
+# Layers from the ground up: a module may import its own layer and the ones below, never one above.
+LAYERS = [
+    {"__init__", "paths", "run_data", "core", "wire", "kinematics", "faults"},  # numpy-only data and maths
+    {"config", "plant", "loop"},                                               # config, physics, loop logic
+    {"controller_factory"},
+    {"sim", "bag", "report"},                                                  # in-process runs, bags, outputs
+    {"ros"},                                                                   # the nodes (rclpy)
+    {"launch"},                                                                # starts and watches the nodes
+    {"commands"},
+    {"cli"},
+]
+ROS_PACKAGES = {"rclpy", "rosidl_runtime_py", "builtin_interfaces", "std_msgs", "sensor_msgs", "trajectory_msgs",
+                "rosgraph_msgs", "diagnostic_msgs", "tf2_msgs", "rcl_interfaces"}
+
+
+def _imports():
+    """(unit, imported pa10_dnbs unit or None, top-level external package or None, file) for every import."""
+    import ast
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent / "pa10_dnbs"
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root.parent).with_suffix("").parts
+        unit = rel[1] if len(rel) > 1 else "__init__"
+        pkg = rel[:-1]
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom):
+                target = (list(pkg[:len(pkg) - node.level + 1]) + (node.module.split(".") if node.module else [])
+                          if node.level else (node.module or "").split("."))
+                targets = [target]
+            elif isinstance(node, ast.Import):
+                targets = [a.name.split(".") for a in node.names]
+            else:
+                continue
+            for t in targets:
+                if t[0] == "pa10_dnbs":
+                    yield unit, (t[1] if len(t) > 1 else "__init__"), None, path.name
+                else:
+                    yield unit, None, t[0], path.name
+
+
+def test_no_layer_imports_a_higher_one():
+    rank = {u: i for i, layer in enumerate(LAYERS) for u in layer}
+    wrong = [f"{unit}/{f} imports {dep}" for unit, dep, _, f in _imports()
+             if dep is not None and rank[dep] > rank[unit]]
+    assert not wrong, "imports that run up the layers: " + "; ".join(sorted(set(wrong)))
+
+
+def test_only_ros_imports_ros():
+    """Everything but ros/ runs without a ROS install (bags are read and written with rosbags, not rclpy)."""
+    wrong = [f"{unit}/{f} imports {ext}" for unit, _, ext, f in _imports() if ext in ROS_PACKAGES and unit != "ros"]
+    assert not wrong, "; ".join(sorted(set(wrong)))

@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from pa10_dnbs.ros.effort_gate import EffortGate
+from pa10_dnbs.loop.effort_gate import EffortGate
 
 
 def test_lockstep_completes_only_with_all_joints():

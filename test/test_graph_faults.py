@@ -12,7 +12,7 @@ from graph_harness import Launcher
 from pa10_dnbs import JOINT_NAMES
 from pa10_dnbs.bag.bag_reader import Bag
 from pa10_dnbs.sim.closed_loop import simulate
-from pa10_dnbs.sim.run_data import RunData
+from pa10_dnbs.run_data import RunData
 
 
 def _launch(tmp_path, name, *args, domain_id, timeout=300):

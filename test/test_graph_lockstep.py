@@ -11,7 +11,7 @@ import pytest
 from graph_harness import alive, exit_codes
 from pa10_dnbs.launch.shm_cleanup import shm_files
 from pa10_dnbs.sim.closed_loop import simulate
-from pa10_dnbs.sim.run_data import RunData
+from pa10_dnbs.run_data import RunData
 
 from conftest import LOCKSTEP_DURATION_S as DURATION_S
 

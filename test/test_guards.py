@@ -8,7 +8,7 @@ from pa10_dnbs.controller_factory import build_controller, build_reference
 from pa10_dnbs.core.checkpoint import load_checkpoint, save_checkpoint
 from pa10_dnbs.core.ekf import EKFParams, EKFTrainer
 from pa10_dnbs.core.state_guard import StateGuard
-from pa10_dnbs.ros.joint_loop import JointLoop
+from pa10_dnbs.loop.joint_loop import JointLoop
 
 GUARD = StateGuard(lower_rad=-1.0, upper_rad=1.0, margin_rad=0.1, max_speed_rad_s=5.0)
 

@@ -1,6 +1,6 @@
 """The controller node's loop: waits for references, answers each state once."""
 from pa10_dnbs.core.reference import ReferenceSample
-from pa10_dnbs.ros.joint_loop import JointLoop
+from pa10_dnbs.loop.joint_loop import JointLoop
 
 
 class Recorder:

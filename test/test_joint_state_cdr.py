@@ -6,7 +6,7 @@ import pytest
 rclpy_serialization = pytest.importorskip("rclpy.serialization")
 from sensor_msgs.msg import JointState  # noqa: E402
 
-from pa10_dnbs.ros import joint_state_cdr  # noqa: E402
+from pa10_dnbs.wire import joint_state_cdr  # noqa: E402
 
 CASES = [
     (3, 141_000_000, ["s1"], [0.25], [-1.5], []),

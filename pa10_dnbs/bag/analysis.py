@@ -14,14 +14,14 @@ from pathlib import Path
 from rosbags.typesys import Stores, get_typestore
 
 from .. import JOINT_NAMES
-from ..sim.wire_record import WireRecord
-from ..ros import joint_state_cdr
+from ..wire.wire_record import WireRecord
+from ..wire import joint_state_cdr
+from ..wire.steps import StepClock, to_ns
 from ..kinematics.urdf_chain import UrdfChain
-from ..topics import JOINT_STATES, ROBOT_DESCRIPTION, reference_topic
+from ..wire.topics import JOINT_STATES, ROBOT_DESCRIPTION, reference_topic
 from .bag_reader import Bag, BagError
+from .custom_data import CUSTOM_CONFIG, CUSTOM_PREFIX
 
-CUSTOM_CONFIG = "pa10_dnbs.config"
-CUSTOM_PREFIX = "pa10_dnbs."
 
 
 def run_info(bag: Bag) -> dict:
@@ -39,7 +39,7 @@ def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None) -> WireReco
     """Fill a WireRecord from the bag; ``n_steps`` None means up to the last /joint_states stamp."""
     needed = [JOINT_STATES] + [reference_topic(j) for j in JOINT_NAMES]
     bag.require_topics(needed, "analysis")
-    dt_ns = int(round(dt_s * 1e9))
+    clock = StepClock(dt_s)
     states = []
     malformed = 0
     for _, _, _, data in bag.messages([JOINT_STATES]):
@@ -51,7 +51,7 @@ def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None) -> WireReco
         if len(pos) != len(JOINT_NAMES) or len(vel) != len(JOINT_NAMES) or len(eff) != len(JOINT_NAMES):
             malformed += 1
             continue
-        states.append((round((sec * 1_000_000_000 + nanosec) / dt_ns), pos, vel, eff))
+        states.append((clock.step_of_sec_nanosec(sec, nanosec), pos, vel, eff))
     if not states:
         raise BagError(f"{bag.path}: no readable /joint_states message")
     n = n_steps if n_steps is not None else max(k for k, *_ in states)
@@ -67,9 +67,8 @@ def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None) -> WireReco
             except Exception:
                 rec.malformed += 1
                 continue
-            k0 = round((msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec) / dt_ns)
-            offsets = [round((p.time_from_start.sec * 1_000_000_000 + p.time_from_start.nanosec) / dt_ns)
-                       for p in msg.points]
+            k0 = clock.step_of_sec_nanosec(msg.header.stamp.sec, msg.header.stamp.nanosec)
+            offsets = [clock.step_of_ns(to_ns(p.time_from_start.sec, p.time_from_start.nanosec)) for p in msg.points]
             rec.add_reference(j, k0, offsets, [float(p.positions[0]) for p in msg.points])
     return rec
 

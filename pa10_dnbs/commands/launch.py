@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import struct
 import sys
 from pathlib import Path
 
@@ -20,10 +19,10 @@ from ..launch.fault_report import fault_note, fault_report
 from ..launch.graph_run import GraphFailure, GraphOptions, parse_netns, run_graph
 from ..report.metrics_file import effective_window, metrics_dict
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
-from ..sim.wire_record import load_wire_run
-from ..topics import CLOCK, JOINT_STATES, effort_topic, state_topic
+from ..wire.wire_record import load_wire_run
+from ..wire.steps import StepClock
+from ..wire.topics import CLOCK, JOINT_STATES, effort_topic, state_topic
 
-_STAMP = struct.Struct("<iI")  # header.stamp (or Clock.clock) right after the 4-byte CDR header
 
 
 def run_launch(config_path: Path | None, mode: str, controller: str, duration_s: float | None, out: Path,
@@ -125,7 +124,7 @@ def _bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, cfg: dict
     on /clock, /joint_states and each joint's state topic, and on each effort topic except the steps the
     plant filled in after a timeout. (Resent states and repeated answers add messages; none may be lost.)
     """
-    dt_ns = int(round(dt * 1e9))
+    clock = StepClock(dt)
     try:
         with Bag(bag_path) as bag:
             rec = wire_record_from_bag(bag, dt, n_steps)
@@ -135,8 +134,7 @@ def _bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, cfg: dict
                 steps = {t: set() for t in per_step}
                 for topic, _, _, data in bag.messages([t for t in per_step if t in bag.topics]):
                     if len(data) >= 12:
-                        sec, nanosec = _STAMP.unpack_from(data, 4)
-                        steps[topic].add(round((sec * 1_000_000_000 + nanosec) / dt_ns))
+                        steps[topic].add(clock.step_of_cdr(data))
     except BagError as exc:
         raise GraphFailure(f"the recorded bag is not readable: {exc}") from None
     problems = [rec.missing()] if rec.missing() else []

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .. import JOINT_NAMES
-from ..topics import CLOCK, DIAGNOSTICS, JOINT_STATES, ROBOT_DESCRIPTION, effort_topic, reference_topic, state_topic
+from ..wire.topics import CLOCK, DIAGNOSTICS, JOINT_STATES, ROBOT_DESCRIPTION, effort_topic, reference_topic, state_topic
 from .processes import ManagedProcess, stop_all
 from .shm_cleanup import remove_stale, shm_files
 

@@ -10,7 +10,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ..kinematics.urdf_chain import UrdfChain  # noqa: E402
-from ..sim.run_data import RunData  # noqa: E402
+from ..run_data import RunData  # noqa: E402
 
 N_POSES = 6        # stick figures drawn
 PATH_POINTS = 1000  # samples of the flange path

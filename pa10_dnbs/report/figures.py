@@ -9,7 +9,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ..sim.run_data import RunData  # noqa: E402
+from ..run_data import RunData  # noqa: E402
 
 _MAX_POINTS = 4000  # plotted samples per curve; the npz keeps every step
 

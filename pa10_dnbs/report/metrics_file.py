@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.metrics import joint_metrics
-from ..sim.run_data import RunData
+from ..run_data import RunData
 
 
 def effective_window(duration_s: float, window_s: tuple[float, float]) -> tuple[float, float]:

@@ -14,7 +14,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from ..kinematics.urdf_chain import UrdfChain
-from ..sim.run_data import RunData
+from ..run_data import RunData
 from .arm_figure import arm_figure
 from .figures import error_figure, torque_figure, tracking_figure
 from .markdown import report_markdown

@@ -9,10 +9,11 @@ from __future__ import annotations
 from rclpy.duration import Duration
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, LivelinessPolicy, QoSProfile, ReliabilityPolicy
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+from ..wire.steps import NS_PER_S
 
 
 def _time(d: Duration) -> QosTime:
-    sec, nsec = divmod(int(d.nanoseconds), 1_000_000_000)
+    sec, nsec = divmod(int(d.nanoseconds), NS_PER_S)
     return QosTime(sec, nsec)
 
 

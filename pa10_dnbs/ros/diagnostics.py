@@ -10,7 +10,7 @@ from __future__ import annotations
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from ..topics import DIAGNOSTICS
+from ..wire.topics import DIAGNOSTICS
 
 PERIOD_S = 1.0  # wall seconds between reports
 

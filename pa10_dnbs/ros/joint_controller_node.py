@@ -40,9 +40,9 @@ from ..core.checkpoint import load_checkpoint, save_checkpoint
 from ..core.state_guard import StateGuard
 from ..faults.faulty_link import links_from_config
 from ..kinematics.urdf_chain import UrdfChain
-from . import joint_state_cdr
+from ..wire import joint_state_cdr
 from .diagnostics import DiagnosticsReporter, status
-from .joint_loop import JointLoop
+from ..loop.joint_loop import JointLoop
 from .params import ParameterError, check_choice, declare, load_node_config
 from .runtime import announce_ready, run_node
 from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic

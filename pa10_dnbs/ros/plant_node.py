@@ -36,11 +36,11 @@ from std_msgs.msg import String
 
 from .. import JOINT_NAMES
 from ..plant.from_config import open_client, plant_from_config
-from . import joint_state_cdr
+from ..wire import joint_state_cdr
 from ..faults.faulty_link import links_from_config
 from ..kinematics.urdf_chain import UrdfChain
 from .diagnostics import DiagnosticsReporter, status
-from .effort_gate import EffortGate
+from ..loop.effort_gate import EffortGate
 from .params import check_choice, declare, load_node_config
 from .runtime import announce_ready, run_node, spin_until
 from .wire import (CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, StepClock, description_qos, effort_topic, loop_qos,

@@ -19,7 +19,8 @@ from rclpy.qos import QoSProfile
 from rosgraph_msgs.msg import Clock
 
 from ..bag.bag_reader import Bag
-from ..topics import CLOCK
+from ..wire.topics import CLOCK
+from ..wire.steps import NS_PER_S
 from .bag_qos import from_bag_qos
 from .msg_types import message_class
 from .runtime import announce_ready
@@ -76,7 +77,7 @@ class PlayerNode(Node):
 
     def _publish_clock(self, t_ns: int) -> None:
         msg = Clock()
-        msg.clock.sec, msg.clock.nanosec = divmod(t_ns, 1_000_000_000)
+        msg.clock.sec, msg.clock.nanosec = divmod(t_ns, NS_PER_S)
         self._clock_pub.publish(msg)
 
     def _play_once(self, stop) -> bool:

@@ -24,18 +24,18 @@ from pathlib import Path
 from rclpy.node import Node
 
 from .. import JOINT_NAMES
-from ..bag.analysis import CUSTOM_CONFIG, CUSTOM_PREFIX
+from ..bag.custom_data import CUSTOM_CONFIG, CUSTOM_PREFIX
 from ..bag.bag_writer import BagWriter
 from ..bag.tf_messages import tf_message_cdr
 from ..kinematics.urdf_chain import UrdfChain
-from . import joint_state_cdr
+from ..wire import joint_state_cdr
+from ..wire.steps import cdr_stamp_ns, to_ns
 from .bag_qos import bag_qos, subscription_qos, to_bag_qos
 from .msg_types import message_class
 from .params import ParameterError, declare, load_node_config
 from .runtime import announce_ready, run_node, spin_until
 from .wire import CLOCK, JOINT_STATES, TF, TF_STATIC
 
-_STAMP = struct.Struct("<iI")
 # types whose CDR body starts with a stamp (header.stamp, or the Clock's time)
 # (/diagnostics is stamped too, but on a wall-clock timer: it says nothing about completeness)
 STAMPED_TYPES = {"sensor_msgs/msg/JointState", "trajectory_msgs/msg/JointTrajectory", "rosgraph_msgs/msg/Clock",
@@ -124,16 +124,14 @@ class RecorderNode(Node):
     # ------------------------------------------------------------- messages
     def _on_message(self, topic: str, stamped: bool, data: bytes) -> None:
         if topic == CLOCK and self.p["time_source"] == "clock" and len(data) >= 12:
-            sec, nanosec = _STAMP.unpack_from(data, 4)
-            self.now_ns = max(self.now_ns, sec * 1_000_000_000 + nanosec)
+            self.now_ns = max(self.now_ns, cdr_stamp_ns(data))
         t_ns = self.now_ns if self.p["time_source"] == "clock" else time.time_ns()
         self.writer.write(topic, t_ns, data)
         self.received += 1
         if topic == JOINT_STATES:
             self._on_joint_states(data, t_ns)
         if stamped and self.end_ns >= 0 and not self.reached.get(topic, True) and len(data) >= 12:
-            sec, nanosec = _STAMP.unpack_from(data, 4)
-            if sec * 1_000_000_000 + nanosec >= self.end_ns:
+            if cdr_stamp_ns(data) >= self.end_ns:
                 self.reached[topic] = True
                 if not self._announced and all(self.reached.values()) and all(
                         self._subs.get(t) for t in self.wanted):
@@ -144,8 +142,7 @@ class RecorderNode(Node):
         """PROGRESS (every PROGRESS_PERIOD_NS of stamps) and /tf (at tf_rate_hz) from /joint_states."""
         if len(data) < 12:
             return
-        sec, nanosec = _STAMP.unpack_from(data, 4)
-        stamp_ns = sec * 1_000_000_000 + nanosec
+        stamp_ns = cdr_stamp_ns(data)
         if stamp_ns >= self._next_progress_ns:
             self._next_progress_ns = stamp_ns + PROGRESS_PERIOD_NS
             print(f"PROGRESS {stamp_ns // self.dt_ns}", flush=True)
@@ -157,7 +154,7 @@ class RecorderNode(Node):
             sec, nanosec, names, pos, _, _ = joint_state_cdr.decode(data)
         except (ValueError, struct.error, UnicodeDecodeError):
             return
-        stamp_ns = sec * 1_000_000_000 + nanosec
+        stamp_ns = to_ns(sec, nanosec)
         if stamp_ns < self._next_tf_ns:
             return
         self._next_tf_ns = stamp_ns + self._tf_period_ns

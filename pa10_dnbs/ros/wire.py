@@ -8,8 +8,9 @@ from __future__ import annotations
 from builtin_interfaces.msg import Duration, Time
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from ..topics import (ARM_NS, CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, TF, TF_STATIC,  # noqa: F401 (re-exported)
-                      effort_topic, reference_topic, state_topic)
+from ..wire import steps
+from ..wire.topics import (ARM_NS, CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, TF, TF_STATIC,  # noqa: F401 (re-exported)
+                          effort_topic, reference_topic, state_topic)
 
 
 def loop_qos(reliability: str, depth: int = 10) -> QoSProfile:
@@ -37,33 +38,21 @@ def description_qos() -> QoSProfile:
                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
-class StepClock:
-    """Conversions between step k and ROS time for a fixed step T = dt_ns nanoseconds."""
-
-    def __init__(self, dt_s: float):
-        self.dt_ns = int(round(dt_s * 1e9))
-        if self.dt_ns <= 0:
-            raise ValueError("dt_s must be at least 1 ns")
+class StepClock(steps.StepClock):
+    """Step arithmetic of ``wire/steps.py`` plus conversions to and from ``builtin_interfaces`` Time and Duration."""
 
     def stamp(self, step: int, out: Time | None = None) -> Time:
-        ns = step * self.dt_ns
         t = out if out is not None else Time()
-        t.sec, t.nanosec = divmod(ns, 1_000_000_000)
+        t.sec, t.nanosec = self.sec_nanosec(step)
         return t
 
-    def sec_nanosec(self, step: int) -> tuple[int, int]:
-        return divmod(step * self.dt_ns, 1_000_000_000)
-
-    def step_of_sec_nanosec(self, sec: int, nanosec: int) -> int:
-        return round((sec * 1_000_000_000 + nanosec) / self.dt_ns)
-
     def step_of(self, stamp: Time) -> int:
-        return round((stamp.sec * 1_000_000_000 + stamp.nanosec) / self.dt_ns)
+        return self.step_of_sec_nanosec(stamp.sec, stamp.nanosec)
 
     def duration(self, steps: int) -> Duration:
         d = Duration()
-        d.sec, d.nanosec = divmod(steps * self.dt_ns, 1_000_000_000)
+        d.sec, d.nanosec = self.sec_nanosec(steps)
         return d
 
     def steps_of(self, d: Duration) -> int:
-        return round((d.sec * 1_000_000_000 + d.nanosec) / self.dt_ns)
+        return self.step_of_sec_nanosec(d.sec, d.nanosec)

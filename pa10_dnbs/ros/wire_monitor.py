@@ -18,8 +18,8 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from .. import JOINT_NAMES
-from ..sim.wire_record import WireRecord
-from . import joint_state_cdr
+from ..wire.wire_record import WireRecord
+from ..wire import joint_state_cdr
 from .params import ParameterError, declare, load_node_config
 from .runtime import announce_ready, run_node
 from .wire import JOINT_STATES, StepClock, record_qos, reference_qos, reference_topic

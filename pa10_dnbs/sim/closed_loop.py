@@ -9,7 +9,7 @@ from .. import JOINT_NAMES
 from ..controller_factory import build_controller, build_reference
 from ..core.reference import ReferenceSample
 from ..plant.from_config import open_client, plant_from_config
-from .run_data import RunData
+from ..run_data import RunData
 
 
 def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = False) -> RunData:

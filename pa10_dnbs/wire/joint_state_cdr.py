@@ -14,9 +14,10 @@ from __future__ import annotations
 
 import struct
 
+from .steps import STAMP as _STAMP
+
 _ENCAPSULATION = b"\x00\x01\x00\x00"
 _U32 = struct.Struct("<I")
-_STAMP = struct.Struct("<iI")
 
 
 def _pad(n: int, align: int) -> int:

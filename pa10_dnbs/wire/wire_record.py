@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .run_data import RunData
+from ..run_data import RunData
 
 
 class WireRecord:
