@@ -69,7 +69,7 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--mode", choices=("lockstep", "realtime"), default="lockstep",
                     help="lockstep: simulated time, deterministic; realtime: 1 kHz wall clock")
     _add_run_args(la, ("dnbs", "pid"))
-    la.add_argument("--domain-id", type=int, default=None, help="ROS_DOMAIN_ID (default: derived from the PID)")
+    la.add_argument("--domain-id", type=int, default=None, help="ROS_DOMAIN_ID (default: a free one, leased for the run so concurrent runs never share it)")
     la.add_argument("--reliability", choices=("reliable", "best_effort"), default="reliable",
                     help="QoS of the per-joint state/effort topics")
     la.add_argument("--effort-timeout", type=float, default=1.0, metavar="SECONDS",

@@ -40,6 +40,15 @@ def cfg(_default_cfg):
     return copy.deepcopy(_default_cfg)
 
 
+@pytest.fixture
+def domain():
+    """A ROS_DOMAIN_ID leased for this test alone: no other test, suite or launcher on the host has it meanwhile."""
+    from pa10_dnbs.launch.domain_ids import lease_domain
+
+    with lease_domain() as lease:
+        yield lease.domain_id
+
+
 @pytest.fixture(scope="session")
 def lockstep_run(tmp_path_factory):
     """A 6 s lockstep DNBS run of the node graph, recorded into a bag: output dir, bag, exit code, output."""
@@ -49,12 +58,15 @@ def lockstep_run(tmp_path_factory):
 
     base = tmp_path_factory.mktemp("graph")
     out, bag = base / "run", base / "bag"
+    from pa10_dnbs.launch.domain_ids import lease_domain
+
     shm_before = shm_files()
-    la = Launcher("--mode", "lockstep", "--controller", "dnbs", "--duration", LOCKSTEP_DURATION_S, "--out", out,
-                  "--record", bag, domain_id=61)
-    try:
-        pids = la.node_pids()
-        rc = la.wait(timeout=300)
-    finally:
-        la.kill()
+    with lease_domain() as lease:
+        la = Launcher("--mode", "lockstep", "--controller", "dnbs", "--duration", LOCKSTEP_DURATION_S, "--out", out,
+                      "--record", bag, domain_id=lease.domain_id)
+        try:
+            pids = la.node_pids()
+            rc = la.wait(timeout=300)
+        finally:
+            la.kill()
     return {"out": out, "bag": bag, "rc": rc, "output": la.output, "pids": pids, "shm_before": shm_before}

@@ -151,20 +151,21 @@ def test_replay_rejects_unknown_topics_before_joining_ros(tmp_path):
     _assert_clear_error(r, "--rate")
 
 
-def _recorder(tmp_path, *params):
-    env = {**os.environ, "ROS_DOMAIN_ID": "71", "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+def _recorder(domain, *params):
+    env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
     args = [a for p in params for a in ("-p", p)]
     return subprocess.run([sys.executable, "-m", "pa10_dnbs.ros.recorder_node", "--ros-args", *args],
                           cwd=REPO, env=env, capture_output=True, text=True, timeout=60)
 
 
-def test_standalone_recorder_rejects_bad_parameters(tmp_path):
-    _assert_clear_error(_recorder(tmp_path), "parameter bag is required")
-    _assert_clear_error(_recorder(tmp_path, f"bag:={tmp_path / 'b'}"), "all_topics")
-    _assert_clear_error(_recorder(tmp_path, f"bag:={tmp_path / 'b'}", "topics:=[joint_states]"), "starting with '/'")
+@pytest.mark.graph
+def test_standalone_recorder_rejects_bad_parameters(tmp_path, domain):
+    _assert_clear_error(_recorder(domain), "parameter bag is required")
+    _assert_clear_error(_recorder(domain, f"bag:={tmp_path / 'b'}"), "all_topics")
+    _assert_clear_error(_recorder(domain, f"bag:={tmp_path / 'b'}", "topics:=[joint_states]"), "starting with '/'")
     existing = _write_bag(tmp_path / "old")
     before = sorted(p.name for p in existing.iterdir())
-    _assert_clear_error(_recorder(tmp_path, f"bag:={existing}", "all_topics:=true"), "exists", "--force")
+    _assert_clear_error(_recorder(domain, f"bag:={existing}", "all_topics:=true"), "exists", "--force")
     assert sorted(p.name for p in existing.iterdir()) == before
     assert not (tmp_path / "b").exists()
 

@@ -25,6 +25,8 @@ from pa10_dnbs.wire import joint_state_cdr
 from pa10_dnbs.sim.closed_loop import simulate
 from pa10_dnbs.run_data import RunData
 
+pytestmark = pytest.mark.graph  # starts ROS processes
+
 N_STEPS = int(LOCKSTEP_DURATION_S * 1000)
 PER_JOINT = [f"/pa10/{j}/{kind}" for j in JOINT_NAMES for kind in ("state", "effort")]
 
@@ -138,7 +140,7 @@ def _stop(p: Proc, sig=signal.SIGINT, timeout=20) -> int:
         p.kill()
 
 
-def test_faithful_replay(bag, tmp_path):
+def test_faithful_replay(bag, tmp_path, domain):
     """A subscriber receives exactly the recorded messages: count, order and payload bytes."""
     specs = {"/pa10/s1/state": "sensor_msgs/msg/JointState", "/pa10/w2/effort": "sensor_msgs/msg/JointState",
              "/pa10/e1/reference": "trajectory_msgs/msg/JointTrajectory", "/clock": "rosgraph_msgs/msg/Clock",
@@ -148,12 +150,12 @@ def test_faithful_replay(bag, tmp_path):
     total = sum(map(len, recorded.values()))
     dump = tmp_path / "probe.pkl"
     probe = Proc([sys.executable, REPO / "test" / "bag_probe.py", dump, total, 90]
-                 + [f"{t}:{ty}" for t, ty in specs.items()], domain_id=66)
+                 + [f"{t}:{ty}" for t, ty in specs.items()], domain_id=domain)
     player = None
     try:
         probe.wait_for("READY bag_probe", 60)
         player = Proc([sys.executable, "-m", "pa10_dnbs.cli", "replay", bag, "--topics", *specs,
-                       "--wait-for-subscribers", 30], domain_id=66)
+                       "--wait-for-subscribers", 30], domain_id=domain)
         assert player.wait(120) == 0, player.output
         assert probe.wait(120) == 0, probe.output
     finally:
@@ -167,7 +169,7 @@ def test_faithful_replay(bag, tmp_path):
         assert got[t] == recorded[t], t
 
 
-def test_redrive_reproduces_the_recorded_states_bit_for_bit(bag, tmp_path):
+def test_redrive_reproduces_the_recorded_states_bit_for_bit(bag, tmp_path, domain):
     """Only the recorded efforts, replayed into a fresh lockstep plant (no controllers): same states, same bytes."""
     new_bag = tmp_path / "redriven"
     efforts = [f"/pa10/{j}/effort" for j in JOINT_NAMES]
@@ -176,16 +178,16 @@ def test_redrive_reproduces_the_recorded_states_bit_for_bit(bag, tmp_path):
     ros = ["--ros-args", "-p"]
     recorder = Proc([sys.executable, "-m", "pa10_dnbs.ros.recorder_node", *ros, f"bag:={new_bag}", "-p",
                      "topics:=[" + ",".join(f"'{t}'" for t in topics) + "]", "-p", f"end_stamp_ns:={N_STEPS * 10**6}",
-                     "-p", "tf_rate_hz:=0.0"], domain_id=67)
+                     "-p", "tf_rate_hz:=0.0"], domain_id=domain)
     plant = Proc([sys.executable, "-m", "pa10_dnbs.ros.plant_node", *ros, "mode:=lockstep", "-p",
                   f"duration_s:={LOCKSTEP_DURATION_S}", "-p", "state_subscribers:=1", "-p", "clock_subscribers:=0",
-                  "-p", "min_joint_states_subscribers:=1"], domain_id=67)
+                  "-p", "min_joint_states_subscribers:=1"], domain_id=domain)
     player = None
     try:
         recorder.wait_for("READY recorder", 60)
         plant.wait_for("READY plant", 60)
         player = Proc([sys.executable, "-m", "pa10_dnbs.cli", "replay", bag, "--topics", *efforts,
-                       "--wait-for-subscribers", 30], domain_id=67)
+                       "--wait-for-subscribers", 30], domain_id=domain)
         assert plant.wait(180) == 0, plant.output
         recorder.wait_for("COMPLETE", 30)
         assert player.wait(60) == 0, player.output
@@ -204,10 +206,10 @@ def test_redrive_reproduces_the_recorded_states_bit_for_bit(bag, tmp_path):
             assert not differ, f"{t}: {len(differ)} states differ, first at {differ[0]} ns"
 
 
-def test_interrupted_recording_leaves_a_complete_bag(tmp_path):
+def test_interrupted_recording_leaves_a_complete_bag(tmp_path, domain):
     """Ctrl-C of the launcher mid-run: exit 130, and the bag so far is closed, consistent and readable."""
     bag = tmp_path / "bag"
-    la = Launcher("--duration", 60, "--out", tmp_path / "run", "--record", bag, domain_id=68)
+    la = Launcher("--duration", 60, "--out", tmp_path / "run", "--record", bag, domain_id=domain)
     try:
         la.wait_running()
         time.sleep(3.0)
@@ -224,11 +226,11 @@ def test_interrupted_recording_leaves_a_complete_bag(tmp_path):
     assert states == [k * 1_000_000 for k in range(len(states))]  # a prefix of the run, without gaps
 
 
-def test_existing_bag_is_not_overwritten_without_force(tmp_path):
+def test_existing_bag_is_not_overwritten_without_force(tmp_path, domain):
     bag = tmp_path / "bag"
     bag.mkdir()
     (bag / "keep.txt").write_text("mine")
     r = subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "launch", "--duration", "1", "--out", tmp_path / "run",
-                        "--record", bag, "--domain-id", "69"], cwd=REPO, capture_output=True, text=True, timeout=60)
+                        "--record", bag, "--domain-id", str(domain)], cwd=REPO, capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and "--force" in r.stderr and "Traceback" not in r.stderr
     assert (bag / "keep.txt").read_text() == "mine" and not (tmp_path / "run").exists()

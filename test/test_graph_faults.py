@@ -14,6 +14,8 @@ from pa10_dnbs.bag.bag_reader import Bag
 from pa10_dnbs.sim.closed_loop import simulate
 from pa10_dnbs.run_data import RunData
 
+pytestmark = pytest.mark.graph  # starts ROS processes
+
 
 def _launch(tmp_path, name, *args, domain_id, timeout=300):
     out = tmp_path / name
@@ -30,11 +32,11 @@ def _faults(out):
     return m, {j["name"]: j for j in m["faults"]["joints"]}
 
 
-@pytest.mark.parametrize("states, efforts, domain", [("nan", "inf", 72), ("inf", "out_of_range", 73),
+@pytest.mark.parametrize("states, efforts, seed", [("nan", "inf", 72), ("inf", "out_of_range", 73),
                                                      ("out_of_range", "nan", 74)])
-def test_corrupted_states_and_efforts_are_caught_and_counted(tmp_path, states, efforts, domain):
+def test_corrupted_states_and_efforts_are_caught_and_counted(tmp_path, states, efforts, seed, domain):
     rc, output, out = _launch(tmp_path, "run", "--duration", 2, "--corrupt-states", f"{states}:0.01",
-                              "--corrupt-efforts", f"{efforts}:0.01", "--fault-seed", domain, domain_id=domain)
+                              "--corrupt-efforts", f"{efforts}:0.01", "--fault-seed", seed, domain_id=domain)
     assert rc == 0, output
     m, joints = _faults(out)
     run = RunData.load_npz(out / "timeseries.npz")
@@ -63,10 +65,10 @@ def _last_diagnostics(bag) -> dict:
     return last
 
 
-def test_killed_controller_is_restarted_from_its_checkpoint(tmp_path):
+def test_killed_controller_is_restarted_from_its_checkpoint(tmp_path, domain):
     bag = tmp_path / "bag"
     rc, output, out = _launch(tmp_path, "run", "--duration", 8, "--kill", "e1@5", "--restart", "--record", bag,
-                              domain_id=75)
+                              domain_id=domain)
     assert rc == 0, output
     assert "launch: joint e1 controller exited with code -9; restarted (resume" in output
     m, joints = _faults(out)
@@ -96,9 +98,9 @@ def test_killed_controller_is_restarted_from_its_checkpoint(tmp_path):
     assert int(diag["pa10/reference"].level) == 0
 
 
-def test_killed_controller_without_restart_stops_the_run_and_keeps_the_bag(tmp_path):
+def test_killed_controller_without_restart_stops_the_run_and_keeps_the_bag(tmp_path, domain):
     bag = tmp_path / "bag"
-    rc, output, out = _launch(tmp_path, "run", "--duration", 10, "--kill", "e1@1", "--record", bag, domain_id=76)
+    rc, output, out = _launch(tmp_path, "run", "--duration", 10, "--kill", "e1@1", "--record", bag, domain_id=domain)
     assert rc == 1, output
     assert "joint e1 controller (joint_controller_e1) exited early with code -9" in output
     assert "the bag recorded so far is closed and readable" in output
@@ -108,12 +110,12 @@ def test_killed_controller_without_restart_stops_the_run_and_keeps_the_bag(tmp_p
         assert 1000 <= n < 10001
 
 
-def test_lost_and_late_messages_in_lockstep_change_nothing(tmp_path, _default_cfg):
+def test_lost_and_late_messages_in_lockstep_change_nothing(tmp_path, _default_cfg, domain):
     """Dropped and delayed states and efforts on two joints: every loss is recovered by a resend, so the
     lockstep trajectory is the in-process one bit for bit."""
     rc, output, out = _launch(tmp_path, "run", "--duration", 1.5, "--fault-joints", "s2,w1",
                               "--drop-states", 0.01, "--drop-efforts", 0.01, "--delay-states", 1,
-                              "--jitter-efforts", 2, "--fault-seed", 79, domain_id=79)
+                              "--jitter-efforts", 2, "--fault-seed", 79, domain_id=domain)
     assert rc == 0, output
     _, joints = _faults(out)
     for name in JOINT_NAMES:
@@ -157,8 +159,8 @@ def _realtime_rms(tmp_path, domain, pairs: int = 2):
     return np.mean(rms["clean"], axis=0), np.mean(rms["lossy"], axis=0), lossy_faults
 
 
-def test_realtime_with_one_percent_of_efforts_lost(tmp_path):
-    clean, lossy, faults = _realtime_rms(tmp_path, 77)
+def test_realtime_with_one_percent_of_efforts_lost(tmp_path, domain):
+    clean, lossy, faults = _realtime_rms(tmp_path, domain)
     for joints in faults:
         dropped = sum(joints[j]["controller"]["injected_effort_dropped"] for j in JOINT_NAMES)
         assert 0.005 * 7 * 20000 < dropped < 0.02 * 7 * 20000
@@ -195,11 +197,11 @@ def _veth_packets(ns: str, dev: str) -> int:
     return s["rx"]["packets"] + s["tx"]["packets"]
 
 
-def test_two_hosts_give_the_single_host_trajectory_bit_for_bit(tmp_path, two_hosts, _default_cfg):
+def test_two_hosts_give_the_single_host_trajectory_bit_for_bit(tmp_path, two_hosts, _default_cfg, domain):
     a, b = two_hosts
     before = _veth_packets(a, "pa10ta")
     rc, output, out = _launch(tmp_path, "run", "--duration", 2, "--netns", f"plant={a}", "--netns", f"reference={a}",
-                              "--netns", f"observer={a}", "--netns", f"controllers={b}", domain_id=78)
+                              "--netns", f"observer={a}", "--netns", f"controllers={b}", domain_id=domain)
     assert rc == 0, output
     # every state and effort crossed the link: at least 2 x 7 x 2000 packets
     assert _veth_packets(a, "pa10ta") - before > 2 * 7 * 2000

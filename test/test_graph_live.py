@@ -6,10 +6,14 @@ import subprocess
 import sys
 import time
 
+import pytest
+
 from graph_harness import REPO, Launcher, Proc, alive, exit_codes
 from pa10_dnbs import JOINT_NAMES
 from pa10_dnbs.config import default_config_path
 from pa10_dnbs.launch.shm_cleanup import shm_files
+
+pytestmark = pytest.mark.graph  # starts ROS processes
 
 
 def _introspect(domain_id: int, timeout: float = 20.0, joints: str = "", settle_s: float = 1.0) -> dict:
@@ -21,12 +25,12 @@ def _introspect(domain_id: int, timeout: float = 20.0, joints: str = "", settle_
     return {j: (set(v["subscribes"]), set(v["publishes"])) for j, v in json.loads(out.stdout).items()}
 
 
-def test_each_controller_sees_only_its_own_joint_and_sigint_stops_cleanly(tmp_path):
+def test_each_controller_sees_only_its_own_joint_and_sigint_stops_cleanly(tmp_path, domain):
     shm_before = shm_files()
-    la = Launcher("--duration", 120, "--out", tmp_path / "never_written", domain_id=62)
+    la = Launcher("--duration", 120, "--out", tmp_path / "never_written", domain_id=domain)
     try:
         pids = la.wait_running()
-        found = _introspect(62)
+        found = _introspect(domain)
         assert set(found) == set(JOINT_NAMES)
         for j, (subs, pubs) in found.items():
             assert f"/pa10/{j}/state" in subs and f"/pa10/{j}/reference" in subs
@@ -59,18 +63,18 @@ def _stop(nodes: list[Proc]) -> list[int]:
     return [n.wait(timeout=30) for n in nodes]
 
 
-def test_controller_offers_its_effort_only_once_it_holds_references():
+def test_controller_offers_its_effort_only_once_it_holds_references(domain):
     """The plant starts when every effort topic has a publisher; a controller creates its publisher when
     its first reference batch arrives, so state 0 never waits for a reference still in discovery."""
-    nodes = [_node("joint_controller_node", "joint_controller_e1", 85, joint="e1")]
+    nodes = [_node("joint_controller_node", "joint_controller_e1", domain, joint="e1")]
     try:
         nodes[0].wait_for("READY joint_controller e1", 60)
-        subs, pubs = _introspect(85, joints="e1")["e1"]
+        subs, pubs = _introspect(domain, joints="e1")["e1"]
         assert {"/pa10/e1/state", "/pa10/e1/reference"} <= subs and "/pa10/e1/effort" not in pubs, (subs, pubs)
-        nodes.append(_node("reference_node", "reference", 85, duration_s=1.0))
+        nodes.append(_node("reference_node", "reference", domain, duration_s=1.0))
         nodes[1].wait_for("READY reference", 60)
         nodes[0].wait_for("OFFERED joint_controller e1 /pa10/e1/effort", 60)
-        subs, pubs = _introspect(85, joints="e1", settle_s=2.0)["e1"]
+        subs, pubs = _introspect(domain, joints="e1", settle_s=2.0)["e1"]
         assert "/pa10/e1/effort" in pubs, pubs
         codes = _stop(nodes)
     finally:
@@ -79,15 +83,15 @@ def test_controller_offers_its_effort_only_once_it_holds_references():
     assert codes == [0, 0], "\n".join(n.output for n in nodes)
 
 
-def test_controller_holds_its_answers_until_plant_and_recorder_have_matched():
+def test_controller_holds_its_answers_until_plant_and_recorder_have_matched(domain):
     """A restarted controller's first efforts must reach the recorder too: with effort_subscribers:=2 the
     answer to a state waits while only the plant has matched, and reaches both once the recorder has."""
-    nodes = [_node("joint_controller_node", "joint_controller_e1", 86, joint="e1", effort_subscribers=2),
-             _node("reference_node", "reference", 86, duration_s=1.0)]
+    nodes = [_node("joint_controller_node", "joint_controller_e1", domain, joint="e1", effort_subscribers=2),
+             _node("reference_node", "reference", domain, duration_s=1.0)]
     try:
         nodes[0].wait_for("READY joint_controller e1", 60)
         env = {**os.environ, "PYTHONPATH": str(REPO)}
-        out = subprocess.run([sys.executable, str(REPO / "test" / "effort_hold_probe.py"), "86", "e1", "1.5"],
+        out = subprocess.run([sys.executable, str(REPO / "test" / "effort_hold_probe.py"), str(domain), "e1", "1.5"],
                              capture_output=True, text=True, env=env, timeout=120)
         codes = _stop(nodes)
     finally:
@@ -100,9 +104,9 @@ def test_controller_holds_its_answers_until_plant_and_recorder_have_matched():
     assert "held_until_matched 1," in nodes[0].output, nodes[0].output
 
 
-def test_killed_controller_stops_the_launcher_naming_the_joint(tmp_path):
+def test_killed_controller_stops_the_launcher_naming_the_joint(tmp_path, domain):
     shm_before = shm_files()
-    la = Launcher("--duration", 120, "--out", tmp_path / "o", domain_id=63)
+    la = Launcher("--duration", 120, "--out", tmp_path / "o", domain_id=domain)
     try:
         pids = la.wait_running()
         time.sleep(1.0)
@@ -120,10 +124,10 @@ def test_killed_controller_stops_the_launcher_naming_the_joint(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
-def test_stalled_controller_is_timed_out_held_and_counted(tmp_path):
+def test_stalled_controller_is_timed_out_held_and_counted(tmp_path, domain):
     out = tmp_path / "o"
     la = Launcher("--duration", 3, "--effort-timeout", 0.4, "--on-missing-effort", "hold", "--out", out,
-                  domain_id=64)
+                  domain_id=domain)
     try:
         pids = la.wait_running()
         time.sleep(0.5)
@@ -143,9 +147,9 @@ def test_stalled_controller_is_timed_out_held_and_counted(tmp_path):
     assert all(counts[j] < counts["w1"] for j in JOINT_NAMES if j != "w1"), counts
 
 
-def test_realtime_mode_runs_and_reports_misses_and_latency(tmp_path):
+def test_realtime_mode_runs_and_reports_misses_and_latency(tmp_path, domain):
     out = tmp_path / "rt"
-    la = Launcher("--mode", "realtime", "--duration", 1.5, "--out", out, domain_id=65)
+    la = Launcher("--mode", "realtime", "--duration", 1.5, "--out", out, domain_id=domain)
     try:
         rc = la.wait(timeout=120)
     finally:

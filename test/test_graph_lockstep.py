@@ -15,6 +15,8 @@ from pa10_dnbs.run_data import RunData
 
 from conftest import LOCKSTEP_DURATION_S as DURATION_S
 
+pytestmark = pytest.mark.graph  # starts ROS processes
+
 
 def test_every_node_reported_ready_and_ran(lockstep_run):
     assert lockstep_run["rc"] == 0, lockstep_run["output"]

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from .. import JOINT_NAMES
 from ..wire.topics import CLOCK, DIAGNOSTICS, JOINT_STATES, ROBOT_DESCRIPTION, effort_topic, reference_topic, state_topic
+from .domain_ids import lease_domain
 from .processes import ManagedProcess, stop_all
 from .shm_cleanup import remove_stale, shm_files
 
@@ -84,11 +85,6 @@ def _catch_signals(stop: _StopRequest) -> dict:
         previous[signum] = signal.getsignal(signum)
         signal.signal(signum, stop)
     return previous
-
-
-def pick_domain_id() -> int:
-    """A domain id in 1..101 (valid on every platform), different for concurrent launchers."""
-    return 1 + os.getpid() % 101
 
 
 NODE_GROUPS = ("observer", "reference", "controllers", "plant")
@@ -176,7 +172,8 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
 
     The launcher itself never joins DDS: the observer is one of its child processes.
     """
-    domain = opt.domain_id if opt.domain_id is not None else pick_domain_id()
+    lease = lease_domain() if opt.domain_id is None else None  # held until the run is over
+    domain = opt.domain_id if lease is None else lease.domain_id
     env = node_env(domain, "SUBNET" if opt.netns else "LOCALHOST")
     logs = workdir / "logs"
     logs.mkdir(parents=True, exist_ok=True)
@@ -207,6 +204,8 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
         shm_removed = remove_stale(shm_files() - shm_before)
         for signum, handler in previous.items():
             signal.signal(signum, handler)
+        if lease is not None:
+            lease.release()
     if stop.signal_name:
         failure = f"interrupted ({stop.signal_name})"
     say("launch: stopped: " + " ".join(f"{n}={c}" for n, c in codes.items())

@@ -1,0 +1,64 @@
+"""ROS_DOMAIN_ID leases: a domain per run that no other run on this host uses at the same time.
+
+A lease is an exclusive ``flock`` on ``<tmp>/pa10_dnbs_domains/<id>.lock``,
+held for as long as the lease (or the process) lives: the kernel drops it
+when the holder exits, however it exits, so a crashed run never blocks an id.
+Launchers and test suites on one host take their domains here and so never
+share one. Ids come from 1..101, valid on every platform (0, the ROS
+default, is left to other users of the host).
+"""
+from __future__ import annotations
+
+import fcntl
+import os
+import tempfile
+from pathlib import Path
+
+DOMAIN_IDS = range(1, 102)
+LOCK_DIR = Path(tempfile.gettempdir()) / "pa10_dnbs_domains"
+
+
+class NoFreeDomain(RuntimeError):
+    """Every domain id is leased by another run on this host."""
+
+
+class DomainLease:
+    """One leased domain id; ``release()`` (or the process's exit) frees it."""
+
+    def __init__(self, domain_id: int, fd: int):
+        self.domain_id = domain_id
+        self._fd: int | None = fd
+
+    def release(self) -> None:
+        if self._fd is not None:
+            os.close(self._fd)  # closing the descriptor drops the flock
+            self._fd = None
+
+    def __enter__(self) -> "DomainLease":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+
+def try_lease(domain_id: int) -> DomainLease | None:
+    """Lease ``domain_id`` if no other holder has it, else None."""
+    LOCK_DIR.mkdir(parents=True, exist_ok=True)
+    fd = os.open(LOCK_DIR / f"{domain_id}.lock", os.O_RDWR | os.O_CREAT, 0o666)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        os.close(fd)
+        return None
+    return DomainLease(domain_id, fd)
+
+
+def lease_domain() -> DomainLease:
+    """The first free id, searched from an offset derived from the PID (so concurrent callers rarely race)."""
+    n = len(DOMAIN_IDS)
+    start = os.getpid() % n
+    for i in range(n):
+        lease = try_lease(DOMAIN_IDS[(start + i) % n])
+        if lease is not None:
+            return lease
+    raise NoFreeDomain(f"all {n} ROS domain ids are in use by other runs on this host ({LOCK_DIR})")
