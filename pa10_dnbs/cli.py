@@ -19,7 +19,8 @@ def _simulate(args: argparse.Namespace) -> int:
     from .commands.simulate import run_simulate
 
     return run_simulate(config_path=args.config, controller=args.controller, duration_s=args.duration,
-                        out=args.out, force=args.force, progress=not args.no_progress and sys.stderr.isatty())
+                        out=args.out, force=args.force, progress=not args.no_progress and sys.stderr.isatty(),
+                        init_from=args.init_from)
 
 
 def _launch(args: argparse.Namespace) -> int:
@@ -47,9 +48,9 @@ def _replay(args: argparse.Namespace) -> int:
                       queue_depth=args.queue_depth)
 
 
-def _add_run_args(p: argparse.ArgumentParser, controllers: tuple[str, ...]) -> None:
+def _add_run_args(p: argparse.ArgumentParser, controllers: tuple[str, ...], help_controller: str) -> None:
     p.add_argument("--config", type=Path, default=None, help=f"YAML config (default: {default_config_path()})")
-    p.add_argument("--controller", choices=controllers, default="dnbs")
+    p.add_argument("--controller", choices=controllers, default="dnbs", help=help_controller)
     p.add_argument("--duration", type=float, default=None, metavar="SECONDS",
                    help="simulated time [s] (default: simulation.duration_s of the config, 20 s)")
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
@@ -62,13 +63,18 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     sim = sub.add_parser("simulate", help="closed loop in one process (no ROS), with metrics, figures, report")
-    _add_run_args(sim, ("dnbs", "pid", "both"))
+    _add_run_args(sim, ("dnbs", "pid", "ctc", "both", "all"),
+                  "dnbs (the paper's, with the configured remedies), pid (decentralized baseline), ctc (centralized "
+                  "computed torque with the plant's model: the reference), both (dnbs, pid), all (dnbs, pid, ctc)")
+    sim.add_argument("--init-from", type=Path, default=None, metavar="CHECKPOINTS",
+                     help="warm start: the DNBS weights and covariances of an earlier run (its output directory or "
+                          "its checkpoints/ directory); reported as such")
     sim.set_defaults(func=_simulate)
 
     la = sub.add_parser("launch", help="the ROS 2 node graph (plant, 7 joint controllers, reference)")
     la.add_argument("--mode", choices=("lockstep", "realtime"), default="lockstep",
                     help="lockstep: simulated time, deterministic; realtime: 1 kHz wall clock")
-    _add_run_args(la, ("dnbs", "pid"))
+    _add_run_args(la, ("dnbs", "pid"), "the joint controllers: dnbs or pid (ctc is centralized: in-process only)")
     la.add_argument("--domain-id", type=int, default=None, help="ROS_DOMAIN_ID (default: a free one, leased for the run so concurrent runs never share it)")
     la.add_argument("--reliability", choices=("reliable", "best_effort"), default="reliable",
                     help="QoS of the per-joint state/effort topics")

@@ -8,8 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from graph_harness import alive, exit_codes
-from pa10_dnbs.launch.shm_cleanup import shm_files
+from graph_harness import assert_no_leftovers, exit_codes
 from pa10_dnbs.sim.closed_loop import simulate
 from pa10_dnbs.run_data import RunData
 
@@ -54,6 +53,4 @@ def test_bit_identical_to_in_process_simulation(lockstep_run, _default_cfg):
 def test_clean_shutdown(lockstep_run):
     codes = exit_codes(lockstep_run["output"])
     assert len(codes) == 10 and all(c == 0 for c in codes.values()), codes  # 9 nodes and the recorder
-    assert not [n for n, pid in lockstep_run["pids"].items() if alive(pid)]
-    leaked = shm_files() - lockstep_run["shm_before"]
-    assert not leaked, leaked
+    assert_no_leftovers(lockstep_run["pids"].values(), lockstep_run["shm_before"])

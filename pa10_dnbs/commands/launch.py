@@ -17,7 +17,7 @@ from ..kinematics.urdf_chain import UrdfChain
 from ..launch.fault_flags import apply_fault_flags, faults_active, plain
 from ..launch.fault_report import fault_note, fault_report
 from ..launch.graph_run import GraphFailure, GraphOptions, parse_netns, run_graph
-from ..report.metrics_file import effective_window, metrics_dict
+from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..wire.wire_record import load_wire_run
 from ..wire.steps import StepClock
@@ -64,7 +64,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                        domain_id=domain_id, reliability=reliability, effort_timeout_s=effort_timeout_s,
                        on_missing_effort=on_missing_effort, progress=progress, dt_s=dt, record_bag=record,
                        force_bag=force, restart=restart, netns=namespaces)
-    window = effective_window(n_steps * dt, cfg["simulation"]["window_s"])
+    settings = metrics_settings(cfg, n_steps * dt)
+    window = settings["window_s"]
 
     try:
         with atomic_output_dir(out, force) as tmp:
@@ -83,7 +84,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
             if missing:
                 raise GraphFailure(f"the record of the run is incomplete: {missing}")
             metrics = metrics_dict(
-                run, window, source="ros-graph", mode=mode, config_file=str(config_path),
+                run, settings, source="ros-graph", mode=mode, config_file=str(config_path),
                 seed=cfg["simulation"]["seed"], reliability=reliability, domain_id=result.domain_id,
                 wall_time_total_s=result.wall_total_s, limit_hits=stats["limit_hits"],
                 timing={k: stats[k] for k in ("late_ticks", "on_time_fraction", "effort_timeout_s",
