@@ -31,7 +31,14 @@ def _launch(args: argparse.Namespace) -> int:
                       progress=not args.no_progress and sys.stderr.isatty(), domain_id=args.domain_id,
                       reliability=args.reliability, effort_timeout_s=args.effort_timeout,
                       on_missing_effort=args.on_missing_effort, record=args.record, fault_args=args,
-                      restart=args.restart, netns=args.netns)
+                      restart=args.restart, netns=args.netns, init_from=args.init_from)
+
+
+def _study(args: argparse.Namespace) -> int:
+    from .commands.study import run_study_command
+
+    return run_study_command(args.scenarios, args.controllers, args.seeds, args.duration, args.out, args.force,
+                             args.config, args.workers, progress=not args.no_progress and sys.stderr.isatty())
 
 
 def _analyse(args: argparse.Namespace) -> int:
@@ -89,8 +96,25 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--netns", action="append", default=[], metavar="GROUP=NAMESPACE",
                     help="run a node group (observer, reference, controllers, plant) in a network namespace "
                          "(ip netns), with discovery range SUBNET: several hosts on one machine; repeatable")
+    la.add_argument("--init-from", type=Path, default=None, metavar="CHECKPOINTS",
+                    help="warm start: the DNBS weights and covariances of an earlier run (its output directory or "
+                         "its checkpoints/ directory); reported as such")
     add_fault_arguments(la)
     la.set_defaults(func=_launch)
+
+    st = sub.add_parser("study", help="robustness study: scenarios x controllers x seeds, in parallel (in-process)")
+    st.add_argument("--scenarios", default="nominal", metavar="LIST",
+                    help="comma-separated: nominal, payload_2kg, payload_5kg, links_heavier_30pct, encoder_noise, "
+                         "delay_1_tick, coulomb, fast_reference")
+    st.add_argument("--controllers", default="dnbs,pid", metavar="LIST", help="comma-separated: dnbs, pid, ctc")
+    st.add_argument("--seeds", type=int, default=1, help="seeds 0..N-1 of the DNBS initial weights and the noise")
+    st.add_argument("--duration", type=float, default=20.0, metavar="SECONDS", help="simulated time per run")
+    st.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
+    st.add_argument("--config", type=Path, default=None, help="YAML config the scenarios start from")
+    st.add_argument("--workers", type=int, default=None, help="worker processes (default: one per core)")
+    st.add_argument("--force", action="store_true", help="replace an existing output directory")
+    st.add_argument("--no-progress", action="store_true", help="no progress bar")
+    st.set_defaults(func=_study)
 
     an = sub.add_parser("analyse", help="metrics, figures and report of a recorded run, from its bag alone")
     an.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 bag directory (metadata.yaml + .mcap)")

@@ -54,7 +54,7 @@ class JointControllerNode(Node):
         super().__init__("joint_controller")
         p = declare(self, {"config_file": "", "joint": "", "controller": "dnbs", "reliability": "reliable",
                            "queue_depth": 10, "stats_file": "", "checkpoint_file": "", "resume": False,
-                           "incarnation": 0, "effort_subscribers": 1, "match_timeout_s": 10.0})
+                           "incarnation": 0, "effort_subscribers": 1, "match_timeout_s": 10.0, "init_file": ""})
         if p["effort_subscribers"] < 1 or p["match_timeout_s"] <= 0:
             raise ParameterError("effort_subscribers must be >= 1 and match_timeout_s > 0 s")
         check_choice("joint", p["joint"], JOINT_NAMES)
@@ -73,6 +73,13 @@ class JointControllerNode(Node):
             raise ParameterError(f"checkpoint_file: the {p['controller']} controller has no learned state to save")
         self.checkpoint_every = max(1, int(round(cfg["checkpoint"]["period_s"] / cfg["simulation"]["dt_s"])))
         self.resumed_from = None
+        if p["init_file"] and not (p["resume"] and self.checkpoint is not None and self.checkpoint.is_file()):
+            # a warm start from an earlier run: its weights and covariances, this run's own step count
+            try:
+                controller.load_state_dict(0, load_checkpoint(Path(p["init_file"]))[0], resume_steps=False)
+            except (ValueError, KeyError, AttributeError) as exc:
+                raise ParameterError(f"init_file: {exc}") from None
+            print(f"WARM joint_controller {self.joint} from {p['init_file']}", flush=True)
         if p["resume"] and self.checkpoint is not None and self.checkpoint.is_file():
             try:
                 state, step = load_checkpoint(self.checkpoint)
