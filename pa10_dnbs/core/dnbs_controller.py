@@ -176,6 +176,7 @@ class DNBSControllers:
         self._bound = rem.weight_bound if rem.projection else np.inf
         self._ramp_steps = rem.learning_ramp_s / params.dt_s if rem.learning_ramp and rem.learning_ramp_s > 0 else 0.0
         self._anti_windup = rem.anti_windup
+        self._dead_zone = rem.dead_zone
         self._printed = params.e2_sign == "printed"
         self._A, self._E1 = a.output_scale, a.error_scale
         self._U, self._E2 = t.output_scale, t.error_scale
@@ -216,21 +217,30 @@ class DNBSControllers:
         u_out = np.minimum(np.maximum(u, -lim), lim)
 
         e2_train = -e2 if self._printed else e2
-        act1 = act2 = self._ones if active is None else active
+        act1 = act2 = active
         if self._anti_windup:
             # Conditional integration: while the torque is clipped, skip an update that would raise |u|:
             # e2 > 0 raises u directly; e1 > 0 raises alpha, and so u wherever du/dalpha > 0.
             sat = np.abs(u) >= lim
-            act1 = act1 * (1.0 - (sat & (e1 * u > 0.0)))
-            act2 = act2 * (1.0 - (sat & (e2_train * u > 0.0)))
-        eps1 = (e1 - np.clip(e1, -self._d1, self._d1)) / self._E1
-        eps2 = (e2_train - np.clip(e2_train, -self._d2, self._d2)) / self._E2
+            if sat.any():
+                base = self._ones if active is None else active
+                act1 = base * (1.0 - (sat & (e1 * u > 0.0)))
+                act2 = base * (1.0 - (sat & (e2_train * u > 0.0)))
+        if self._dead_zone:
+            e1 = e1 - np.clip(e1, -self._d1, self._d1)
+            e2_train = e2_train - np.clip(e2_train, -self._d2, self._d2)
+        eps1 = e1 / self._E1
+        eps2 = e2_train / self._E2
         ramp = min(1.0, self.steps / self._ramp_steps) if self._ramp_steps else 1.0
-        self.alpha_ekf.update(S1, eps1, self.alpha_ekf.eta * ramp, act1)
-        self.torque_ekf.update(S2, eps2, self.torque_ekf.eta * ramp, act2)
+        eta1 = self.alpha_ekf.eta * ramp if ramp != 1.0 else self.alpha_ekf.eta
+        eta2 = self.torque_ekf.eta * ramp if ramp != 1.0 else self.torque_ekf.eta
+        self.alpha_ekf.update(S1, eps1, eta1, act1)
+        self.torque_ekf.update(S2, eps2, eta2, act2)
         if self._sigma:
-            self.alpha_ekf.w *= (1.0 - np.minimum(1.0, self._sigma * np.abs(eps1) * act1))[:, None]
-            self.torque_ekf.w *= (1.0 - np.minimum(1.0, self._sigma * np.abs(eps2) * act2))[:, None]
+            a1 = self._ones if act1 is None else act1
+            a2 = self._ones if act2 is None else act2
+            self.alpha_ekf.w *= (1.0 - np.minimum(1.0, self._sigma * np.abs(eps1) * a1))[:, None]
+            self.torque_ekf.w *= (1.0 - np.minimum(1.0, self._sigma * np.abs(eps2) * a2))[:, None]
         if self._bound != np.inf:
             np.clip(self.alpha_ekf.w, -self._bound, self._bound, out=self.alpha_ekf.w)
             np.clip(self.torque_ekf.w, -self._bound, self._bound, out=self.torque_ekf.w)

@@ -55,8 +55,12 @@ class EKFBank:
         if not self.p_max > 0:
             raise ValueError(f"EKF parameter p_max must be positive, got {p_max}")
         self.w = self.w0.copy()
-        self.P = self.p0[:, None, None] * np.eye(L)
-        self._diag = (slice(None), np.arange(L), np.arange(L))
+        self.P = self.p0[:, None, None] * np.eye(L)  # C-contiguous, always written in place
+        self._diag = self.P.reshape(n, L * L)[:, :: L + 1]  # a view of the n diagonals, (n, L)
+        self._q_col = self.q[:, None]
+        self._nLL = np.empty((n, L, L))  # scratch
+        self._nL = np.empty((n, L))
+        self._PH = np.empty((n, L))
         self.last_hph = np.zeros(n)
 
     @property
@@ -65,35 +69,46 @@ class EKFBank:
 
     def output(self, H: np.ndarray) -> np.ndarray:
         """w^T H per row, shape (n,), for regressors H of shape (n, L)."""
-        return (self.w * H).sum(axis=1)
+        return np.add.reduce(np.multiply(self.w, H, out=self._nL), axis=1)
 
-    def update(self, H: np.ndarray, error: np.ndarray, eta: np.ndarray, active: np.ndarray) -> np.ndarray:
+    def update(self, H: np.ndarray, error: np.ndarray, eta: np.ndarray, active: np.ndarray | None = None) -> np.ndarray:
         """One step per row with regressor H (n, L), training error (n,), learning rate eta (n,) and
-        ``active`` (n,) 1.0 to train, 0.0 to skip; returns the gain g = H^T K (n,).
+        ``active`` (n,) 1.0 to train, 0.0 to skip (None: every row trains); returns the gain g = H^T K (n,).
 
         g in [0, 1) is the fraction of eta*e that the output at the same input moves by.
         """
-        PH = (self.P * H[:, None, :]).sum(axis=2)
-        hph = (H * PH).sum(axis=1)
+        PH = np.add.reduce(np.multiply(self.P, H[:, None, :], out=self._nLL), axis=2, out=self._PH)
+        hph = np.add.reduce(np.multiply(H, PH, out=self._nL), axis=1)
         m = 1.0 / (self.r + hph)
         sqrt_m = np.sqrt(m)
-        v = PH * (sqrt_m * active)[:, None]
+        v = PH * (sqrt_m if active is None else sqrt_m * active)[:, None]
         self.w += v * (eta * sqrt_m * error)[:, None]     # eta K e, K = P H M
-        self.P -= v[:, :, None] * v[:, None, :]           # K H^T P = v v^T: exactly symmetric
+        self.P -= np.multiply(v[:, :, None], v[:, None, :], out=self._nLL)  # K H^T P = v v^T: exactly symmetric
+        q = self._q_col if active is None else (self.q * active)[:, None]
+        d = self._diag
         if self.p_max == np.inf:
-            self.P[self._diag] += (self.q * active)[:, None]
+            d += q
         else:
-            self.P[self._diag] += (self.q * active)[:, None] * (self.P[self._diag] < self.p_max)
+            d += q * (d < self.p_max)
         self.last_hph = hph
         return hph * m
 
     def unhealthy(self, full: bool = True) -> np.ndarray:
         """Bool (n,): rows that must be reset. Cheap check (every step): w finite and the last H^T P H finite
         and >= 0 (NaN or Inf anywhere in P that H reaches shows there). ``full``: also every entry of P finite,
-        P symmetric and positive definite (a Cholesky factorisation per row, ~L^3/3 flops)."""
-        hph = self.last_hph
-        bad = ~(np.isfinite(hph) & (hph >= 0.0) & np.isfinite((self.w * self.w).sum(axis=1)))
+        P symmetric and positive definite (a Cholesky factorisation, ~L^3/3 flops per row)."""
+        hph, ww = self.last_hph, np.add.reduce(np.multiply(self.w, self.w, out=self._nL), axis=1)
+        if np.isfinite(ww.sum()) and hph.min() >= 0.0 and np.isfinite(hph.sum()):
+            bad = np.zeros(hph.size, dtype=bool)  # every row finite (the totals are) and hph >= 0
+        else:
+            bad = ~(np.isfinite(hph) & (hph >= 0.0) & np.isfinite(ww))
         if full:
+            try:
+                if np.isfinite(self.P).all() and np.array_equal(self.P, self.P.transpose(0, 2, 1)):
+                    np.linalg.cholesky(self.P)  # all rows at once; one that fails sends us row by row
+                    return bad
+            except np.linalg.LinAlgError:
+                pass
             for i in np.flatnonzero(~bad):
                 P = self.P[i]
                 if not (np.isfinite(P).all() and np.array_equal(P, P.T)):

@@ -56,7 +56,13 @@ class HONN:
             factors[i, :len(idx)] = idx
         self._factor_cols = [np.ascontiguousarray(factors[:, c]) for c in range(factors.shape[1])]
         self._inv_scale = 1.0 / self.input_scale
-        self._ext = np.ones((0, self.input_scale.size + 1))
+        self._alloc(0)
+
+    def _alloc(self, n: int) -> None:
+        self._ext = np.ones((n, self.input_scale.size + 1))
+        self._zs = np.empty((n, self.input_scale.size))
+        self._S = np.empty((n, self.exponents.shape[0]))
+        self._f = np.empty((n, self.exponents.shape[0]))
 
     @property
     def n_inputs(self) -> int:
@@ -69,16 +75,18 @@ class HONN:
         return self.exponents.shape[0]
 
     def regressor(self, z: np.ndarray) -> np.ndarray:
-        """S(z), shape (n, L), for inputs z of shape (n, p) (one row per joint)."""
-        z = np.asarray(z, dtype=float)
+        """S(z), shape (n, L), for inputs z of shape (n, p) (one row per joint).
+
+        The result is this network's own buffer, overwritten by the next call: copy it to keep it.
+        """
         if z.ndim != 2 or z.shape[1] != self.input_scale.size:
             raise ValueError(f"expected inputs of shape (n, {self.input_scale.size}), got {z.shape}")
         if self._ext.shape[0] != z.shape[0]:
-            self._ext = np.ones((z.shape[0], self.input_scale.size + 1))
+            self._alloc(z.shape[0])
         ext = self._ext
-        np.tanh(np.multiply(z, self._inv_scale), out=ext[:, 1:])
+        np.tanh(np.multiply(z, self._inv_scale, out=self._zs), out=ext[:, 1:])
         cols = self._factor_cols
-        out = ext[:, cols[0]]
+        out = np.take(ext, cols[0], axis=1, out=self._S)
         for c in cols[1:]:
-            out *= ext[:, c]
+            out *= np.take(ext, c, axis=1, out=self._f)
         return out
