@@ -49,6 +49,7 @@ REMEDIES = "dnbs.remedies"
 VARIANTS = [
     ("default", None),
     ("paper's law (config/paper.yaml)", "paper"),
+    ("paper's law without its anti-windup", ("paper", _set(f"{REMEDIES}.anti_windup.enabled", False))),
     ("robust term off", _set(f"{REMEDIES}.robust_term.enabled", False)),
     ("velocity feed-forward off", _set(f"{REMEDIES}.robust_term.velocity_feedforward", False)),
     ("anti-windup off", _set(f"{REMEDIES}.anti_windup.enabled", False)),
@@ -63,8 +64,9 @@ VARIANTS = [
 
 def _run(args) -> dict:
     variant, scenario, duration, window = args
-    base = load_config(share_path("config", "paper.yaml") if VARIANTS[variant][1] == "paper" else default_config_path())
-    edit = VARIANTS[variant][1]
+    spec = VARIANTS[variant][1]
+    preset, edit = spec if isinstance(spec, tuple) else (spec, spec)
+    base = load_config(share_path("config", "paper.yaml") if preset == "paper" else default_config_path())
     if callable(edit):
         edit(base)
     cfg, dist = scenario_config(base, scenario, base["simulation"]["seed"])
@@ -84,8 +86,10 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--workers", type=int, default=None)
     ap.add_argument("--long-s", type=float, default=100.0, help="length of the noisy run [s]")
+    ap.add_argument("--only", default=None, help="comma-separated variant numbers (0 = default) to run")
     a = ap.parse_args()
-    jobs = [(i, sc, d, w) for i in range(len(VARIANTS)) for sc, d, w in (
+    rows = range(len(VARIANTS)) if a.only is None else [int(x) for x in a.only.split(",")]
+    jobs = [(i, sc, d, w) for i in rows for sc, d, w in (
         ("nominal", 20.0, (10.0, 20.0)), ("payload_5kg", 20.0, (10.0, 20.0)),
         ("encoder_noise", a.long_s, (a.long_s - 20.0, a.long_s)))]
     with ProcessPoolExecutor(max_workers=a.workers) as pool:
@@ -93,7 +97,8 @@ def main() -> int:
     print(f"| variant | nominal: settled [s] | max abs [rad] | torque variation | at limit after 0.2 s | RMS [rad] | "
           f"payload 5 kg: settled [s] | torque variation | RMS [rad] | noise, {a.long_s:g} s: RMS last 20 s [rad] |")
     print("|---" * 10 + "|")
-    for i, (name, _) in enumerate(VARIANTS):
+    for i in rows:
+        name = VARIANTS[i][0]
         n, p, z = res[(i, "nominal")], res[(i, "payload_5kg")], res[(i, "encoder_noise")]
         print(f"| {name} | {_f(n['worst_settling_time_s'], '.3f')} | {n['worst_max_abs_error_run_rad']:.4f} | "
               f"{n['worst_torque_variation']:.2f} | {n['worst_saturated_fraction_after_s']:.4f} | "
