@@ -30,6 +30,7 @@ setup(
             "reference_node = pa10_dnbs.ros.reference_node:main",
             "wire_monitor = pa10_dnbs.ros.wire_monitor:main",
             "recorder_node = pa10_dnbs.ros.recorder_node:main",
+            "live_observer_node = pa10_dnbs.ros.live_observer_node:main",
         ],
     },
 )

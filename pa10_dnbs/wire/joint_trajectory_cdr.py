@@ -1,0 +1,73 @@
+"""trajectory_msgs/msg/JointTrajectory CDR bytes -> the reference points, without rclpy.
+
+The reference node sends each joint's x_d in batches (one joint, ~100 points);
+observers that only need x_d (the live view, progress lines) read the raw
+bytes here instead of building Python message objects point by point.
+test/test_joint_trajectory_cdr.py checks it against rclpy's serializer.
+
+Layout (little-endian XCDR1, alignment relative to the body after the 4-byte
+encapsulation): header.stamp (int32 sec, uint32 nanosec), header.frame_id
+(string), joint_names (sequence<string>), points (sequence of positions,
+velocities, accelerations, effort: sequence<float64> each, then
+time_from_start: int32 sec, uint32 nanosec).
+"""
+from __future__ import annotations
+
+import struct
+
+from .steps import NS_PER_S, STAMP
+
+_U32 = struct.Struct("<I")
+
+
+def _pad(n: int, align: int) -> int:
+    return (-n) % align
+
+
+def decode(data: bytes) -> tuple[int, int, list[str], list[tuple[tuple[float, ...], int]]]:
+    """(sec, nanosec, joint_names, [(positions, time_from_start [ns]), ...]) of a JointTrajectory.
+
+    Raises ValueError (or struct.error) on bytes that are not a little-endian JointTrajectory.
+    """
+    if len(data) < 12 or data[1] != 1:
+        raise ValueError("not little-endian CDR")
+    mv = memoryview(data)[4:]
+    sec, nanosec = STAMP.unpack_from(mv, 0)
+    off = 8
+
+    def u32(off: int) -> tuple[int, int]:
+        off += _pad(off, 4)
+        return _U32.unpack_from(mv, off)[0], off + 4
+
+    def string(off: int) -> tuple[str, int]:
+        n, off = u32(off)
+        if n == 0 or off + n > len(mv):
+            raise ValueError("bad string length")
+        return bytes(mv[off:off + n - 1]).decode("utf-8"), off + n
+
+    def doubles(off: int) -> tuple[tuple[float, ...], int]:
+        n, off = u32(off)
+        if n == 0:
+            return (), off
+        off += _pad(off, 8)
+        return struct.unpack_from(f"<{n}d", mv, off), off + 8 * n
+
+    _, off = string(off)  # frame_id
+    count, off = u32(off)
+    names = []
+    for _ in range(count):
+        name, off = string(off)
+        names.append(name)
+    n_points, off = u32(off)
+    if n_points > len(mv):  # each point takes at least 24 bytes: a length this large is garbage
+        raise ValueError("bad point count")
+    points = []
+    for _ in range(n_points):
+        positions, off = doubles(off)
+        for _ in range(3):  # velocities, accelerations, effort
+            _, off = doubles(off)
+        off += _pad(off, 4)
+        d_sec, d_nanosec = STAMP.unpack_from(mv, off)
+        off += 8
+        points.append((positions, d_sec * NS_PER_S + d_nanosec))
+    return sec, nanosec, names, points
