@@ -22,7 +22,7 @@ _TIME = struct.Struct("<BQ")             # op, time [ns]
 class FoxgloveClient:
     def __init__(self, url: str, open_timeout: float = 20.0):
         self.ws = connect(url, subprotocols=SUBPROTOCOLS, proxy=None, open_timeout=open_timeout,
-                          max_size=None)
+                          max_size=None, close_timeout=1.0, legacy=True)
         self.server_info: dict | None = None
         self.channels: dict[str, dict] = {}          # topic -> advertised channel
         self.messages: dict[str, list[tuple[int, bytes]]] = {}  # topic -> [(log time [ns], payload)]
