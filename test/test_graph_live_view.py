@@ -92,7 +92,7 @@ def test_a_client_watches_a_lockstep_run(tmp_path, domain):
     assert _check_tracking(client.messages["/pa10/tracking"], run) >= 10
     assert client.count("/robot_description") >= 1
     assert exit_codes(la.output)["live_view"] == 0
-    assert "frames shown of" in (out / "logs" / "live_view.log").read_text()
+    assert "frames shown in" in (out / "logs" / "live_view.log").read_text()
 
 
 def test_clients_that_drop_or_stall_change_nothing(lockstep_run, tmp_path, domain):
