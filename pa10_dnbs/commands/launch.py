@@ -13,12 +13,13 @@ from ..bag.analysis import wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
 from ..bag.bag_writer import COMPRESSIONS, check_bag_path
 from ..config import ConfigError, default_config_path, load_config
+from ..core.checkpoint import checkpoint_dir, load_joint_checkpoints
 from ..kinematics.urdf_chain import UrdfChain
 from ..launch.fault_flags import apply_fault_flags, faults_active, plain
 from ..launch.fault_report import fault_note, fault_report
 from ..launch.graph_run import GraphFailure, GraphOptions, parse_netns, run_graph
 from ..live.options import check_live_options
-from ..report.metrics_file import effective_window, metrics_dict
+from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..wire.wire_record import load_wire_run
 from ..wire.steps import StepClock
@@ -29,13 +30,14 @@ from ..wire.topics import CLOCK, JOINT_STATES, effort_topic, state_topic
 def run_launch(config_path: Path | None, mode: str, controller: str, duration_s: float | None, out: Path,
                force: bool, progress: bool, domain_id: int | None, reliability: str, effort_timeout_s: float,
                on_missing_effort: str, record: Path | None = None, fault_args=None, restart: str | None = None,
-               netns: list[str] | None = None, bag_compression: str = "zstd", live_port: int | None = None,
-               live_host: str = "127.0.0.1", live_hz: float = 50.0) -> int:
+               netns: list[str] | None = None, init_from: Path | None = None, bag_compression: str = "zstd",
+               live_port: int | None = None, live_host: str = "127.0.0.1", live_hz: float = 50.0) -> int:
     """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code.
 
     ``fault_args``: the parsed fault flags (launch/fault_flags.py) applied to the config; the config the
     nodes run with is written to ``out/config_used.yaml``. ``restart``: 'resume' or 'fresh'.
     ``netns``: ['GROUP=NAMESPACE', ...] to run node groups in network namespaces.
+    ``init_from``: warm start of the DNBS controllers from an earlier run's checkpoints (reported as such).
     ``bag_compression``: 'zstd' or 'none' (with ``record``). ``live_port``: serve the live view
     (Foxglove WebSocket) on ``live_host``:``live_port`` (0: a free port), ``live_hz`` frames per second at most.
     """
@@ -62,6 +64,14 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         raise ConfigError(f"--bag-compression: expected one of {', '.join(COMPRESSIONS)}, got {bag_compression!r}")
     if live_port is not None:
         check_live_options(live_host, live_port, live_hz)
+    if init_from is not None:
+        if controller != "dnbs":
+            raise ConfigError("--init-from: only the DNBS controllers have learned state to start from")
+        try:
+            load_joint_checkpoints(init_from, JOINT_NAMES)  # all there and readable, before anything starts
+        except ValueError as exc:
+            raise ConfigError(f"--init-from: {exc}") from None
+        init_from = checkpoint_dir(init_from).resolve()
     check_output_dir(out, force)
     if record is not None:
         record = Path(record).resolve()
@@ -71,9 +81,10 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     opt = GraphOptions(config_path=config_path, mode=mode, controller=controller, duration_s=n_steps * dt,
                        domain_id=domain_id, reliability=reliability, effort_timeout_s=effort_timeout_s,
                        on_missing_effort=on_missing_effort, progress=progress, dt_s=dt, record_bag=record,
-                       force_bag=force, restart=restart, netns=namespaces, bag_compression=bag_compression,
-                       live_port=live_port, live_host=live_host, live_hz=live_hz)
-    window = effective_window(n_steps * dt, cfg["simulation"]["window_s"])
+                       force_bag=force, restart=restart, netns=namespaces, init_from=init_from,
+                       bag_compression=bag_compression, live_port=live_port, live_host=live_host, live_hz=live_hz)
+    settings = metrics_settings(cfg, n_steps * dt)
+    window = settings["window_s"]
 
     try:
         with atomic_output_dir(out, force) as tmp:
@@ -92,17 +103,20 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
             if missing:
                 raise GraphFailure(f"the record of the run is incomplete: {missing}")
             metrics = metrics_dict(
-                run, window, source="ros-graph", mode=mode, config_file=str(config_path),
+                run, settings, source="ros-graph", mode=mode, config_file=str(config_path),
                 seed=cfg["simulation"]["seed"], reliability=reliability, domain_id=result.domain_id,
                 wall_time_total_s=result.wall_total_s, limit_hits=stats["limit_hits"],
                 timing={k: stats[k] for k in ("late_ticks", "on_time_fraction", "effort_timeout_s",
                                                "on_missing_effort")} | {"joints": stats["joints"]},
                 node_exit_codes=result.exit_codes, bag=str(record) if record else None,
-                faults=fault_report(cfg, stats, result))
+                faults=fault_report(cfg, stats, result),
+                **({"warm_start_from": str(init_from)} if init_from is not None else {}))
             notes = [f"config: `{config_path}`",
                      f"source: ROS 2 node graph, {mode} mode, {reliability} QoS, domain {result.domain_id}; "
                      f"time series rebuilt from {source}",
                      _timing_note(stats)]
+            if init_from is not None:
+                notes.append(f"DNBS warm-started from the checkpoints in `{init_from}` (not a cold start)")
             if faults_active(cfg) or result.restarts:
                 notes.append(fault_note(metrics["faults"]))
             if tuple(window) != tuple(cfg["simulation"]["window_s"]):
