@@ -12,7 +12,7 @@ setup(
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
-        (f"share/{PACKAGE}/config", glob("config/*.yaml")),
+        (f"share/{PACKAGE}/config", glob("config/*.yaml") + glob("config/*.json")),
         (f"share/{PACKAGE}/urdf", glob("urdf/*.urdf") + glob("urdf/*.md")),
     ],
     install_requires=["setuptools"],
@@ -30,6 +30,7 @@ setup(
             "reference_node = pa10_dnbs.ros.reference_node:main",
             "wire_monitor = pa10_dnbs.ros.wire_monitor:main",
             "recorder_node = pa10_dnbs.ros.recorder_node:main",
+            "live_observer_node = pa10_dnbs.ros.live_observer_node:main",
         ],
     },
 )

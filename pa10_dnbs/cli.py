@@ -14,6 +14,8 @@ from .bag.bag_reader import BagError
 from .bag.bag_writer import BagExistsError
 from .report.outputs import OutputExistsError
 
+LIVE_PORT = 8765  # Foxglove's default WebSocket port
+
 
 def _simulate(args: argparse.Namespace) -> int:
     from .commands.simulate import run_simulate
@@ -31,7 +33,9 @@ def _launch(args: argparse.Namespace) -> int:
                       progress=not args.no_progress and sys.stderr.isatty(), domain_id=args.domain_id,
                       reliability=args.reliability, effort_timeout_s=args.effort_timeout,
                       on_missing_effort=args.on_missing_effort, record=args.record, fault_args=args,
-                      restart=args.restart, netns=args.netns, init_from=args.init_from)
+                      restart=args.restart, netns=args.netns, init_from=args.init_from,
+                      bag_compression=args.bag_compression, live_port=args.live, live_host=args.live_host,
+                      live_hz=args.live_hz)
 
 
 def _study(args: argparse.Namespace) -> int:
@@ -44,7 +48,8 @@ def _study(args: argparse.Namespace) -> int:
 def _analyse(args: argparse.Namespace) -> int:
     from .commands.analyse import run_analyse
 
-    return run_analyse(args.bag, args.out, args.force, args.config)
+    return run_analyse(args.bag, args.out, args.force, args.config,
+                       progress=not args.no_progress and sys.stderr.isatty())
 
 
 def _replay(args: argparse.Namespace) -> int:
@@ -52,7 +57,8 @@ def _replay(args: argparse.Namespace) -> int:
 
     return run_replay(args.bag, rate=args.rate, topics=args.topics, start_offset_s=args.start_offset, loop=args.loop,
                       clock_hz=args.clock, wait_for_subscribers_s=args.wait_for_subscribers,
-                      queue_depth=args.queue_depth)
+                      queue_depth=args.queue_depth, live_port=args.live, live_host=args.live_host,
+                      live_hz=args.live_hz, config_path=args.config)
 
 
 def _add_run_args(p: argparse.ArgumentParser, controllers: tuple[str, ...], help_controller: str) -> None:
@@ -63,6 +69,16 @@ def _add_run_args(p: argparse.ArgumentParser, controllers: tuple[str, ...], help
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
     p.add_argument("--force", action="store_true", help="replace an existing output directory")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def _add_live_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--live", type=int, nargs="?", const=LIVE_PORT, default=None, metavar="PORT",
+                   help=f"serve a live view for Foxglove (WebSocket) on PORT (default {LIVE_PORT}; 0: any free port); "
+                        "in Foxglove: Open connection, Foxglove WebSocket, ws://127.0.0.1:PORT (docs/live_view.md)")
+    p.add_argument("--live-host", default="127.0.0.1", metavar="ADDRESS",
+                   help="address the live view listens on (default 127.0.0.1: this machine only)")
+    p.add_argument("--live-hz", type=float, default=50.0, metavar="HZ",
+                   help="live view frames per second of wall time, at most (default 50)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -99,6 +115,9 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--init-from", type=Path, default=None, metavar="CHECKPOINTS",
                     help="warm start: the DNBS weights and covariances of an earlier run (its output directory or "
                          "its checkpoints/ directory); reported as such")
+    la.add_argument("--bag-compression", choices=("zstd", "none"), default="zstd",
+                    help="with --record: zstd-compressed MCAP chunks (default, as `ros2 bag record -s mcap`) or none")
+    _add_live_args(la)
     add_fault_arguments(la)
     la.set_defaults(func=_launch)
 
@@ -122,6 +141,7 @@ def build_parser() -> argparse.ArgumentParser:
     an.add_argument("--config", type=Path, default=None,
                     help="YAML config (default: the one stored in the bag, else the shipped default)")
     an.add_argument("--force", action="store_true", help="replace an existing output directory")
+    an.add_argument("--no-progress", action="store_true", help="no progress bar")
     an.set_defaults(func=_analyse)
 
     rp = sub.add_parser("replay", help="publish a bag's topics with their recorded timing (like ros2 bag play)")
@@ -138,6 +158,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="before playing, wait up to SECONDS until every topic has a subscriber (exit 1 if not)")
     rp.add_argument("--queue-depth", type=int, default=1000,
                     help="keep_last depth of each publisher, at least (default 1000)")
+    _add_live_args(rp)
+    rp.add_argument("--config", type=Path, default=None,
+                    help="with --live: config for the Table 2 limits (default: the one stored in the bag)")
     rp.set_defaults(func=_replay)
     return parser
 

@@ -36,7 +36,7 @@ LAYERS = [
     {"__init__", "paths", "run_data", "core", "wire", "kinematics", "faults"},  # numpy-only data and maths
     {"config", "plant", "loop"},                                               # config, physics, loop logic
     {"controller_factory"},
-    {"sim", "bag", "report"},                                                  # in-process runs, bags, outputs
+    {"sim", "bag", "report", "live"},                                          # in-process runs, bags, outputs, live view
     {"study"},                                                                 # robustness study over sim runs
     {"ros"},                                                                   # the nodes (rclpy)
     {"launch"},                                                                # starts and watches the nodes

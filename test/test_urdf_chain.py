@@ -66,3 +66,17 @@ def test_link_frames_match_pybullet(seed):
             np.testing.assert_allclose(poses[link][1], rot, atol=1e-6, err_msg=link)  # PyBullet keeps link frames partly in float32
     finally:
         client.disconnect()
+
+
+def test_moving_transforms_equal_the_matrix_route():
+    """The quaternion-product fast path of moving_transforms gives the rotations of origin_rot @ R(axis, q)."""
+    chain = UrdfChain.from_file(URDF)
+    rng = np.random.default_rng(5)
+    for _ in range(100):
+        q = dict(zip(JOINTS, rng.uniform(-math.pi, math.pi, 7)))
+        for got, j in zip(chain.moving_transforms(q), chain.movable):
+            want = UrdfChain._transform(j, q[j.name])
+            assert (got.parent, got.child, got.translation_m) == (want.parent, want.child, want.translation_m)
+            sign = 1.0 if np.dot(got.rotation_xyzw, want.rotation_xyzw) >= 0 else -1.0  # w = 0: either sign
+            np.testing.assert_allclose(np.array(got.rotation_xyzw), sign * np.array(want.rotation_xyzw), atol=1e-14)
+            assert got.rotation_xyzw[3] >= 0

@@ -14,6 +14,7 @@ from pathlib import Path
 from rosbags.typesys import Stores, get_typestore
 
 from .. import JOINT_NAMES
+from ..wire.reference_buffer import ReferenceBuffer
 from ..wire.wire_record import WireRecord
 from ..wire import joint_state_cdr
 from ..wire.steps import StepClock, to_ns
@@ -22,6 +23,7 @@ from ..wire.topics import JOINT_STATES, ROBOT_DESCRIPTION, reference_topic
 from .bag_reader import Bag, BagError
 from .custom_data import CUSTOM_CONFIG, CUSTOM_PREFIX
 
+PROGRESS_EVERY = 500  # states between progress calls
 
 
 def run_info(bag: Bag) -> dict:
@@ -35,11 +37,33 @@ def run_info(bag: Bag) -> dict:
     return info
 
 
-def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None) -> WireRecord:
-    """Fill a WireRecord from the bag; ``n_steps`` None means up to the last /joint_states stamp."""
+def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None, progress=None) -> WireRecord:
+    """Fill a WireRecord from the bag; ``n_steps`` None means up to the last /joint_states stamp.
+
+    ``progress(step, worst_abs_error)``, if given, is called as /joint_states is read (every
+    PROGRESS_EVERY states, and at the end) with the step reached and the worst |x_d - x| [rad] so far.
+    """
     needed = [JOINT_STATES] + [reference_topic(j) for j in JOINT_NAMES]
     bag.require_topics(needed, "analysis")
     clock = StepClock(dt_s)
+    store = get_typestore(Stores.ROS2_JAZZY)
+    batches = []  # (joint, first step, offsets, positions), in the bag's order per joint
+    ref_malformed = 0
+    for j, name in enumerate(JOINT_NAMES):
+        for _, msgtype, _, data in bag.messages([reference_topic(name)]):
+            try:
+                msg = store.deserialize_cdr(data, msgtype)
+            except Exception:
+                ref_malformed += 1
+                continue
+            k0 = clock.step_of_sec_nanosec(msg.header.stamp.sec, msg.header.stamp.nanosec)
+            offsets = [clock.step_of_ns(to_ns(p.time_from_start.sec, p.time_from_start.nanosec)) for p in msg.points]
+            batches.append((j, k0, offsets, [float(p.positions[0]) for p in msg.points]))
+    watch = None
+    if progress is not None:  # x_d by step, to show the worst |e| while the states are read
+        watch = ReferenceBuffer(len(JOINT_NAMES), clock)
+        for b in batches:
+            watch.add(*b)
     states = []
     malformed = 0
     for _, _, _, data in bag.messages([JOINT_STATES]):
@@ -51,25 +75,23 @@ def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None) -> WireReco
         if len(pos) != len(JOINT_NAMES) or len(vel) != len(JOINT_NAMES) or len(eff) != len(JOINT_NAMES):
             malformed += 1
             continue
-        states.append((clock.step_of_sec_nanosec(sec, nanosec), pos, vel, eff))
+        k = clock.step_of_sec_nanosec(sec, nanosec)
+        states.append((k, pos, vel, eff))
+        if watch is not None:
+            watch.error(k, pos)
+            if len(states) % PROGRESS_EVERY == 0:
+                progress(k, watch.worst_abs_error)
     if not states:
         raise BagError(f"{bag.path}: no readable /joint_states message")
     n = n_steps if n_steps is not None else max(k for k, *_ in states)
+    if watch is not None:
+        progress(n, watch.worst_abs_error)
     rec = WireRecord(n, dt_s, len(JOINT_NAMES))
-    rec.malformed = malformed
+    rec.malformed = malformed + ref_malformed
     for k, pos, vel, eff in states:
         rec.add_joint_states(k, pos, vel, eff)
-    store = get_typestore(Stores.ROS2_JAZZY)
-    for j, name in enumerate(JOINT_NAMES):
-        for _, msgtype, _, data in bag.messages([reference_topic(name)]):
-            try:
-                msg = store.deserialize_cdr(data, msgtype)
-            except Exception:
-                rec.malformed += 1
-                continue
-            k0 = clock.step_of_sec_nanosec(msg.header.stamp.sec, msg.header.stamp.nanosec)
-            offsets = [clock.step_of_ns(to_ns(p.time_from_start.sec, p.time_from_start.nanosec)) for p in msg.points]
-            rec.add_reference(j, k0, offsets, [float(p.positions[0]) for p in msg.points])
+    for b in batches:
+        rec.add_reference(*b)
     return rec
 
 

@@ -4,6 +4,11 @@ Payloads are written as they came off the wire (serialized CDR); a topic's
 connection (type, ros2msg schema, offered QoS profiles) is added on its first
 message. ``close()`` writes the MCAP summary and ``metadata.yaml``; until it
 runs, the bag is incomplete.
+
+Compression (default ``zstd``): zstd-compressed MCAP chunks of about 1 MiB,
+what ``ros2 bag record -s mcap`` writes by default (storage-level compression:
+metadata.yaml keeps compression_format and compression_mode empty, every MCAP
+reader decompresses chunks itself). ``none`` writes plain chunks.
 """
 from __future__ import annotations
 
@@ -11,10 +16,11 @@ import shutil
 from pathlib import Path
 
 from rosbags.interfaces import Qos
-from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
 ROSBAG2_VERSION = 9
+COMPRESSIONS = ("zstd", "none")
 _TYPESTORE = None
 
 
@@ -42,7 +48,10 @@ def check_bag_path(path: Path, force: bool) -> None:
 class BagWriter:
     """One open bag. ``write(topic, t_ns, data)`` after ``add_topic``."""
 
-    def __init__(self, path: Path, force: bool = False, custom_data: dict[str, str] | None = None):
+    def __init__(self, path: Path, force: bool = False, custom_data: dict[str, str] | None = None,
+                 compression: str = "zstd"):
+        if compression not in COMPRESSIONS:
+            raise ValueError(f"bag compression must be one of {', '.join(COMPRESSIONS)}, got {compression!r}")
         path = Path(path)
         check_bag_path(path, force)
         if path.exists():
@@ -52,6 +61,9 @@ class BagWriter:
                 path.unlink()
         self.path = path
         self._writer = Writer(path, version=ROSBAG2_VERSION, storage_plugin=StoragePlugin.MCAP)
+        if compression == "zstd":
+            self._writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
+        self.compression = compression
         for key, value in (custom_data or {}).items():
             self._writer.set_custom_data(key, str(value))
         self._writer.open()

@@ -10,6 +10,8 @@ from ..bag.bag_reader import Bag, BagError
 from ..config import default_config_path, load_config
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
+from ..report.progress import ProgressBar
+from ..wire.topics import JOINT_STATES
 
 
 def _run_config(info: dict, config_path: Path | None, bag: Bag) -> tuple[dict, str]:
@@ -27,8 +29,11 @@ def _run_config(info: dict, config_path: Path | None, bag: Bag) -> tuple[dict, s
     return cfg, f"stored in the bag (recorded from {info.get('config_file', '?')})"
 
 
-def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None = None) -> int:
-    """Rebuild the run from the bag and write the report into ``out``. Raises BagError on a bad bag."""
+def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None = None, progress: bool = False) -> int:
+    """Rebuild the run from the bag and write the report into ``out``. Raises BagError on a bad bag.
+
+    ``progress``: a progress bar on stderr while the bag is read (report/progress.py; drawn on a terminal only).
+    """
     check_output_dir(out, force)
     with Bag(bag_path) as bag:
         info = run_info(bag)
@@ -40,7 +45,15 @@ def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None
                 n_steps = int(round(float(info["duration_s"]) / dt))
             except ValueError:
                 raise BagError(f"{bag.path}: custom_data duration_s is not a number: {info['duration_s']!r}") from None
-        rec = wire_record_from_bag(bag, dt, n_steps)
+        bar = None
+        if progress:
+            total = n_steps if n_steps is not None else bag.topics[JOINT_STATES].count if JOINT_STATES in bag.topics else 0
+            bar = ProgressBar(total, dt, f"analyse {bag.path.name}")
+        try:
+            rec = wire_record_from_bag(bag, dt, n_steps, progress=bar.update if bar is not None else None)
+        finally:
+            if bar is not None:
+                bar.close()
         if rec.malformed:
             raise BagError(f"{bag.path}: corrupt bag: {rec.malformed} messages on /joint_states or the reference "
                            "topics could not be decoded")

@@ -11,13 +11,14 @@ import yaml
 from .. import JOINT_NAMES
 from ..bag.analysis import wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
-from ..bag.bag_writer import check_bag_path
+from ..bag.bag_writer import COMPRESSIONS, check_bag_path
 from ..config import ConfigError, default_config_path, load_config
 from ..core.checkpoint import checkpoint_dir, load_joint_checkpoints
 from ..kinematics.urdf_chain import UrdfChain
 from ..launch.fault_flags import apply_fault_flags, faults_active, plain
 from ..launch.fault_report import fault_note, fault_report
 from ..launch.graph_run import GraphFailure, GraphOptions, parse_netns, run_graph
+from ..live.options import check_live_options
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..wire.wire_record import load_wire_run
@@ -29,13 +30,16 @@ from ..wire.topics import CLOCK, JOINT_STATES, effort_topic, state_topic
 def run_launch(config_path: Path | None, mode: str, controller: str, duration_s: float | None, out: Path,
                force: bool, progress: bool, domain_id: int | None, reliability: str, effort_timeout_s: float,
                on_missing_effort: str, record: Path | None = None, fault_args=None, restart: str | None = None,
-               netns: list[str] | None = None, init_from: Path | None = None) -> int:
+               netns: list[str] | None = None, init_from: Path | None = None, bag_compression: str = "zstd",
+               live_port: int | None = None, live_host: str = "127.0.0.1", live_hz: float = 50.0) -> int:
     """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code.
 
     ``fault_args``: the parsed fault flags (launch/fault_flags.py) applied to the config; the config the
     nodes run with is written to ``out/config_used.yaml``. ``restart``: 'resume' or 'fresh'.
     ``netns``: ['GROUP=NAMESPACE', ...] to run node groups in network namespaces.
     ``init_from``: warm start of the DNBS controllers from an earlier run's checkpoints (reported as such).
+    ``bag_compression``: 'zstd' or 'none' (with ``record``). ``live_port``: serve the live view
+    (Foxglove WebSocket) on ``live_host``:``live_port`` (0: a free port), ``live_hz`` frames per second at most.
     """
     config_path = Path(config_path).resolve() if config_path else default_config_path()
     cfg = load_config(config_path)
@@ -56,6 +60,10 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     n_steps = int(round(duration_s / dt))
     if n_steps < 2:
         raise ConfigError(f"--duration: {duration_s} s is shorter than two steps of {dt} s")
+    if bag_compression not in COMPRESSIONS:
+        raise ConfigError(f"--bag-compression: expected one of {', '.join(COMPRESSIONS)}, got {bag_compression!r}")
+    if live_port is not None:
+        check_live_options(live_host, live_port, live_hz)
     if init_from is not None:
         if controller != "dnbs":
             raise ConfigError("--init-from: only the DNBS controllers have learned state to start from")
@@ -73,7 +81,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     opt = GraphOptions(config_path=config_path, mode=mode, controller=controller, duration_s=n_steps * dt,
                        domain_id=domain_id, reliability=reliability, effort_timeout_s=effort_timeout_s,
                        on_missing_effort=on_missing_effort, progress=progress, dt_s=dt, record_bag=record,
-                       force_bag=force, restart=restart, netns=namespaces, init_from=init_from)
+                       force_bag=force, restart=restart, netns=namespaces, init_from=init_from,
+                       bag_compression=bag_compression, live_port=live_port, live_host=live_host, live_hz=live_hz)
     settings = metrics_settings(cfg, n_steps * dt)
     window = settings["window_s"]
 
@@ -125,7 +134,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
           f"real-time factor {m['real_time_factor']:.2f}")
     if record is not None:
         size = sum(f.stat().st_size for f in record.iterdir())
-        print(f"recorded {record} ({size / 1e6:.1f} MB, {size / 1e6 / (n_steps * dt):.2f} MB per simulated second)")
+        print(f"recorded {record} ({size / 1e6:.1f} MB, {size / 1e6 / (n_steps * dt):.2f} MB per simulated second, "
+              f"compression {bag_compression})")
     print(f"wrote {out}/report.md")
     return 0 if m["all_finite"] and m["torques_within_limits"] else 1
 

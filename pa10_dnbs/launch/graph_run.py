@@ -53,6 +53,10 @@ class GraphOptions:
     max_restarts: int = 3            # per joint
     netns: dict[str, str] = field(default_factory=dict)  # node group -> network namespace (multi-host)
     init_from: Path | None = None    # warm start: a directory of <joint>.npz controller checkpoints
+    bag_compression: str = "zstd"    # 'zstd' (MCAP chunks, as `ros2 bag record -s mcap`) or 'none'
+    live_port: int | None = None     # serve the live view (Foxglove WebSocket) on this port; 0: a free one
+    live_host: str = "127.0.0.1"
+    live_hz: float = 50.0            # live view frames per second of wall time, at most
 
 
 @dataclass
@@ -89,6 +93,7 @@ def _catch_signals(stop: _StopRequest) -> dict:
 
 
 NODE_GROUPS = ("observer", "reference", "controllers", "plant")
+LIVE_VIEW = "live_view"  # the live observer: display only, its failure does not fail the run
 
 
 def node_group(name: str) -> str:
@@ -156,7 +161,11 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
                   f"reliability={opt.reliability}", f"config_file={cfg}"]
         cmds = [("recorder", py + ["pa10_dnbs.ros.recorder_node"] + _ros_args("recorder", {
             "config_file": cfg, "bag": str(opt.record_bag), "force": str(opt.force_bag).lower(),
-            "topics": _yaml_list(graph_topics()), "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns}))]
+            "topics": _yaml_list(graph_topics()), "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns,
+            "compression": opt.bag_compression}))]
+    if opt.live_port is not None:  # display only: started after the observer, never waited for by the plant
+        cmds.append((LIVE_VIEW, py + ["pa10_dnbs.ros.live_observer_node"] + _ros_args(LIVE_VIEW, {
+            "config_file": cfg, "host": opt.live_host, "port": opt.live_port, "display_hz": opt.live_hz})))
     cmds.append(("reference", py + ["pa10_dnbs.ros.reference_node"] + _ros_args(
         "reference", {"config_file": cfg, "duration_s": opt.duration_s})))
     for j in JOINT_NAMES:
@@ -196,11 +205,18 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
                 break
             procs.append(ManagedProcess(name, _in_netns(opt, name, argv), env, logs / f"{name}.log"))
         if not stop.signal_name:
-            say(f"launch: domain {domain}, {len(procs) - 1} nodes: "
-                + ", ".join(f"{p.name}={p.pid}" for p in procs[1:]) + f"; observer {procs[0].name}={procs[0].pid}")
+            nodes = [p for p in procs[1:] if p.name != LIVE_VIEW]
+            live = [p for p in procs if p.name == LIVE_VIEW]
+            say(f"launch: domain {domain}, {len(nodes)} nodes: "
+                + ", ".join(f"{p.name}={p.pid}" for p in nodes) + f"; observer {procs[0].name}={procs[0].pid}"
+                + "".join(f"; live view {p.name}={p.pid}" for p in live))
             failure = _wait_ready(procs, stop)
         if failure is None and not stop.signal_name:
             say("launch: graph ready (every node printed READY)")
+            for p in procs:
+                url = p.line("LIVE ")
+                if p.name == LIVE_VIEW and url:
+                    say(f"launch: live view at {url.split()[1]} (Foxglove: Open connection, Foxglove WebSocket)")
             failure = _watch(procs, opt, say, stop, _Restarter(opt, workdir, env, restarts, say))
     finally:
         codes = stop_all(procs)
@@ -213,7 +229,9 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
         failure = f"interrupted ({stop.signal_name})"
     say("launch: stopped: " + " ".join(f"{n}={c}" for n, c in codes.items())
         + (f"; removed {len(shm_removed)} shared-memory files the nodes left in /dev/shm" if shm_removed else ""))
-    bad = {n: c for n, c in codes.items() if c != 0}
+    bad = {n: c for n, c in codes.items() if c != 0 and n != LIVE_VIEW}
+    if codes.get(LIVE_VIEW, 0) != 0:
+        say(f"launch: the live view exited with code {codes[LIVE_VIEW]}; the run itself is not affected")
     if failure is None and bad:
         failure = "nodes exited with non-zero codes: " + ", ".join(f"{n}={c}" for n, c in bad.items())
         for p in procs:
@@ -305,11 +323,14 @@ def _watch(procs: list[ManagedProcess], opt: GraphOptions, say, stop: _StopReque
     deadline = time.monotonic() + limit_s
     bar = None
     n_steps = int(round(opt.duration_s / opt.dt_s))
-    if opt.progress:
-        from tqdm import tqdm
+    if opt.progress:  # on a terminal only; the log lines stay whole (ProgressBar.log)
+        from ..report.progress import ProgressBar
 
-        bar = tqdm(total=n_steps, desc=f"launch {opt.mode} {opt.controller}", unit="step", unit_scale=True)
+        bar = ProgressBar(n_steps, opt.dt_s, f"launch {opt.mode} {opt.controller}")
+        plain_say = say
+        say = lambda line: bar.log(plain_say, line)  # noqa: E731
     announced = False
+    live_gone = False
     try:
         while time.monotonic() < deadline:
             if stop.signal_name:
@@ -321,13 +342,21 @@ def _watch(procs: list[ManagedProcess], opt: GraphOptions, say, stop: _StopReque
                 rc = p.returncode
                 if rc is None or (p is plant and rc == 0):
                     continue
+                if p.name == LIVE_VIEW:  # display only: the run goes on without it
+                    if not live_gone:
+                        live_gone = True
+                        say(f"launch: the live view exited with code {rc}; the run goes on without it\n"
+                            f"--- last lines of {p.log_path} ---\n{p.tail()}")
+                    continue
                 if plant.returncode is None and restart is not None and restart(procs, p):
                     continue
                 return _describe(p)
             if plant.returncode == 0:
+                if bar is not None:
+                    bar.update(n_steps)
                 break
-            if bar is not None:
-                bar.update(max(0, monitor.progress - bar.n))
+            if bar is not None and monitor.progress_lines:
+                bar.update(monitor.progress, monitor.worst_abs_error)
             time.sleep(0.05)
         else:
             return f"run did not finish within {limit_s:g} s"
@@ -340,5 +369,4 @@ def _watch(procs: list[ManagedProcess], opt: GraphOptions, say, stop: _StopReque
         return None
     finally:
         if bar is not None:
-            bar.update(max(0, n_steps - bar.n))
             bar.close()

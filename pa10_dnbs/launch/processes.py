@@ -21,6 +21,8 @@ class ManagedProcess:
         self.log_path = log_path
         self.lines: list[str] = []
         self.progress = 0
+        self.progress_lines = 0
+        self.worst_abs_error: float | None = None  # from PROGRESS lines that carry it
         self._log = open(log_path, "w", buffering=1)
         self.proc = subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                      stdin=subprocess.DEVNULL, text=True, errors="replace", bufsize=1)
@@ -32,15 +34,29 @@ class ManagedProcess:
         for line in self.proc.stdout:
             self._log.write(line)
             if line.startswith("PROGRESS "):
-                try:
-                    self.progress = int(line.split()[1])
-                except (IndexError, ValueError):
-                    pass
-            elif line.startswith(("READY", "RUNNING", "FAILED", "COMPLETE", "RESUMED", "KILLED")):
+                self._on_progress(line.split())
+            elif line.startswith(("READY", "RUNNING", "FAILED", "COMPLETE", "RESUMED", "KILLED", "LIVE ")):
                 self.lines.append(line.strip())
+
+    def _on_progress(self, fields: list[str]) -> None:
+        """``PROGRESS k [worst_abs_error_rad]``: the step the observer has reached, and the worst |e| so far."""
+        try:
+            self.progress = int(fields[1])
+        except (IndexError, ValueError):
+            return
+        self.progress_lines += 1
+        if len(fields) > 2:
+            try:
+                self.worst_abs_error = float(fields[2])
+            except ValueError:
+                pass
 
     def saw(self, prefix: str) -> bool:
         return any(line.startswith(prefix) for line in self.lines)
+
+    def line(self, prefix: str) -> str | None:
+        """The first remembered line starting with ``prefix``, or None."""
+        return next((line for line in self.lines if line.startswith(prefix)), None)
 
     @property
     def pid(self) -> int:

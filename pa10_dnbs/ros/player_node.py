@@ -7,6 +7,11 @@ start offset [s], loop, /clock from the bag's timeline at ``clock_hz``
 publisher has a subscriber. Publishers use the recorded reliability and
 durability, keep_last with at least ``queue_depth``. Topics whose message
 package is not installed (tf2_msgs) are skipped, with a warning.
+
+With a live view (``replay --live``, see live/view.py) the player waits for a
+Foxglove client to subscribe to /joint_states, then feeds the view each
+message of the topics it reads as it plays it (the URDF first, whatever the
+start offset), so the client sees the run at its recorded timing.
 """
 from __future__ import annotations
 
@@ -19,7 +24,7 @@ from rclpy.qos import QoSProfile
 from rosgraph_msgs.msg import Clock
 
 from ..bag.bag_reader import Bag
-from ..wire.topics import CLOCK
+from ..wire.topics import CLOCK, JOINT_STATES, ROBOT_DESCRIPTION
 from ..wire.steps import NS_PER_S
 from .bag_qos import from_bag_qos
 from .msg_types import message_class
@@ -40,9 +45,10 @@ class PlayOptions:
 
 
 class PlayerNode(Node):
-    def __init__(self, bag: Bag, opt: PlayOptions):
+    def __init__(self, bag: Bag, opt: PlayOptions, live=None):
+        """``live``: a LiveView to feed (replay --live), or None."""
         super().__init__("player")
-        self.bag, self.opt = bag, opt
+        self.bag, self.opt, self.live = bag, opt, live
         topics = opt.topics or sorted(bag.topics)
         if opt.clock_hz > 0:
             topics = [t for t in topics if t != CLOCK]
@@ -59,7 +65,22 @@ class PlayerNode(Node):
         self._clock_pub = self.create_publisher(Clock, CLOCK, QoSProfile(depth=10)) if opt.clock_hz > 0 else None
         self.published = 0
         self.exit_code = 0
+        # topics read for the live view only (not published, or not played: /tf has no Python message package)
+        self._live_only = [t for t in (live.topics() if live else []) if t in bag.topics and t not in self.pubs]
+        if live is not None:
+            for topic, _, _, data in bag.messages([ROBOT_DESCRIPTION]):
+                live.on_message(topic, bytes(data))
         announce_ready("player")
+
+    def _wait_for_live_client(self, stop) -> bool:
+        """Hold playback until a Foxglove client subscribes to /joint_states (Ctrl-C stops waiting)."""
+        print(f"LIVE waiting for a Foxglove client on {self.live.sink.url}", flush=True)
+        while not stop.done():
+            self.live.tick(time.perf_counter())  # sends the URDF to clients that subscribe meanwhile
+            if self.live.sink.wanted(JOINT_STATES):
+                return True
+            time.sleep(WAIT_SLICE_S)
+        return False
 
     def _wait_for_subscribers(self, stop) -> bool:
         deadline = time.monotonic() + self.opt.wait_for_subscribers_s
@@ -87,12 +108,14 @@ class PlayerNode(Node):
         w0 = time.perf_counter()
         clock_period = 1.0 / self.opt.clock_hz if self._clock_pub else None
         next_clock = w0
-        for topic, _, t_ns, data in self.bag.messages(list(self.pubs), start_ns=t_first):
+        for topic, _, t_ns, data in self.bag.messages(list(self.pubs) + self._live_only, start_ns=t_first):
             target = w0 + (t_ns - t_first) / 1e9 / rate
             while True:
                 if stop.done():
                     return False
                 now = time.perf_counter()
+                if self.live is not None:
+                    self.live.tick(now)
                 if clock_period is not None and next_clock <= min(now, target):
                     self._publish_clock(t_first + int((next_clock - w0) * rate * 1e9))
                     next_clock += clock_period
@@ -101,12 +124,19 @@ class PlayerNode(Node):
                     break
                 wake = target if clock_period is None else min(target, next_clock)
                 time.sleep(min(max(wake - now, 0.0), WAIT_SLICE_S))
-            self.pubs[topic].publish(bytes(data))
-            self.published += 1
+            if topic in self.pubs:
+                self.pubs[topic].publish(bytes(data))
+                self.published += 1
+            if self.live is not None:
+                self.live.on_message(topic, bytes(data))
+        if self.live is not None:  # the last state of the pass
+            self.live.tick(time.perf_counter() + self.live.decimator.period_s)
         return True
 
     def loop(self, executor, stop) -> None:
         if self.opt.wait_for_subscribers_s > 0 and not self._wait_for_subscribers(stop):
+            return
+        if self.live is not None and not self._wait_for_live_client(stop):
             return
         print(f"PLAYING {len(self.pubs)} topics at rate {self.opt.rate:g}", flush=True)
         while self._play_once(stop) and self.opt.loop:

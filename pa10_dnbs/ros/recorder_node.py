@@ -25,14 +25,16 @@ from rclpy.node import Node
 
 from .. import JOINT_NAMES
 from ..bag.custom_data import CUSTOM_CONFIG, CUSTOM_PREFIX
-from ..bag.bag_writer import BagWriter
+from ..bag.bag_writer import COMPRESSIONS, BagWriter
 from ..bag.tf_messages import tf_message_cdr
 from ..kinematics.urdf_chain import UrdfChain
 from ..wire import joint_state_cdr
-from ..wire.steps import cdr_stamp_ns, to_ns
+from ..wire.reference_buffer import ReferenceBuffer
+from ..wire.steps import StepClock, cdr_stamp_ns, to_ns
+from ..wire.topics import reference_topic
 from .bag_qos import bag_qos, subscription_qos, to_bag_qos
 from .msg_types import message_class
-from .params import ParameterError, declare, load_node_config
+from .params import ParameterError, check_choice, declare, load_node_config
 from .runtime import announce_ready, run_node, spin_until
 from .wire import CLOCK, JOINT_STATES, TF, TF_STATIC
 
@@ -59,6 +61,7 @@ class RecorderNode(Node):
         p = declare(self, {
             "bag": "", "force": False, "topics": [""], "all_topics": False, "time_source": "clock",
             "config_file": "", "custom_data": [""], "tf_rate_hz": 100.0, "end_stamp_ns": -1, "qos_depth": 2000,
+            "compression": "zstd",
         })
         if not p["bag"]:
             raise ParameterError("parameter bag is required (the bag directory to write)")
@@ -89,7 +92,11 @@ class RecorderNode(Node):
         self._next_tf_ns = 0
         self._next_progress_ns = 0
         self.dt_ns = int(round(cfg["simulation"]["dt_s"] * 1e9))
-        self.writer = BagWriter(Path(p["bag"]), force=p["force"], custom_data=custom)
+        check_choice("compression", p["compression"], COMPRESSIONS)
+        # x_d from the reference batches, for the worst |e| on PROGRESS lines (sampled at tf_rate_hz)
+        self.refs = ReferenceBuffer(len(JOINT_NAMES), StepClock(cfg["simulation"]["dt_s"]))
+        self._ref_joint = {reference_topic(j): i for i, j in enumerate(JOINT_NAMES)}
+        self.writer = BagWriter(Path(p["bag"]), force=p["force"], custom_data=custom, compression=p["compression"])
         self._discover()
         self._timer = self.create_timer(0.2, self._discover)
         announce_ready("recorder")
@@ -130,6 +137,8 @@ class RecorderNode(Node):
         self.received += 1
         if topic == JOINT_STATES:
             self._on_joint_states(data, t_ns)
+        elif topic in self._ref_joint and self.chain is not None:
+            self.refs.add_cdr(self._ref_joint[topic], data)
         if stamped and self.end_ns >= 0 and not self.reached.get(topic, True) and len(data) >= 12:
             if cdr_stamp_ns(data) >= self.end_ns:
                 self.reached[topic] = True
@@ -145,7 +154,8 @@ class RecorderNode(Node):
         stamp_ns = cdr_stamp_ns(data)
         if stamp_ns >= self._next_progress_ns:
             self._next_progress_ns = stamp_ns + PROGRESS_PERIOD_NS
-            print(f"PROGRESS {stamp_ns // self.dt_ns}", flush=True)
+            worst = self.refs.worst_abs_error  # NaN until /tf sampling has seen a state with its x_d
+            print(f"PROGRESS {stamp_ns // self.dt_ns}" + (f" {worst:.6g}" if worst == worst else ""), flush=True)
         if self.chain is not None and stamp_ns >= self._next_tf_ns:
             self._write_tf(data, t_ns)
 
@@ -164,6 +174,9 @@ class RecorderNode(Node):
             self.writer.add_topic(TF, "tf2_msgs/msg/TFMessage", [bag_qos(True, False, 100)])
         positions = dict(zip(names or JOINT_NAMES, pos))
         self.writer.write(TF, t_ns, tf_message_cdr(self.chain.moving_transforms(positions), sec, nanosec))
+        step = stamp_ns // self.dt_ns
+        self.refs.error(step, [positions.get(j, float("nan")) for j in JOINT_NAMES])
+        self.refs.forget_before(step)
 
     # ------------------------------------------------------------- run / stop
     def loop(self, executor, stop) -> None:

@@ -52,8 +52,8 @@ class WireMonitorNode(Node):
             return
         k = self.clock.step_of_sec_nanosec(sec, nanosec)
         if self.record.add_joint_states(k, pos, vel, eff):
-            if k % 500 == 0:
-                print(f"PROGRESS {k}", flush=True)
+            if k % 500 == 0:  # the step, and the worst |e| so far [rad] for the launcher's progress bar
+                print(f"PROGRESS {k} {self.record.worst_abs_error(k):.6g}", flush=True)
             self._check_complete()
 
     def _on_reference(self, joint: int, msg: JointTrajectory) -> None:

@@ -26,6 +26,8 @@ class WireRecord:
         self.got_ref = np.zeros((n_steps + 1, n_joints), dtype=bool)
         self.states_received = 0
         self.malformed = 0
+        self._worst = np.nan     # worst |x_d - x| over the steps checked so far [rad]
+        self._worst_from = 0     # first step not checked yet
 
     def add_joint_states(self, k: int, position, velocity, effort) -> bool:
         """Store state k; False if k is out of range or already stored."""
@@ -43,6 +45,22 @@ class WireRecord:
             if 0 <= k < self.n:
                 self.ref[k, joint] = x
                 self.got_ref[k, joint] = True
+
+    def worst_abs_error(self, upto: int) -> float:
+        """max |x_d - x| [rad] over joints and the steps up to ``upto`` that have both, NaN if none has.
+
+        Incremental (for progress lines): steps already checked are not looked at again, so call it once a
+        step's state and reference are in.
+        """
+        upto = min(upto, self.n - 1)
+        if upto >= self._worst_from:
+            rows = slice(self._worst_from, upto + 1)
+            e = np.abs(self.ref[rows] - self.pos[rows])
+            e = e[np.isfinite(e)]
+            if e.size and not e.max() <= self._worst:
+                self._worst = float(e.max())
+            self._worst_from = upto + 1
+        return self._worst
 
     @property
     def missing_reference_steps(self) -> int:

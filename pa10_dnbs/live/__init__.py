@@ -1,0 +1,1 @@
+"""Live view for Foxglove (no rclpy): decimation, tracking frames, schemas, the WebSocket server, the view itself."""

@@ -1,0 +1,100 @@
+"""live_observer node: the running graph, live in Foxglove (a Foxglove WebSocket server; see live/view.py).
+
+An observer only: it publishes nothing on ROS and answers nothing, so the
+loop never waits for it. /joint_states is read with best effort and depth 1
+(a best-effort reader sends no acknowledgements the plant's writer would have
+to track) on a subscription that no executor spins: DDS keeps the newest
+state and the display timer takes it, so the 1 kHz messages cost no Python
+callback. The seven reference topics and /robot_description are subscribed
+reliably (transient-local, so batches and the URDF sent before it matched
+still arrive), /diagnostics too. Serves the live view on ``host``:``port``
+(0: a free port), one frame per 1 / ``display_hz`` s of wall time. Prints
+``LIVE ws://host:port``, then READY; at exit, what it showed and its CPU time.
+"""
+from __future__ import annotations
+
+import resource
+import sys
+import time
+
+from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from std_msgs.msg import String
+from trajectory_msgs.msg import JointTrajectory
+
+from .. import JOINT_NAMES
+from ..live.schemas import live_channels
+from ..live.server import LiveServer, LiveServerError
+from ..live.view import LiveView
+from .diagnostics import diagnostics_qos
+from .params import ParameterError, declare, load_node_config
+from .runtime import announce_ready, run_node
+from ..wire.topics import DIAGNOSTICS, JOINT_STATES, ROBOT_DESCRIPTION, reference_topic
+from .wire import description_qos, reference_qos
+
+
+def newest_only_qos() -> QoSProfile:
+    """/joint_states for display: best effort, depth 1."""
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.BEST_EFFORT,
+                      durability=DurabilityPolicy.VOLATILE)
+
+
+class LiveObserverNode(Node):
+    def __init__(self):
+        super().__init__("live_view")
+        p = declare(self, {"config_file": "", "host": "127.0.0.1", "port": 8765, "display_hz": 50.0})
+        if not 0 <= p["port"] <= 65535:
+            raise ParameterError(f"parameter port must be in 0..65535, got {p['port']}")
+        if not 0 < p["display_hz"] <= 1000:
+            raise ParameterError(f"parameter display_hz must be in (0, 1000] frames per second, got {p['display_hz']}")
+        cfg = load_node_config(p["config_file"])
+        try:
+            self.server = LiveServer(live_channels(), host=p["host"], port=p["port"])
+        except LiveServerError as exc:
+            raise ParameterError(str(exc)) from None
+        self.view = LiveView(self.server, cfg["plant"]["torque_limit_nm"], cfg["simulation"]["dt_s"],
+                             display_hz=p["display_hz"])
+        feed = self.view.on_message
+        # a node of its own, never added to the executor (and free of the launcher's name remapping)
+        self._poll_node = Node("live_view_states", namespace="/pa10", use_global_arguments=False)
+        self._states = self._poll_node.create_subscription(JointState, JOINT_STATES, lambda d: None,
+                                                           newest_only_qos(), raw=True)
+        self.states_taken = 0
+        self.create_subscription(String, ROBOT_DESCRIPTION, lambda d: feed(ROBOT_DESCRIPTION, d), description_qos(),
+                                 raw=True)
+        self.create_subscription(DiagnosticArray, DIAGNOSTICS, lambda d: feed(DIAGNOSTICS, d), diagnostics_qos(),
+                                 raw=True)
+        for j in JOINT_NAMES:
+            t = reference_topic(j)
+            self.create_subscription(JointTrajectory, t, lambda d, t=t: feed(t, d), reference_qos(), raw=True)
+        self.create_timer(1.0 / p["display_hz"], self._frame)
+        self._t0 = time.monotonic()
+        print(f"LIVE {self.server.url}", flush=True)
+        announce_ready("live_view")
+
+    def _frame(self) -> None:
+        """Take the newest /joint_states DDS holds (if a new one came) and show a frame."""
+        with self._states.handle:
+            taken = self._states.handle.take_message(JointState, True)
+        if taken is not None:
+            self.states_taken += 1
+            self.view.on_message(JOINT_STATES, taken[0])
+        self.view.tick(time.monotonic())
+
+    def close(self) -> None:
+        self.server.stop()
+        self._poll_node.destroy_subscription(self._states)
+        use = resource.getrusage(resource.RUSAGE_SELF)
+        wall = time.monotonic() - self._t0
+        print(f"LIVE_VIEW {self.view.frames} frames shown in {wall:.1f} s; {self.server.subscriptions} subscriptions; "
+              f"{self.view.malformed} malformed messages; CPU {use.ru_utime + use.ru_stime:.1f} s", flush=True)
+
+
+def main(args=None) -> int:
+    return run_node(LiveObserverNode, args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

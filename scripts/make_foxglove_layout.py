@@ -1,0 +1,35 @@
+#!/usr/bin/env python3
+"""Write config/foxglove_layout.json, the Foxglove layout of the live view (pa10_dnbs/live/layout.py), from the
+joint names, the Table 2 limits of the default config and the URDF's root link.
+
+    python scripts/make_foxglove_layout.py [--config FILE] [--out config/foxglove_layout.json]
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from pa10_dnbs import JOINT_NAMES  # noqa: E402
+from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
+from pa10_dnbs.kinematics.urdf_chain import UrdfChain  # noqa: E402
+from pa10_dnbs.live.layout import layout_json  # noqa: E402
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--config", type=Path, default=default_config_path())
+    ap.add_argument("--out", type=Path, default=ROOT / "config" / "foxglove_layout.json")
+    args = ap.parse_args()
+    cfg = load_config(args.config)
+    text = layout_json(JOINT_NAMES, cfg["plant"]["torque_limit_nm"], UrdfChain.from_file(cfg["plant"]["urdf"]).root_link)
+    args.out.write_text(text)
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
