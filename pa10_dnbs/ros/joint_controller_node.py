@@ -42,7 +42,9 @@ from ..faults.faulty_link import links_from_config
 from ..kinematics.urdf_chain import UrdfChain
 from ..wire import joint_state_cdr
 from .diagnostics import DiagnosticsReporter, status
+from ..loop.cpu_meter import CpuMeter
 from ..loop.joint_loop import JointLoop
+from ..loop.rt_priority import apply_fifo, check_priority
 from .params import ParameterError, check_choice, declare, load_node_config
 from .runtime import announce_ready, run_node
 from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
@@ -56,10 +58,14 @@ class JointControllerNode(Node):
         super().__init__("joint_controller")
         p = declare(self, {"config_file": "", "joint": "", "controller": "dnbs", "reliability": "reliable",
                            "queue_depth": 10, "stats_file": "", "checkpoint_file": "", "resume": False,
-                           "incarnation": 0, "effort_subscribers": 1, "match_timeout_s": 10.0})
+                           "incarnation": 0, "effort_subscribers": 1, "match_timeout_s": 10.0, "rt_priority": 0})
         if p["effort_subscribers"] < 1 or p["match_timeout_s"] <= 0:
             raise ParameterError("effort_subscribers must be >= 1 and match_timeout_s > 0 s")
         check_choice("joint", p["joint"], JOINT_NAMES)
+        try:
+            check_priority(p["rt_priority"])
+        except ValueError as exc:
+            raise ParameterError(f"parameter {exc}") from None
         check_choice("controller", p["controller"], CONTROLLER_KINDS)
         cfg = load_node_config(p["config_file"])
         self.p = p
@@ -106,6 +112,10 @@ class JointControllerNode(Node):
         self.create_subscription(JointTrajectory, reference_topic(self.joint), self._on_reference, reference_qos())
         self.diagnostics = DiagnosticsReporter(self, lambda: [self._status()],
                                                lambda: self.clock_.stamp(max(0, self.loop_.last_step)))
+        self.cpu = CpuMeter()
+        self.rt_applied, rt_message = apply_fifo(p["rt_priority"])
+        if p["rt_priority"]:
+            print(rt_message, flush=True)
         announce_ready(f"joint_controller {self.joint}")
 
     def _on_state(self, data: bytes) -> None:
@@ -117,6 +127,7 @@ class JointControllerNode(Node):
             return
         self.states_received += 1
         step = self.clock_.step_of_sec_nanosec(sec, nanosec)
+        self.cpu.mark(step)
         if self.kill_step is not None and step >= self.kill_step:
             print(f"KILLED joint_controller {self.joint} at step {step} (fault injection)", flush=True)
             os.kill(os.getpid(), signal.SIGKILL)
@@ -202,6 +213,8 @@ class JointControllerNode(Node):
             self._save_checkpoint()
         counters = self.counters()
         counters["resumed_from_step"] = self.resumed_from
+        counters["rt_priority_applied"] = self.rt_applied
+        counters["cpu"] = self.cpu.report()
         if self.p["stats_file"]:
             tmp = f"{self.p['stats_file']}.tmp"
             with open(tmp, "w") as f:
@@ -211,6 +224,7 @@ class JointControllerNode(Node):
         print(f"STATS joint_controller {self.joint}: " + ", ".join(f"{k} {v}" for k, v in counters.items())
               + f", waiting for references {len(loop.pending_steps)}, reference steps buffered "
               f"{loop.reference_span}", flush=True)
+        print(self.cpu.line(f"joint_controller_{self.joint}"), flush=True)
 
 
 def main(args=None) -> int:

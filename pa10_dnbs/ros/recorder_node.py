@@ -11,7 +11,9 @@ On SIGINT/SIGTERM it takes what is still queued, then closes the bag
 (summary + metadata.yaml). It prints ``PROGRESS k`` (the step of
 /joint_states) now and then and, with ``end_stamp_ns`` >= 0, ``COMPLETE``
 once every stamped topic has a message stamped at or after it: started by
-the launcher, it is the run's observer.
+the launcher, it is the run's observer. Messages are taken every
+``poll_period_s`` (``polled.Inbox``), not one wake-up per message; each
+subscription keeps ``qos_depth`` messages, so nothing is lost between drains.
 """
 from __future__ import annotations
 
@@ -31,7 +33,9 @@ from ..kinematics.urdf_chain import UrdfChain
 from ..wire import joint_state_cdr
 from ..wire.steps import cdr_stamp_ns, to_ns
 from .bag_qos import bag_qos, subscription_qos, to_bag_qos
+from ..loop.cpu_meter import CpuMeter
 from .msg_types import message_class
+from .polled import Inbox
 from .params import ParameterError, declare, load_node_config
 from .runtime import announce_ready, run_node, spin_until
 from .wire import CLOCK, JOINT_STATES, TF, TF_STATIC
@@ -59,9 +63,12 @@ class RecorderNode(Node):
         p = declare(self, {
             "bag": "", "force": False, "topics": [""], "all_topics": False, "time_source": "clock",
             "config_file": "", "custom_data": [""], "tf_rate_hz": 100.0, "end_stamp_ns": -1, "qos_depth": 2000,
+            "poll_period_s": 0.01,
         })
         if not p["bag"]:
             raise ParameterError("parameter bag is required (the bag directory to write)")
+        if not p["poll_period_s"] > 0:
+            raise ParameterError(f"parameter poll_period_s must be > 0 s, got {p['poll_period_s']}")
         if p["time_source"] not in ("clock", "system"):
             raise ParameterError(f"parameter time_source must be clock or system, got {p['time_source']!r}")
         specs = [parse_topic_spec(s) for s in p["topics"] if s]
@@ -90,6 +97,8 @@ class RecorderNode(Node):
         self._next_progress_ns = 0
         self.dt_ns = int(round(cfg["simulation"]["dt_s"] * 1e9))
         self.writer = BagWriter(Path(p["bag"]), force=p["force"], custom_data=custom)
+        self.cpu = CpuMeter()
+        self.inbox = Inbox(self, p["poll_period_s"])
         self._discover()
         self._timer = self.create_timer(0.2, self._discover)
         announce_ready("recorder")
@@ -116,9 +125,9 @@ class RecorderNode(Node):
             stamped = type_name in STAMPED_TYPES
             if stamped and self.end_ns >= 0:
                 self.reached[topic] = False
-            self._subs[topic] = self.create_subscription(
-                cls, topic, lambda data, t=topic, s=stamped: self._on_message(t, s, data),
-                subscription_qos(profiles, self.p["qos_depth"]), raw=True)
+            self._subs[topic] = self.inbox.subscribe(
+                cls, topic, subscription_qos(profiles, self.p["qos_depth"]),
+                lambda data, t=topic, s=stamped: self._on_message(t, s, data))
             self.get_logger().info(f"recording {topic} ({type_name})")
 
     # ------------------------------------------------------------- messages
@@ -143,6 +152,7 @@ class RecorderNode(Node):
         if len(data) < 12:
             return
         stamp_ns = cdr_stamp_ns(data)
+        self.cpu.mark(stamp_ns // self.dt_ns)
         if stamp_ns >= self._next_progress_ns:
             self._next_progress_ns = stamp_ns + PROGRESS_PERIOD_NS
             print(f"PROGRESS {stamp_ns // self.dt_ns}", flush=True)
@@ -168,19 +178,20 @@ class RecorderNode(Node):
     # ------------------------------------------------------------- run / stop
     def loop(self, executor, stop) -> None:
         spin_until(executor, stop, stop)
-        # take what is still queued before closing the bag
+        # take what is still queued (and still arriving) before closing the bag
         self.destroy_timer(self._timer)
+        self.destroy_timer(self.inbox.timer)
         t_end = time.monotonic() + DRAIN_LIMIT_S
         idle_since = time.monotonic()
-        last = self.received
         while time.monotonic() < t_end and time.monotonic() - idle_since < DRAIN_IDLE_S:
-            executor.spin_once(timeout_sec=0.05)
-            if self.received != last:
-                last, idle_since = self.received, time.monotonic()
+            if self.inbox.drain():
+                idle_since = time.monotonic()
+            time.sleep(self.p["poll_period_s"])
 
     def close(self) -> None:
         self.writer.close()
         missing = [t for t in self.wanted if not self._subs.get(t)]
+        print(self.cpu.line("recorder"), flush=True)
         print(f"RECORDED {sum(self.writer.counts.values())} messages on {len(self.writer.counts)} topics into "
               f"{self.writer.path}" + (f"; never seen: {', '.join(missing)}" if missing else ""), flush=True)
 
