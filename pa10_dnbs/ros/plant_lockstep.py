@@ -33,11 +33,16 @@ def run_lockstep(node, executor, stop) -> None:
     next_housekeeping = clock() + HOUSEKEEPING_S
     while not node.finished and not stop.done():
         if not gate.ready:
-            node.wire.wait(min(SLICE_S, policy.next_check_s(clock()), max(0.0, next_housekeeping - clock())))
-            node.take_efforts()
+            ready = node.wire.wait(min(SLICE_S, policy.next_check_s(clock()), max(0.0, next_housekeeping - clock())))
+            if ready:
+                node.take_efforts(ready)
         while gate.ready and not node.finished:  # efforts sent ahead may complete later steps too
             node.step(gate.take_lockstep())
             publish(gate.step)
+            if gate.ready:  # stepping on efforts sent ahead: keep taking, so the queues never overflow
+                ready = node.wire.wait(0.0)
+                if ready:
+                    node.take_efforts(ready)
         if node.finished:
             break
         now = clock()

@@ -108,9 +108,10 @@ class PlantNode(Node):
         if joints is None:
             self.timing.published(k, t_ns)
 
-    def take_efforts(self) -> bool:
-        """Offer every queued effort to the gate; True when the current step is complete."""
-        for joint, k, u, received_ns in self.wire.take_efforts():
+    def take_efforts(self, joints=None) -> bool:
+        """Offer every queued effort (of ``joints``, default all) to the gate; True when the current step is
+        complete."""
+        for joint, k, u, received_ns in self.wire.take_efforts(joints):
             self.timing.answered(k, joint, received_ns)
             self.gate.offer(joint, k, u)
         return self.gate.ready

@@ -44,11 +44,13 @@ def _ticks(node, executor, stop, sched, warnings, clock, next_housekeeping) -> N
     gate, wire, log = node.gate, node.wire, node.get_logger()
     while not stop.done():
         # collect the answers to state k until all are in or the deadline passes
-        while not node.take_efforts():
+        ready = None  # first look at every joint (stale answers may be queued)
+        while not node.take_efforts(ready):
             left = sched.deadline - clock()
             if left <= 0 or stop.done():
+                node.take_efforts()  # a last look at the deadline
                 break
-            wire.wait(min(left, SLICE_S))
+            ready = wire.wait(min(left, SLICE_S))
         if stop.done():
             return
         k = gate.step

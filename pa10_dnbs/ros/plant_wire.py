@@ -81,14 +81,16 @@ class PlantWire:
         return t_ns
 
     # ------------------------------------------------------------- in
-    def wait(self, timeout_s: float) -> None:
-        """Block until some effort is queued or ``timeout_s`` [s] passed."""
-        self._wait_set.wait(timeout_s)
+    def wait(self, timeout_s: float) -> list[int]:
+        """Block until some effort is queued or ``timeout_s`` [s] passed; the joints with efforts queued."""
+        return self._wait_set.wait(timeout_s)
 
-    def take_efforts(self) -> list[tuple[int, int, float, int]]:
-        """Every queued effort as (joint, step, torque [N m], received [ns]), saturated at Table 2."""
+    def take_efforts(self, joints=None) -> list[tuple[int, int, float, int]]:
+        """Every queued effort (of ``joints``, default all) as (joint, step, torque [N m], received [ns]),
+        saturated at Table 2."""
         out = []
-        for joint, sub in enumerate(self._effort_subs):
+        for joint in (range(len(self._effort_subs)) if joints is None else joints):
+            sub = self._effort_subs[joint]
             while (got := sub.take()) is not None:
                 data, received_ns = got
                 try:

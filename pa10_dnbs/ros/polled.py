@@ -97,17 +97,21 @@ class SubscriptionWaitSet:
 
     def __init__(self, node, subs: list[PolledSubscription]):
         self.subs = list(subs)
+        self._index = {s.handle.pointer: i for i, s in enumerate(self.subs)}
         self._context = node.context
         with self._context.handle:
             self._ws = _rclpy.WaitSet(len(self.subs), 0, 0, 0, 0, 0, self._context.handle)
 
-    def wait(self, timeout_s: float) -> None:
-        """Block until some subscription has a message or ``timeout_s`` [s] passed (0: just look)."""
+    def wait(self, timeout_s: float) -> list[int]:
+        """Block until some subscription has a message or ``timeout_s`` [s] passed (0: just look); the indices
+        (into ``subs``) of those that have one."""
         ws = self._ws
         ws.clear_entities()
         for s in self.subs:
             ws.add_subscription(s.handle)
         ws.wait(max(0, int(timeout_s * 1e9)))
+        ready = ws.get_ready_entities("subscription")
+        return [self._index[p] for p in ready] if ready else []
 
     def destroy(self) -> None:
         self._ws.destroy_when_not_in_use()
