@@ -97,7 +97,8 @@ class JointControllerNode(Node):
         self.malformed = 0
         self.states_received = 0
         self.efforts_sent = 0
-        self._names = [self.joint]
+        self._state_layout = joint_state_cdr.OneJointLayout(self.joint, ("position", "velocity"))
+        self._effort_layout = joint_state_cdr.OneJointLayout(self.joint, ("effort",))
         qos = loop_qos(p["reliability"], depth=p["queue_depth"])
         self.torque_limit = cfg["plant"]["torque_limit_nm"][index]
         # The effort topic is offered only once the first reference batch is in: the plant starts when
@@ -120,8 +121,7 @@ class JointControllerNode(Node):
 
     def _on_state(self, data: bytes) -> None:
         try:
-            sec, nanosec, _, pos, vel, _ = joint_state_cdr.decode(data)
-            q, qd = pos[0], vel[0]
+            sec, nanosec, (q, qd) = self._state_layout.decode(data)
         except (ValueError, IndexError, struct.error, UnicodeDecodeError):
             self.malformed += 1
             return
@@ -177,11 +177,11 @@ class JointControllerNode(Node):
         for step, effort in answers:
             sec, nanosec = self.clock_.sec_nanosec(step)
             if self._link is None:
-                self._pub.publish(joint_state_cdr.encode(sec, nanosec, self._names, (), (), (effort,)))
+                self._pub.publish(self._effort_layout.encode(sec, nanosec, effort))
             else:
                 fate = self._link.fate()
                 value = self._link.corrupt_value() if fate.corrupt else effort
-                self._link.send(joint_state_cdr.encode(sec, nanosec, self._names, (), (), (value,)), fate)
+                self._link.send(self._effort_layout.encode(sec, nanosec, value), fate)
             self.efforts_sent += 1
             if self.checkpoint is not None and step > 0 and step % self.checkpoint_every == 0:
                 self._save_checkpoint()

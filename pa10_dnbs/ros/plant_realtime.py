@@ -30,14 +30,32 @@ def run_realtime(node, executor, stop) -> None:
     clock = time.monotonic
     log = node.get_logger()
     next_housekeeping = clock() + HOUSEKEEPING_S
-    sched.begin(clock())
+    # Handshake: step 0 waits until every joint has answered state 0 (the first messages on new DDS
+    # connections and the first controller steps are slow), at most effort_timeout_s; the tick schedule
+    # starts with state 1. A joint still silent then misses step 0 like any other.
     node.publish_state(0)
+    t_end = clock() + p["effort_timeout_s"]
+    ready = None
+    while not node.take_efforts(ready) and not stop.done() and clock() < t_end:
+        ready = wire_wait(node, min(SLICE_S, t_end - clock()))
+    if stop.done():
+        return
+    warnings.missed(0, node.gate.missing)
+    node.step(node.gate.take_deadline())
+    sched.begin(clock())
+    node.publish_state(1)
+    if node.finished:
+        return
     try:
         _ticks(node, executor, stop, sched, warnings, clock, next_housekeeping)
     finally:
         text = warnings.poll(float("inf"))  # what happened since the last warning
         if text:
             log.warning(text)
+
+
+def wire_wait(node, timeout_s: float) -> list[int]:
+    return node.wire.wait(max(0.0, timeout_s))
 
 
 def _ticks(node, executor, stop, sched, warnings, clock, next_housekeeping) -> None:

@@ -32,6 +32,9 @@ from .wire import (CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, StepClock, descriptio
                    record_qos, state_topic)
 
 
+CLOCK_CDR = struct.Struct("<HHiI")  # rosgraph_msgs/Clock: encapsulation (little-endian CDR), sec, nanosec
+
+
 class PlantWire:
     def __init__(self, node, cfg: dict, clock: StepClock, reliability: str, state_depth: int, effort_depth: int):
         """``reliability`` and the depths: QoS of the per-joint state and effort topics."""
@@ -53,8 +56,8 @@ class PlantWire:
                             for i, j in enumerate(JOINT_NAMES)]
         self.torque_limit = np.array(cfg["plant"]["torque_limit_nm"], dtype=float)
         self._limits = self.torque_limit.tolist()
-        self._names = [[j] for j in JOINT_NAMES]
-        self._clock_msg = Clock()
+        self._state_layouts = [joint_state_cdr.OneJointLayout(j, ("position", "velocity")) for j in JOINT_NAMES]
+        self._effort_layouts = [joint_state_cdr.OneJointLayout(j, ("effort",)) for j in JOINT_NAMES]
         self.malformed = np.zeros(n, dtype=np.int64)
         self.out_of_range = np.zeros(n, dtype=np.int64)
 
@@ -68,15 +71,13 @@ class PlantWire:
         for j in (range(len(JOINT_NAMES)) if joints is None else joints):
             link = self.state_links[j]
             if link is None:
-                self._state_pubs[j].publish(
-                    joint_state_cdr.encode(sec, nanosec, self._names[j], (ql[j],), (qdl[j],), ()))
+                self._state_pubs[j].publish(self._state_layouts[j].encode(sec, nanosec, ql[j], qdl[j]))
                 continue
             fate = link.fate()
             pos = link.corrupt_value() if fate.corrupt else ql[j]
-            link.send(joint_state_cdr.encode(sec, nanosec, self._names[j], (pos,), (qdl[j],), ()), fate)
+            link.send(self._state_layouts[j].encode(sec, nanosec, pos, qdl[j]), fate)
         if joints is None:
-            self._clock_msg.clock.sec, self._clock_msg.clock.nanosec = sec, nanosec
-            self._clock_pub.publish(self._clock_msg)
+            self._clock_pub.publish(CLOCK_CDR.pack(0x0100, 0, sec, nanosec))  # raw CDR: no message conversion
             self._js_pub.publish(joint_state_cdr.encode(sec, nanosec, JOINT_NAMES, ql, qdl, applied.tolist()))
         return t_ns
 
@@ -90,12 +91,12 @@ class PlantWire:
         saturated at Table 2."""
         out = []
         for joint in (range(len(self._effort_subs)) if joints is None else joints):
-            sub = self._effort_subs[joint]
+            sub, layout = self._effort_subs[joint], self._effort_layouts[joint]
             while (got := sub.take()) is not None:
                 data, received_ns = got
                 try:
-                    sec, nanosec, _, _, _, effort = joint_state_cdr.decode(data)
-                    u = float(effort[0])
+                    sec, nanosec, (u,) = layout.decode(data)
+                    u = float(u)
                 except (ValueError, IndexError, struct.error, UnicodeDecodeError):
                     self.malformed[joint] += 1
                     continue
