@@ -1,5 +1,8 @@
 """The plant's realtime loop: deadline-synchronous ticks paced by the wall clock.
 
+Step 0 is a handshake: the plant waits (at most ``effort_timeout_s``) until
+every joint has answered state 0, so the first, slow messages on new DDS
+connections do not count as misses; the schedule starts with state 1.
 Tick k (``loop/tick_schedule.py``): state k goes out at its start; the plant
 blocks on the effort wait set until every joint has answered state k or the
 deadline (``deadline_fraction`` of the tick) has passed, taking what is
@@ -37,7 +40,7 @@ def run_realtime(node, executor, stop) -> None:
     t_end = clock() + p["effort_timeout_s"]
     ready = None
     while not node.take_efforts(ready) and not stop.done() and clock() < t_end:
-        ready = wire_wait(node, min(SLICE_S, t_end - clock()))
+        ready = node.wire.wait(max(0.0, min(SLICE_S, t_end - clock())))
     if stop.done():
         return
     warnings.missed(0, node.gate.missing)
@@ -52,10 +55,6 @@ def run_realtime(node, executor, stop) -> None:
         text = warnings.poll(float("inf"))  # what happened since the last warning
         if text:
             log.warning(text)
-
-
-def wire_wait(node, timeout_s: float) -> list[int]:
-    return node.wire.wait(max(0.0, timeout_s))
 
 
 def _ticks(node, executor, stop, sched, warnings, clock, next_housekeeping) -> None:
