@@ -19,6 +19,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from rclpy.duration import Duration
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
@@ -124,8 +125,19 @@ class PlantWire:
             out.append(f"{JOINT_STATES} (fewer than {joint_states_subscribers} subscribers)")
         return out
 
+    def flush(self, timeout_s: float = 2.0) -> bool:
+        """Wait (at most ``timeout_s`` in all) until every subscriber acknowledged what the reliable publishers
+        sent, so the observer gets the last states before the plant's writers go away; True when all did."""
+        end = time.monotonic() + timeout_s
+        ok = True
+        for pub in [self._js_pub, self._clock_pub] + self._state_pubs:
+            left = max(0.0, end - time.monotonic())
+            ok = pub.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9))) and ok
+        return ok
+
     def close(self) -> None:
         for link in self.state_links:
             if link is not None:
                 link.close()
+        self.flush()
         self._wait_set.destroy()
