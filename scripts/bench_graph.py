@@ -89,7 +89,8 @@ def main() -> int:
                          f"{stats['late_start_ticks']:5d}, achieved factor {stats['real_time_factor']:.3f}")
             else:
                 line += f"         achieved real-time factor {stats['real_time_factor']:.3f}"
-            line += f", CPU {sum(cpu.values()) / 1e3:.2f} ms per tick in all; load {load()}"
+            line += (f", CPU {sum(cpu.values()) / 1e3:.2f} ms per tick in all, plant woken "
+                     f"{stats['effort_wakeups_per_step']:.2f}x per tick for its 7 efforts; load {load()}")
             print(line, flush=True)
 
     print("\nCPU per tick [us] (median of runs; inside each process, start-up excluded)")

@@ -170,7 +170,7 @@ def _bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, cfg: dict
 TIMING_KEYS = ("on_time_fraction", "late_start_ticks", "max_start_lateness_us", "target_real_time_factor",
                "real_time_factor", "tick_period_s", "deadline_fraction", "reliability", "state_qos_depth",
                "effort_qos_depth", "effort_timeout_s", "on_missing_effort", "rt_priority", "rt_priority_applied",
-               "cpu", "on_time_fraction_per_bin")
+               "cpu", "effort_waits_per_step", "effort_wakeups_per_step", "on_time_fraction_per_bin")
 
 
 def timing_summary(stats: dict) -> dict:

@@ -59,6 +59,8 @@ class PlantWire:
         self._limits = self.torque_limit.tolist()
         self._state_layouts = [joint_state_cdr.OneJointLayout(j, ("position", "velocity")) for j in JOINT_NAMES]
         self._effort_layouts = [joint_state_cdr.OneJointLayout(j, ("effort",)) for j in JOINT_NAMES]
+        self.waits = 0                 # wait set waits (each a possible wake-up)
+        self.wakeups_with_efforts = 0  # ... that returned with efforts queued
         self.malformed = np.zeros(n, dtype=np.int64)
         self.out_of_range = np.zeros(n, dtype=np.int64)
 
@@ -85,7 +87,10 @@ class PlantWire:
     # ------------------------------------------------------------- in
     def wait(self, timeout_s: float) -> list[int]:
         """Block until some effort is queued or ``timeout_s`` [s] passed; the joints with efforts queued."""
-        return self._wait_set.wait(timeout_s)
+        ready = self._wait_set.wait(timeout_s)
+        self.waits += 1
+        self.wakeups_with_efforts += bool(ready)
+        return ready
 
     def take_efforts(self, joints=None) -> list[tuple[int, int, float, int]]:
         """Every queued effort (of ``joints``, default all) as (joint, step, torque [N m], received [ns]),
