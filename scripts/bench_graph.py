@@ -28,7 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from pa10_dnbs import JOINT_NAMES  # noqa: E402
 from pa10_dnbs.config import default_config_path  # noqa: E402
-from pa10_dnbs.launch.graph_run import GraphOptions, run_graph  # noqa: E402
+from pa10_dnbs.launch.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
 
 ON_TIME_TARGET = 0.99
 CPU_LINE = re.compile(r"^CPU (\S+) ([0-9.]+) us per step")
@@ -42,8 +42,19 @@ def load() -> str:
         return "?"
 
 
-def one_run(mode: str, factor: float, args) -> tuple[dict, dict[str, float]]:
-    """Plant stats and {process: CPU per tick [us]} of one run."""
+def one_run(mode: str, factor: float, args, attempts: int = 3) -> tuple[dict, dict[str, float]]:
+    """Plant stats and {process: CPU per tick [us]} of one run (a failed run, e.g. a node whose teardown
+    outlived the launcher's grace period on a loaded machine, is reported and run again)."""
+    for attempt in range(1, attempts + 1):
+        try:
+            return _run(mode, factor, args)
+        except GraphFailure as exc:
+            print(f"  ({mode} R={factor:g} attempt {attempt} failed: {str(exc).splitlines()[0]})", flush=True)
+            if attempt == attempts:
+                raise
+
+
+def _run(mode: str, factor: float, args) -> tuple[dict, dict[str, float]]:
     with tempfile.TemporaryDirectory(prefix="pa10_bench_") as tmp:
         opt = GraphOptions(config_path=default_config_path(), mode="lockstep" if mode == "record" else mode,
                            duration_s=args.duration, reliability=args.reliability, real_time_factor=factor,
