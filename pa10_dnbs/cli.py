@@ -19,7 +19,8 @@ def _simulate(args: argparse.Namespace) -> int:
     from .commands.simulate import run_simulate
 
     return run_simulate(config_path=args.config, controller=args.controller, duration_s=args.duration,
-                        out=args.out, force=args.force, progress=not args.no_progress and sys.stderr.isatty())
+                        out=args.out, force=args.force, progress=not args.no_progress and sys.stderr.isatty(),
+                        init_from=args.init_from)
 
 
 def _launch(args: argparse.Namespace) -> int:
@@ -30,8 +31,16 @@ def _launch(args: argparse.Namespace) -> int:
                       progress=not args.no_progress and sys.stderr.isatty(), domain_id=args.domain_id,
                       reliability=args.reliability, effort_timeout_s=args.effort_timeout,
                       on_missing_effort=args.on_missing_effort, record=args.record, fault_args=args,
-                      restart=args.restart, netns=args.netns, real_time_factor=args.rtf,
-                      deadline_fraction=args.deadline_fraction, rt_priority=args.rt_priority)
+                      restart=args.restart, netns=args.netns, init_from=args.init_from,
+                      real_time_factor=args.rtf, deadline_fraction=args.deadline_fraction,
+                      rt_priority=args.rt_priority)
+
+
+def _study(args: argparse.Namespace) -> int:
+    from .commands.study import run_study_command
+
+    return run_study_command(args.scenarios, args.controllers, args.seeds, args.duration, args.out, args.force,
+                             args.config, args.workers, progress=not args.no_progress and sys.stderr.isatty())
 
 
 def _analyse(args: argparse.Namespace) -> int:
@@ -48,9 +57,9 @@ def _replay(args: argparse.Namespace) -> int:
                       queue_depth=args.queue_depth)
 
 
-def _add_run_args(p: argparse.ArgumentParser, controllers: tuple[str, ...]) -> None:
+def _add_run_args(p: argparse.ArgumentParser, controllers: tuple[str, ...], help_controller: str) -> None:
     p.add_argument("--config", type=Path, default=None, help=f"YAML config (default: {default_config_path()})")
-    p.add_argument("--controller", choices=controllers, default="dnbs")
+    p.add_argument("--controller", choices=controllers, default="dnbs", help=help_controller)
     p.add_argument("--duration", type=float, default=None, metavar="SECONDS",
                    help="simulated time [s] (default: simulation.duration_s of the config, 20 s)")
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
@@ -63,7 +72,12 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     sim = sub.add_parser("simulate", help="closed loop in one process (no ROS), with metrics, figures, report")
-    _add_run_args(sim, ("dnbs", "pid", "both"))
+    _add_run_args(sim, ("dnbs", "pid", "ctc", "both", "all"),
+                  "dnbs (the paper's, with the configured remedies), pid (decentralized baseline), ctc (centralized "
+                  "computed torque with the plant's model: the reference), both (dnbs, pid), all (dnbs, pid, ctc)")
+    sim.add_argument("--init-from", type=Path, default=None, metavar="CHECKPOINTS",
+                     help="warm start: the DNBS weights and covariances of an earlier run (its output directory or "
+                          "its checkpoints/ directory); reported as such")
     sim.set_defaults(func=_simulate)
 
     la = sub.add_parser("launch", help="the ROS 2 node graph (plant, 7 joint controllers, reference)")
@@ -80,7 +94,7 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--rt-priority", type=int, default=0, metavar="N",
                     help="SCHED_FIFO priority 1..99 for the plant and the controllers where the OS allows it "
                          "(root, CAP_SYS_NICE or ulimit -r); otherwise a message and default scheduling")
-    _add_run_args(la, ("dnbs", "pid"))
+    _add_run_args(la, ("dnbs", "pid"), "the joint controllers: dnbs or pid (ctc is centralized: in-process only)")
     la.add_argument("--domain-id", type=int, default=None, help="ROS_DOMAIN_ID (default: a free one, leased for the run so concurrent runs never share it)")
     la.add_argument("--reliability", choices=("reliable", "best_effort"), default=None,
                     help="QoS of the per-joint state/effort topics (default: best_effort with depth 1 in "
@@ -97,8 +111,25 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--netns", action="append", default=[], metavar="GROUP=NAMESPACE",
                     help="run a node group (observer, reference, controllers, plant) in a network namespace "
                          "(ip netns), with discovery range SUBNET: several hosts on one machine; repeatable")
+    la.add_argument("--init-from", type=Path, default=None, metavar="CHECKPOINTS",
+                    help="warm start: the DNBS weights and covariances of an earlier run (its output directory or "
+                         "its checkpoints/ directory); reported as such")
     add_fault_arguments(la)
     la.set_defaults(func=_launch)
+
+    st = sub.add_parser("study", help="robustness study: scenarios x controllers x seeds, in parallel (in-process)")
+    st.add_argument("--scenarios", default="nominal", metavar="LIST",
+                    help="comma-separated: nominal, payload_2kg, payload_5kg, links_heavier_30pct, encoder_noise, "
+                         "delay_1_tick, coulomb, fast_reference")
+    st.add_argument("--controllers", default="dnbs,pid", metavar="LIST", help="comma-separated: dnbs, pid, ctc")
+    st.add_argument("--seeds", type=int, default=1, help="seeds 0..N-1 of the DNBS initial weights and the noise")
+    st.add_argument("--duration", type=float, default=20.0, metavar="SECONDS", help="simulated time per run")
+    st.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
+    st.add_argument("--config", type=Path, default=None, help="YAML config the scenarios start from")
+    st.add_argument("--workers", type=int, default=None, help="worker processes (default: one per core)")
+    st.add_argument("--force", action="store_true", help="replace an existing output directory")
+    st.add_argument("--no-progress", action="store_true", help="no progress bar")
+    st.set_defaults(func=_study)
 
     an = sub.add_parser("analyse", help="metrics, figures and report of a recorded run, from its bag alone")
     an.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 bag directory (metadata.yaml + .mcap)")

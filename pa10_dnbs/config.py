@@ -62,16 +62,22 @@ ANY = Num()
 FRACTION = Num(0.0, strict=False, high=1.0)
 
 
-def _net_schema() -> dict:
+def _net_schema(output_key: str, error_key: str, n_inputs: int) -> dict:
     return {
         "max_degree": Num(0, strict=False, integer=True, high=4),
-        "input_scale": (POS,),  # tuple of Num: fixed-length list, length set per network below
+        "input_scale": (POS,) * n_inputs,  # tuple of Num: one per input, in that input's units
+        output_key: Joints(POS),           # A [rad/s] or U [N m]: output = scale * w^T S
+        error_key: Joints(POS),            # E1 [rad] or E2 [rad/s]: the EKF trains on e / scale
         "init_weight_std": Joints(NONNEG),
         "p0": Joints(POS),
         "q": Joints(NONNEG),
         "r": Joints(POS),
-        "eta": Joints(POS),
+        "eta": Joints(Num(0.0, high=1.0)),  # 0 < eta <= 1 (eq. 7)
     }
+
+
+def _switch(**settings) -> dict:
+    return {"enabled": Flag(), **settings}
 
 
 def _link_faults() -> dict:
@@ -85,10 +91,6 @@ def _link_faults() -> dict:
     }
 
 
-_alpha = _net_schema()
-_alpha["input_scale"] = (POS, POS)
-_torque = _net_schema()
-_torque["input_scale"] = (POS, POS, POS)
 
 SCHEMA: dict[str, Any] = {
     "simulation": {
@@ -113,9 +115,25 @@ SCHEMA: dict[str, Any] = {
         "coulomb_nm": Joints(NONNEG),
         "coulomb_smoothing_rad_s": POS,
         "torque_limit_nm": Joints(POS),
+        "payload_kg": NONNEG,
+        "link_mass_scale": POS,
     },
-    "dnbs": {"anti_windup": Flag(), "alpha_net": _alpha, "torque_net": _torque},
+    "dnbs": {
+        "e2_sign": Text(("stable", "printed")),
+        "alpha_net": _net_schema("output_scale_rad_s", "error_scale_rad", 2),
+        "torque_net": _net_schema("output_scale_nm", "error_scale_rad_s", 3),
+        "remedies": {
+            "robust_term": _switch(velocity_feedforward=Flag(), alpha_gain_per_s=Joints(NONNEG), torque_gain_nms_per_rad=Joints(NONNEG)),
+            "anti_windup": _switch(),
+            "dead_zone": _switch(alpha_rad=Joints(NONNEG), torque_rad_s=Joints(NONNEG)),
+            "e_modification": _switch(sigma=NONNEG),
+            "projection": _switch(weight_bound=POS),
+            "learning_ramp": _switch(ramp_s=NONNEG),
+            "covariance_bound": _switch(p_max=POS),
+        },
+    },
     "pid": {"kp": Joints(NONNEG), "ki": Joints(NONNEG), "kd": Joints(NONNEG)},
+    "ctc": {"kp_per_s2": Joints(NONNEG), "kd_per_s": Joints(NONNEG)},
     "guards": {
         "position_margin_rad": NONNEG,
         "max_speed_rad_s": Joints(POS),
@@ -123,6 +141,7 @@ SCHEMA: dict[str, Any] = {
         "ekf_full_check_every": Num(0, strict=False, integer=True),
     },
     "checkpoint": {"period_s": POS},
+    "metrics": {"settle_band_rad": POS, "startup_s": NONNEG},
     "faults": {
         "seed": Num(0, strict=False, integer=True),
         "state": _link_faults(),
@@ -207,15 +226,46 @@ def validate(raw: Any, base_dir: Path) -> dict:
     return cfg
 
 
-def load_config(path: str | Path) -> dict:
-    """Read and validate a YAML config file. Raises ConfigError (naming the key or file)."""
-    path = Path(path)
+def _read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict:
+    """The document at ``path``, merged over the file its ``extends`` key names (relative to it), recursively."""
+    path = path.resolve()
     if not path.is_file():
         raise ConfigError(f"config file not found: {path}")
+    if path in seen:
+        raise ConfigError(f"{path}: extends: circular ({' -> '.join(str(p) for p in seen + (path,))})")
     try:
         raw = yaml.safe_load(path.read_text())
     except yaml.YAMLError as exc:
         raise ConfigError(f"{path}: not valid YAML: {exc}") from None
+    if not isinstance(raw, dict):
+        return raw
+    plant = raw.get("plant")
+    if isinstance(plant, dict) and isinstance(plant.get("urdf"), str) and plant["urdf"]:
+        plant["urdf"] = str((path.parent / plant["urdf"]).resolve())  # relative to the file that names it
+    if "extends" not in raw:
+        return raw
+    base = raw.pop("extends")
+    if not isinstance(base, str) or not base:
+        raise ConfigError(f"{path}: extends: expected the path of a config file, got {base!r}")
+    parent = _read_yaml(path.parent / base, seen + (path,))
+    if not isinstance(parent, dict):
+        raise ConfigError(f"{path}: extends: {base} is not a mapping")
+    return _merge(parent, raw)
+
+
+def _merge(base: dict, over: dict) -> dict:
+    """``base`` with ``over``'s keys replacing its own, mappings merged key by key."""
+    out = dict(base)
+    for k, v in over.items():
+        out[k] = _merge(base[k], v) if isinstance(v, dict) and isinstance(base.get(k), dict) else v
+    return out
+
+
+def load_config(path: str | Path) -> dict:
+    """Read and validate a YAML config file (and the one it ``extends``). Raises ConfigError (naming the key
+    or file)."""
+    path = Path(path)
+    raw = _read_yaml(path)
     return validate(raw, base_dir=path.resolve().parent)
 
 

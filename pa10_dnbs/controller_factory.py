@@ -1,40 +1,73 @@
-"""Build one joint's controller (DNBS or PID) from a validated config dict.
+"""Build joint controllers (DNBS or PID) and the reference from a validated config dict.
 
-Shared by the in-process simulation and the ROS joint-controller node, so
-both run the same objects with the same seeds.
+Shared by the in-process simulation (one bank of all seven joints) and the
+ROS joint-controller node (a bank of its one joint), so both run the same
+objects with the same seeds.
 """
 from __future__ import annotations
 
-from .core.dnbs_controller import DNBSJointController, DNBSParams, NetworkParams
-from .core.ekf import EKFParams
-from .core.pid_controller import PIDJointController, PIDParams
+import numpy as np
+
+from . import JOINT_NAMES
+from .core.dnbs_controller import DNBSControllers, DNBSParams, NetworkParams, Remedies
+from .core.pid_controller import PIDControllers, PIDParams
 from .core.reference import Reference
+from .core.state_guard import StateGuard
+from .kinematics.urdf_chain import UrdfChain
+from .loop.guarded_controllers import GuardedControllers
 
 CONTROLLER_KINDS = ("dnbs", "pid")
 
 
-def _network(net: dict, joint: int) -> NetworkParams:
-    return NetworkParams(
-        max_degree=net["max_degree"],
-        input_scale=net["input_scale"],
-        init_weight_std=net["init_weight_std"][joint],
-        ekf=EKFParams(p0=net["p0"][joint], q=net["q"][joint], r=net["r"][joint], eta=net["eta"][joint]),
-    )
+def _network(net: dict, output_key: str, error_key: str) -> NetworkParams:
+    a = lambda key: np.array(net[key], dtype=float)  # noqa: E731
+    return NetworkParams(max_degree=net["max_degree"], input_scale=tuple(net["input_scale"]),
+                         output_scale=a(output_key), error_scale=a(error_key), init_weight_std=a("init_weight_std"),
+                         p0=a("p0"), q=a("q"), r=a("r"), eta=a("eta"))
 
 
-def build_controller(cfg: dict, kind: str, joint: int):
-    """Controller for joint index ``joint`` (0..6); DNBS weights seeded by (simulation.seed, joint)."""
-    limit = cfg["plant"]["torque_limit_nm"][joint]
+def remedies_from_config(rem: dict) -> Remedies:
+    """The ``dnbs.remedies`` section as :class:`Remedies` (settings of a switched-off remedy are kept, unused)."""
+    a = lambda sec, key: np.array(rem[sec][key], dtype=float)  # noqa: E731
+    return Remedies(
+        robust_term=rem["robust_term"]["enabled"], velocity_feedforward=rem["robust_term"]["velocity_feedforward"],
+        alpha_gain_per_s=a("robust_term", "alpha_gain_per_s"),
+        torque_gain_nms_per_rad=a("robust_term", "torque_gain_nms_per_rad"),
+        anti_windup=rem["anti_windup"]["enabled"],
+        dead_zone=rem["dead_zone"]["enabled"], dead_zone_rad=a("dead_zone", "alpha_rad"),
+        dead_zone_rad_s=a("dead_zone", "torque_rad_s"),
+        e_modification=rem["e_modification"]["enabled"], e_modification_sigma=rem["e_modification"]["sigma"],
+        projection=rem["projection"]["enabled"], weight_bound=rem["projection"]["weight_bound"],
+        learning_ramp=rem["learning_ramp"]["enabled"], learning_ramp_s=rem["learning_ramp"]["ramp_s"],
+        covariance_bound=rem["covariance_bound"]["enabled"], p_max=rem["covariance_bound"]["p_max"])
+
+
+def dnbs_params(cfg: dict) -> DNBSParams:
+    """All seven joints' DNBS parameters (``.select(rows)`` gives a subset)."""
+    d = cfg["dnbs"]
+    return DNBSParams(alpha_net=_network(d["alpha_net"], "output_scale_rad_s", "error_scale_rad"),
+                      torque_net=_network(d["torque_net"], "output_scale_nm", "error_scale_rad_s"),
+                      torque_limit_nm=np.array(cfg["plant"]["torque_limit_nm"], dtype=float),
+                      dt_s=cfg["simulation"]["dt_s"], remedies=remedies_from_config(d["remedies"]),
+                      e2_sign=d["e2_sign"], ekf_full_check_every=cfg["guards"]["ekf_full_check_every"])
+
+
+def pid_params(cfg: dict) -> PIDParams:
+    pid = cfg["pid"]
+    return PIDParams(kp=np.array(pid["kp"], float), ki=np.array(pid["ki"], float), kd=np.array(pid["kd"], float),
+                     torque_limit_nm=np.array(cfg["plant"]["torque_limit_nm"], float), dt_s=cfg["simulation"]["dt_s"])
+
+
+def build_controllers(cfg: dict, kind: str, joints=None):
+    """Controllers of joint indices ``joints`` (0..6; all seven when None), one per row, in that order.
+
+    DNBS weights of joint j are seeded by (simulation.seed, j), whatever the bank it sits in.
+    """
+    rows = list(range(len(cfg["plant"]["torque_limit_nm"]))) if joints is None else [int(j) for j in joints]
     if kind == "dnbs":
-        params = DNBSParams(alpha_net=_network(cfg["dnbs"]["alpha_net"], joint),
-                            torque_net=_network(cfg["dnbs"]["torque_net"], joint),
-                            torque_limit_nm=limit, anti_windup=cfg["dnbs"]["anti_windup"],
-                            ekf_full_check_every=cfg["guards"]["ekf_full_check_every"])
-        return DNBSJointController(params, seed=(cfg["simulation"]["seed"], joint))
+        return DNBSControllers(dnbs_params(cfg).select(rows), seed=cfg["simulation"]["seed"], joints=rows)
     if kind == "pid":
-        pid = cfg["pid"]
-        return PIDJointController(PIDParams(kp=pid["kp"][joint], ki=pid["ki"][joint], kd=pid["kd"][joint],
-                                            dt_s=cfg["simulation"]["dt_s"], torque_limit_nm=limit))
+        return PIDControllers(pid_params(cfg).select(rows))
     raise ValueError(f"unknown controller kind {kind!r} (expected one of {CONTROLLER_KINDS})")
 
 
@@ -43,3 +76,20 @@ def build_reference(cfg: dict) -> Reference:
     r = cfg["reference"]
     return Reference(r["amplitude_rad"], r["envelope_rate_per_s3"], r["frequency_rad_s"],
                      dt_s=cfg["simulation"]["dt_s"], preview_steps=r["preview_steps"])
+
+
+def build_state_guard(cfg: dict, joints=None) -> StateGuard:
+    """The state guard of joint indices ``joints`` (all when None): URDF limits and ``cfg['guards']``."""
+    rows = list(range(len(JOINT_NAMES))) if joints is None else [int(j) for j in joints]
+    chain = UrdfChain.from_file(cfg["plant"]["urdf"])
+    g = cfg["guards"]
+    return StateGuard(lower_rad=np.array([chain.joint(JOINT_NAMES[j]).lower for j in rows]),
+                      upper_rad=np.array([chain.joint(JOINT_NAMES[j]).upper for j in rows]),
+                      margin_rad=g["position_margin_rad"],
+                      max_speed_rad_s=np.array([g["max_speed_rad_s"][j] for j in rows]))
+
+
+def build_guarded_controllers(cfg: dict, kind: str, joints=None) -> GuardedControllers:
+    """What a joint runs, in a node or in-process: its controller behind its state guard."""
+    return GuardedControllers(build_controllers(cfg, kind, joints), build_state_guard(cfg, joints),
+                              cfg["guards"]["on_bad_state"])

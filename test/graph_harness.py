@@ -107,3 +107,17 @@ def exit_codes(output: str) -> dict[str, int]:
     m = re.search(r"launch: stopped: ([^;\n]*)", output)
     assert m, output
     return {k: int(v) for k, v in (kv.split("=") for kv in m.group(1).split())}
+
+
+def assert_no_leftovers(pids, shm_before: set[str]) -> None:
+    """Post-shutdown check: every child process is gone and no shared-memory file it created is left behind.
+
+    Only unused new files count: another suite's graph running on the host at the same time keeps its own
+    segments mapped, and is none of this test's business.
+    """
+    from pa10_dnbs.launch.shm_cleanup import shm_files, unused
+
+    alive_now = sorted(str(p) for p in pids if alive(p))
+    assert not alive_now, f"processes still alive: {alive_now}"
+    leaked = unused(shm_files() - shm_before)
+    assert not leaked, f"shared-memory files left behind: {sorted(leaked)}"

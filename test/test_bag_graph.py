@@ -21,7 +21,6 @@ from graph_harness import REPO, Launcher, Proc
 from pa10_dnbs import JOINT_NAMES
 from pa10_dnbs.bag.bag_reader import Bag
 from pa10_dnbs.kinematics.urdf_chain import UrdfChain
-from pa10_dnbs.wire import joint_state_cdr
 from pa10_dnbs.sim.closed_loop import simulate
 from pa10_dnbs.run_data import RunData
 

@@ -34,7 +34,11 @@ def test_default_config_is_valid():
     (("plant", "torque_limit_nm"), [232, 232, 100, 100, 14.5, 14.5, math.inf], r"plant\.torque_limit_nm\[6\]: must be finite"),
     (("plant", "viscous_nms_per_rad"), "ten", r"plant\.viscous_nms_per_rad: expected a number"),
     (("simulation", "seed"), 1.5, r"simulation\.seed: expected an integer"),
-    (("dnbs", "anti_windup"), "yes", r"dnbs\.anti_windup: expected true or false"),
+    (("dnbs", "remedies", "anti_windup", "enabled"), "yes", r"dnbs\.remedies\.anti_windup\.enabled: expected true"),
+    (("dnbs", "torque_net", "eta"), 3.0, r"dnbs\.torque_net\.eta: must be <= 1"),
+    (("dnbs", "e2_sign"), "minus", r"dnbs\.e2_sign: must be one of stable, printed"),
+    (("metrics", "settle_band_rad"), 0.0, r"metrics\.settle_band_rad: must be > 0"),
+    (("plant", "payload_kg"), -1.0, r"plant\.payload_kg: must be >= 0"),
     (("pid", "kp"), [1, 2, 3], r"pid\.kp: expected 7 values"),
     (("simulation", "window_s"), [5.0, 2.0], r"simulation\.window_s: t1 must be greater"),
     (("simulation", "duration_s"), 5.0, r"simulation\.window_s: ends at 20 s, after simulation\.duration_s"),
@@ -75,3 +79,35 @@ def test_not_yaml(tmp_path):
     p.write_text("simulation: [unclosed\n")
     with pytest.raises(ConfigError, match="not valid YAML"):
         load_config(p)
+
+
+def test_extends_merges_over_the_base_and_resolves_paths_where_they_are_written(tmp_path):
+    (tmp_path / "sub").mkdir()
+    p = tmp_path / "sub" / "mine.yaml"
+    p.write_text(f"extends: {default_config_path()}\nsimulation:\n  seed: 11\ndnbs:\n  remedies:\n"
+                 "    robust_term: {enabled: false}\n")
+    cfg = load_config(p)
+    base = load_config(default_config_path())
+    assert cfg["simulation"]["seed"] == 11 and cfg["simulation"]["dt_s"] == base["simulation"]["dt_s"]
+    assert cfg["dnbs"]["remedies"]["robust_term"]["enabled"] is False
+    assert cfg["dnbs"]["remedies"]["robust_term"]["alpha_gain_per_s"] == base["dnbs"]["remedies"]["robust_term"][
+        "alpha_gain_per_s"]
+    assert cfg["plant"]["urdf"] == base["plant"]["urdf"]  # relative to default.yaml, not to mine.yaml
+
+
+def test_extends_errors(tmp_path):
+    a, b = tmp_path / "a.yaml", tmp_path / "b.yaml"
+    a.write_text("extends: b.yaml\n")
+    b.write_text("extends: a.yaml\n")
+    with pytest.raises(ConfigError, match="circular"):
+        load_config(a)
+    a.write_text("extends: nowhere.yaml\n")
+    with pytest.raises(ConfigError, match="config file not found: .*nowhere.yaml"):
+        load_config(a)
+
+
+def test_shipped_presets_are_valid():
+    from pa10_dnbs.paths import share_path
+
+    paper = load_config(share_path("config", "paper.yaml"))
+    assert not any(r["enabled"] for r in paper["dnbs"]["remedies"].values())

@@ -37,6 +37,7 @@ LAYERS = [
     {"config", "plant", "loop"},                                               # config, physics, loop logic
     {"controller_factory"},
     {"sim", "bag", "report"},                                                  # in-process runs, bags, outputs
+    {"study"},                                                                 # robustness study over sim runs
     {"ros"},                                                                   # the nodes (rclpy)
     {"launch"},                                                                # starts and watches the nodes
     {"commands"},

@@ -8,7 +8,7 @@ import time
 
 import pytest
 
-from graph_harness import REPO, Launcher, Proc, alive, exit_codes
+from graph_harness import REPO, Launcher, Proc, assert_no_leftovers, exit_codes
 from pa10_dnbs import JOINT_NAMES
 from pa10_dnbs.config import default_config_path
 from pa10_dnbs.launch.shm_cleanup import shm_files
@@ -45,8 +45,7 @@ def test_each_controller_sees_only_its_own_joint_and_sigint_stops_cleanly(tmp_pa
     assert rc == 130, la.output
     codes = exit_codes(la.output)
     assert all(c == 0 for c in codes.values()), la.output
-    assert not [n for n, pid in pids.items() if alive(pid)]
-    assert not (shm_files() - shm_before)
+    assert_no_leftovers(pids.values(), shm_before)
     assert not (tmp_path / "never_written").exists() and not list(tmp_path.iterdir())
 
 
@@ -119,8 +118,7 @@ def test_killed_controller_stops_the_launcher_naming_the_joint(tmp_path, domain)
     assert rc == 1
     assert took < 10, took
     assert "joint e1 controller (joint_controller_e1) exited early with code -9" in la.output
-    assert not [n for n, pid in pids.items() if alive(pid)]
-    assert not (shm_files() - shm_before)  # the killed process's segments were removed
+    assert_no_leftovers(pids.values(), shm_before)  # the killed process's segments were removed
     assert not (tmp_path / "o").exists()
 
 

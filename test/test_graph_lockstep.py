@@ -8,8 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from graph_harness import alive, exit_codes
-from pa10_dnbs.launch.shm_cleanup import shm_files
+from graph_harness import assert_no_leftovers, exit_codes
 from pa10_dnbs.sim.closed_loop import simulate
 from pa10_dnbs.run_data import RunData
 
@@ -54,6 +53,29 @@ def test_bit_identical_to_in_process_simulation(lockstep_run, _default_cfg):
 def test_clean_shutdown(lockstep_run):
     codes = exit_codes(lockstep_run["output"])
     assert len(codes) == 10 and all(c == 0 for c in codes.values()), codes  # 9 nodes and the recorder
-    assert not [n for n, pid in lockstep_run["pids"].items() if alive(pid)]
-    leaked = shm_files() - lockstep_run["shm_before"]
-    assert not leaked, leaked
+    assert_no_leftovers(lockstep_run["pids"].values(), lockstep_run["shm_before"])
+
+
+def test_warm_start_over_ros_equals_the_in_process_warm_start(lockstep_run, _default_cfg, tmp_path, domain):
+    """--init-from the session run's checkpoints: each node loads its joint's weights and P; the lockstep run
+    equals simulate(init_states=...) bit for bit, and metrics.json says it was a warm start."""
+    from graph_harness import Launcher
+
+    from pa10_dnbs import JOINT_NAMES
+    from pa10_dnbs.core.checkpoint import load_joint_checkpoints
+
+    la = Launcher("--duration", 1.0, "--init-from", lockstep_run["out"], "--out", tmp_path / "warm", domain_id=domain)
+    try:
+        rc = la.wait(timeout=300)
+    finally:
+        la.kill()
+    assert rc == 0, la.output
+    wire = RunData.load_npz(tmp_path / "warm" / "timeseries.npz")
+    states = load_joint_checkpoints(lockstep_run["out"], JOINT_NAMES)
+    local = simulate(_default_cfg, "dnbs", 1.0, init_states=states)
+    for field in ("position_rad", "torque_nm"):
+        assert np.array_equal(getattr(local, field), getattr(wire, field)), field
+    m = json.loads((tmp_path / "warm" / "metrics.json").read_text())
+    assert m["warm_start_from"].endswith("checkpoints")
+    cold = RunData.load_npz(lockstep_run["out"] / "timeseries.npz")
+    assert not np.array_equal(cold.torque_nm[:1000], wire.torque_nm)

@@ -1,99 +1,114 @@
-"""Defensive controller: the state guard, the EKF guard, checkpoints; no non-finite torque gets out."""
+"""Defensive controllers: the state guard, the EKF guard, checkpoints; no non-finite torque gets out."""
 import math
 
 import numpy as np
 import pytest
 
-from pa10_dnbs.controller_factory import build_controller, build_reference
+from pa10_dnbs.controller_factory import build_controllers, build_reference
 from pa10_dnbs.core.checkpoint import load_checkpoint, save_checkpoint
-from pa10_dnbs.core.ekf import EKFParams, EKFTrainer
-from pa10_dnbs.core.state_guard import StateGuard
-from pa10_dnbs.loop.joint_loop import JointLoop
+from pa10_dnbs.core.reference import ReferenceSample
+from pa10_dnbs.core.state_guard import OK, REASONS, StateGuard
+from pa10_dnbs.loop.guarded_controllers import GuardedControllers
 
-GUARD = StateGuard(lower_rad=-1.0, upper_rad=1.0, margin_rad=0.1, max_speed_rad_s=5.0)
+GUARD = StateGuard(lower_rad=np.array([-1.0]), upper_rad=np.array([1.0]), margin_rad=0.1,
+                   max_speed_rad_s=np.array([5.0]))
+REF = ReferenceSample(np.zeros(1), np.zeros(1), np.zeros(1))
 
 
 class Constant:
-    def __init__(self, u):
-        self.u, self.calls = u, 0
+    """A bank of one row answering ``u`` (and recording the rows it was asked to train)."""
+    n_joints = 1
 
-    def step(self, x1, x2, ref):
-        self.calls += 1
-        return self.u
+    def __init__(self, u):
+        self.u, self.trained = u, []
+
+    def step(self, x1, x2, ref, active=None):
+        assert np.all(np.isfinite(x1)) and np.all(np.isfinite(x2))  # never fed an untrusted state
+        self.trained.append(1.0 if active is None else float(active[0]))
+        return np.array([self.u])
 
 
 @pytest.mark.parametrize("x1, x2, reason", [
     (0.5, 1.0, None), (1.09, -4.9, None), (math.nan, 0.0, "nonfinite"), (0.0, math.inf, "nonfinite"),
-    (1.11, 0.0, "position"), (-1.2, 0.0, "position"), (0.0, 5.01, "speed"), (0.0, -6.0, "speed")])
+    (1.11, 0.0, "position"), (-1.2, 0.0, "position"), (0.0, 5.01, "speed"), (0.0, -6.0, "speed"),
+    (math.nan, 50.0, "nonfinite"), (9.0, 50.0, "position")])
 def test_state_guard(x1, x2, reason):
-    assert GUARD.check(x1, x2) == reason
+    code = GUARD.check(np.array([x1]), np.array([x2]))[0]
+    assert (None if code == OK else REASONS[code]) == reason
 
 
 @pytest.mark.parametrize("on_bad, expected", [("hold", 3.0), ("zero", 0.0)])
-def test_bad_states_are_answered_safely_and_counted(on_bad, expected):
+def test_bad_states_are_answered_safely_counted_and_not_trained_on(on_bad, expected):
     ctrl = Constant(3.0)
-    loop = JointLoop(ctrl, preview_steps=2, guard=GUARD, on_bad_state=on_bad)
-    loop.add_reference(0, [0.0] * 20, [0.0] * 20)
-    assert loop.on_state(0, 0.1, 0.0) == [(0, 3.0)]
-    answers = [loop.on_state(k, x1, x2)[0][1] for k, (x1, x2) in
-               enumerate([(math.nan, 0.0), (math.inf, 0.0), (9.0, 0.0), (0.0, 50.0)], start=1)]
+    g = GuardedControllers(ctrl, GUARD, on_bad)
+    assert g.step(np.array([0.1]), np.zeros(1), REF)[0] == 3.0
+    answers = [g.step(np.array([x1]), np.array([x2]), REF)[0]
+               for x1, x2 in [(math.nan, 0.0), (math.inf, 0.0), (9.0, 0.0), (0.0, 50.0)]]
     assert answers == [expected] * 4
-    assert loop.bad_states == {"nonfinite": 2, "position": 1, "speed": 1}
-    assert ctrl.calls == 1  # the controller never saw a bad state
+    assert {r: int(c[0]) for r, c in g.bad_states.items()} == {"nonfinite": 2, "position": 1, "speed": 1}
+    assert ctrl.trained == [1.0, 0.0, 0.0, 0.0, 0.0]
+
+
+def test_a_bad_joint_does_not_disturb_the_others(cfg):
+    """In a bank of seven, joint 2's NaN state is held; the other six answer exactly as without it."""
+    ref = build_reference(cfg)
+    a = GuardedControllers(build_controllers(cfg, "dnbs"), _guard7(), "hold")
+    b = GuardedControllers(build_controllers(cfg, "dnbs"), _guard7(), "hold")
+    x1, x2 = np.full(7, 0.05), np.zeros(7)
+    ub_held = None
+    for k in range(50):
+        ua = a.step(x1, x2, ref.sample(k))
+        y1 = x1.copy()
+        if k >= 20:
+            y1[2] = math.nan
+        ub = b.step(y1, x2, ref.sample(k))
+        assert np.array_equal(np.delete(ua, 2), np.delete(ub, 2))
+        if k >= 20:
+            assert ub[2] == ub_held
+        ub_held = ub[2]
+    assert int(b.bad_states["nonfinite"][2]) == 30 and np.isfinite(b.controllers.torque_ekf.w).all()
+
+
+def _guard7():
+    return StateGuard(np.full(7, -3.0), np.full(7, 3.0), 0.1, np.full(7, 10.0))
 
 
 def test_nonfinite_torque_from_the_controller_never_leaves():
-    loop = JointLoop(Constant(math.nan), preview_steps=2, guard=GUARD, on_bad_state="hold")
-    loop.add_reference(0, [0.0] * 20, [0.0] * 20)
-    out = [loop.on_state(k, 0.1, 0.0)[0][1] for k in range(5)]
-    assert out == [0.0] * 5 and loop.nonfinite_torques == 5
-
-
-def _ekf():
-    return EKFTrainer(np.full(6, 0.01), EKFParams(p0=1.0, q=0.01, r=1.0, eta=1.0))
-
-
-def test_ekf_guard_detects_nonfinite_and_indefinite_P_and_resets():
-    ekf = _ekf()
-    H = np.linspace(0.1, 0.6, 6)
-    for _ in range(10):
-        ekf.update(H, 0.3)
-    assert ekf.healthy(full=True)
-    ekf.P[2, 4] = ekf.P[4, 2] = math.nan
-    ekf.update(H, 0.3)
-    assert not ekf.healthy(full=False)  # NaN reaches H^T P H and w at once
-    ekf.reset()
-    assert ekf.healthy(full=True) and np.array_equal(ekf.w, ekf.w0) and np.array_equal(ekf.P, np.eye(6))
-    ekf.P[0, 0] = -5.0  # symmetric, finite, not positive definite: only the full check sees it
-    assert not ekf.healthy(full=True)
+    g = GuardedControllers(Constant(math.nan), GUARD, "hold")
+    out = [g.step(np.array([0.1]), np.zeros(1), REF)[0] for _ in range(5)]
+    assert out == [0.0] * 5 and int(g.nonfinite_torques[0]) == 5
 
 
 def test_dnbs_controller_resets_a_broken_network_and_keeps_a_finite_torque(cfg):
-    ctrl = build_controller(cfg, "dnbs", 4)
+    ctrl = build_controllers(cfg, "dnbs", [4])
     ref = build_reference(cfg)
+    x1, x2 = np.array([0.1]), np.zeros(1)
     for k in range(50):
-        ctrl.step(0.1, 0.0, ref.sample(4, k))
+        ctrl.step(x1, x2, ref.sample(k, [4]))
     ctrl.torque_ekf.P[:] = math.inf
     # seen at the next update (H^T P H), or at the latest by the full check every 100 steps
-    torques = [ctrl.step(0.1, 0.0, ref.sample(4, k)) for k in range(50, 151)]
-    assert ctrl.ekf_resets == {"alpha": 0, "torque": 1}
-    assert ctrl.torque_ekf.healthy(full=True)
-    assert all(math.isfinite(u) for u in torques[1:])  # the step that broke may not be (JointLoop holds then)
+    torques = [ctrl.step(x1, x2, ref.sample(k, [4]))[0] for k in range(50, 151)]
+    assert {k: int(v[0]) for k, v in ctrl.ekf_resets.items()} == {"alpha": 0, "torque": 1}
+    assert not ctrl.torque_ekf.unhealthy(full=True).any()
+    assert all(math.isfinite(u) for u in torques[1:])  # the step that broke may not be (the guard holds then)
 
 
 def test_checkpoint_resume_continues_exactly(cfg, tmp_path):
     """A controller restored from a checkpoint answers like the original would have."""
     ref = build_reference(cfg)
-    a = build_controller(cfg, "dnbs", 1)
+    a = build_controllers(cfg, "dnbs", [1])
     for k in range(300):
-        a.step(0.1 + 1e-4 * k, 0.01, ref.sample(1, k))
-    save_checkpoint(tmp_path / "s2.npz", a.state_dict(), 299)
+        a.step(np.array([0.1 + 1e-4 * k]), np.array([0.01]), ref.sample(k, [1]))
+    save_checkpoint(tmp_path / "s2.npz", a.state_dict(0), 299)
     state, step = load_checkpoint(tmp_path / "s2.npz")
-    b = build_controller(cfg, "dnbs", 1)
-    b.load_state_dict(state)
+    b = build_controllers(cfg, "dnbs", [1])
+    b.load_state_dict(0, state)
     assert step == 299 and b.steps == 300
     for k in range(300, 400):
-        assert a.step(0.13, 0.02, ref.sample(1, k)) == b.step(0.13, 0.02, ref.sample(1, k))
+        x1, x2 = np.array([0.13]), np.array([0.02])
+        assert a.step(x1, x2, ref.sample(k, [1]))[0] == b.step(x1, x2, ref.sample(k, [1]))[0]
+    with pytest.raises(ValueError, match="joint index 1, expected 2"):
+        build_controllers(cfg, "dnbs", [2]).load_state_dict(0, state)
     (tmp_path / "junk.npz").write_bytes(b"not a checkpoint")
     with pytest.raises(ValueError, match="not a readable checkpoint"):
         load_checkpoint(tmp_path / "junk.npz")

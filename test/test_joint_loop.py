@@ -1,29 +1,39 @@
 """The controller node's loop: waits for references, answers each state once."""
+import numpy as np
+
 from pa10_dnbs.core.reference import ReferenceSample
+from pa10_dnbs.loop.guarded_controllers import GuardedControllers
 from pa10_dnbs.loop.joint_loop import JointLoop
 
 
 class Recorder:
+    """A bank of one row that answers 1, 2, 3, ... and records what it saw."""
+    n_joints = 1
+
     def __init__(self):
         self.calls = []
 
-    def step(self, x1, x2, ref: ReferenceSample):
-        self.calls.append((x1, x2, ref))
-        return float(len(self.calls))
+    def step(self, x1, x2, ref: ReferenceSample, active=None):
+        self.calls.append((float(x1[0]), float(x2[0]), float(ref.position_rad[0]), float(ref.velocity_rad_s[0]),
+                           float(ref.position_ahead_rad[0])))
+        return np.array([float(len(self.calls))])
+
+
+def _loop():
+    ctrl = Recorder()
+    return ctrl, JointLoop(GuardedControllers(ctrl, guard=None), preview_steps=2)
 
 
 def test_state_waits_for_its_references_then_is_answered():
-    ctrl = Recorder()
-    loop = JointLoop(ctrl, preview_steps=2)
+    ctrl, loop = _loop()
     assert loop.on_state(0, 0.1, 0.0) == []            # no reference yet
     assert loop.add_reference(0, [0.0, 0.5], [1.0, 1.5]) == []  # x_d(2) still missing
     assert loop.add_reference(2, [0.7, 0.8], [2.0, 2.0]) == [(0, 1.0)]
-    assert ctrl.calls == [(0.1, 0.0, ReferenceSample(0.0, 1.0, 0.7))]
+    assert ctrl.calls == [(0.1, 0.0, 0.0, 1.0, 0.7)]
 
 
 def test_resent_state_gets_same_effort_without_retraining():
-    ctrl = Recorder()
-    loop = JointLoop(ctrl, preview_steps=2)
+    ctrl, loop = _loop()
     loop.add_reference(0, [0.0] * 10, [0.0] * 10)
     assert loop.on_state(0, 0.1, 0.0) == [(0, 1.0)]
     assert loop.on_state(0, 0.1, 0.0) == [(0, 1.0)]

@@ -1,20 +1,31 @@
-"""PID baseline: the law and the gains of paper_notes.md."""
+"""PID baseline: the law and the gains of the reference baseline (docs/design.md)."""
+import numpy as np
 import pytest
 
-from pa10_dnbs.controller_factory import build_controller
+from pa10_dnbs.controller_factory import build_controllers
 from pa10_dnbs.core.reference import ReferenceSample
 
 
+def _ref(x, v):
+    return ReferenceSample(np.array([x]), np.array([v]), np.array([x]))
+
+
 def test_gains_are_the_reference_ones(cfg):
-    kp = [2000, 2000, 800, 800, 60, 60, 60]
-    kd = [200, 200, 60, 60, 3, 3, 3]
-    for j in range(7):
-        p = build_controller(cfg, "pid", j).params
-        assert (p.kp, p.kd, p.ki) == (kp[j], kd[j], 5 * kp[j])
+    p = build_controllers(cfg, "pid").params
+    assert p.kp.tolist() == [2000, 2000, 800, 800, 60, 60, 60]
+    assert p.kd.tolist() == [200, 200, 60, 60, 3, 3, 3]
+    assert p.ki.tolist() == (5 * p.kp).tolist()
 
 
 def test_law_and_saturation(cfg):
-    pid = build_controller(cfg, "pid", 4)  # kp 60, ki 300, kd 3, limit 14.5
-    u = pid.step(0.0, 0.2, ReferenceSample(0.1, 0.5, 0.1))
-    assert u == pytest.approx(60 * 0.1 + 300 * 0.1 * 1e-3 + 3 * (0.5 - 0.2))
-    assert pid.step(0.0, 0.0, ReferenceSample(10.0, 0.0, 10.0)) == 14.5
+    pid = build_controllers(cfg, "pid", [4])  # kp 60, ki 300, kd 3, limit 14.5
+    u = pid.step(np.array([0.0]), np.array([0.2]), _ref(0.1, 0.5))
+    assert u[0] == pytest.approx(60 * 0.1 + 300 * 0.1 * 1e-3 + 3 * (0.5 - 0.2))
+    assert pid.step(np.zeros(1), np.zeros(1), _ref(10.0, 0.0))[0] == 14.5
+
+
+def test_an_inactive_row_does_not_integrate(cfg):
+    pid = build_controllers(cfg, "pid", [4, 5])
+    pid.step(np.zeros(2), np.zeros(2), ReferenceSample(np.full(2, 0.1), np.zeros(2), np.full(2, 0.1)),
+             active=np.array([1.0, 0.0]))
+    assert pid.integral[0] == pytest.approx(0.1e-3) and pid.integral[1] == 0.0

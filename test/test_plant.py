@@ -219,6 +219,13 @@ def test_forward_acceleration_matches_independent_solve(client, make_plant):
         np.testing.assert_allclose(tau_id + ROTOR_KGM2 * qdd + friction, tau, rtol=1e-9, atol=1e-8)
 
 
+def _bisect(g, lo, hi):
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if g(mid) < 0 else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
 def test_one_step_is_semi_implicit_euler(client, make_plant):
     plant = make_plant(coulomb_nm=(1.0,) * 7)
     fv, fc, eps = (np.array(plant.params.viscous_nms_per_rad), np.array(plant.params.coulomb_nm),
@@ -229,7 +236,12 @@ def test_one_step_is_semi_implicit_euler(client, make_plant):
         plant.step(tau)
         m = np.array(client.calculateMassMatrix(plant.body_id, q.tolist())) + np.diag(ROTOR_KGM2)
         bias = np.array(client.calculateInverseDynamics(plant.body_id, q.tolist(), qd.tolist(), [0.0] * 7))
-        qdd = np.linalg.solve(m, tau - bias - fv * qd - fc * np.tanh(qd / eps))
+        rhs = tau - bias - fv * qd
+        m_inv = np.linalg.inv(m)
+        v_free, k = qd + dt * m_inv @ rhs, dt * fc * np.diag(m_inv)
+        v = np.array([_bisect(lambda x: x - vf + kj * np.tanh(x / eps), vf - kj, vf + kj)  # Coulomb: implicit
+                      for vf, kj in zip(v_free, k)])
+        qdd = m_inv @ (rhs - fc * np.tanh(v / eps))
         qd1 = qd + dt * qdd
         q1 = q + dt * qd1
         q_got, qd_got = plant.state
@@ -412,3 +424,32 @@ def test_missing_urdf_raises(client, tmp_path):
     missing = tmp_path / "no_such_arm.urdf"
     with pytest.raises(FileNotFoundError, match="no_such_arm.urdf"):
         PyBulletPA10Plant(client, missing, PlantParams())
+
+
+def test_steep_coulomb_friction_on_a_light_wrist_does_not_ring(make_plant):
+    """Fc / eps = 72.5 N m s/rad on a ~0.01 kg m^2 wrist: an explicit step would ring (dt Fc/(eps J) ~ 7);
+    the linearly implicit step brings the joint to rest without sign flips growing."""
+    fc = (11.6, 11.6, 5.0, 5.0, 0.725, 0.725, 0.725)
+    plant = make_plant(coulomb_nm=fc, gravity_mps2=0.0)
+    plant.reset(np.zeros(7), np.array([0, 0, 0, 0, 0.5, -0.5, 0.5]))
+    speeds = []
+    for _ in range(300):
+        plant.step(np.zeros(7))
+        speeds.append(np.abs(plant.state[1][4:]).max())
+    assert speeds[-1] < 1e-3
+    assert all(b <= a + 1e-12 for a, b in zip(speeds, speeds[1:])), "the wrist speeds only decay"
+
+
+def test_payload_and_link_mass_scale_change_the_dynamics(make_plant):
+    """5 kg at the flange: the gravity torque on S2 with the arm horizontal grows by m g (flange - S2 axis)."""
+    q = np.array([0.0, np.pi / 2, 0, 0, 0, 0, 0])
+    base = make_plant()
+    loaded = make_plant(payload_kg=5.0)
+    heavier = make_plant(link_mass_scale=1.3)
+    d = loaded.bias_torque(q, np.zeros(7)) - base.bias_torque(q, np.zeros(7))
+    assert abs(d[1]) == pytest.approx(5.0 * 9.81 * (1.345 - 0.315), rel=1e-6)
+    g0, g1 = base.bias_torque(q, np.zeros(7)), heavier.bias_torque(q, np.zeros(7))
+    np.testing.assert_allclose(g1, 1.3 * g0, rtol=1e-9, atol=1e-9)  # gravity is linear in the link masses
+    rotor = np.array(ROTOR_KGM2)
+    np.testing.assert_allclose(np.diag(heavier.mass_matrix(q)) - rotor, 1.3 * (np.diag(base.mass_matrix(q)) - rotor),
+                               rtol=1e-9)

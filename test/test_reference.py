@@ -40,8 +40,16 @@ def test_velocity_is_derivative_of_position(cfg):
 
 def test_sample_carries_k_plus_2_preview(cfg):
     ref = build_reference(cfg)
-    s = ref.sample(3, 5000)
-    assert s.position_rad == ref.position(5000)[3]
-    assert s.position_ahead_rad == ref.position(5002)[3]
-    assert s.velocity_rad_s == ref.velocity(5000)[3]
-    assert [x.position_ahead_rad for x in ref.samples(5000)] == list(ref.position(5002))
+    s = ref.sample(5000, [3])
+    assert s.position_rad[0] == ref.position(5000)[3]
+    assert s.position_ahead_rad[0] == ref.position(5002)[3]
+    assert s.velocity_rad_s[0] == ref.velocity(5000)[3]
+    assert np.array_equal(ref.sample(5000).position_ahead_rad, ref.position(5002))
+
+
+def test_acceleration_is_the_derivative_of_the_velocity(cfg):
+    ref = build_reference(cfg)
+    k = np.array([100, 3000, 9000, 15000])
+    h = 1  # one step: central difference of the analytic velocity
+    fd = (ref.velocity(k + h) - ref.velocity(k - h)) / (2 * h * ref.dt_s)
+    np.testing.assert_allclose(ref.acceleration(k), fd, rtol=1e-4, atol=1e-6)

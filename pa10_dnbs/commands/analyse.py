@@ -8,7 +8,7 @@ from .. import JOINT_NAMES
 from ..bag.analysis import robot_chain, run_info, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
 from ..config import default_config_path, load_config
-from ..report.metrics_file import effective_window, metrics_dict
+from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 
 
@@ -49,8 +49,7 @@ def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None
             raise BagError(f"{bag.path}: the bag does not hold the whole run: {missing}")
         controller = info.get("controller", "unknown")
         run = rec.run_data(controller, JOINT_NAMES, cfg["plant"]["torque_limit_nm"], math.nan)
-        window = effective_window(rec.n * dt, tuple(cfg["simulation"]["window_s"]))
-        metrics = metrics_dict(run, window, source="bag", bag=str(bag.path.resolve()), mode=info.get("mode"),
+        metrics = metrics_dict(run, metrics_settings(cfg, rec.n * dt), source="bag", bag=str(bag.path.resolve()), mode=info.get("mode"),
                                seed=cfg["simulation"].get("seed"), malformed_messages=rec.malformed)
         notes = [f"bag: `{bag.path}` ({bag.message_count} messages on {len(bag.topics)} topics)",
                  f"config: {cfg_note}",

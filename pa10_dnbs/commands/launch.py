@@ -13,12 +13,13 @@ from ..bag.analysis import wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
 from ..bag.bag_writer import check_bag_path
 from ..config import ConfigError, default_config_path, load_config
+from ..core.checkpoint import checkpoint_dir, load_joint_checkpoints
 from ..kinematics.urdf_chain import UrdfChain
 from ..launch.fault_flags import apply_fault_flags, faults_active, plain
 from ..launch.fault_report import fault_note, fault_report
 from ..launch.graph_run import GraphFailure, GraphOptions, loop_reliability, parse_netns, run_graph
 from ..loop.rt_priority import check_priority
-from ..report.metrics_file import effective_window, metrics_dict
+from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..wire.wire_record import load_wire_run
 from ..wire.steps import StepClock
@@ -29,13 +30,14 @@ from ..wire.topics import CLOCK, JOINT_STATES, effort_topic, state_topic
 def run_launch(config_path: Path | None, mode: str, controller: str, duration_s: float | None, out: Path,
                force: bool, progress: bool, domain_id: int | None, reliability: str | None, effort_timeout_s: float,
                on_missing_effort: str, record: Path | None = None, fault_args=None, restart: str | None = None,
-               netns: list[str] | None = None, real_time_factor: float = 1.0, deadline_fraction: float = 0.9,
-               rt_priority: int = 0) -> int:
+               netns: list[str] | None = None, init_from: Path | None = None, real_time_factor: float = 1.0,
+               deadline_fraction: float = 0.9, rt_priority: int = 0) -> int:
     """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code.
 
     ``fault_args``: the parsed fault flags (launch/fault_flags.py) applied to the config; the config the
     nodes run with is written to ``out/config_used.yaml``. ``restart``: 'resume' or 'fresh'.
     ``netns``: ['GROUP=NAMESPACE', ...] to run node groups in network namespaces.
+    ``init_from``: warm start of the DNBS controllers from an earlier run's checkpoints (reported as such).
     ``real_time_factor``, ``deadline_fraction``: realtime pacing (docs/timing.md); ``rt_priority``: SCHED_FIFO
     priority of plant and controllers (0: off). ``reliability`` None: the mode's default QoS.
     """
@@ -66,6 +68,14 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     n_steps = int(round(duration_s / dt))
     if n_steps < 2:
         raise ConfigError(f"--duration: {duration_s} s is shorter than two steps of {dt} s")
+    if init_from is not None:
+        if controller != "dnbs":
+            raise ConfigError("--init-from: only the DNBS controllers have learned state to start from")
+        try:
+            load_joint_checkpoints(init_from, JOINT_NAMES)  # all there and readable, before anything starts
+        except ValueError as exc:
+            raise ConfigError(f"--init-from: {exc}") from None
+        init_from = checkpoint_dir(init_from).resolve()
     check_output_dir(out, force)
     if record is not None:
         record = Path(record).resolve()
@@ -75,10 +85,12 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     opt = GraphOptions(config_path=config_path, mode=mode, controller=controller, duration_s=n_steps * dt,
                        domain_id=domain_id, reliability=reliability, effort_timeout_s=effort_timeout_s,
                        on_missing_effort=on_missing_effort, progress=progress, dt_s=dt, record_bag=record,
-                       force_bag=force, restart=restart, netns=namespaces, real_time_factor=real_time_factor,
-                       deadline_fraction=deadline_fraction, rt_priority=rt_priority)
+                       force_bag=force, restart=restart, netns=namespaces, init_from=init_from,
+                       real_time_factor=real_time_factor, deadline_fraction=deadline_fraction,
+                       rt_priority=rt_priority)
     reliability = loop_reliability(opt)
-    window = effective_window(n_steps * dt, cfg["simulation"]["window_s"])
+    settings = metrics_settings(cfg, n_steps * dt)
+    window = settings["window_s"]
 
     try:
         with atomic_output_dir(out, force) as tmp:
@@ -97,16 +109,19 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
             if missing:
                 raise GraphFailure(f"the record of the run is incomplete: {missing}")
             metrics = metrics_dict(
-                run, window, source="ros-graph", mode=mode, config_file=str(config_path),
+                run, settings, source="ros-graph", mode=mode, config_file=str(config_path),
                 seed=cfg["simulation"]["seed"], reliability=reliability, domain_id=result.domain_id,
                 wall_time_total_s=result.wall_total_s, limit_hits=stats["limit_hits"],
                 timing=timing_summary(stats),
                 node_exit_codes=result.exit_codes, bag=str(record) if record else None,
-                faults=fault_report(cfg, stats, result))
+                faults=fault_report(cfg, stats, result),
+                **({"warm_start_from": str(init_from)} if init_from is not None else {}))
             notes = [f"config: `{config_path}`",
                      f"source: ROS 2 node graph, {mode} mode, {reliability} QoS, domain {result.domain_id}; "
                      f"time series rebuilt from {source}",
                      _timing_note(stats)]
+            if init_from is not None:
+                notes.append(f"DNBS warm-started from the checkpoints in `{init_from}` (not a cold start)")
             if faults_active(cfg) or result.restarts:
                 notes.append(fault_note(metrics["faults"]))
             if tuple(window) != tuple(cfg["simulation"]["window_s"]):

@@ -4,16 +4,24 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from .. import JOINT_NAMES
 from ..config import ConfigError, default_config_path, load_config
+from ..core.checkpoint import load_joint_checkpoints, save_checkpoint
 from ..kinematics.urdf_chain import UrdfChain
-from ..report.metrics_file import effective_window, metrics_dict
+from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..sim.closed_loop import simulate
 
+CHOICES = {"dnbs": ("dnbs",), "pid": ("pid",), "ctc": ("ctc",), "both": ("dnbs", "pid"), "all": ("dnbs", "pid", "ctc")}
+
 
 def run_simulate(config_path: Path | None, controller: str, duration_s: float | None, out: Path,
-                 force: bool, progress: bool) -> int:
-    """Run one or both controllers; write everything into ``out`` atomically. Returns the exit code."""
+                 force: bool, progress: bool, init_from: Path | None = None) -> int:
+    """Run one or more controllers; write everything into ``out`` atomically. Returns the exit code.
+
+    ``init_from``: a warm start of the DNBS controllers from the checkpoints of an earlier run (a run's
+    output directory, or a directory of ``<joint>.npz``); the report says so.
+    """
     config_path = Path(config_path) if config_path else default_config_path()
     cfg = load_config(config_path)
     if duration_s is None:
@@ -24,25 +32,54 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
     if n_steps < 2:
         raise ConfigError(f"--duration: {duration_s} s is shorter than two steps")
     duration_s = n_steps * cfg["simulation"]["dt_s"]
+    kinds = CHOICES[controller]
+    init_states = None
+    if init_from is not None:
+        if "dnbs" not in kinds:
+            raise ConfigError("--init-from: only the DNBS controllers have learned state to start from")
+        try:
+            init_states = load_joint_checkpoints(init_from, JOINT_NAMES)
+        except ValueError as exc:
+            raise ConfigError(f"--init-from: {exc}") from None
     check_output_dir(out, force)
-    window = effective_window(duration_s, cfg["simulation"]["window_s"])
-    kinds = ("dnbs", "pid") if controller == "both" else (controller,)
+    settings = metrics_settings(cfg, duration_s)
     runs, metrics = [], []
     for kind in kinds:
-        run = simulate(cfg, kind, duration_s, progress=progress)
+        run = simulate(cfg, kind, duration_s, progress=progress, init_states=init_states if kind == "dnbs" else None)
         runs.append(run)
-        metrics.append(metrics_dict(run, window, source="in-process", config_file=str(config_path.resolve()),
-                                    seed=cfg["simulation"]["seed"], limit_hits=run.extra["limit_hits"]))
+        extra = {"warm_start_from": str(Path(init_from).resolve())} if init_states is not None and kind == "dnbs" else {}
+        metrics.append(metrics_dict(run, settings, source="in-process", config_file=str(config_path.resolve()),
+                                    seed=cfg["simulation"]["seed"], limit_hits=run.extra["limit_hits"], **extra))
     notes = [f"config: `{config_path}`", "source: in-process simulation (no ROS)"]
-    if tuple(window) != tuple(cfg["simulation"]["window_s"]):
+    if init_states is not None:
+        notes.append(f"DNBS warm-started from the checkpoints in `{init_from}` (not a cold start)")
+    if "ctc" in kinds:
+        notes.append("CTC: centralized computed torque with the plant's own model (the reference a decentralized "
+                     "controller is compared to; in-process only)")
+    if tuple(settings["window_s"]) != tuple(cfg["simulation"]["window_s"]):
         notes.append(f"run shorter than the configured window {cfg['simulation']['window_s']}: "
                      f"metrics over the second half instead")
     with atomic_output_dir(out, force) as tmp:
         write_report(tmp, runs, metrics, title="PA10-7CE closed-loop run", notes=notes,
                      chain=UrdfChain.from_file(cfg["plant"]["urdf"]))
+        for run in runs:
+            if run.controller == "dnbs":
+                _save_checkpoints(tmp / "checkpoints" if len(runs) == 1 else tmp / "dnbs" / "checkpoints",
+                                  run.extra["controllers"], n_steps - 1)
     for m in metrics:
-        print(f"{m['controller']}: worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over "
-              f"{m['window_s']} s, {m['real_time_factor']:.1f}x real time")
+        settle = m["worst_settling_time_s"]
+        print(f"{m['controller']}: worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over {m['window_s']} s; "
+              f"settled (|e| < {m['settle_band_rad']:g} rad) "
+              + (f"after {settle:.3f} s" if settle is not None else "never")
+              + f"; max |e| {m['worst_max_abs_error_run_rad']:.4f} rad; torque variation "
+              f"{m['worst_torque_variation']:.2f}; {m['real_time_factor']:.1f}x real time")
     print(f"wrote {out}/report.md")
     ok = all(m["all_finite"] and m["torques_within_limits"] for m in metrics)
     return 0 if ok else 1
+
+
+def _save_checkpoints(directory: Path, controllers, last_step: int) -> None:
+    """One ``<joint>.npz`` per joint, as the graph's controllers write them (``--init-from`` reads either)."""
+    directory.mkdir(parents=True, exist_ok=True)
+    for row, joint in enumerate(controllers.joints):
+        save_checkpoint(directory / f"{JOINT_NAMES[joint]}.npz", controllers.state_dict(row), last_step)

@@ -29,3 +29,26 @@ def load_checkpoint(path: Path) -> tuple[dict, int]:
     if "step" not in state:
         raise ValueError(f"{path}: not a checkpoint (no step)")
     return state, int(state.pop("step"))
+
+
+def checkpoint_dir(path: Path) -> Path:
+    """The directory holding ``<joint>.npz`` files: ``path`` itself, or ``path/checkpoints`` (a run's output)."""
+    path = Path(path)
+    return path / "checkpoints" if (path / "checkpoints").is_dir() else path
+
+
+def load_joint_checkpoints(path: Path, joint_names) -> list[dict]:
+    """One controller state per joint from ``<dir>/<joint>.npz`` (see :func:`checkpoint_dir`).
+
+    ValueError naming the file when one is missing or unreadable.
+    """
+    d = checkpoint_dir(path)
+    if not d.is_dir():
+        raise ValueError(f"{path}: no such checkpoint directory")
+    states = []
+    for name in joint_names:
+        f = d / f"{name}.npz"
+        if not f.is_file():
+            raise ValueError(f"{f}: missing (a warm start needs one checkpoint per joint: {', '.join(joint_names)})")
+        states.append(load_checkpoint(f)[0])
+    return states

@@ -1,131 +1,288 @@
-"""Per-joint decentralized neural backstepping controller, eq. 23-26.
+"""Decentralized neural backstepping controllers (eq. 23-26), one per joint, computed as rows of arrays.
 
-For joint i at step k, using only that joint's x1 (angle, rad), x2 (velocity,
-rad/s) and its own reference:
-    alpha = w1^T S1(z1),  z1 = [x1, x_d(k+2)]          virtual control [rad/s]
-    u     = w2^T S2(z2),  z2 = [x1, x2, alpha]         torque [N m]
-    e1 = x_d(k) - x1,     e2 = alpha - x2
-and both networks are trained by an EKF every step (except, with anti-windup,
-an update that would push an already saturated torque further out). e2 has the opposite sign of
-the paper's printed eq. 26: with H = S(z) and w <- w + eta K e the printed
-x2 - alpha is positive feedback (test/test_dnbs_controller.py shows it).
-The torque is saturated at the joint's Table 2 limit.
+Row i is joint i's controller and reads only row i: its own angle x1 [rad],
+velocity x2 [rad/s] and reference. A joint-controller node holds a bank of
+one row; the in-process simulation holds all seven in one bank. The
+arithmetic of a row does not depend on the other rows, so both agree bit for
+bit (test/test_dnbs_controller.py checks it).
+
+Per joint, at step k:
+    alpha = A w1^T S1(z1) + k_a e1        z1 = [x1, x_d(k+2)]     virtual control [rad/s]
+    u     = U w2^T S2(z2) + k_u e2        z2 = [x1, x2, alpha]    torque [N m], clipped to Table 2
+    e1 = x_d(k) - x1,   e2 = alpha - x2
+Both HONNs (w1, w2) are trained every step by an EKF with learning rate
+eta in (0, 1] (eq. 7) on the dimensionless errors e1/E1 and e2/E2. A [rad/s]
+and U [N m] scale the networks' outputs, E1 [rad] and E2 [rad/s] their
+training errors: U eta / E2 [N m per rad/s] is the torque network's
+adaptation gain, explicit and per joint.
+
+e2 has the opposite sign of the paper's printed eq. 26: with H = S(z) and
+w <- w + eta K e, the printed x2 - alpha is positive feedback (``e2_sign =
+'printed'`` reproduces it; test_dnbs_controller shows it diverge).
+
+The remedies for the learning transient (docs/controller.md gives each one's
+reason and reference; each is off in ``config/paper.yaml``):
+- robust term: the linear k_a e1 and k_u e2 above (Lewis, Yesildirek & Liu
+  1996); k = 0 is the paper's law;
+- anti-windup: conditional integration, an update that would push a clipped
+  torque further out is skipped (Astrom & Rundqwist 1989);
+- dead zone: the EKF trains on e - clip(e, -d, d), no adaptation on errors
+  below the modelling error (continuous dead zone, Ioannou & Sun 8.5);
+- e-modification: after each update w <- w (1 - sigma |e/E|), a leakage that
+  vanishes with the error (Narendra & Annaswamy 1987);
+- projection: every weight is kept in [-B, B] (Ioannou & Sun 8.5; B large
+  enough for the ideal weights);
+- learning ramp: eta grows linearly from 0 over ramp_s seconds, so the
+  networks do not learn from the first, least informative, transient;
+- covariance bound: Q stops growing a diagonal entry of P beyond p_max
+  (no covariance windup in unexcited directions; Haykin 2001, ch. 2).
 
 EKF guard: after every step both trainers are checked (finite w and P, and
-every ``ekf_full_check_every`` steps P symmetric positive definite); a
-network that fails is reset to its initial weights and P0, and counted in
-``ekf_resets``. ``state_dict()`` / ``load_state_dict()`` carry everything a
-restarted controller needs to resume (weights, covariances, step count).
+every ``ekf_full_check_every`` steps P symmetric positive definite); a row that
+fails is reset to its initial weights and P0, and counted in ``ekf_resets``.
+``state_dict(row)`` / ``load_state_dict(row, state)`` carry what a restarted
+(or warm-started) controller needs to resume: weights, covariances, step count.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from .ekf import EKFParams, EKFTrainer
+from .ekf import EKFBank
 from .honn import HONN, monomial_exponents
 from .reference import ReferenceSample
 
 
 @dataclass(frozen=True)
 class NetworkParams:
-    """One HONN and its EKF.
+    """One HONN per joint and its EKF; per-joint values are arrays of shape (n,).
 
-    max_degree: terms are all tanh monomials of total degree <= max_degree;
-    input_scale: per input, in that input's units; init_weight_std: std of
-    the seeded normal initial weights; ekf: EKF settings.
+    max_degree: the terms are all tanh monomials of total degree <= max_degree;
+    input_scale: per input, in that input's units (shared by the joints);
+    output_scale: A [rad/s] or U [N m]; error_scale: E1 [rad] or E2 [rad/s];
+    init_weight_std: std of the seeded normal initial weights (dimensionless);
+    p0, q, r: EKF P(0) = p0 I, Q = q I, R = r (dimensionless); eta in (0, 1].
     """
 
     max_degree: int
     input_scale: tuple[float, ...]
-    init_weight_std: float
-    ekf: EKFParams
+    output_scale: np.ndarray
+    error_scale: np.ndarray
+    init_weight_std: np.ndarray
+    p0: np.ndarray
+    q: np.ndarray
+    r: np.ndarray
+    eta: np.ndarray
+
+
+@dataclass(frozen=True)
+class Remedies:
+    """Switches and settings of the remedies (module docstring); per-joint values are arrays (n,).
+
+    A remedy that is off has no effect at all: its gain, band or bound is
+    replaced by the neutral value (0, 0, inf), so the paper's law is exact.
+    """
+
+    robust_term: bool = False
+    velocity_feedforward: bool = False                    # k_v = 1: alpha also gets x_d_dot (Lewis's r)
+    alpha_gain_per_s: np.ndarray | float = 0.0          # k_a [1/s]
+    torque_gain_nms_per_rad: np.ndarray | float = 0.0   # k_u [N m s/rad]
+    anti_windup: bool = False
+    dead_zone: bool = False
+    dead_zone_rad: np.ndarray | float = 0.0              # d1 on e1 [rad]
+    dead_zone_rad_s: np.ndarray | float = 0.0            # d2 on e2 [rad/s]
+    e_modification: bool = False
+    e_modification_sigma: float = 0.0                    # sigma [-] per step, per unit of |e/E|
+    projection: bool = False
+    weight_bound: float = float("inf")                   # B [-]
+    learning_ramp: bool = False
+    learning_ramp_s: float = 0.0                         # [s]
+    covariance_bound: bool = False
+    p_max: float = float("inf")                          # [-] largest diagonal entry of P that Q still grows
 
 
 @dataclass(frozen=True)
 class DNBSParams:
-    """Settings of one joint's DNBS controller."""
+    """Settings of n joints' DNBS controllers (all per-joint arrays have shape (n,))."""
 
     alpha_net: NetworkParams
     torque_net: NetworkParams
-    torque_limit_nm: float
-    anti_windup: bool = True       # skip updates that would push a saturated torque further out
-    printed_e2_sign: bool = False  # True reproduces the paper's printed e2 = x2 - alpha (diverges)
+    torque_limit_nm: np.ndarray
+    dt_s: float
+    remedies: Remedies = field(default_factory=Remedies)
+    e2_sign: str = "stable"          # 'printed' reproduces the paper's printed e2 = x2 - alpha (diverges)
     ekf_full_check_every: int = 100  # steps between Cholesky checks of P (0: never; finiteness every step)
 
+    @property
+    def n_joints(self) -> int:
+        return int(np.size(self.torque_limit_nm))
 
-class DNBSJointController:
-    """Neural backstepping controller for one joint; see the module docstring."""
+    def select(self, rows) -> "DNBSParams":
+        """The parameters of a subset of the joints (e.g. one node's joint), in the order of ``rows``."""
+        rows = np.asarray(rows)
 
-    def __init__(self, params: DNBSParams, seed):
-        """``seed``: int or sequence of ints for numpy.random.default_rng (initial weights)."""
+        def pick(obj):
+            kw = {}
+            for f in fields(obj):
+                v = getattr(obj, f.name)
+                kw[f.name] = v[rows] if isinstance(v, np.ndarray) and v.ndim == 1 else v
+            return type(obj)(**kw)
+
+        return DNBSParams(alpha_net=pick(self.alpha_net), torque_net=pick(self.torque_net),
+                          torque_limit_nm=self.torque_limit_nm[rows], dt_s=self.dt_s,
+                          remedies=pick(self.remedies), e2_sign=self.e2_sign,
+                          ekf_full_check_every=self.ekf_full_check_every)
+
+
+def initial_weights(seed: int, joint: int, n_alpha: int, n_torque: int, std_alpha: float, std_torque: float):
+    """Joint ``joint``'s random initial weights (the paper: "initialized in a random way"), seeded by
+    (seed, joint): the same in a bank of one as in a bank of seven."""
+    rng = np.random.default_rng((seed, joint))
+    return rng.normal(0.0, std_alpha, n_alpha), rng.normal(0.0, std_torque, n_torque)
+
+
+class DNBSControllers:
+    """The DNBS controllers of joints ``joints`` (indices 0..6), one per row; see the module docstring."""
+
+    def __init__(self, params: DNBSParams, seed: int, joints):
+        joints = [int(j) for j in joints]
+        if len(joints) != params.n_joints:
+            raise ValueError(f"{len(joints)} joints for parameters of {params.n_joints}")
+        if params.e2_sign not in ("stable", "printed"):
+            raise ValueError(f"e2_sign must be 'stable' or 'printed', got {params.e2_sign!r}")
         self.params = params
-        rng = np.random.default_rng(seed)
-        self.alpha_honn = HONN(monomial_exponents(2, params.alpha_net.max_degree),
-                               params.alpha_net.input_scale)
-        self.torque_honn = HONN(monomial_exponents(3, params.torque_net.max_degree),
-                                params.torque_net.input_scale)
-        w1 = rng.normal(0.0, params.alpha_net.init_weight_std, self.alpha_honn.n_terms)
-        w2 = rng.normal(0.0, params.torque_net.init_weight_std, self.torque_honn.n_terms)
-        self.alpha_ekf = EKFTrainer(w1, params.alpha_net.ekf)
-        self.torque_ekf = EKFTrainer(w2, params.torque_net.ekf)
-        self.alpha = 0.0
-        self.torque_unsaturated = 0.0
+        self.joints = tuple(joints)
+        a, t = params.alpha_net, params.torque_net
+        self.alpha_honn = HONN(monomial_exponents(2, a.max_degree), a.input_scale)
+        self.torque_honn = HONN(monomial_exponents(3, t.max_degree), t.input_scale)
+        w = [initial_weights(seed, j, self.alpha_honn.n_terms, self.torque_honn.n_terms,
+                             a.init_weight_std[i], t.init_weight_std[i]) for i, j in enumerate(joints)]
+        rem = params.remedies
+        p_max = rem.p_max if rem.covariance_bound else np.inf
+        self.alpha_ekf = EKFBank(np.array([x[0] for x in w]), a.p0, a.q, a.r, a.eta, p_max)
+        self.torque_ekf = EKFBank(np.array([x[1] for x in w]), t.p0, t.q, t.r, t.eta, p_max)
+        n = len(joints)
+
+        def on(flag, value, neutral):
+            return np.broadcast_to(np.asarray(value, dtype=float), (n,)).copy() if flag else np.full(n, neutral)
+
+        self._k_a = on(rem.robust_term, rem.alpha_gain_per_s, 0.0)
+        self._k_v = 1.0 if rem.robust_term and rem.velocity_feedforward else 0.0
+        self._k_u = on(rem.robust_term, rem.torque_gain_nms_per_rad, 0.0)
+        self._d1 = on(rem.dead_zone, rem.dead_zone_rad, 0.0)
+        self._d2 = on(rem.dead_zone, rem.dead_zone_rad_s, 0.0)
+        self._sigma = rem.e_modification_sigma if rem.e_modification else 0.0
+        self._bound = rem.weight_bound if rem.projection else np.inf
+        self._ramp_steps = rem.learning_ramp_s / params.dt_s if rem.learning_ramp and rem.learning_ramp_s > 0 else 0.0
+        self._anti_windup = rem.anti_windup
+        self._dead_zone = rem.dead_zone
+        self._printed = params.e2_sign == "printed"
+        self._A, self._E1 = a.output_scale, a.error_scale
+        self._U, self._E2 = t.output_scale, t.error_scale
+        self._lim = params.torque_limit_nm
+        self._z1 = np.empty((n, 2))
+        self._z2 = np.empty((n, 3))
+        self._ones = np.ones(n)
+        self.alpha = np.zeros(n)                 # last virtual control [rad/s]
+        self.torque_unsaturated = np.zeros(n)    # last torque before the Table 2 clip [N m]
         self.steps = 0
-        self.ekf_resets = {"alpha": 0, "torque": 0}
+        self.ekf_resets = {"alpha": np.zeros(n, dtype=np.int64), "torque": np.zeros(n, dtype=np.int64)}
 
-    def step(self, x1: float, x2: float, ref: ReferenceSample) -> float:
-        """Compute the torque [N m] for state (x1, x2) and train both networks."""
-        S1 = self.alpha_honn.regressor((x1, ref.position_ahead_rad))
-        alpha = float(self.alpha_ekf.w @ S1)
-        S2 = self.torque_honn.regressor((x1, x2, alpha))
-        u = float(self.torque_ekf.w @ S2)
+    @property
+    def n_joints(self) -> int:
+        return len(self.joints)
 
+    def step(self, x1: np.ndarray, x2: np.ndarray, ref: ReferenceSample, active: np.ndarray | None = None) -> np.ndarray:
+        """Torques (n,) [N m] for angles x1 (n,) [rad] and velocities x2 (n,) [rad/s]; trains both networks.
+
+        ``active`` (n,) of 1.0 / 0.0: a row with 0 is not trained (its state was not trusted; its inputs must
+        still be finite) and its torque is to be ignored by the caller.
+        """
+        z1, z2 = self._z1, self._z2
+        z1[:, 0] = x1
+        z1[:, 1] = ref.position_ahead_rad
+        S1 = self.alpha_honn.regressor(z1)
         e1 = ref.position_rad - x1
-        e2 = (x2 - alpha) if self.params.printed_e2_sign else (alpha - x2)
-        lim = self.params.torque_limit_nm
-        # Conditional integration: while the torque is clipped, skip an update
-        # that would raise |u| further: e2 > 0 raises u directly; e1 > 0 raises
-        # alpha, and so u too wherever du/dalpha > 0 (the case the law relies on).
-        saturated = self.params.anti_windup and abs(u) >= lim
-        if not (saturated and e1 * u > 0.0):
-            self.alpha_ekf.update(S1, e1)
-        if not (saturated and e2 * u > 0.0):
-            self.torque_ekf.update(S2, e2)
+        alpha = self._A * self.alpha_ekf.output(S1) + self._k_a * e1
+        if self._k_v:
+            alpha = alpha + ref.velocity_rad_s
+        z2[:, 0] = x1
+        z2[:, 1] = x2
+        z2[:, 2] = alpha
+        S2 = self.torque_honn.regressor(z2)
+        e2 = alpha - x2
+        u = self._U * self.torque_ekf.output(S2) + self._k_u * e2
+        lim = self._lim
+        u_out = np.minimum(np.maximum(u, -lim), lim)
+
+        e2_train = -e2 if self._printed else e2
+        act1 = act2 = active
+        if self._anti_windup:
+            # Conditional integration: while the torque is clipped, skip an update that would raise |u|:
+            # e2 > 0 raises u directly; e1 > 0 raises alpha, and so u wherever du/dalpha > 0.
+            sat = np.abs(u) >= lim
+            if sat.any():
+                base = self._ones if active is None else active
+                act1 = base * (1.0 - (sat & (e1 * u > 0.0)))
+                act2 = base * (1.0 - (sat & (e2_train * u > 0.0)))
+        if self._dead_zone:
+            e1 = e1 - np.clip(e1, -self._d1, self._d1)
+            e2_train = e2_train - np.clip(e2_train, -self._d2, self._d2)
+        eps1 = e1 / self._E1
+        eps2 = e2_train / self._E2
+        ramp = min(1.0, self.steps / self._ramp_steps) if self._ramp_steps else 1.0
+        eta1 = self.alpha_ekf.eta * ramp if ramp != 1.0 else self.alpha_ekf.eta
+        eta2 = self.torque_ekf.eta * ramp if ramp != 1.0 else self.torque_ekf.eta
+        self.alpha_ekf.update(S1, eps1, eta1, act1)
+        self.torque_ekf.update(S2, eps2, eta2, act2)
+        if self._sigma:
+            a1 = self._ones if act1 is None else act1
+            a2 = self._ones if act2 is None else act2
+            self.alpha_ekf.w *= (1.0 - np.minimum(1.0, self._sigma * np.abs(eps1) * a1))[:, None]
+            self.torque_ekf.w *= (1.0 - np.minimum(1.0, self._sigma * np.abs(eps2) * a2))[:, None]
+        if self._bound != np.inf:
+            np.clip(self.alpha_ekf.w, -self._bound, self._bound, out=self.alpha_ekf.w)
+            np.clip(self.torque_ekf.w, -self._bound, self._bound, out=self.torque_ekf.w)
 
         self.alpha = alpha
         self.torque_unsaturated = u
         self.steps += 1
         self._guard()
-        return min(max(u, -lim), lim)
+        return u_out
 
     def _guard(self) -> None:
         every = self.params.ekf_full_check_every
         full = every > 0 and self.steps % every == 0
         for name, ekf in (("alpha", self.alpha_ekf), ("torque", self.torque_ekf)):
-            if not ekf.healthy(full):
-                ekf.reset()
-                self.ekf_resets[name] += 1
+            bad = ekf.unhealthy(full)
+            if bad.any():
+                ekf.reset(bad)
+                self.ekf_resets[name] += bad
 
-    def state_dict(self) -> dict[str, np.ndarray]:
-        """Weights (L,), covariances (L, L), initial weights and counters, as arrays (for np.savez)."""
-        return {"alpha_w": self.alpha_ekf.w.copy(), "alpha_P": self.alpha_ekf.P.copy(),
-                "alpha_w0": self.alpha_ekf.w0.copy(), "torque_w": self.torque_ekf.w.copy(),
-                "torque_P": self.torque_ekf.P.copy(), "torque_w0": self.torque_ekf.w0.copy(),
-                "steps": np.array(self.steps), "alpha": np.array(self.alpha),
-                "ekf_resets": np.array([self.ekf_resets["alpha"], self.ekf_resets["torque"]])}
+    def state_dict(self, row: int = 0) -> dict[str, np.ndarray]:
+        """Row ``row``'s weights (L,), covariances (L, L), initial weights and counters (for np.savez)."""
+        return {"joint": np.array(self.joints[row]),
+                "alpha_w": self.alpha_ekf.w[row].copy(), "alpha_P": self.alpha_ekf.P[row].copy(),
+                "alpha_w0": self.alpha_ekf.w0[row].copy(), "torque_w": self.torque_ekf.w[row].copy(),
+                "torque_P": self.torque_ekf.P[row].copy(), "torque_w0": self.torque_ekf.w0[row].copy(),
+                "steps": np.array(self.steps), "alpha": np.array(self.alpha[row]),
+                "ekf_resets": np.array([self.ekf_resets["alpha"][row], self.ekf_resets["torque"][row]])}
 
-    def load_state_dict(self, state: dict) -> None:
-        """Resume from ``state_dict()`` output; shapes must match this controller's networks."""
+    def load_state_dict(self, row: int, state: dict, resume_steps: bool = True) -> None:
+        """Set row ``row`` from a ``state_dict()``; shapes must match. ``resume_steps`` also takes over the step
+        count (a restarted controller); a warm start of a new run keeps its own (it starts at step 0)."""
+        if "joint" in state and int(state["joint"]) != self.joints[row]:
+            raise ValueError(f"checkpoint of joint index {int(state['joint'])}, expected {self.joints[row]}")
         for name, ekf in (("alpha", self.alpha_ekf), ("torque", self.torque_ekf)):
             w, P = np.asarray(state[f"{name}_w"], float), np.asarray(state[f"{name}_P"], float)
-            if w.shape != ekf.w.shape or P.shape != ekf.P.shape:
+            if w.shape != ekf.w[row].shape or P.shape != ekf.P[row].shape:
                 raise ValueError(f"checkpoint {name} network has shape {w.shape}/{P.shape}, expected "
-                                 f"{ekf.w.shape}/{ekf.P.shape}")
-            ekf.w[:] = w
-            ekf.P[:] = P
-            ekf.w0[:] = np.asarray(state[f"{name}_w0"], float)
-        self.steps = int(state["steps"])
-        self.alpha = float(state["alpha"])
-        self.ekf_resets = dict(zip(("alpha", "torque"), (int(v) for v in state["ekf_resets"])))
+                                 f"{ekf.w[row].shape}/{ekf.P[row].shape}")
+            ekf.w[row] = w
+            ekf.P[row] = P
+            ekf.w0[row] = np.asarray(state[f"{name}_w0"], float)
+        if resume_steps:
+            self.steps = int(state["steps"])
+            self.alpha[row] = float(state["alpha"])
+            self.ekf_resets["alpha"][row], self.ekf_resets["torque"][row] = (int(v) for v in state["ekf_resets"])

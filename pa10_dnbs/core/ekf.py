@@ -1,95 +1,130 @@
-"""Extended Kalman filter training of a scalar-output, weight-linear network.
+"""Extended Kalman filter training of scalar-output, weight-linear networks, one per row.
 
-Eq. 7-9 / 13-16 of the paper with m = 1:
+Eq. 7-9 / 13-16 of the paper with m = 1, for n independent networks (one
+per joint) of L weights each; row i only ever reads row i:
     M = 1 / (R + H^T P H)
     K = P H M
     w <- w + eta K e
     P <- P - K H^T P + Q
 P stays exactly symmetric: the correction is computed as v v^T with v = P H sqrt(M).
+Every sum over weights is an elementwise product reduced along the last axis
+(numpy's fixed-order pairwise sum), never einsum or matmul, whose summation
+order depends on the operands' shape and memory alignment: so a row's bits do
+not depend on how many rows the bank has.
+A row whose ``active`` flag is 0 skips the step entirely (no correction, no Q):
+conditional integration, for anti-windup. With ``p_max`` finite, Q is added
+to a diagonal entry of P only while it is below p_max: without it, P grows by
+q every step in every direction the regressors do not excite (covariance
+windup), and a later excitation there meets a huge gain.
 
-Guard: ``healthy()`` says whether w is finite and P finite, symmetric and
-positive definite (a Cholesky factorisation, when ``full``); ``reset()``
-returns to the initial weights and P = p0 I.
+Guard: ``unhealthy()`` names the rows whose w or P are no longer finite (and,
+when ``full``, whose P is not symmetric positive definite); ``reset(rows)``
+returns them to their initial weights and P = p0 I.
 """
 from __future__ import annotations
-
-import math
-from dataclasses import dataclass
 
 import numpy as np
 
 
-@dataclass(frozen=True)
-class EKFParams:
-    """EKF settings for one network.
+def _per_row(name: str, value, n: int, allow_zero: bool) -> np.ndarray:
+    arr = np.broadcast_to(np.asarray(value, dtype=float), (n,)).copy()
+    if not np.all(np.isfinite(arr)) or np.any(arr < 0) or (not allow_zero and np.any(arr == 0)):
+        raise ValueError(f"EKF parameter {name} must be finite and positive{' or 0' if allow_zero else ''}, "
+                         f"got {value}")
+    return arr
 
-    p0: initial diagonal of P [output-units^2 per unit-regressor^2];
-    q: diagonal of Q added every step; r: R (scalar, error-units^2);
-    eta: learning rate (dimensionless step scale).
+
+class EKFBank:
+    """Weights w (n, L) and covariances P (n, L, L) of n networks, trained one EKF step per call.
+
+    p0: initial diagonal of P; q: diagonal of Q added every step; r: R; eta:
+    learning rate in (0, 1] (eq. 7). Each is a number or one value per row, for
+    the network's dimensionless output and training error.
     """
 
-    p0: float
-    q: float
-    r: float
-    eta: float
-
-    def __post_init__(self):
-        for name in ("p0", "q", "r", "eta"):
-            v = getattr(self, name)
-            if not np.isfinite(v) or v < 0 or (name in ("p0", "r", "eta") and v == 0):
-                raise ValueError(f"EKF parameter {name} must be finite and positive (q may be 0), got {v}")
-
-
-class EKFTrainer:
-    """Holds w (L,) and P (L, L) and applies one EKF step per call."""
-
-    def __init__(self, weights: np.ndarray, params: EKFParams):
-        self.params = params
-        self.w0 = np.array(weights, dtype=float)  # the safe state reset() returns to
+    def __init__(self, weights, p0, q, r, eta, p_max=np.inf):
+        self.w0 = np.array(weights, dtype=float, ndmin=2)  # the safe state reset() returns to
+        n, L = self.w0.shape
+        self.p0 = _per_row("p0", p0, n, allow_zero=False)
+        self.q = _per_row("q", q, n, allow_zero=True)
+        self.r = _per_row("r", r, n, allow_zero=False)
+        self.eta = _per_row("eta", eta, n, allow_zero=False)
+        if np.any(self.eta > 1.0):
+            raise ValueError(f"EKF parameter eta must be in (0, 1] (eq. 7), got {eta}")
+        self.p_max = float(p_max)
+        if not self.p_max > 0:
+            raise ValueError(f"EKF parameter p_max must be positive, got {p_max}")
         self.w = self.w0.copy()
-        n = self.w.size
-        self.P = np.eye(n) * params.p0
-        self._P_diag = self.P.reshape(-1)[:: n + 1]  # a view: adds Q in place
-        self._outer = np.empty((n, n))
-        self._v = np.empty(n)           # P H sqrt(M)
-        self._v_col = self._v[:, None]  # the same buffer as a column (a view, made once)
-        self._eta, self._q, self._r = params.eta, params.q, params.r
-        self._last_hph = 0.0
+        self.P = self.p0[:, None, None] * np.eye(L)  # C-contiguous, always written in place
+        self._diag = self.P.reshape(n, L * L)[:, :: L + 1]  # a view of the n diagonals, (n, L)
+        self._q_col = self.q[:, None]
+        self._nLL = np.empty((n, L, L))  # scratch
+        self._nL = np.empty((n, L))
+        self._PH = np.empty((n, L))
+        self.last_hph = np.zeros(n)
 
-    def update(self, H: np.ndarray, error: float) -> float:
-        """One step with regressor H (L,) and training error e; returns the gain g = H^T K.
+    @property
+    def n_rows(self) -> int:
+        return self.w.shape[0]
+
+    def output(self, H: np.ndarray) -> np.ndarray:
+        """w^T H per row, shape (n,), for regressors H of shape (n, L)."""
+        return np.add.reduce(np.multiply(self.w, H, out=self._nL), axis=1)
+
+    def update(self, H: np.ndarray, error: np.ndarray, eta: np.ndarray, active: np.ndarray | None = None) -> np.ndarray:
+        """One step per row with regressor H (n, L), training error (n,), learning rate eta (n,) and
+        ``active`` (n,) 1.0 to train, 0.0 to skip (None: every row trains); returns the gain g = H^T K (n,).
 
         g in [0, 1) is the fraction of eta*e that the output at the same input moves by.
         """
-        PH = self.P @ H
-        hph = float(H @ PH)
-        m = 1.0 / (self._r + hph)
-        sqrt_m = math.sqrt(m)
-        v = np.multiply(PH, sqrt_m, out=self._v)
-        self.w += (self._eta * sqrt_m * error) * v          # eta K e, K = P H M
-        self.P -= np.multiply(self._v_col, v, out=self._outer)  # K H^T P = v v^T: exactly symmetric
-        self._P_diag += self._q
-        self._last_hph = hph
+        PH = np.add.reduce(np.multiply(self.P, H[:, None, :], out=self._nLL), axis=2, out=self._PH)
+        hph = np.add.reduce(np.multiply(H, PH, out=self._nL), axis=1)
+        m = 1.0 / (self.r + hph)
+        sqrt_m = np.sqrt(m)
+        v = PH * (sqrt_m if active is None else sqrt_m * active)[:, None]
+        self.w += v * (eta * sqrt_m * error)[:, None]     # eta K e, K = P H M
+        self.P -= np.multiply(v[:, :, None], v[:, None, :], out=self._nLL)  # K H^T P = v v^T: exactly symmetric
+        q = self._q_col if active is None else (self.q * active)[:, None]
+        d = self._diag
+        if self.p_max == np.inf:
+            d += q
+        else:
+            d += q * (d < self.p_max)
+        self.last_hph = hph
         return hph * m
 
-    def healthy(self, full: bool = True) -> bool:
-        """Cheap (every step): w finite and the last H^T P H finite and >= 0 (NaN or Inf anywhere in P
-        that H reaches shows there). ``full``: also every entry of P finite, P symmetric and positive
-        definite (a Cholesky factorisation, ~L^3/3 flops)."""
-        if not (math.isfinite(self._last_hph) and self._last_hph >= 0.0 and math.isfinite(float(self.w @ self.w))):
-            return False
-        if not full:
-            return True
-        if not (np.isfinite(self.P).all() and np.array_equal(self.P, self.P.T)):
-            return False
-        try:
-            np.linalg.cholesky(self.P)
-        except np.linalg.LinAlgError:
-            return False
-        return True
+    def unhealthy(self, full: bool = True) -> np.ndarray:
+        """Bool (n,): rows that must be reset. Cheap check (every step): w finite and the last H^T P H finite
+        and >= 0 (NaN or Inf anywhere in P that H reaches shows there). ``full``: also every entry of P finite,
+        P symmetric and positive definite (a Cholesky factorisation, ~L^3/3 flops per row)."""
+        hph, ww = self.last_hph, np.add.reduce(np.multiply(self.w, self.w, out=self._nL), axis=1)
+        if np.isfinite(ww.sum()) and hph.min() >= 0.0 and np.isfinite(hph.sum()):
+            bad = np.zeros(hph.size, dtype=bool)  # every row finite (the totals are) and hph >= 0
+        else:
+            bad = ~(np.isfinite(hph) & (hph >= 0.0) & np.isfinite(ww))
+        if full:
+            try:
+                if np.isfinite(self.P).all() and np.array_equal(self.P, self.P.transpose(0, 2, 1)):
+                    np.linalg.cholesky(self.P)  # all rows at once; one that fails sends us row by row
+                    return bad
+            except np.linalg.LinAlgError:
+                pass
+            for i in np.flatnonzero(~bad):
+                P = self.P[i]
+                if not (np.isfinite(P).all() and np.array_equal(P, P.T)):
+                    bad[i] = True
+                    continue
+                try:
+                    np.linalg.cholesky(P)
+                except np.linalg.LinAlgError:
+                    bad[i] = True
+        return bad
 
-    def reset(self) -> None:
-        """Back to the initial weights and P = p0 I (in place: the views on P stay valid)."""
-        self.w[:] = self.w0
-        self.P[:] = np.eye(self.w.size) * self.params.p0
-        self._last_hph = 0.0
+    def reset(self, rows) -> None:
+        """Rows ``rows`` (indices or a bool mask) back to their initial weights and P = p0 I, in place."""
+        rows = np.flatnonzero(np.asarray(rows)) if np.asarray(rows).dtype == bool else np.asarray(rows)
+        L = self.w.shape[1]
+        for i in rows:
+            self.w[i] = self.w0[i]
+            self.P[i] = np.eye(L) * self.p0[i]
+            self.last_hph[i] = 0.0

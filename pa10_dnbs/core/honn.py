@@ -1,12 +1,13 @@
-"""High-order neural network of eq. 3-4 with a scalar output.
+"""High-order neural network of eq. 3-4 with a scalar output, for n joints at once.
 
 phi(w, z) = w^T S(z),  S_i(z) = prod_j tanh(z_j / scale_j)^(d_ij),
 for a configurable set of exponent rows d_i (a row of zeros is the bias).
 The output is linear in w, so the EKF's H = d phi / d w = S(z).
+Inputs come as rows, one per joint: z has shape (n, p), S(z) has shape (n, L),
+and row i of S depends on row i of z only.
 """
 from __future__ import annotations
 
-import math
 from itertools import product
 
 import numpy as np
@@ -26,7 +27,7 @@ def monomial_exponents(n_inputs: int, max_degree: int) -> np.ndarray:
 
 
 class HONN:
-    """Scalar-output HONN.
+    """The regressor S(z) of a scalar-output HONN.
 
     Parameters
     ----------
@@ -45,7 +46,7 @@ class HONN:
             raise ValueError("exponents must be non-negative")
         if np.any(~np.isfinite(self.input_scale)) or np.any(self.input_scale <= 0):
             raise ValueError("input_scale must be finite and positive")
-        # Term i is the product of D factors ext[f_i1] ... ext[f_iD], where
+        # Term i is the product of D factors ext[:, f_i1] ... ext[:, f_iD], where
         # ext = [1, s_1, ..., s_p] and D is the largest total degree; a term of
         # lower degree is padded with index 0 (the constant 1).
         degree = int(self.exponents.sum(axis=1).max(initial=0))
@@ -54,28 +55,38 @@ class HONN:
             idx = [j + 1 for j, d in enumerate(row) for _ in range(d)]
             factors[i, :len(idx)] = idx
         self._factor_cols = [np.ascontiguousarray(factors[:, c]) for c in range(factors.shape[1])]
-        self._inv_scale = tuple(float(1.0 / x) for x in self.input_scale)
-        self._ext = np.ones(self.input_scale.size + 1)
+        self._inv_scale = 1.0 / self.input_scale
+        self._alloc(0)
+
+    def _alloc(self, n: int) -> None:
+        self._ext = np.ones((n, self.input_scale.size + 1))
+        self._zs = np.empty((n, self.input_scale.size))
+        self._S = np.empty((n, self.exponents.shape[0]))
+        self._f = np.empty((n, self.exponents.shape[0]))
+
+    @property
+    def n_inputs(self) -> int:
+        """p, the number of inputs."""
+        return self.input_scale.size
 
     @property
     def n_terms(self) -> int:
         """L, the number of weights."""
         return self.exponents.shape[0]
 
-    def regressor(self, z) -> np.ndarray:
-        """S(z), shape (L,), for inputs z of shape (p,)."""
-        ext = self._ext
-        if len(z) != len(self._inv_scale):
-            raise ValueError(f"expected {len(self._inv_scale)} inputs, got {len(z)}")
-        for j, (zj, inv) in enumerate(zip(z, self._inv_scale), start=1):
-            ext[j] = math.tanh(zj * inv)
-        cols = self._factor_cols
-        out = ext.take(cols[0])
-        for c in cols[1:]:
-            out *= ext.take(c)
-        return out
+    def regressor(self, z: np.ndarray) -> np.ndarray:
+        """S(z), shape (n, L), for inputs z of shape (n, p) (one row per joint).
 
-    @staticmethod
-    def output(weights: np.ndarray, regressor: np.ndarray) -> float:
-        """phi = w^T S."""
-        return float(weights @ regressor)
+        The result is this network's own buffer, overwritten by the next call: copy it to keep it.
+        """
+        if z.ndim != 2 or z.shape[1] != self.input_scale.size:
+            raise ValueError(f"expected inputs of shape (n, {self.input_scale.size}), got {z.shape}")
+        if self._ext.shape[0] != z.shape[0]:
+            self._alloc(z.shape[0])
+        ext = self._ext
+        np.tanh(np.multiply(z, self._inv_scale, out=self._zs), out=ext[:, 1:])
+        cols = self._factor_cols
+        out = np.take(ext, cols[0], axis=1, out=self._S)
+        for c in cols[1:]:
+            out *= np.take(ext, c, axis=1, out=self._f)
+        return out

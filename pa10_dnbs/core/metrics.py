@@ -46,3 +46,37 @@ def joint_metrics(error_rad: np.ndarray, torque_nm: np.ndarray, torque_limit_nm,
         }
         for j in range(error_rad.shape[1])
     ]
+
+
+def run_metrics(error_rad: np.ndarray, torque_nm: np.ndarray, torque_limit_nm, dt_s: float,
+                settle_band_rad: float, startup_s: float) -> list[dict]:
+    """Per joint, over the whole run (error_rad, torque_nm of shape (n_steps, n_joints)):
+
+    - settling_time_s: from this time on |e| <= settle_band_rad, i.e. one step after the last sample outside
+      the band (0.0 when never outside, None when still outside at the last sample);
+    - max_abs_error_run_rad: max |e| over the whole run [rad];
+    - torque_variation: sum over k of |tau(k) - tau(k-1)| divided by the joint's limit (dimensionless: 2 is
+      one swing from zero to the limit and back);
+    - saturated_fraction_after_s: fraction of the steps with t >= startup_s at which |tau| >= limit (1 - 1e-9).
+    """
+    error_rad = np.asarray(error_rad, dtype=float)
+    torque_nm = np.asarray(torque_nm, dtype=float)
+    limit = np.asarray(torque_limit_nm, dtype=float)
+    n = error_rad.shape[0]
+    outside = ~(np.abs(error_rad) <= settle_band_rad)  # NaN counts as outside
+    k0 = min(n, int(np.ceil(startup_s / dt_s - 1e-9)))
+    after = np.abs(torque_nm[k0:]) >= limit * (1.0 - 1e-9)
+    sat_after = after.mean(axis=0) if after.shape[0] else np.zeros(limit.shape)
+    tv = np.abs(np.diff(torque_nm, axis=0)).sum(axis=0) / limit
+    out = []
+    for j in range(error_rad.shape[1]):
+        idx = np.flatnonzero(outside[:, j])
+        if idx.size == 0:
+            settle = 0.0
+        elif idx[-1] == n - 1:
+            settle = None
+        else:
+            settle = float((idx[-1] + 1) * dt_s)
+        out.append({"settling_time_s": settle, "max_abs_error_run_rad": float(np.nanmax(np.abs(error_rad[:, j]))),
+                    "torque_variation": float(tv[j]), "saturated_fraction_after_s": float(sat_after[j])})
+    return out

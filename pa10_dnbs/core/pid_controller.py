@@ -1,37 +1,48 @@
-"""Decentralized PID baseline with velocity feed-forward (paper_notes.md).
+"""Decentralized PID baseline with velocity feed-forward, one per joint, computed as rows of arrays.
 
 u = Kp e + Ki int(e) dt + Kd (xd_dot - x2),  e = x_d - x1, saturated at the
-Table 2 limit. Uses only the joint's own measurements and reference.
+Table 2 limit. Row i uses only joint i's measurements and reference.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+import numpy as np
 
 from .reference import ReferenceSample
 
 
 @dataclass(frozen=True)
 class PIDParams:
-    """kp [N m/rad], ki [N m/(rad s)], kd [N m s/rad], dt_s [s], torque_limit_nm [N m]."""
+    """Per joint (arrays (n,)): kp [N m/rad], ki [N m/(rad s)], kd [N m s/rad], torque_limit_nm [N m]; dt_s [s]."""
 
-    kp: float
-    ki: float
-    kd: float
+    kp: np.ndarray
+    ki: np.ndarray
+    kd: np.ndarray
+    torque_limit_nm: np.ndarray
     dt_s: float
-    torque_limit_nm: float
+
+    def select(self, rows) -> "PIDParams":
+        rows = np.asarray(rows)
+        return PIDParams(self.kp[rows], self.ki[rows], self.kd[rows], self.torque_limit_nm[rows], self.dt_s)
 
 
-class PIDJointController:
-    """Fixed-gain PID for one joint."""
+class PIDControllers:
+    """Fixed-gain PIDs of n joints."""
 
     def __init__(self, params: PIDParams):
         self.params = params
-        self.integral = 0.0  # int(e) dt [rad s]
+        self.integral = np.zeros(np.size(params.kp))  # int(e) dt [rad s]
 
-    def step(self, x1: float, x2: float, ref: ReferenceSample) -> float:
-        """Torque [N m] for state (x1 [rad], x2 [rad/s]) at the reference sample."""
+    @property
+    def n_joints(self) -> int:
+        return self.integral.size
+
+    def step(self, x1: np.ndarray, x2: np.ndarray, ref: ReferenceSample, active: np.ndarray | None = None) -> np.ndarray:
+        """Torques (n,) [N m] for angles x1 (n,) [rad] and velocities x2 (n,) [rad/s]; a row whose ``active``
+        is 0.0 does not integrate (its state was not trusted)."""
         p = self.params
         e = ref.position_rad - x1
-        self.integral += e * p.dt_s
+        self.integral += e * p.dt_s if active is None else e * (p.dt_s * active)
         u = p.kp * e + p.ki * self.integral + p.kd * (ref.velocity_rad_s - x2)
-        return min(max(u, -p.torque_limit_nm), p.torque_limit_nm)
+        return np.minimum(np.maximum(u, -p.torque_limit_nm), p.torque_limit_nm)

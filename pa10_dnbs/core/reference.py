@@ -2,7 +2,7 @@
 
 x_d(k) = c (1 - exp(-d (kT)^3)) sin(w kT), with kT in seconds. The printed
 exponent ``e^{d k T^3}`` is read as ``exp(-d (kT)^3)`` (see
-``../shared/reference/paper_notes.md``).
+docs/design.md): with T = 1 ms the literal reading never moves or diverges.
 """
 from __future__ import annotations
 
@@ -13,15 +13,18 @@ import numpy as np
 
 @dataclass(frozen=True)
 class ReferenceSample:
-    """What one joint controller needs from the reference at step k.
+    """What the joint controllers need from the reference at step k, one entry per joint (arrays (n,)).
 
     position_rad: x_d(k); velocity_rad_s: dx_d/dt at kT (analytic);
-    position_ahead_rad: x_d(k+2), the preview used by the virtual control.
+    position_ahead_rad: x_d(k+2), the preview used by the virtual control;
+    acceleration_rad_s2: d2x_d/dt2 at kT (analytic), or None where nobody sent it
+    (the joint controllers never need it; the centralized computed-torque baseline does).
     """
 
-    position_rad: float
-    velocity_rad_s: float
-    position_ahead_rad: float
+    position_rad: np.ndarray
+    velocity_rad_s: np.ndarray
+    position_ahead_rad: np.ndarray
+    acceleration_rad_s2: np.ndarray | None = None
 
 
 class Reference:
@@ -63,16 +66,18 @@ class Reference:
         denv = 3.0 * self.d * t**2 * np.exp(-self.d * t**3)
         return self.c * (denv * np.sin(self.w * t) + env * self.w * np.cos(self.w * t))
 
-    def sample(self, joint: int, k: int) -> ReferenceSample:
-        """Reference of one joint at step k, with the k + preview_steps preview."""
-        now = self.position(k)[joint]
-        vel = self.velocity(k)[joint]
-        ahead = self.position(k + self.preview_steps)[joint]
-        return ReferenceSample(float(now), float(vel), float(ahead))
+    def acceleration(self, k) -> np.ndarray:
+        """Analytic d2x_d/dt2 at step(s) k [rad/s^2], same shapes as :meth:`position`."""
+        t = np.asarray(k, dtype=float)[..., None] * self.dt_s
+        ex = np.exp(-self.d * t**3)
+        env = 1.0 - ex
+        denv = 3.0 * self.d * t**2 * ex
+        ddenv = (6.0 * self.d * t - 9.0 * self.d**2 * t**4) * ex
+        wt = self.w * t
+        return self.c * (ddenv * np.sin(wt) + 2.0 * denv * self.w * np.cos(wt) - env * self.w**2 * np.sin(wt))
 
-    def samples(self, k: int) -> list[ReferenceSample]:
-        """All joints' samples at step k (one evaluation per quantity)."""
-        now = self.position(k)
-        vel = self.velocity(k)
-        ahead = self.position(k + self.preview_steps)
-        return [ReferenceSample(float(a), float(b), float(c)) for a, b, c in zip(now, vel, ahead)]
+    def sample(self, k: int, joints=None) -> ReferenceSample:
+        """The reference at step k for ``joints`` (indices; all when None), with the k + preview_steps preview."""
+        sel = slice(None) if joints is None else np.asarray(joints)
+        return ReferenceSample(self.position(k)[sel], self.velocity(k)[sel],
+                               self.position(k + self.preview_steps)[sel], self.acceleration(k)[sel])

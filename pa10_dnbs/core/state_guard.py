@@ -1,30 +1,32 @@
-"""Plausibility of one joint's measured state, checked before it reaches the controller.
+"""Plausibility of the joints' measured states, checked before they reach the controllers.
 
 A state is rejected when x1 [rad] or x2 [rad/s] is not finite, when x1 lies
 beyond the joint's limits by more than ``margin_rad``, or when |x2| exceeds
-``max_speed_rad_s``. numpy-free: scalars only.
+``max_speed_rad_s``. One row per joint: arrays of shape (n,).
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
+import numpy as np
+
 REASONS = ("nonfinite", "position", "speed")
+OK = -1  # check() code of a plausible state; otherwise the index into REASONS
 
 
 @dataclass(frozen=True)
 class StateGuard:
-    lower_rad: float
-    upper_rad: float
-    margin_rad: float
-    max_speed_rad_s: float
+    """Limits per joint (arrays (n,) or numbers): lower_rad, upper_rad, max_speed_rad_s; margin_rad [rad]."""
 
-    def check(self, x1: float, x2: float) -> str | None:
-        """None for a plausible state, else the reason: 'nonfinite', 'position' or 'speed'."""
-        if not (math.isfinite(x1) and math.isfinite(x2)):
-            return "nonfinite"
-        if x1 < self.lower_rad - self.margin_rad or x1 > self.upper_rad + self.margin_rad:
-            return "position"
-        if abs(x2) > self.max_speed_rad_s:
-            return "speed"
-        return None
+    lower_rad: np.ndarray
+    upper_rad: np.ndarray
+    margin_rad: float
+    max_speed_rad_s: np.ndarray
+
+    def check(self, x1: np.ndarray, x2: np.ndarray) -> np.ndarray:
+        """int (n,): OK for a plausible state, else the index of the reason in REASONS (the first that applies)."""
+        with np.errstate(invalid="ignore"):
+            code = np.where(np.abs(x2) > self.max_speed_rad_s, 2, OK)
+            outside = (x1 < self.lower_rad - self.margin_rad) | (x1 > self.upper_rad + self.margin_rad)
+        code = np.where(outside, 1, code)
+        return np.where(~(np.isfinite(x1) & np.isfinite(x2)), 0, code)

@@ -55,6 +55,7 @@ class GraphOptions:
     restart: str | None = None       # 'resume' or 'fresh': restart a joint controller that died
     max_restarts: int = 3            # per joint
     netns: dict[str, str] = field(default_factory=dict)  # node group -> network namespace (multi-host)
+    init_from: Path | None = None    # warm start: a directory of <joint>.npz controller checkpoints
 
 
 @dataclass
@@ -148,6 +149,8 @@ def controller_command(opt: GraphOptions, workdir: Path, joint: str, incarnation
               "effort_subscribers": 1 + int(opt.record_bag is not None)}  # the plant and the recorder
     if opt.controller == "dnbs":
         params["checkpoint_file"] = str(workdir / "checkpoints" / f"{joint}.npz")
+        if opt.init_from is not None:
+            params["init_file"] = str(opt.init_from / f"{joint}.npz")
     return [sys.executable, "-m", "pa10_dnbs.ros.joint_controller_node"] + _ros_args(f"joint_controller_{joint}",
                                                                                     params)
 

@@ -55,6 +55,13 @@ def _owner(name: str) -> str:
     return name
 
 
+def unused(names: set[str], ignore_pids: frozenset[int] = frozenset()) -> set[str]:
+    """The files among ``names`` that no live process (other than ignore_pids) uses: a run's leftovers,
+    not the segments of other graphs running on the host at the same time."""
+    busy = _mapped_segments(ignore_pids)
+    return {n for n in names if n not in busy and _owner(n) not in busy}
+
+
 def remove_stale(created_during_run: set[str], ignore_pids: frozenset[int] = frozenset()) -> list[str]:
     """Delete the given files that no live process uses; return what was removed.
 

@@ -6,32 +6,31 @@ its references (x_d(k) and x_d(k + preview)) waits for them, so the answer
 does not depend on message timing; a state seen again (a resend) gets the
 same effort back without training the networks twice.
 
-Defensive: a state that fails the StateGuard (non-finite, beyond the joint
-limits by more than a margin, faster than the speed limit) is answered with
-the last torque ("hold") or zero, without touching the controller, and
-counted by reason; so is a non-finite torque from the controller. No
-non-finite torque is ever returned.
+Defensive: the answer comes from GuardedControllers, the same guard the
+in-process simulation steps through: a state that fails the StateGuard is
+answered with the last torque ("hold") or zero, without training the
+controller, and counted by reason; so is a non-finite torque. No non-finite
+torque is ever returned.
 """
 from __future__ import annotations
 
-import math
+import numpy as np
 
 from ..core.reference import ReferenceSample
-from ..core.state_guard import REASONS, StateGuard
+from ..core.state_guard import REASONS
+from .guarded_controllers import GuardedControllers
 
 
 class JointLoop:
-    """Bookkeeping around one joint controller (DNBS or PID, anything with ``step``)."""
+    """Bookkeeping around one joint's guarded controller (a bank of one row, DNBS or PID)."""
 
-    def __init__(self, controller, preview_steps: int, guard: StateGuard | None = None, on_bad_state: str = "hold"):
-        if on_bad_state not in ("hold", "zero"):
-            raise ValueError(f"on_bad_state must be 'hold' or 'zero', got {on_bad_state!r}")
-        self.controller = controller
+    def __init__(self, guarded: GuardedControllers, preview_steps: int):
+        if guarded.controllers.n_joints != 1:
+            raise ValueError(f"a joint loop runs one joint's controller, got {guarded.controllers.n_joints}")
+        self.guarded = guarded
+        self.controller = guarded.controllers
         self.preview_steps = preview_steps
-        self.guard = guard
-        self.on_bad_state = on_bad_state
-        self.bad_states = dict.fromkeys(REASONS, 0)
-        self.nonfinite_torques = 0
+        self._x1, self._x2 = np.zeros(1), np.zeros(1)
         self._ref_pos: dict[int, float] = {}
         self._ref_vel: dict[int, float] = {}
         self._pending: dict[int, tuple[float, float]] = {}
@@ -68,18 +67,20 @@ class JointLoop:
         self._pending[step] = (position, velocity)
         return self._drain()
 
+    @property
+    def bad_states(self) -> dict[str, int]:
+        """States rejected by the guard, by reason."""
+        return {r: int(self.guarded.bad_states[r][0]) for r in REASONS}
+
+    @property
+    def nonfinite_torques(self) -> int:
+        return int(self.guarded.nonfinite_torques[0])
+
     def _answer(self, step: int, q: float, qd: float, ahead: int) -> float:
-        safe = self.last_effort if self.on_bad_state == "hold" else 0.0
-        reason = self.guard.check(q, qd) if self.guard is not None else None
-        if reason is not None:
-            self.bad_states[reason] += 1
-            return safe
-        sample = ReferenceSample(self._ref_pos[step], self._ref_vel[step], self._ref_pos[ahead])
-        u = self.controller.step(q, qd, sample)
-        if not math.isfinite(u):
-            self.nonfinite_torques += 1
-            return safe
-        return u
+        self._x1[0], self._x2[0] = q, qd
+        sample = ReferenceSample(np.array([self._ref_pos[step]]), np.array([self._ref_vel[step]]),
+                                 np.array([self._ref_pos[ahead]]))
+        return float(self.guarded.step(self._x1, self._x2, sample)[0])
 
     def _drain(self) -> list[tuple[int, float]]:
         out = []

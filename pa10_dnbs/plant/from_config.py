@@ -27,6 +27,8 @@ def plant_from_config(cfg: dict, client: BulletClient) -> PyBulletPA10Plant:
         coulomb_nm=p["coulomb_nm"],
         coulomb_smoothing_rad_s=p["coulomb_smoothing_rad_s"],
         torque_limit_nm=p["torque_limit_nm"],
+        payload_kg=p["payload_kg"],
+        link_mass_scale=p["link_mass_scale"],
     )
     plant = PyBulletPA10Plant(client, p["urdf"], params)
     q0, qd0 = initial_state(cfg)

@@ -58,6 +58,11 @@ class PlantParams:
         eps in Fc tanh(qd / eps), rad/s (> 0).
     torque_limit_nm : tuple of 7 float
         Symmetric torque saturation, N m (> 0).
+    payload_kg : float
+        Point mass at the tool flange, kg (>= 0; the PA10's rated payload is 10 kg).
+    link_mass_scale : float
+        Factor on every link's mass and inertia tensor (> 0; 1 is the URDF as written): a model error
+        the controllers were not tuned for. The rotor inertias are not scaled.
     """
 
     dt_s: float = 1e-3
@@ -67,9 +72,13 @@ class PlantParams:
     coulomb_nm: tuple[float, ...] = COULOMB_NM
     coulomb_smoothing_rad_s: float = 1e-2
     torque_limit_nm: tuple[float, ...] = TORQUE_LIMIT_NM
+    payload_kg: float = 0.0
+    link_mass_scale: float = 1.0
 
     def __post_init__(self) -> None:
         _check_scalar("dt_s", self.dt_s, strict=True)
+        _check_scalar("payload_kg", self.payload_kg, strict=False)
+        _check_scalar("link_mass_scale", self.link_mass_scale, strict=True)
         _check_scalar("gravity_mps2", self.gravity_mps2, strict=False)
         _check_scalar("coulomb_smoothing_rad_s", self.coulomb_smoothing_rad_s, strict=True)
         for name, _, strict in _VECTOR_FIELDS:
@@ -108,6 +117,23 @@ def _as_joint_vector(name: str, value) -> np.ndarray:
     return arr
 
 
+def _implicit_coulomb_speed(v_free: np.ndarray, k: np.ndarray, inv_eps: float) -> np.ndarray:
+    """Per joint, the root v of v - v_free + k tanh(v inv_eps) = 0 (k >= 0): monotone in v, bracketed in
+    [v_free - k, v_free + k]; Newton steps, bisection where one would leave the bracket."""
+    lo, hi = v_free - k, v_free + k
+    v = np.clip(v_free - k * np.tanh(v_free * inv_eps), lo, hi)
+    for _ in range(60):
+        th = np.tanh(v * inv_eps)
+        g = v - v_free + k * th
+        if np.max(np.abs(g)) <= 1e-13 * (1.0 + np.max(np.abs(v_free))):
+            break
+        hi = np.where(g > 0.0, v, hi)
+        lo = np.where(g < 0.0, v, lo)
+        step = v - g / (1.0 + k * inv_eps * (1.0 - th * th))
+        v = np.where((step > lo) & (step < hi), step, 0.5 * (lo + hi))
+    return v
+
+
 class PyBulletPA10Plant:
     """Seven-joint torque-driven arm with rotor inertia, friction and limits.
 
@@ -124,8 +150,14 @@ class PyBulletPA10Plant:
     -----
     Per step, with tau the saturated torque and J = diag(rotor inertia)::
 
-        qdd = (M(q) + J)^-1 (tau - h(q, qd) - Fv qd - Fc tanh(qd / eps))
+        qdd = (M(q) + J)^-1 (tau - h(q, qd) - Fv qd - Fc tanh(qd+ / eps))
         qd <- qd + dt qdd;  q <- q + dt qd          (semi-implicit Euler)
+
+    The Coulomb term is implicit: qd+ is the joint's speed at the end of the
+    step, from v = v_free - dt Fc (M + J)^-1_jj tanh(v / eps) per joint, where
+    v_free is the speed without it (so friction never reverses a joint within
+    a step); the torques it gives act through the full (M + J)^-1. Without
+    Coulomb friction the step is explicit in qd.
 
     where M and h (Coriolis, centrifugal and gravity) come from PyBullet.
     PyBullet's gravity belongs to the client, so the plant sets it to its own
@@ -169,8 +201,10 @@ class PyBulletPA10Plant:
         self._upper = np.array(upper, dtype=float)
         if not np.all(self._lower < self._upper):
             raise ValueError(f"{urdf_path}: every revolute joint needs lower < upper limits")
-        # Link masses for the potential energy (every non-base link, incl. massless frames).
         self._n_links = client.getNumJoints(self._body)
+        # Mass changes must come before PyBullet's first dynamics call, which caches the multibody tree.
+        self._apply_mass_changes(client, params)
+        # Link masses for the potential energy (every non-base link, incl. massless frames).
         self._link_masses = np.array(
             [client.getDynamicsInfo(self._body, j)[0] for j in range(self._n_links)], dtype=float
         )
@@ -206,6 +240,22 @@ class PyBulletPA10Plant:
         self._above = np.zeros(N_JOINTS, dtype=bool)
         self._step_count = 0
         self.reset(np.zeros(N_JOINTS), np.zeros(N_JOINTS))
+
+    def _apply_mass_changes(self, client, params: PlantParams) -> None:
+        """Scale every link's mass and inertia by ``link_mass_scale``; put ``payload_kg`` at the flange."""
+        if params.link_mass_scale != 1.0:
+            for j in range(self._n_links):
+                info = client.getDynamicsInfo(self._body, j)
+                if info[0] > 0.0:
+                    client.changeDynamics(self._body, j, mass=info[0] * params.link_mass_scale,
+                                          localInertiaDiagonal=[x * params.link_mass_scale for x in info[2]])
+        if params.payload_kg > 0.0:
+            names = [client.getJointInfo(self._body, j)[12].decode("utf-8") for j in range(self._n_links)]
+            if "flange" not in names:
+                raise ValueError("payload_kg: the URDF has no link named 'flange' to carry the payload")
+            # a point mass at the flange frame's origin (a tiny inertia keeps the link's inertia valid)
+            client.changeDynamics(self._body, names.index("flange"), mass=params.payload_kg,
+                                  localInertiaDiagonal=[1e-9] * 3)
 
     # ------------------------------------------------------------------ info
     @property
@@ -310,9 +360,15 @@ class PyBulletPA10Plant:
         self._set_gravity(0.0, 0.0, self._gravity_z)
         bias = np.array(self._calc_inverse_dynamics(self._body, q_list, qd_list, self._zero_acc), dtype=float)
         rhs = tau - bias - self._fv * qd
-        if self._has_coulomb:
-            rhs -= self._fc * np.tanh(qd * self._inv_eps)
-        return np.linalg.solve(m, rhs)
+        if not self._has_coulomb:
+            return np.linalg.solve(m, rhs)
+        # Coulomb friction, implicit: an explicit Fc tanh(qd / eps) rings on a light joint (its slope at rest,
+        # e.g. 72 N m s/rad on a wrist, gives dt Fc / (eps J) ~ 7) and a linearised one settles into a 2-cycle.
+        m_inv = np.linalg.inv(m)
+        v_free = qd + self._dt * (m_inv @ rhs)
+        f = self._fc * np.tanh(_implicit_coulomb_speed(v_free, self._dt * self._fc * np.diag(m_inv), self._inv_eps)
+                               * self._inv_eps)
+        return m_inv @ (rhs - f)
 
     def mass_matrix(self, q) -> np.ndarray:
         """(7, 7) joint-space inertia M(q) + diag(rotor inertia), kg m^2."""
@@ -334,6 +390,13 @@ class PyBulletPA10Plant:
         """(7,) friction torque Fv qd + Fc tanh(qd / eps), N m."""
         qd = _as_joint_vector("qd", qd)
         return self._fv * qd + self._fc * np.tanh(qd * self._inv_eps)
+
+    def step_friction_torque(self, qd, qdd) -> np.ndarray:
+        """(7,) the friction torque a step from speed qd with acceleration qdd meets, N m: viscous at qd (explicit),
+        Coulomb at the end-of-step speed qd + dt qdd (implicit), as :meth:`step` applies them."""
+        qd = _as_joint_vector("qd", qd)
+        qdd = _as_joint_vector("qdd", qdd)
+        return self._fv * qd + self._fc * np.tanh((qd + self._dt * qdd) * self._inv_eps)
 
     def forward_acceleration(self, q, qd, tau) -> np.ndarray:
         """(7,) qdd = (M + J)^-1 (tau - bias - friction), rad/s^2; tau is not saturated."""

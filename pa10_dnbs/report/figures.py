@@ -44,13 +44,19 @@ def tracking_figure(run: RunData, path: Path) -> None:
     plt.close(fig)
 
 
-def error_figure(runs: list[RunData], path: Path, window_s: tuple[float, float] | None = None) -> None:
-    """Tracking error x_d - x1 per joint (Fig. 11); several runs are overlaid for comparison."""
+def error_figure(runs: list[RunData], path: Path, window_s: tuple[float, float] | None = None,
+                 settling_s: list[list[float | None]] | None = None) -> None:
+    """Tracking error x_d - x1 per joint (Fig. 11); several runs are overlaid for comparison.
+
+    ``settling_s``: per run, per joint, the settling time [s] (None: never), drawn as a dotted line.
+    """
     fig, axes = _grid("Tracking errors " + " vs ".join(r.controller.upper() for r in runs))
-    for run in runs:
+    for i, run in enumerate(runs):
         s = _stride(run.n_steps)
         for j, name in enumerate(run.joint_names):
-            axes[j].plot(run.time_s[::s], run.error_rad[::s, j], lw=1.0, label=run.controller.upper())
+            line, = axes[j].plot(run.time_s[::s], run.error_rad[::s, j], lw=1.0, label=run.controller.upper())
+            if settling_s is not None and settling_s[i][j] is not None:
+                axes[j].axvline(settling_s[i][j], ls=":", color=line.get_color(), lw=1.0)
     for j, name in enumerate(runs[0].joint_names):
         ax = axes[j]
         ax.set_ylabel(f"{name} error [rad]")
@@ -85,5 +91,36 @@ def torque_figure(run: RunData, path: Path) -> None:
         ax.grid(alpha=0.3)
     for ax in axes[5:7]:
         ax.set_xlabel("time [s]")
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def startup_figure(run: RunData, path: Path, settle_band_rad: float, settling_s: list[float | None]) -> None:
+    """The first seconds: error per joint with the settling band and settling time (dotted), torque with limits."""
+    done = [t for t in settling_s if t is not None]
+    t_show = min(run.n_steps * run.dt_s, max(1.0, 1.5 * max(done)) if len(done) == len(settling_s) else 5.0)
+    n = max(2, int(round(t_show / run.dt_s)))
+    t = run.time_s[:n]
+    fig, axes = plt.subplots(7, 2, figsize=(11, 13), sharex=True, constrained_layout=True)
+    fig.suptitle(f"Start-up ({run.controller.upper()}): error with the {settle_band_rad:g} rad band, torque with "
+                 "the Table 2 limits")
+    for j, name in enumerate(run.joint_names):
+        ax, at = axes[j, 0], axes[j, 1]
+        ax.plot(t, run.error_rad[:n, j], lw=1.0, color="tab:blue")
+        ax.axhspan(-settle_band_rad, settle_band_rad, color="0.9", zorder=0)
+        if settling_s[j] is not None and settling_s[j] <= t_show:
+            ax.axvline(settling_s[j], ls=":", color="k", lw=1.0)
+            ax.text(settling_s[j], ax.get_ylim()[1], f" {settling_s[j]:.2f} s", va="top", fontsize=7)
+        ax.set_ylabel(f"{name} e [rad]")
+        lim = run.torque_limit_nm[j]
+        at.plot(t, run.torque_nm[:n, j], lw=1.0, color="tab:red")
+        at.axhline(lim, ls=":", color="k")
+        at.axhline(-lim, ls=":", color="k")
+        at.set_ylim(-1.15 * lim, 1.15 * lim)
+        at.set_ylabel(f"{name} [N m]")
+        for a in (ax, at):
+            a.grid(alpha=0.3)
+    axes[-1, 0].set_xlabel("time [s]")
+    axes[-1, 1].set_xlabel("time [s]")
     fig.savefig(path, dpi=90)
     plt.close(fig)

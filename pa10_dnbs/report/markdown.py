@@ -1,23 +1,45 @@
-"""The Markdown report: metrics table(s) and the figures."""
+"""The Markdown report: metrics tables and the figures."""
 from __future__ import annotations
 
 
+def _settle(v) -> str:
+    return "never" if v is None else f"{v:.3f}"
+
+
 def metrics_table(metrics: list[dict]) -> str:
-    """One row per joint; one RMS / max column pair per run (e.g. DNBS and PID side by side)."""
-    head = "| joint | " + " | ".join(
-        f"{m['controller'].upper()} RMS [rad] | {m['controller'].upper()} max abs [rad] | "
-        f"{m['controller'].upper()} max abs torque [N m] | sat. fraction" for m in metrics) + " | limit [N m] |"
-    sep = "|---" * (1 + 4 * len(metrics) + 1) + "|"
-    rows = [head, sep]
+    """Window figures: one row per joint, RMS / max |e| / max |torque| per run side by side."""
+    tags = [m["controller"].upper() for m in metrics]
+    head = "| joint | " + " | ".join(f"{t} RMS [rad] | {t} max abs [rad] | {t} max abs torque [N m]" for t in tags)
+    rows = [head + " | limit [N m] |", "|---" * (2 + 3 * len(metrics)) + "|"]
     for j, joint in enumerate(metrics[0]["joints"]):
         cells = [joint["name"]]
         for m in metrics:
             jm = m["joints"][j]
-            cells += [f"{jm['rms_error_rad']:.3e}", f"{jm['max_abs_error_rad']:.3e}",
-                      f"{jm['max_abs_torque_nm']:.1f}", f"{jm['saturated_fraction']:.4f}"]
-        cells.append(f"{joint['torque_limit_nm']:g}")
+            cells += [f"{jm['rms_error_rad']:.3e}", f"{jm['max_abs_error_rad']:.3e}", f"{jm['max_abs_torque_nm']:.1f}"]
+        rows.append("| " + " | ".join(cells + [f"{joint['torque_limit_nm']:g}"]) + " |")
+    worst = ["**worst**"] + sum(([f"**{m['worst_rms_error_rad']:.3e}**", "", ""] for m in metrics), []) + [""]
+    rows.append("| " + " | ".join(worst) + " |")
+    return "\n".join(rows)
+
+
+def startup_table(metrics: list[dict]) -> str:
+    """Whole-run figures: settling time, max |e| over the run, torque variation, time at the limit."""
+    m0 = metrics[0]
+    tags = [m["controller"].upper() for m in metrics]
+    head = "| joint | " + " | ".join(
+        f"{t} settled [s] | {t} max abs run [rad] | {t} torque variation | {t} at limit after {m0['startup_s']:g} s"
+        for t in tags) + " |"
+    rows = [head, "|---" * (1 + 4 * len(metrics)) + "|"]
+    for j, joint in enumerate(m0["joints"]):
+        cells = [joint["name"]]
+        for m in metrics:
+            jm = m["joints"][j]
+            cells += [_settle(jm["settling_time_s"]), f"{jm['max_abs_error_run_rad']:.4f}", f"{jm['torque_variation']:.2f}",
+                      f"{jm['saturated_fraction_after_s']:.4f}"]
         rows.append("| " + " | ".join(cells) + " |")
-    worst = ["**worst RMS**"] + sum(([f"**{m['worst_rms_error_rad']:.3e}**", "", "", ""] for m in metrics), []) + [""]
+    worst = ["**worst**"] + sum(([f"**{_settle(m['worst_settling_time_s'])}**", f"**{m['worst_max_abs_error_run_rad']:.4f}**",
+                                  f"**{m['worst_torque_variation']:.2f}**",
+                                  f"**{m['worst_saturated_fraction_after_s']:.4f}**"] for m in metrics), [])
     rows.append("| " + " | ".join(worst) + " |")
     return "\n".join(rows)
 
@@ -31,10 +53,13 @@ def report_markdown(metrics: list[dict], figures: list[tuple[str, str]], title: 
     lines.append("")
     for m in metrics:
         rtf = m.get("real_time_factor")
-        lines.append(f"- **{m['controller'].upper()}**: worst-joint RMS {m['worst_rms_error_rad']:.3e} rad; "
+        lines.append(f"- **{m['controller'].upper()}**: worst-joint RMS {m['worst_rms_error_rad']:.3e} rad; settled "
+                     f"(|e| < {m['settle_band_rad']:g} rad) after {_settle(m['worst_settling_time_s'])} s; "
                      f"all values finite: {m['all_finite']}; torques within Table 2: {m['torques_within_limits']}; "
                      f"wall time {m['wall_time_s']:.2f} s" + (f" ({rtf:.1f}x real time)" if rtf else ""))
-    lines += [""] + [f"- {n}" for n in notes] + ["", "## Metrics", "", metrics_table(metrics), "", "## Figures", ""]
+    lines += [""] + [f"- {n}" for n in notes]
+    lines += ["", f"## Tracking over [{m0['window_s'][0]:g}, {m0['window_s'][1]:g}) s", "", metrics_table(metrics)]
+    lines += ["", "## Start-up: the whole run", "", startup_table(metrics), "", "## Figures", ""]
     for caption, path in figures:
         lines += [f"### {caption}", "", f"![{caption}]({path})", ""]
     return "\n".join(lines)

@@ -3,8 +3,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.metrics import joint_metrics
+from ..core.metrics import joint_metrics, run_metrics
 from ..run_data import RunData
+
+# metrics settings of configs written before the ``metrics`` section existed (bags of earlier runs)
+_DEFAULT_SETTINGS = {"settle_band_rad": 0.01, "startup_s": 0.2}
 
 
 def effective_window(duration_s: float, window_s: tuple[float, float]) -> tuple[float, float]:
@@ -14,12 +17,28 @@ def effective_window(duration_s: float, window_s: tuple[float, float]) -> tuple[
     return (duration_s / 2.0, duration_s)
 
 
-def metrics_dict(run: RunData, window_s: tuple[float, float], **extra) -> dict:
-    """Per-joint figures over the window plus run-level facts; ``extra`` keys are added as they are."""
+def metrics_settings(cfg: dict, duration_s: float) -> dict:
+    """window_s (the config's, or the second half of a shorter run), settle_band_rad [rad], startup_s [s]."""
+    m = cfg.get("metrics") or _DEFAULT_SETTINGS
+    return {"window_s": tuple(effective_window(duration_s, tuple(cfg["simulation"]["window_s"]))),
+            "settle_band_rad": float(m["settle_band_rad"]), "startup_s": float(m["startup_s"])}
+
+
+def _worst_settling(values: list) -> float | None:
+    return None if any(v is None for v in values) else max(values)
+
+
+def metrics_dict(run: RunData, settings: dict, **extra) -> dict:
+    """Per-joint figures over the window and over the whole run, plus run-level facts; ``extra`` keys are
+    added as they are. ``settings``: :func:`metrics_settings`."""
     duration = run.n_steps * run.dt_s
+    window_s = settings["window_s"]
     joints = joint_metrics(run.error_rad, run.torque_nm, run.torque_limit_nm, run.dt_s, window_s)
-    for name, j in zip(run.joint_names, joints):
+    whole = run_metrics(run.error_rad, run.torque_nm, run.torque_limit_nm, run.dt_s, settings["settle_band_rad"],
+                        settings["startup_s"])
+    for name, j, w in zip(run.joint_names, joints, whole):
         j["name"] = name
+        j.update(w)
     finite = bool(np.all(np.isfinite(run.position_rad)) and np.all(np.isfinite(run.torque_nm)))
     within = bool(np.all(np.abs(run.torque_nm) <= run.torque_limit_nm * (1 + 1e-12)))
     out = {
@@ -27,13 +46,21 @@ def metrics_dict(run: RunData, window_s: tuple[float, float], **extra) -> dict:
         "duration_s": duration,
         "dt_s": run.dt_s,
         "window_s": list(window_s),
+        "settle_band_rad": settings["settle_band_rad"],
+        "startup_s": settings["startup_s"],
         "wall_time_s": run.wall_time_s,
         "real_time_factor": duration / run.wall_time_s if run.wall_time_s > 0 else None,
         "worst_rms_error_rad": max(j["rms_error_rad"] for j in joints),
+        "worst_settling_time_s": _worst_settling([j["settling_time_s"] for j in joints]),
+        "worst_max_abs_error_run_rad": max(j["max_abs_error_run_rad"] for j in joints),
+        "worst_torque_variation": max(j["torque_variation"] for j in joints),
+        "worst_saturated_fraction_after_s": max(j["saturated_fraction_after_s"] for j in joints),
         "all_finite": finite,
         "torques_within_limits": within,
         "joints": [{k: j[k] for k in ("name", "rms_error_rad", "max_abs_error_rad", "max_abs_torque_nm",
-                                      "torque_limit_nm", "saturated_fraction")} for j in joints],
+                                      "torque_limit_nm", "saturated_fraction", "settling_time_s",
+                                      "max_abs_error_run_rad", "torque_variation", "saturated_fraction_after_s")}
+                   for j in joints],
     }
     out.update(extra)
     return out

@@ -16,7 +16,7 @@ from pathlib import Path
 from ..kinematics.urdf_chain import UrdfChain
 from ..run_data import RunData
 from .arm_figure import arm_figure
-from .figures import error_figure, torque_figure, tracking_figure
+from .figures import error_figure, startup_figure, torque_figure, tracking_figure
 from .markdown import report_markdown
 
 
@@ -68,11 +68,14 @@ def write_run(directory: Path, run: RunData, metrics: dict, chain: UrdfChain | N
     (directory / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
     run.save_npz(directory / "timeseries.npz")
     tag = run.controller.upper()
+    settling = [j["settling_time_s"] for j in metrics["joints"]]
     figs = [(f"{tag}: reference (solid) and actual (dashed) angles, Figs. 4-10", "tracking.png"),
-            (f"{tag}: tracking errors, Fig. 11 (metrics window shaded)", "errors.png"),
+            (f"{tag}: tracking errors, Fig. 11 (metrics window shaded, settling time dotted)", "errors.png"),
+            (f"{tag}: start-up, errors with the settling band and torques with the Table 2 limits", "startup.png"),
             (f"{tag}: applied torques and Table 2 limits", "torques.png")]
     tracking_figure(run, directory / "tracking.png")
-    error_figure([run], directory / "errors.png", tuple(metrics["window_s"]))
+    error_figure([run], directory / "errors.png", tuple(metrics["window_s"]), [settling])
+    startup_figure(run, directory / "startup.png", metrics["settle_band_rad"], settling)
     torque_figure(run, directory / "torques.png")
     if chain is not None:
         arm_figure(run, chain, directory / "arm.png")
@@ -91,7 +94,8 @@ def write_report(directory: Path, runs: list[RunData], metrics: list[dict], titl
         for run, m in zip(runs, metrics):
             sub = run.controller
             figs += [(c, f"{sub}/{f}") for c, f in write_run(directory / sub, run, m, chain)]
-        error_figure(runs, directory / "errors_compare.png", tuple(metrics[0]["window_s"]))
+        error_figure(runs, directory / "errors_compare.png", tuple(metrics[0]["window_s"]),
+                     [[j["settling_time_s"] for j in m["joints"]] for m in metrics])
         figs.insert(0, ("Tracking errors of " + " and ".join(r.controller.upper() for r in runs)
                         + " overlaid (metrics window shaded)", "errors_compare.png"))
         (directory / "summary.json").write_text(json.dumps(

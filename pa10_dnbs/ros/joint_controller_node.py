@@ -35,11 +35,9 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from .. import JOINT_NAMES
-from ..controller_factory import CONTROLLER_KINDS, build_controller
+from ..controller_factory import CONTROLLER_KINDS, build_guarded_controllers
 from ..core.checkpoint import load_checkpoint, save_checkpoint
-from ..core.state_guard import StateGuard
 from ..faults.faulty_link import links_from_config
-from ..kinematics.urdf_chain import UrdfChain
 from ..wire import joint_state_cdr
 from .diagnostics import DiagnosticsReporter, status
 from ..loop.cpu_meter import CpuMeter
@@ -58,7 +56,8 @@ class JointControllerNode(Node):
         super().__init__("joint_controller")
         p = declare(self, {"config_file": "", "joint": "", "controller": "dnbs", "reliability": "reliable",
                            "queue_depth": 10, "stats_file": "", "checkpoint_file": "", "resume": False,
-                           "incarnation": 0, "effort_subscribers": 1, "match_timeout_s": 10.0, "rt_priority": 0})
+                           "incarnation": 0, "effort_subscribers": 1, "match_timeout_s": 10.0, "init_file": "",
+                           "rt_priority": 0})
         if p["effort_subscribers"] < 1 or p["match_timeout_s"] <= 0:
             raise ParameterError("effort_subscribers must be >= 1 and match_timeout_s > 0 s")
         check_choice("joint", p["joint"], JOINT_NAMES)
@@ -72,20 +71,26 @@ class JointControllerNode(Node):
         self.joint = p["joint"]
         index = JOINT_NAMES.index(self.joint)
         self.clock_ = StepClock(cfg["simulation"]["dt_s"])
-        urdf_joint = UrdfChain.from_file(cfg["plant"]["urdf"]).joint(self.joint)
-        g = cfg["guards"]
-        guard = StateGuard(urdf_joint.lower, urdf_joint.upper, g["position_margin_rad"], g["max_speed_rad_s"][index])
-        controller = build_controller(cfg, p["controller"], index)
-        self.loop_ = JointLoop(controller, cfg["reference"]["preview_steps"], guard, g["on_bad_state"])
+        # a bank of this one joint behind its state guard, as the in-process simulation runs all seven
+        self.loop_ = JointLoop(build_guarded_controllers(cfg, p["controller"], [index]),
+                               cfg["reference"]["preview_steps"])
+        controller = self.loop_.controller
         self.checkpoint = Path(p["checkpoint_file"]) if p["checkpoint_file"] else None
         if self.checkpoint is not None and not hasattr(controller, "state_dict"):
             raise ParameterError(f"checkpoint_file: the {p['controller']} controller has no learned state to save")
         self.checkpoint_every = max(1, int(round(cfg["checkpoint"]["period_s"] / cfg["simulation"]["dt_s"])))
         self.resumed_from = None
+        if p["init_file"] and not (p["resume"] and self.checkpoint is not None and self.checkpoint.is_file()):
+            # a warm start from an earlier run: its weights and covariances, this run's own step count
+            try:
+                controller.load_state_dict(0, load_checkpoint(Path(p["init_file"]))[0], resume_steps=False)
+            except (ValueError, KeyError, AttributeError) as exc:
+                raise ParameterError(f"init_file: {exc}") from None
+            print(f"WARM joint_controller {self.joint} from {p['init_file']}", flush=True)
         if p["resume"] and self.checkpoint is not None and self.checkpoint.is_file():
             try:
                 state, step = load_checkpoint(self.checkpoint)
-                controller.load_state_dict(state)
+                controller.load_state_dict(0, state)
             except (ValueError, KeyError) as exc:
                 raise ParameterError(f"resume: {exc}") from None
             self.resumed_from = step
@@ -187,14 +192,14 @@ class JointControllerNode(Node):
                 self._save_checkpoint()
 
     def _save_checkpoint(self) -> None:
-        save_checkpoint(self.checkpoint, self.loop_.controller.state_dict(), self.loop_.last_step)
+        save_checkpoint(self.checkpoint, self.loop_.controller.state_dict(0), self.loop_.last_step)
 
     def counters(self) -> dict:
         loop = self.loop_
         c = {f"bad_states_{k}": v for k, v in loop.bad_states.items()}
         c["nonfinite_torques"] = loop.nonfinite_torques
         resets = getattr(loop.controller, "ekf_resets", {})
-        c.update({f"ekf_resets_{k}": v for k, v in resets.items()})
+        c.update({f"ekf_resets_{k}": int(v[0]) for k, v in resets.items()})
         c.update({"malformed_states": self.malformed, "states": self.states_received, "efforts": self.efforts_sent,
                   "duplicate_states": loop.duplicates, "last_step": loop.last_step,
                   "held_until_matched": self.held_answers})

@@ -1,47 +1,86 @@
-"""Run the plant and seven per-joint controllers in one process, step by step."""
+"""Run the plant and the seven joint controllers in one process, step by step (no ROS).
+
+The controllers are the nodes' own: one bank of seven rows behind the same
+state guard (``build_guarded_controllers``), so an in-process run equals the
+lockstep node graph bit for bit, guards included.
+"""
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
 from .. import JOINT_NAMES
-from ..controller_factory import build_controller, build_reference
+from ..controller_factory import build_guarded_controllers, build_reference, build_state_guard
 from ..core.reference import ReferenceSample
 from ..plant.from_config import open_client, plant_from_config
+from ..loop.guarded_controllers import GuardedControllers
 from ..run_data import RunData
+from .computed_torque import ComputedTorqueController
+
+CONTROLLERS = ("dnbs", "pid", "ctc")  # ctc: centralized computed torque with the plant's model, in-process only
 
 
-def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = False) -> RunData:
+@dataclass(frozen=True)
+class Disturbances:
+    """What the in-process loop can add between plant and controllers (the study's scenarios; not in the graph).
+
+    position_noise_std_rad, velocity_noise_std_rad_s: white Gaussian noise on the x1 and x2 the controllers
+    see (encoders), seeded by ``seed``; torque_delay_steps: each torque is applied that many steps late
+    (zero torque until the first one arrives). The recorded run is the true state.
+    """
+
+    position_noise_std_rad: float = 0.0
+    velocity_noise_std_rad_s: float = 0.0
+    torque_delay_steps: int = 0
+    seed: int = 0
+
+
+def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = False,
+             init_states: list[dict] | None = None, disturbances: Disturbances | None = None) -> RunData:
     """Closed loop for ``duration_s`` seconds of simulated time.
 
     At each step k every joint controller gets only its own x1(k), x2(k) and
     reference sample, returns its torque, and the plant advances to k+1.
+    ``init_states``: one controller ``state_dict`` per joint to start from (a warm start).
+    ``disturbances``: sensor noise and actuator delay (the study's scenarios); None: none.
     """
     dt = cfg["simulation"]["dt_s"]
     n = int(round(duration_s / dt))
     reference = build_reference(cfg)
-    controllers = [build_controller(cfg, controller, j) for j in range(len(JOINT_NAMES))]
     client = open_client()
     try:
         plant = plant_from_config(cfg, client)
+        guarded = _controllers(cfg, controller, plant)
+        if init_states is not None:
+            for row, state in enumerate(init_states):
+                guarded.controllers.load_state_dict(row, state, resume_steps=False)
         nj = len(JOINT_NAMES)
         pos = np.empty((n, nj))
         vel = np.empty((n, nj))
         tau = np.empty((n, nj))
-        ref = reference.position(np.arange(n))
-        ref_vel = reference.velocity(np.arange(n))
-        ref_ahead = reference.position(np.arange(n) + reference.preview_steps)
+        steps = np.arange(n)
+        ref = reference.position(steps)
+        ref_vel = reference.velocity(steps)
+        ref_ahead = reference.position(steps + reference.preview_steps)
+        ref_acc = reference.acceleration(steps) if controller == "ctc" else [None] * n
 
+        dist = disturbances or Disturbances()
+        noise = _sensor_noise(dist, n, nj)
+        delayed = [np.zeros(nj)] * dist.torque_delay_steps
         bar = _progress_bar(n, controller) if progress else None
-        u = np.empty(nj)
         t0 = time.perf_counter()
         for k in range(n):
             q, qd = plant.state
             pos[k] = q
             vel[k] = qd
-            for j, ctrl in enumerate(controllers):
-                u[j] = ctrl.step(q[j], qd[j], ReferenceSample(ref[k, j], ref_vel[k, j], ref_ahead[k, j]))
+            if noise is not None:
+                q, qd = q + noise[0][k], qd + noise[1][k]
+            u = guarded.step(q, qd, ReferenceSample(ref[k], ref_vel[k], ref_ahead[k], ref_acc[k]))
+            if delayed:
+                delayed.append(u)
+                u = delayed.pop(0)
             plant.step(u)
             tau[k] = plant.applied_torque_nm
             if bar is not None and k % 500 == 499:
@@ -53,9 +92,28 @@ def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = Fal
         return RunData(controller=controller, dt_s=dt, joint_names=JOINT_NAMES,
                        torque_limit_nm=np.array(cfg["plant"]["torque_limit_nm"]),
                        position_rad=pos, velocity_rad_s=vel, reference_rad=ref, torque_nm=tau,
-                       wall_time_s=wall, extra={"limit_hits": plant.limit_hits.tolist()})
+                       wall_time_s=wall, extra={"limit_hits": plant.limit_hits.tolist(),
+                                                "controllers": guarded.controllers})
     finally:
         client.disconnect()
+
+
+def _controllers(cfg: dict, controller: str, plant) -> GuardedControllers:
+    """The seven joints' controllers behind their state guards (the nodes' own code), or computed torque."""
+    if controller == "ctc":
+        c = cfg["ctc"]
+        ctc = ComputedTorqueController(plant, c["kp_per_s2"], c["kd_per_s"], cfg["plant"]["torque_limit_nm"])
+        return GuardedControllers(ctc, build_state_guard(cfg), cfg["guards"]["on_bad_state"])
+    return build_guarded_controllers(cfg, controller)
+
+
+def _sensor_noise(dist: Disturbances, n: int, nj: int):
+    """(position noise (n, nj), velocity noise (n, nj)), or None without noise."""
+    if dist.position_noise_std_rad == 0.0 and dist.velocity_noise_std_rad_s == 0.0:
+        return None
+    rng = np.random.default_rng(dist.seed)
+    return (rng.normal(0.0, dist.position_noise_std_rad, (n, nj)),
+            rng.normal(0.0, dist.velocity_noise_std_rad_s, (n, nj)))
 
 
 def _progress_bar(n_steps: int, label: str):

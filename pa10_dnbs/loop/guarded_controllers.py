@@ -1,0 +1,51 @@
+"""Joint controllers behind the state guard: what every caller (node or in-process loop) steps.
+
+A joint whose state fails the StateGuard (non-finite, beyond its limits by
+more than a margin, faster than the speed limit) is answered with its last
+torque ("hold") or zero, and its controller row is not trained on it; so is
+a non-finite torque from the controller. Each case is counted per joint. No
+non-finite torque is ever returned. One row per joint, arrays of shape (n,).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..core.reference import ReferenceSample
+from ..core.state_guard import OK, REASONS, StateGuard
+
+
+class GuardedControllers:
+    """``controllers`` (a DNBS or PID bank with ``step(x1, x2, ref, active)``) behind ``guard``."""
+
+    def __init__(self, controllers, guard: StateGuard | None, on_bad_state: str = "hold"):
+        if on_bad_state not in ("hold", "zero"):
+            raise ValueError(f"on_bad_state must be 'hold' or 'zero', got {on_bad_state!r}")
+        self.controllers = controllers
+        self.guard = guard
+        self.hold = on_bad_state == "hold"
+        n = controllers.n_joints
+        self.bad_states = {r: np.zeros(n, dtype=np.int64) for r in REASONS}
+        self.nonfinite_torques = np.zeros(n, dtype=np.int64)
+        self.last_torque = np.zeros(n)
+
+    def step(self, x1: np.ndarray, x2: np.ndarray, ref: ReferenceSample) -> np.ndarray:
+        """Torques (n,) [N m], always finite, for states x1 (n,) [rad], x2 (n,) [rad/s]."""
+        code = self.guard.check(x1, x2) if self.guard is not None else None
+        if code is None or (code == OK).all():
+            u = self.controllers.step(x1, x2, ref)
+            ok = None
+        else:
+            ok = code == OK
+            for i, reason in enumerate(REASONS):
+                self.bad_states[reason] += code == i
+            # the untrusted rows get finite stand-in inputs and no training; their torque is replaced below
+            u = self.controllers.step(np.where(ok, x1, ref.position_rad), np.where(ok, x2, 0.0), ref,
+                                      active=ok.astype(float))
+        finite = np.isfinite(u)
+        if not finite.all():
+            self.nonfinite_torques += ~finite if ok is None else ~finite & ok
+            ok = finite if ok is None else ok & finite
+        if ok is not None:
+            u = np.where(ok, u, self.last_torque if self.hold else 0.0)
+        self.last_torque = u
+        return u

@@ -1,0 +1,106 @@
+#!/usr/bin/env python3
+"""Ablation of the DNBS remedies: each remedy of the default config off in turn (and the ones it leaves off
+switched on in turn), against the default and the paper's law, on three runs:
+
+- nominal, 20 s: settling time, max |e| over the run, torque variation, steps at the limit after 0.2 s,
+  RMS over [10, 20) s (worst joint of each);
+- payload_5kg, 20 s: settling time, torque variation, RMS;
+- encoder_noise, 100 s: RMS over [80, 100) s, where covariance windup shows (it does not within 20 s).
+
+Prints a Markdown table (docs/controller.md holds the one of the last run). Figures only; nothing asserted.
+
+    python scripts/ablation.py [--workers N] [--long-s 100]
+"""
+from __future__ import annotations
+
+import argparse
+import copy
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
+from pa10_dnbs.paths import share_path  # noqa: E402
+from pa10_dnbs.report.metrics_file import metrics_dict, metrics_settings  # noqa: E402
+from pa10_dnbs.sim.closed_loop import simulate  # noqa: E402
+from pa10_dnbs.study.scenarios import scenario_config  # noqa: E402
+
+
+def _set(path: str, value):
+    def edit(cfg):
+        node = cfg
+        *keys, last = path.split(".")
+        for k in keys:
+            node = node[k]
+        node[last] = value
+    return edit
+
+
+def _with(**settings):
+    def edit(cfg):
+        for name, kv in settings.items():
+            cfg["dnbs"]["remedies"][name].update(kv)
+    return edit
+
+
+REMEDIES = "dnbs.remedies"
+VARIANTS = [
+    ("default", None),
+    ("paper's law (config/paper.yaml)", "paper"),
+    ("robust term off", _set(f"{REMEDIES}.robust_term.enabled", False)),
+    ("velocity feed-forward off", _set(f"{REMEDIES}.robust_term.velocity_feedforward", False)),
+    ("anti-windup off", _set(f"{REMEDIES}.anti_windup.enabled", False)),
+    ("learning ramp off", _set(f"{REMEDIES}.learning_ramp.enabled", False)),
+    ("covariance bound off", _set(f"{REMEDIES}.covariance_bound.enabled", False)),
+    ("+ dead zone (2e-4 rad, 3e-3 rad/s)", _with(dead_zone={"enabled": True, "alpha_rad": (2e-4,) * 7,
+                                                          "torque_rad_s": (3e-3,) * 7})),
+    ("+ e-modification (sigma 1e-3)", _with(e_modification={"enabled": True, "sigma": 1e-3})),
+    ("+ projection (B = 2)", _with(projection={"enabled": True, "weight_bound": 2.0})),
+]
+
+
+def _run(args) -> dict:
+    variant, scenario, duration, window = args
+    base = load_config(share_path("config", "paper.yaml") if VARIANTS[variant][1] == "paper" else default_config_path())
+    edit = VARIANTS[variant][1]
+    if callable(edit):
+        edit(base)
+    cfg, dist = scenario_config(base, scenario, base["simulation"]["seed"])
+    cfg["simulation"]["window_s"] = window
+    run = simulate(cfg, "dnbs", duration, disturbances=dist)
+    m = metrics_dict(run, metrics_settings(cfg, duration))
+    return {"variant": variant, "scenario": scenario, **{k: m[k] for k in (
+        "worst_settling_time_s", "worst_max_abs_error_run_rad", "worst_torque_variation",
+        "worst_saturated_fraction_after_s", "worst_rms_error_rad")}}
+
+
+def _f(v, spec):
+    return "never" if v is None else format(v, spec)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--workers", type=int, default=None)
+    ap.add_argument("--long-s", type=float, default=100.0, help="length of the noisy run [s]")
+    a = ap.parse_args()
+    jobs = [(i, sc, d, w) for i in range(len(VARIANTS)) for sc, d, w in (
+        ("nominal", 20.0, (10.0, 20.0)), ("payload_5kg", 20.0, (10.0, 20.0)),
+        ("encoder_noise", a.long_s, (a.long_s - 20.0, a.long_s)))]
+    with ProcessPoolExecutor(max_workers=a.workers) as pool:
+        res = {(r["variant"], r["scenario"]): r for r in pool.map(_run, jobs)}
+    print(f"| variant | nominal: settled [s] | max abs [rad] | torque variation | at limit after 0.2 s | RMS [rad] | "
+          f"payload 5 kg: settled [s] | torque variation | RMS [rad] | noise, {a.long_s:g} s: RMS last 20 s [rad] |")
+    print("|---" * 10 + "|")
+    for i, (name, _) in enumerate(VARIANTS):
+        n, p, z = res[(i, "nominal")], res[(i, "payload_5kg")], res[(i, "encoder_noise")]
+        print(f"| {name} | {_f(n['worst_settling_time_s'], '.3f')} | {n['worst_max_abs_error_run_rad']:.4f} | "
+              f"{n['worst_torque_variation']:.2f} | {n['worst_saturated_fraction_after_s']:.4f} | "
+              f"{n['worst_rms_error_rad']:.2e} | {_f(p['worst_settling_time_s'], '.3f')} | "
+              f"{p['worst_torque_variation']:.2f} | {p['worst_rms_error_rad']:.2e} | {z['worst_rms_error_rad']:.2e} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
