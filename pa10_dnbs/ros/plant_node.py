@@ -55,7 +55,7 @@ class PlantNode(Node):
             "min_joint_states_subscribers": 0, "start_timeout_s": 30.0, "settle_s": 0.3,
             "state_subscribers": 1, "clock_subscribers": 1, "recorders": 0, "effort_queue_depth": 1000,
             "real_time_factor": 1.0, "deadline_fraction": 0.9, "late_tolerance": 0.1, "rt_priority": 0,
-            "warn_period_s": 1.0,
+            "warn_period_s": 1.0, "handshake_steps": 3,
         })
         check_choice("mode", p["mode"], ("lockstep", "realtime"))
         check_choice("on_missing_effort", p["on_missing_effort"], ("hold", "zero"))
@@ -66,6 +66,8 @@ class PlantNode(Node):
         _check_positive(p, "real_time_factor", "effort_timeout_s", "resend_s", "warn_period_s")
         if not 0 < p["deadline_fraction"] <= 1:
             raise ParameterError(f"parameter deadline_fraction must be in (0, 1], got {p['deadline_fraction']}")
+        if p["handshake_steps"] < 1:
+            raise ParameterError(f"parameter handshake_steps must be >= 1, got {p['handshake_steps']}")
         if not 0 <= p["late_tolerance"] < 1:
             raise ParameterError(f"parameter late_tolerance must be in [0, 1), got {p['late_tolerance']}")
         try:

@@ -1,8 +1,9 @@
 """The plant's realtime loop: deadline-synchronous ticks paced by the wall clock.
 
-Step 0 is a handshake: the plant waits (at most ``effort_timeout_s``) until
-every joint has answered state 0, so the first, slow messages on new DDS
-connections do not count as misses; the schedule starts with state 1.
+The first ``handshake_steps`` steps are a handshake: each waits (at most
+``effort_timeout_s``) until every joint has answered, so the first, slow
+messages on new DDS connections and the controllers' first steps do not
+count as misses; the tick schedule starts after them.
 Tick k (``loop/tick_schedule.py``): state k goes out at its start; the plant
 blocks on the effort wait set until every joint has answered state k or the
 deadline (``deadline_fraction`` of the tick) has passed, taking what is
@@ -33,20 +34,22 @@ def run_realtime(node, executor, stop) -> None:
     clock = time.monotonic
     log = node.get_logger()
     next_housekeeping = clock() + HOUSEKEEPING_S
-    # Handshake: step 0 waits until every joint has answered state 0 (the first messages on new DDS
-    # connections and the first controller steps are slow), at most effort_timeout_s; the tick schedule
-    # starts with state 1. A joint still silent then misses step 0 like any other.
-    node.publish_state(0)
-    t_end = clock() + p["effort_timeout_s"]
-    ready = None
-    while not node.take_efforts(ready) and not stop.done() and clock() < t_end:
-        ready = node.wire.wait(max(0.0, min(SLICE_S, t_end - clock())))
-    if stop.done():
-        return
-    warnings.missed(0, node.gate.missing)
-    node.step(node.gate.take_deadline())
+    # Handshake: the first ``handshake_steps`` steps wait until every joint has answered (the first messages
+    # on new DDS connections and the controllers' first steps, which load numpy's linear algebra, take
+    # milliseconds), each at most effort_timeout_s; the tick schedule starts after them. A joint still silent
+    # then misses that step like any other.
+    for k in range(min(p["handshake_steps"], node.n_steps)):
+        node.publish_state(k)
+        t_end = clock() + p["effort_timeout_s"]
+        ready = None
+        while not node.take_efforts(ready) and not stop.done() and clock() < t_end:
+            ready = node.wire.wait(max(0.0, min(SLICE_S, t_end - clock())))
+        if stop.done():
+            return
+        warnings.missed(k, node.gate.missing)
+        node.step(node.gate.take_deadline())
     sched.begin(clock())
-    node.publish_state(1)
+    node.publish_state(node.gate.step)
     if node.finished:
         return
     try:
@@ -60,7 +63,7 @@ def run_realtime(node, executor, stop) -> None:
 def _ticks(node, executor, stop, sched, warnings, clock, next_housekeeping) -> None:
     gate, wire, log = node.gate, node.wire, node.get_logger()
     while not stop.done():
-        # collect the answers to state k until all are in or the deadline passes
+        # collect the answers to the state of this tick until all are in or the deadline passes
         ready = None  # first look at every joint (stale answers may be queued)
         while not node.take_efforts(ready):
             left = sched.deadline - clock()
