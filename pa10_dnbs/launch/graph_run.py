@@ -125,6 +125,9 @@ def graph_topics() -> list[str]:
     return specs
 
 
+REALTIME_REFERENCE_BATCH = 20  # reference points per message in realtime (a 100-point batch cost ~ms to decode)
+
+
 def loop_reliability(opt: GraphOptions) -> str:
     """QoS reliability of the per-joint state/effort topics: as given, else the mode's default (realtime:
     best effort, the sensor-data convention, so a late sample is overwritten, not re-sent; lockstep:
@@ -170,8 +173,11 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
         cmds = [("recorder", py + ["pa10_dnbs.ros.recorder_node"] + _ros_args("recorder", {
             "config_file": cfg, "bag": str(opt.record_bag), "force": str(opt.force_bag).lower(),
             "topics": _yaml_list(graph_topics()), "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns}))]
+    # realtime: smaller reference batches, so that decoding one (in each controller) never costs a tick its
+    # deadline; lockstep keeps 100 points per message (fewer messages, and timing does not matter there)
+    batch = REALTIME_REFERENCE_BATCH if opt.mode == "realtime" else 100
     cmds.append(("reference", py + ["pa10_dnbs.ros.reference_node"] + _ros_args(
-        "reference", {"config_file": cfg, "duration_s": opt.duration_s})))
+        "reference", {"config_file": cfg, "duration_s": opt.duration_s, "batch_steps": batch})))
     for j in JOINT_NAMES:
         cmds.append((f"joint_controller_{j}", controller_command(opt, stats_file.parent, j)))
     cmds.append(("plant", py + ["pa10_dnbs.ros.plant_node"] + _ros_args("plant", {
