@@ -125,7 +125,7 @@ def graph_topics() -> list[str]:
     return specs
 
 
-REALTIME_REFERENCE_BATCH = 20  # reference points per message in realtime (a 100-point batch cost ~ms to decode)
+REALTIME_REFERENCE_BATCH = 20  # reference points per message in realtime (smaller bursts of work in the controllers)
 
 
 def loop_reliability(opt: GraphOptions) -> str:

@@ -39,6 +39,7 @@ from ..controller_factory import CONTROLLER_KINDS, build_guarded_controllers
 from ..core.checkpoint import load_checkpoint, save_checkpoint
 from ..faults.faulty_link import links_from_config
 from ..wire import joint_state_cdr
+from ..wire.trajectory_cdr import decode_first_joint
 from .diagnostics import DiagnosticsReporter, status
 from ..loop.cpu_meter import CpuMeter
 from ..loop.joint_loop import JointLoop
@@ -115,7 +116,10 @@ class JointControllerNode(Node):
         self._matched = False
         self.held_answers = 0
         self.create_subscription(JointState, state_topic(self.joint), self._on_state, qos, raw=True)
-        self.create_subscription(JointTrajectory, reference_topic(self.joint), self._on_reference, reference_qos())
+        self.malformed_references = 0
+        # raw: the batch is read straight from CDR (wire/trajectory_cdr.py), no rclpy message per point
+        self.create_subscription(JointTrajectory, reference_topic(self.joint), self._on_reference, reference_qos(),
+                                 raw=True)
         self.diagnostics = DiagnosticsReporter(self, lambda: [self._status()],
                                                lambda: self.clock_.stamp(max(0, self.loop_.last_step)))
         self.cpu = CpuMeter()
@@ -161,13 +165,16 @@ class JointControllerNode(Node):
         held, self._held = self._held, []
         self._send(held)
 
-    def _on_reference(self, msg: JointTrajectory) -> None:
+    def _on_reference(self, data: bytes) -> None:
+        try:
+            sec, nanosec, positions, velocities = decode_first_joint(data)
+        except (ValueError, IndexError, struct.error):
+            self.malformed_references += 1
+            return
         if self._pub is None:
             self._offer_effort()
-        first = self.clock_.step_of(msg.header.stamp)
-        pts = msg.points
-        self._publish(self.loop_.add_reference(first, [pt.positions[0] for pt in pts],
-                                               [pt.velocities[0] for pt in pts]))
+        first = self.clock_.step_of_sec_nanosec(sec, nanosec)
+        self._publish(self.loop_.add_reference(first, positions, velocities))
 
     def _publish(self, answers) -> None:
         if answers and self._pub is None:  # a bad state answered before any reference came
@@ -200,7 +207,7 @@ class JointControllerNode(Node):
         c["nonfinite_torques"] = loop.nonfinite_torques
         resets = getattr(loop.controller, "ekf_resets", {})
         c.update({f"ekf_resets_{k}": int(v[0]) for k, v in resets.items()})
-        c.update({"malformed_states": self.malformed, "states": self.states_received, "efforts": self.efforts_sent,
+        c.update({"malformed_states": self.malformed, "malformed_references": self.malformed_references, "states": self.states_received, "efforts": self.efforts_sent,
                   "duplicate_states": loop.duplicates, "last_step": loop.last_step,
                   "held_until_matched": self.held_answers})
         if self._link is not None:
