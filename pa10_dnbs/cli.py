@@ -35,7 +35,8 @@ def _launch(args: argparse.Namespace) -> int:
                       on_missing_effort=args.on_missing_effort, record=args.record, fault_args=args,
                       restart=args.restart, netns=args.netns, init_from=args.init_from,
                       bag_compression=args.bag_compression, live_port=args.live, live_host=args.live_host,
-                      live_hz=args.live_hz)
+                      live_hz=args.live_hz, real_time_factor=args.rtf, deadline_fraction=args.deadline_fraction,
+                      rt_priority=args.rt_priority)
 
 
 def _study(args: argparse.Namespace) -> int:
@@ -96,14 +97,27 @@ def build_parser() -> argparse.ArgumentParser:
 
     la = sub.add_parser("launch", help="the ROS 2 node graph (plant, 7 joint controllers, reference)")
     la.add_argument("--mode", choices=("lockstep", "realtime"), default="lockstep",
-                    help="lockstep: simulated time, deterministic; realtime: 1 kHz wall clock")
+                    help="lockstep: the plant steps once every joint has answered (deterministic, as fast as the "
+                         "graph goes); realtime: the plant steps on a wall-clock schedule with deadlines "
+                         "(docs/timing.md)")
+    la.add_argument("--rtf", type=float, default=1.0, metavar="R",
+                    help="realtime: real-time factor, as Gazebo's real_time_factor: a step of dt takes dt / R of "
+                         "wall time (1.0: 1 kHz; 0.5: half speed, a 2 ms tick)")
+    la.add_argument("--deadline-fraction", type=float, default=0.9, metavar="F",
+                    help="realtime: an effort counts when it arrives within this fraction of its tick "
+                         "(default 0.9); a missing one is held or zeroed (--on-missing-effort) and counted")
+    la.add_argument("--rt-priority", type=int, default=0, metavar="N",
+                    help="SCHED_FIFO priority 1..99 for the plant and the controllers where the OS allows it "
+                         "(root, CAP_SYS_NICE or ulimit -r); otherwise a message and default scheduling")
     _add_run_args(la, ("dnbs", "pid"), "the joint controllers: dnbs or pid (ctc is centralized: in-process only)")
     la.add_argument("--domain-id", type=int, default=None, help="ROS_DOMAIN_ID (default: a free one, leased for the run so concurrent runs never share it)")
-    la.add_argument("--reliability", choices=("reliable", "best_effort"), default="reliable",
-                    help="QoS of the per-joint state/effort topics")
+    la.add_argument("--reliability", choices=("reliable", "best_effort"), default=None,
+                    help="QoS of the per-joint state/effort topics (default: best_effort with depth 1 in "
+                         "realtime, the sensor-data convention; reliable in lockstep)")
     la.add_argument("--effort-timeout", type=float, default=1.0, metavar="SECONDS",
                     help="lockstep: wall time to wait for a joint's effort before holding/zeroing it")
-    la.add_argument("--on-missing-effort", choices=("hold", "zero"), default="hold")
+    la.add_argument("--on-missing-effort", choices=("hold", "zero"), default="hold",
+                    help="what replaces a missing effort: the joint's last applied torque (hold) or zero")
     la.add_argument("--record", type=Path, default=None, metavar="BAG_DIR",
                     help="record every topic into a rosbag2 MCAP bag (replaced only with --force)")
     la.add_argument("--restart", nargs="?", const="resume", choices=("resume", "fresh"), default=None,

@@ -1,158 +1,156 @@
 #!/usr/bin/env python3
-"""Benchmark: the ROS 2 node graph (plant + 7 DNBS controller processes + reference).
+"""Benchmark: the ROS 2 node graph (plant + 7 DNBS controller processes + reference + observer).
 
-Prints, for a run of --duration simulated seconds (default 10):
-- lockstep: real-time factor of the stepping phase (simulated / wall time),
-  with the wire monitor observing /joint_states and the references;
-- record: lockstep with the recorder in the wire monitor's place, writing
-  every topic into an MCAP bag (what `launch --record` runs, zstd-compressed
-  chunks): its real-time factor, the cost against plain lockstep (runs
-  interleaved), and the bag size per simulated second; record-none: the same
-  with uncompressed chunks (`--bag-compression none`);
-- live: lockstep with the live view (`launch --live`) and one Foxglove
-  WebSocket client subscribed to every channel for the whole run: its
-  real-time factor against plain lockstep, frames the client received;
-- realtime: fraction of 1 ms ticks at which every joint's effort for the
-  previous state had arrived, missed ticks and state-to-effort latency
-  (median / p99) per joint, and how often the plant itself was late.
-Figures only; nothing is asserted (the machines are shared and noisy).
+Prints, from --repeat runs of --duration simulated seconds each (default 2 x 10 s):
+- lockstep: the real-time factor it reaches;
+- realtime at each factor R of --factors (default 1.0 0.75 0.5 0.35): the fraction of ticks at which every
+  joint's effort came before the deadline (median of the runs), late tick starts, the achieved factor, and
+  the state-to-effort latency p50 / p99 per joint;
+- the CPU time per tick of every process (plant, each controller, reference, observer), measured inside
+  each process between its first and last step (start-up left out), per mode;
+- the sustainable factor: the highest R at which the median run had >= 99 % of ticks with every effort
+  on time, and how many cores 1 kHz real time (R = 1) would need from the CPU per tick.
+The machine's load average is printed before and after: the figures mean little on a busy machine.
+Figures only; nothing is asserted.
 
-    python scripts/bench_graph.py [--duration 10] [--repeat 2] [--modes lockstep record record-none live realtime]
+    python scripts/bench_graph.py [--duration 10] [--repeat 2] [--factors 1.0 0.75 0.5 0.35] [--no-lockstep]
 """
 from __future__ import annotations
 
 import argparse
 import re
-import resource
 import statistics
 import sys
 import tempfile
-import threading
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from pa10_dnbs import JOINT_NAMES  # noqa: E402
 from pa10_dnbs.config import default_config_path  # noqa: E402
 from pa10_dnbs.launch.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
 
-
-class LiveClient:
-    """A Foxglove WebSocket client, started when the launcher says where the live view is; reads everything."""
-
-    def __init__(self):
-        self.frames = 0
-        self._thread = None
-        self._stop = threading.Event()
-
-    def say(self, line: str) -> None:
-        m = re.search(r"live view at (ws://\S+)", line)
-        if m and self._thread is None:
-            self._thread = threading.Thread(target=self._run, args=(m.group(1),), daemon=True)
-            self._thread.start()
-
-    def _run(self, url: str) -> None:
-        import json
-
-        from websockets.exceptions import ConnectionClosed
-        from websockets.sync.client import connect
-
-        with connect(url, subprotocols=["foxglove.websocket.v1", "foxglove.sdk.v1"], proxy=None) as ws:
-            channels = {}
-            js_sub = None
-            while not self._stop.is_set():
-                try:
-                    frame = ws.recv(timeout=0.2)
-                except TimeoutError:
-                    continue
-                except ConnectionClosed:
-                    return
-                if isinstance(frame, str):
-                    msg = json.loads(frame)
-                    if msg.get("op") == "advertise":
-                        channels.update({c["topic"]: c["id"] for c in msg["channels"]})
-                    if js_sub is None and len(channels) >= 6:
-                        subs = {topic: i + 1 for i, topic in enumerate(channels)}
-                        ws.send(json.dumps({"op": "subscribe", "subscriptions": [
-                            {"id": i, "channelId": channels[t]} for t, i in subs.items()]}))
-                        js_sub = subs["/joint_states"]
-                elif frame[0] == 1 and int.from_bytes(frame[1:5], "little") == js_sub:
-                    self.frames += 1
-
-    def close(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5)
+ON_TIME_TARGET = 0.99
+CPU_LINE = re.compile(r"^CPU (\S+) ([0-9.]+) us per step")
 
 
-def one_run(mode: str, duration: float, reliability: str) -> tuple[dict, float, int, int]:
-    """Plant stats, children's CPU time [s], bag size [bytes] (0 without recording) and /joint_states frames
-    a live client received (0 without --live) of one run."""
-    with tempfile.TemporaryDirectory(prefix="pa10_bench_") as tmp:
-        bag = Path(tmp) / "bag" if mode.startswith("record") else None
-        client = LiveClient() if mode == "live" else None
-        r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+def load() -> str:
+    """The 1, 5 and 15 minute load averages."""
+    try:
+        return " ".join(Path("/proc/loadavg").read_text().split()[:3])
+    except OSError:
+        return "?"
+
+
+def one_run(mode: str, factor: float, args, attempts: int = 3) -> tuple[dict, dict[str, float]]:
+    """Plant stats and {process: CPU per tick [us]} of one run (a failed run, e.g. a node whose teardown
+    outlived the launcher's grace period on a loaded machine, is reported and run again)."""
+    for attempt in range(1, attempts + 1):
         try:
-            res = run_graph(GraphOptions(config_path=default_config_path(), mode="realtime" if mode == "realtime"
-                                         else "lockstep", duration_s=duration, reliability=reliability,
-                                         record_bag=bag, bag_compression="none" if mode == "record-none" else "zstd",
-                                         live_port=0 if client else None),
-                            Path(tmp), say=client.say if client else (lambda s: None))
-        finally:
-            if client is not None:
-                client.close()
-        r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        size = sum(f.stat().st_size for f in bag.iterdir()) if bag else 0
-    cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
-    return res.stats, cpu, size, client.frames if client else 0
+            return _run(mode, factor, args)
+        except GraphFailure as exc:
+            print(f"  ({mode} R={factor:g} attempt {attempt} failed: {str(exc).splitlines()[0]})", flush=True)
+            if attempt == attempts:
+                raise
+
+
+def _run(mode: str, factor: float, args) -> tuple[dict, dict[str, float]]:
+    with tempfile.TemporaryDirectory(prefix="pa10_bench_") as tmp:
+        opt = GraphOptions(config_path=default_config_path(), mode="lockstep" if mode == "record" else mode,
+                           duration_s=args.duration, reliability=args.reliability, real_time_factor=factor,
+                           rt_priority=args.rt_priority, record_bag=Path(tmp) / "bag" if mode == "record" else None)
+        res = run_graph(opt, Path(tmp), say=lambda s: None)
+        cpu = {}
+        for log in sorted((Path(tmp) / "logs").glob("*.log")):
+            for line in log.read_text(errors="replace").splitlines():
+                if m := CPU_LINE.match(line):
+                    cpu[m.group(1)] = float(m.group(2))
+    return res.stats, cpu
+
+
+def med(xs):
+    xs = [x for x in xs if x is not None]
+    return statistics.median(xs) if xs else float("nan")
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--duration", type=float, default=10.0)
-    ap.add_argument("--repeat", type=int, default=2)
-    ap.add_argument("--modes", nargs="+", default=["lockstep", "record", "realtime"],
-                    choices=["lockstep", "record", "record-none", "live", "realtime"])
-    ap.add_argument("--reliability", default="reliable", choices=["reliable", "best_effort"])
+    ap.add_argument("--duration", type=float, default=10.0, help="simulated seconds per run (default 10)")
+    ap.add_argument("--repeat", type=int, default=2, help="runs per mode and factor (default 2; medians)")
+    ap.add_argument("--factors", type=float, nargs="+", default=[1.0, 0.75, 0.5, 0.35])
+    ap.add_argument("--no-lockstep", action="store_true", help="realtime runs only")
+    ap.add_argument("--record", action="store_true",
+                    help="also lockstep with the recorder as the observer (what launch --record runs)")
+    ap.add_argument("--reliability", default=None, choices=["reliable", "best_effort"],
+                    help="QoS of the per-joint topics (default: the mode's own)")
+    ap.add_argument("--rt-priority", type=int, default=0)
     args = ap.parse_args()
-    print(f"node graph, DNBS, {args.duration:g} s simulated, {args.reliability} QoS, {args.repeat} runs per mode; "
-          f"load average at start: {open('/proc/loadavg').read().strip()}")
-    rtfs = {m: [] for m in args.modes}
-    paired = {m: [] for m in args.modes}  # rtf / the lockstep rtf of the same round (load drifts between rounds)
-    for i in range(args.repeat):  # modes interleaved, so a slow spell of the machine hits all of them
-        for mode in args.modes:
-            try:
-                stats, cpu, size, frames = one_run(mode, args.duration, args.reliability)
-            except GraphFailure as exc:  # e.g. a node whose teardown outlived the grace period on a loaded machine
-                print(f"{mode:11s} run {i + 1}: FAILED ({str(exc).splitlines()[0]}); not counted")
-                continue
-            rtfs[mode].append(stats["real_time_factor"])
-            if mode != "lockstep" and "lockstep" in args.modes and len(rtfs["lockstep"]) == i + 1:
-                paired[mode].append(stats["real_time_factor"] / rtfs["lockstep"][i])
-            line = (f"{mode:11s} run {i + 1}: real-time factor {stats['real_time_factor']:.2f}, "
-                    f"children CPU {cpu:.1f} s ({1e3 * cpu / stats['steps']:.2f} ms per step incl. start-up)")
-            if size:
-                line += f", bag {size / 1e6:.1f} MB = {size / 1e6 / args.duration:.2f} MB per simulated second"
-            if mode == "live":
-                line += f", live client received {frames} /joint_states frames"
+    print(f"node graph, DNBS, {args.duration:g} s simulated per run, {args.repeat} runs each; "
+          f"load average before: {load()}", flush=True)
+    cases = (([("lockstep", 1.0)] if not args.no_lockstep else []) + ([("record", 1.0)] if args.record else [])
+             + [("realtime", r) for r in args.factors])
+    runs: dict[tuple, list] = {c: [] for c in cases}
+    for i in range(args.repeat):  # cases interleaved, so a slow spell of the machine hits all of them
+        for mode, r in cases:
+            stats, cpu = one_run(mode, r, args)
+            runs[(mode, r)].append((stats, cpu))
+            line = f"run {i + 1} {mode:8s}"
             if mode == "realtime":
-                line += (f", ticks with every effort on time {100 * stats['on_time_fraction']:.1f} %, "
-                         f"plant late on {stats['late_ticks']} of {stats['steps']} ticks")
-            print(line)
-            for j in stats["joints"]:
-                print(f"    {j['name']}: latency median {j['latency_median_us']:7.0f} us, p99 {j['latency_p99_us']:7.0f} us"
-                      + (f", missed ticks {j['missed_ticks']}" if mode == "realtime" else
-                         f", effort timeouts {j['effort_timeouts']}"))
-    for mode, r in rtfs.items():
-        if r:
-            print(f"{mode:11s} real-time factor: best {max(r):.2f}, median {statistics.median(r):.2f} ({len(r)} runs)")
-    print(f"load average at end: {open('/proc/loadavg').read().strip()}")
-    for mode, what in (("record", "recording (zstd)"), ("record-none", "recording (uncompressed)"),
-                       ("live", "the live view with a client")):
-        if rtfs.get("lockstep") and rtfs.get(mode):
-            cost = 1 - statistics.median(rtfs[mode]) / statistics.median(rtfs["lockstep"])
-            ratios = ", ".join(f"{r:.2f}" for r in paired[mode])
-            print(f"{what} costs {100 * cost:.0f} % of the lockstep rate (medians); keeps "
-                  f"{ratios or '-'} of the lockstep rate of the same round")
+                line += (f" R={r:<5g} on time {100 * stats['on_time_fraction']:6.2f} %, late starts "
+                         f"{stats['late_start_ticks']:5d}, achieved factor {stats['real_time_factor']:.3f}")
+            else:
+                line += f"         achieved real-time factor {stats['real_time_factor']:.3f}"
+            line += (f", CPU {sum(cpu.values()) / 1e3:.2f} ms per tick in all, plant woken "
+                     f"{stats['effort_wakeups_per_step']:.2f}x per tick for its 7 efforts; load {load()}")
+            print(line, flush=True)
+
+    print("\nCPU per tick [us] (median of runs; inside each process, start-up excluded)")
+    names = ["plant"] + [f"joint_controller_{j}" for j in JOINT_NAMES] + ["reference", "wire_monitor"]
+    names += ["recorder"] if args.record else []
+    header = f"  {'process':22s}" + "".join(f"{(m if m != 'realtime' else f'R={r:g}'):>10s}" for m, r in cases)
+    print(header)
+    totals = {}
+    for n in names:
+        row = f"  {n:22s}"
+        for c in cases:
+            v = med([cpu.get(n) for _, cpu in runs[c]])
+            row += f"{v:10.0f}" if v == v else f"{'-':>10s}"
+        print(row)
+    row = f"  {'total':22s}"
+    for c in cases:
+        totals[c] = med([sum(cpu.values()) for _, cpu in runs[c]])
+        row += f"{totals[c]:10.0f}"
+    print(row)
+
+    if args.factors:
+        print("\nrealtime: ticks with every effort before the deadline, and state-to-effort latency per joint")
+        for r in args.factors:
+            rs = [s for s, _ in runs[("realtime", r)]]
+            print(f"  R={r:g} (tick {1e3 * 1e-3 / r:.2f} ms, deadline {0.9e3 * 1e-3 / r:.2f} ms): on time "
+                  f"{100 * med([s['on_time_fraction'] for s in rs]):.2f} % (runs: "
+                  + ", ".join(f"{100 * s['on_time_fraction']:.2f}" for s in rs)
+                  + f"), late starts {med([s['late_start_ticks'] for s in rs]):.0f}, achieved factor "
+                  f"{med([s['real_time_factor'] for s in rs]):.3f}")
+            for j, name in enumerate(JOINT_NAMES):
+                print(f"      {name}: p50 {med([s['joints'][j]['latency_median_us'] for s in rs]):6.0f} us, "
+                      f"p99 {med([s['joints'][j]['latency_p99_us'] for s in rs]):6.0f} us, missed "
+                      f"{med([s['joints'][j]['missed_ticks'] for s in rs]):.0f}")
+        ok = [r for r in args.factors if med([s["on_time_fraction"] for s, _ in runs[("realtime", r)]])
+              >= ON_TIME_TARGET]
+        print(f"\nsustainable real-time factor (median run >= {100 * ON_TIME_TARGET:.0f} % of ticks on time): "
+              + (f"{max(ok):g}" if ok else f"none of {', '.join(f'{r:g}' for r in args.factors)}"))
+        busiest = max(args.factors)
+        cpu_ms = totals[("realtime", busiest)] / 1e3
+        print(f"CPU per tick of the whole graph at R={busiest:g}: {cpu_ms:.2f} ms; 1 kHz real time needs at least "
+              f"{cpu_ms:.1f} cores fully busy (more in practice: to keep p99 latency under the 0.9 ms deadline "
+              f"the cores must stay well below full load)")
+    if not args.no_lockstep:
+        print(f"lockstep real-time factor: median {med([s['real_time_factor'] for s, _ in runs[('lockstep', 1.0)]]):.3f}"
+              f" (runs: " + ", ".join(f"{s['real_time_factor']:.3f}" for s, _ in runs[("lockstep", 1.0)]) + ")")
+    if args.record:
+        print(f"lockstep with the recorder: real-time factor median "
+              f"{med([s['real_time_factor'] for s, _ in runs[('record', 1.0)]]):.3f}")
+    print(f"load average after: {load()}")
     return 0
 
 

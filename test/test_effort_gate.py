@@ -55,15 +55,55 @@ def test_nonfinite_effort_is_replaced_at_once_and_counted():
     assert g.nonfinite.tolist() == [2, 0] and g.timeouts.tolist() == [0, 0]
 
 
-def test_realtime_zero_order_hold_and_miss_count():
+def test_deadline_applies_exactly_the_efforts_that_came():
     g = EffortGate(2)
     g.offer(0, 0, 1.0)
     g.offer(1, 0, 2.0)
-    assert g.take_realtime().tolist() == [1.0, 2.0]  # tick applying step 0: both answered state 0
-    g.offer(0, 1, 3.0)                                # joint 1 late for state 1
-    assert g.take_realtime().tolist() == [3.0, 2.0]  # held
-    assert g.misses.tolist() == [0, 1]
+    assert g.take_deadline().tolist() == [1.0, 2.0]  # both answered state 0 in time
+    g.offer(0, 1, 3.0)                                # joint 1 misses the deadline of state 1
+    assert g.take_deadline().tolist() == [3.0, 2.0]  # held
+    assert g.misses.tolist() == [0, 1] and g.miss_steps == [[], [1]]
     assert (g.ticks, g.ticks_all_on_time) == (2, 1)
+    assert not g.offer(1, 1, 9.0)                     # its late answer: stale, never applied
+    assert g.stale.tolist() == [0, 1]
+    assert g.missing == [0, 1] and g.step == 2
+
+
+@pytest.mark.parametrize("mode", ["hold", "zero"])
+def test_lost_efforts_in_realtime_are_filled_in_and_counted_per_joint(mode):
+    """A seeded 5 % of efforts never arrive (as --drop-efforts does on the wire): every loss is one miss of its
+    joint at its step, the tick is not on time, the torque is the last applied one (hold) or zero, and every
+    effort that did arrive is applied unchanged at its own step."""
+    rng = np.random.default_rng(5)
+    n, steps = 7, 2000
+    sent = rng.normal(size=(steps, n))
+    lost = rng.random((steps, n)) < 0.05
+    g = EffortGate(n, on_missing=mode)
+    applied = np.zeros((steps, n))
+    for k in range(steps):
+        for j in rng.permutation(n):
+            if not lost[k, j]:
+                g.offer(j, k, sent[k, j])
+        applied[k] = g.take_deadline()
+    assert g.misses.tolist() == lost.sum(axis=0).tolist()
+    assert [s[0] if s else None for s in g.miss_steps] == [
+        int(np.flatnonzero(lost[:, j])[0]) if lost[:, j].any() else None for j in range(n)]
+    assert g.ticks == steps and g.ticks_all_on_time == int((~lost.any(axis=1)).sum())
+    assert np.array_equal(applied[~lost], sent[~lost])
+    for k, j in zip(*np.nonzero(lost)):
+        expected = (applied[k - 1, j] if k > 0 else 0.0) if mode == "hold" else 0.0
+        assert applied[k, j] == expected, (k, j)
+    assert g.timeouts.sum() == 0 and g.stale.sum() == 0
+
+
+def test_deadline_on_time_fraction_per_bin():
+    g = EffortGate(1)
+    g.bin_steps = 2
+    for k, arrives in enumerate([True, False, True, True, False]):
+        if arrives:
+            g.offer(0, k, 1.0)
+        g.take_deadline()
+    assert g.ticks_per_bin == [2, 2, 1] and g.on_time_per_bin == [1, 2, 0]
 
 
 def test_efforts_ahead_are_kept_until_their_step():

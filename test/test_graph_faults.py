@@ -1,5 +1,5 @@
 """The graph under faults: corrupted messages, a killed controller with and without restart,
-lost efforts in realtime, and plant and controllers on two hosts (network namespaces)."""
+lost efforts in realtime (a smoke run), and plant and controllers on two hosts (network namespaces)."""
 import json
 import shutil
 import subprocess
@@ -136,36 +136,26 @@ def test_lost_and_late_messages_in_lockstep_change_nothing(tmp_path, _default_cf
         assert np.array_equal(getattr(local, field), getattr(wire, field)), field
 
 
-def _realtime_rms(tmp_path, domain, pairs: int = 2):
-    """Per-joint RMS error [rad] over [10, 20] s, mean of ``pairs`` clean and ``pairs`` lossy (1 % of efforts
-    dropped) realtime runs of 20 s, run alternately; also each lossy run's fault report.
-
-    One clean realtime run alone is no fair baseline here: ~99 % of ticks are late on 2 cores (issue 3), and
-    a joint's RMS varies by up to 2.3x between identical clean runs (e1 3.1e-3 to 7.3e-3 rad measured), so
-    the mean of two runs of each is compared.
-    """
-    rms = {"clean": [], "lossy": []}
-    lossy_faults = []
-    for i in range(pairs):
-        for kind, extra in (("clean", ()), ("lossy", ("--drop-efforts", "0.01"))):
-            rc, output, out = _launch(tmp_path, f"{kind}{i}", "--mode", "realtime", "--duration", 20, *extra,
-                                      domain_id=domain)
-            assert rc == 0, output
-            m, joints = _faults(out)
-            assert m["torques_within_limits"] and m["all_finite"], (kind, i)
-            rms[kind].append([j["rms_error_rad"] for j in m["joints"]])
-            if kind == "lossy":
-                lossy_faults.append(joints)
-    return np.mean(rms["clean"], axis=0), np.mean(rms["lossy"], axis=0), lossy_faults
-
-
-def test_realtime_with_one_percent_of_efforts_lost(tmp_path, domain):
-    clean, lossy, faults = _realtime_rms(tmp_path, domain)
-    for joints in faults:
-        dropped = sum(joints[j]["controller"]["injected_effort_dropped"] for j in JOINT_NAMES)
-        assert 0.005 * 7 * 20000 < dropped < 0.02 * 7 * 20000
-    for name, a, b in zip(JOINT_NAMES, clean, lossy):
-        assert b < 2 * a, (name, a, b)
+def test_realtime_effort_loss_is_counted_as_misses(tmp_path, domain):
+    """Smoke run: 5 % of efforts dropped on the wire (seeded), realtime at half speed. Each drop is a miss of
+    its joint, so every joint counts at least as many misses as drops; the run completes with finite torques
+    within Table 2. (How a miss is filled in: test_effort_gate.py, deterministically.)"""
+    duration = 1.5
+    rc, output, out = _launch(tmp_path, "run", "--mode", "realtime", "--rtf", 0.5, "--duration", duration,
+                              "--drop-efforts", 0.05, "--fault-seed", 31, domain_id=domain)
+    assert rc == 0, output
+    m, faults = _faults(out)
+    assert m["torques_within_limits"] and m["all_finite"]
+    stats = json.loads((out / "plant_stats.json").read_text())
+    n = int(round(duration * 1000))
+    assert stats["steps"] == n and stats["completed"]
+    for j in stats["joints"]:
+        dropped = faults[j["name"]]["controller"]["injected_effort_dropped"]
+        assert 0.02 * n < dropped < 0.1 * n, (j["name"], dropped)
+        # a dropped effort never arrives, so its tick misses (the answer to the last state is not needed)
+        assert j["missed_ticks"] >= dropped - 1, (j["name"], j["missed_ticks"], dropped)
+        assert j["effort_timeouts"] == 0  # realtime never waits past the deadline
+    assert stats["on_time_fraction"] <= 1 - max(j["missed_ticks"] for j in stats["joints"]) / n + 1e-12
 
 
 NS = ("pa10t_a", "pa10t_b")

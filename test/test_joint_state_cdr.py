@@ -1,5 +1,6 @@
 """The raw JointState codec agrees with rclpy's serializer in both directions."""
 import math
+import struct
 
 import pytest
 
@@ -36,3 +37,26 @@ def test_decode_reads_rclpy_bytes(sec, nsec, names, pos, vel, eff):
 def test_rejects_garbage():
     with pytest.raises(ValueError):
         joint_state_cdr.decode(b"\x01\x00")
+
+
+@pytest.mark.parametrize("name,fields", [("s1", ("position", "velocity")), ("w2", ("effort",)),
+                                         ("a_long_joint_name", ("position", "velocity")), ("e1", ("effort",))])
+def test_one_joint_layout_equals_the_general_codec(name, fields):
+    lay = joint_state_cdr.OneJointLayout(name, fields)
+    vals = (0.25, -1.5)[:len(fields)] if fields != ("effort",) else (7.25,)
+    kw = {f: (v,) for f, v in zip(fields, vals)}
+    general = joint_state_cdr.encode(12, 999_999_999, [name], kw.get("position", ()), kw.get("velocity", ()),
+                                     kw.get("effort", ()))
+    fast = lay.encode(12, 999_999_999, *vals)
+    assert fast == general
+    assert lay.decode(fast) == (12, 999_999_999, vals)
+    nan = lay.decode(lay.encode(1, 2, *([math.nan] * len(vals))))
+    assert all(math.isnan(v) for v in nan[2])
+
+
+def test_one_joint_layout_falls_back_for_other_valid_messages_and_rejects_garbage():
+    lay = joint_state_cdr.OneJointLayout("s1", ("effort",))
+    other = joint_state_cdr.encode(3, 4, ["s1"], [1.0], [], [2.5], frame_id="base")  # valid, other shape
+    assert lay.decode(other) == (3, 4, (2.5,))
+    with pytest.raises((ValueError, IndexError, UnicodeDecodeError, struct.error)):
+        lay.decode(b"\x00\x01\x00\x00garbage")

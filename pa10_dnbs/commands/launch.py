@@ -17,8 +17,9 @@ from ..core.checkpoint import checkpoint_dir, load_joint_checkpoints
 from ..kinematics.urdf_chain import UrdfChain
 from ..launch.fault_flags import apply_fault_flags, faults_active, plain
 from ..launch.fault_report import fault_note, fault_report
-from ..launch.graph_run import GraphFailure, GraphOptions, parse_netns, run_graph
+from ..launch.graph_run import GraphFailure, GraphOptions, loop_reliability, parse_netns, run_graph
 from ..live.options import check_live_options
+from ..loop.rt_priority import check_priority
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..wire.wire_record import load_wire_run
@@ -28,10 +29,11 @@ from ..wire.topics import CLOCK, JOINT_STATES, effort_topic, state_topic
 
 
 def run_launch(config_path: Path | None, mode: str, controller: str, duration_s: float | None, out: Path,
-               force: bool, progress: bool, domain_id: int | None, reliability: str, effort_timeout_s: float,
+               force: bool, progress: bool, domain_id: int | None, reliability: str | None, effort_timeout_s: float,
                on_missing_effort: str, record: Path | None = None, fault_args=None, restart: str | None = None,
                netns: list[str] | None = None, init_from: Path | None = None, bag_compression: str = "zstd",
-               live_port: int | None = None, live_host: str = "127.0.0.1", live_hz: float = 50.0) -> int:
+               live_port: int | None = None, live_host: str = "127.0.0.1", live_hz: float = 50.0,
+               real_time_factor: float = 1.0, deadline_fraction: float = 0.9, rt_priority: int = 0) -> int:
     """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code.
 
     ``fault_args``: the parsed fault flags (launch/fault_flags.py) applied to the config; the config the
@@ -40,6 +42,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     ``init_from``: warm start of the DNBS controllers from an earlier run's checkpoints (reported as such).
     ``bag_compression``: 'zstd' or 'none' (with ``record``). ``live_port``: serve the live view
     (Foxglove WebSocket) on ``live_host``:``live_port`` (0: a free port), ``live_hz`` frames per second at most.
+    ``real_time_factor``, ``deadline_fraction``: realtime pacing (docs/timing.md); ``rt_priority``: SCHED_FIFO
+    priority of plant and controllers (0: off). ``reliability`` None: the mode's default QoS.
     """
     config_path = Path(config_path).resolve() if config_path else default_config_path()
     cfg = load_config(config_path)
@@ -56,6 +60,14 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         raise ConfigError(f"--domain-id: must be in 0..101, got {domain_id}")
     if not (math.isfinite(effort_timeout_s) and effort_timeout_s > 0):
         raise ConfigError(f"--effort-timeout: must be a positive number of seconds, got {effort_timeout_s}")
+    if not (math.isfinite(real_time_factor) and 0 < real_time_factor <= 100):
+        raise ConfigError(f"--rtf: must be a real-time factor in (0, 100], got {real_time_factor}")
+    if not (math.isfinite(deadline_fraction) and 0 < deadline_fraction <= 1):
+        raise ConfigError(f"--deadline-fraction: must be in (0, 1], got {deadline_fraction}")
+    try:
+        check_priority(rt_priority)
+    except ValueError:
+        raise ConfigError(f"--rt-priority: must be 0 (off) or 1..99, got {rt_priority}") from None
     dt = cfg["simulation"]["dt_s"]
     n_steps = int(round(duration_s / dt))
     if n_steps < 2:
@@ -82,7 +94,10 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                        domain_id=domain_id, reliability=reliability, effort_timeout_s=effort_timeout_s,
                        on_missing_effort=on_missing_effort, progress=progress, dt_s=dt, record_bag=record,
                        force_bag=force, restart=restart, netns=namespaces, init_from=init_from,
-                       bag_compression=bag_compression, live_port=live_port, live_host=live_host, live_hz=live_hz)
+                       bag_compression=bag_compression, live_port=live_port, live_host=live_host, live_hz=live_hz,
+                       real_time_factor=real_time_factor, deadline_fraction=deadline_fraction,
+                       rt_priority=rt_priority)
+    reliability = loop_reliability(opt)
     settings = metrics_settings(cfg, n_steps * dt)
     window = settings["window_s"]
 
@@ -106,8 +121,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                 run, settings, source="ros-graph", mode=mode, config_file=str(config_path),
                 seed=cfg["simulation"]["seed"], reliability=reliability, domain_id=result.domain_id,
                 wall_time_total_s=result.wall_total_s, limit_hits=stats["limit_hits"],
-                timing={k: stats[k] for k in ("late_ticks", "on_time_fraction", "effort_timeout_s",
-                                               "on_missing_effort")} | {"joints": stats["joints"]},
+                timing=timing_summary(stats),
                 node_exit_codes=result.exit_codes, bag=str(record) if record else None,
                 faults=fault_report(cfg, stats, result),
                 **({"warm_start_from": str(init_from)} if init_from is not None else {}))
@@ -178,14 +192,27 @@ def _bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, cfg: dict
     return run, "; ".join(problems) or None
 
 
+TIMING_KEYS = ("on_time_fraction", "late_start_ticks", "max_start_lateness_us", "target_real_time_factor",
+               "real_time_factor", "tick_period_s", "deadline_fraction", "reliability", "state_qos_depth",
+               "effort_qos_depth", "effort_timeout_s", "on_missing_effort", "rt_priority", "rt_priority_applied",
+               "cpu", "effort_waits_per_step", "effort_wakeups_per_step", "on_time_fraction_per_bin")
+
+
+def timing_summary(stats: dict) -> dict:
+    """The timing part of metrics.json: the plant's pacing figures and, per joint, misses and latency."""
+    return {k: stats.get(k) for k in TIMING_KEYS} | {"joints": stats["joints"]}
+
+
 def _timing_note(stats: dict) -> str:
     j = stats["joints"]
     med = max(x["latency_median_us"] or 0 for x in j)
     p99 = max(x["latency_p99_us"] or 0 for x in j)
     s = (f"plant: {stats['steps']} steps, real-time factor {stats['real_time_factor']:.2f}; state-to-effort latency "
-         f"median up to {med:.0f} us, p99 up to {p99:.0f} us; effort timeouts "
+         f"p50 up to {med:.0f} us, p99 up to {p99:.0f} us; effort timeouts "
          f"{sum(x['effort_timeouts'] for x in j)}")
     if stats["mode"] == "realtime":
-        s += (f"; ticks with every effort on time {100 * stats['on_time_fraction']:.2f} %, missed ticks per joint "
-              + ", ".join(f"{x['name']} {x['missed_ticks']}" for x in j))
+        s += (f"; target real-time factor {stats['target_real_time_factor']:g} (tick {1e3 * stats['tick_period_s']:.2f}"
+              f" ms, deadline {100 * stats['deadline_fraction']:.0f} %); ticks with every effort on time "
+              f"{100 * stats['on_time_fraction']:.2f} %, late tick starts {stats['late_start_ticks']}, missed ticks "
+              "per joint " + ", ".join(f"{x['name']} {x['missed_ticks']}" for x in j))
     return s

@@ -42,7 +42,10 @@ class GraphOptions:
     controller: str = "dnbs"
     duration_s: float = 20.0
     domain_id: int | None = None
-    reliability: str = "reliable"
+    reliability: str | None = None   # per-joint state/effort QoS; None: best_effort in realtime, reliable in lockstep
+    real_time_factor: float = 1.0    # realtime: a step of dt_s takes dt_s / real_time_factor of wall time
+    deadline_fraction: float = 0.9   # realtime: efforts must arrive within this fraction of the tick
+    rt_priority: int = 0             # SCHED_FIFO priority of plant and controllers (0: off)
     effort_timeout_s: float = 1.0
     on_missing_effort: str = "hold"
     progress: bool = False
@@ -127,6 +130,18 @@ def graph_topics() -> list[str]:
     return specs
 
 
+REALTIME_REFERENCE_BATCH = 20  # reference points per message in realtime (smaller bursts of work in the controllers)
+
+
+def loop_reliability(opt: GraphOptions) -> str:
+    """QoS reliability of the per-joint state/effort topics: as given, else the mode's default (realtime:
+    best effort, the sensor-data convention, so a late sample is overwritten, not re-sent; lockstep:
+    reliable, so nothing has to be re-requested)."""
+    if opt.reliability is not None:
+        return opt.reliability
+    return "best_effort" if opt.mode == "realtime" else "reliable"
+
+
 def _yaml_list(items: list[str]) -> str:
     return "[" + ",".join(f"'{i}'" for i in items) + "]"
 
@@ -135,7 +150,8 @@ def controller_command(opt: GraphOptions, workdir: Path, joint: str, incarnation
     """argv of joint ``joint``'s controller; a restarted one (incarnation > 0) resumes unless opt.restart is
     'fresh', and is not killed again by faults.kill_controller_at_s."""
     params = {"config_file": str(opt.config_path), "joint": joint, "controller": opt.controller,
-              "reliability": opt.reliability, "queue_depth": 1 if opt.mode == "realtime" else 2000,
+              "reliability": loop_reliability(opt), "queue_depth": 1 if opt.mode == "realtime" else 2000,
+              "rt_priority": opt.rt_priority,
               "stats_file": str(workdir / f"controller_{joint}.json"), "incarnation": incarnation,
               "resume": str(incarnation > 0 and opt.restart != "fresh").lower(),
               "effort_subscribers": 1 + int(opt.record_bag is not None)}  # the plant and the recorder
@@ -158,7 +174,7 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
     else:  # the recorder is the observer: the run is rebuilt from the bag
         end_ns = int(round(opt.duration_s / opt.dt_s)) * int(round(opt.dt_s * 1e9))
         custom = [f"controller={opt.controller}", f"mode={opt.mode}", f"duration_s={opt.duration_s!r}",
-                  f"reliability={opt.reliability}", f"config_file={cfg}"]
+                  f"reliability={loop_reliability(opt)}", f"config_file={cfg}"]
         cmds = [("recorder", py + ["pa10_dnbs.ros.recorder_node"] + _ros_args("recorder", {
             "config_file": cfg, "bag": str(opt.record_bag), "force": str(opt.force_bag).lower(),
             "topics": _yaml_list(graph_topics()), "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns,
@@ -166,13 +182,18 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
     if opt.live_port is not None:  # display only: started after the observer, never waited for by the plant
         cmds.append((LIVE_VIEW, py + ["pa10_dnbs.ros.live_observer_node"] + _ros_args(LIVE_VIEW, {
             "config_file": cfg, "host": opt.live_host, "port": opt.live_port, "display_hz": opt.live_hz})))
+    # realtime: smaller reference batches, so that decoding one (in each controller) never costs a tick its
+    # deadline; lockstep keeps 100 points per message (fewer messages, and timing does not matter there)
+    batch = REALTIME_REFERENCE_BATCH if opt.mode == "realtime" else 100
     cmds.append(("reference", py + ["pa10_dnbs.ros.reference_node"] + _ros_args(
-        "reference", {"config_file": cfg, "duration_s": opt.duration_s})))
+        "reference", {"config_file": cfg, "duration_s": opt.duration_s, "batch_steps": batch})))
     for j in JOINT_NAMES:
         cmds.append((f"joint_controller_{j}", controller_command(opt, stats_file.parent, j)))
     cmds.append(("plant", py + ["pa10_dnbs.ros.plant_node"] + _ros_args("plant", {
-        "config_file": cfg, "mode": opt.mode, "duration_s": opt.duration_s, "reliability": opt.reliability,
+        "config_file": cfg, "mode": opt.mode, "duration_s": opt.duration_s, "reliability": loop_reliability(opt),
         "effort_timeout_s": opt.effort_timeout_s, "on_missing_effort": opt.on_missing_effort,
+        "real_time_factor": opt.real_time_factor, "deadline_fraction": opt.deadline_fraction,
+        "rt_priority": opt.rt_priority,
         "stats_file": str(stats_file), "min_joint_states_subscribers": int(opt.record_bag is None),
         "recorders": int(opt.record_bag is not None)})))
     return cmds

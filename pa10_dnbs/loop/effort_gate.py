@@ -6,10 +6,10 @@ joint's last applied torque ("hold") or zero, and counted; so is a non-finite
 one, at once.
 An effort for a later step (a player re-driving the plant from a bag sends
 ahead) is kept until that step comes, up to ``max_pending`` steps.
-Realtime: at the tick that advances the plant from state k to k+1, the latest
-effort of each joint is applied (zero-order hold); a joint whose effort
-answering state k (the state published one tick earlier) has not arrived
-counts a miss.
+Realtime (deadline-synchronous): at the deadline of tick k the efforts
+answering state k that have arrived are applied; each missing one is
+replaced the same way and counted as a miss for its joint (``take_deadline``).
+The tick is on time when no joint missed it.
 """
 from __future__ import annotations
 
@@ -30,18 +30,17 @@ class EffortGate:
         self._efforts = np.zeros(n_joints)
         self._have = np.zeros(n_joints, dtype=bool)
         self.applied = np.zeros(n_joints)
-        self.latest = np.zeros(n_joints)
-        self.latest_step = np.full(n_joints, -1, dtype=np.int64)
         self.timeouts = np.zeros(n_joints, dtype=np.int64)     # lockstep: effort replaced after the timeout
         self.nonfinite = np.zeros(n_joints, dtype=np.int64)    # efforts rejected for NaN/Inf
         self.stale = np.zeros(n_joints, dtype=np.int64)        # efforts for a step already applied
-        self.misses = np.zeros(n_joints, dtype=np.int64)       # realtime: previous state not answered at a tick
+        self.misses = np.zeros(n_joints, dtype=np.int64)       # realtime: effort not in by the tick's deadline
         self.ticks = 0
         self.ticks_all_on_time = 0
         self.max_pending = max_pending
         self._pending: dict[int, dict[int, float]] = {}      # lockstep: step -> {joint: effort} ahead of time
         self.dropped_ahead = np.zeros(n_joints, dtype=np.int64)  # efforts ahead beyond max_pending steps
         self.timeout_steps: list[list[int]] = [[] for _ in range(n_joints)]  # lockstep: steps filled in, per joint
+        self.miss_steps: list[list[int]] = [[] for _ in range(n_joints)]     # realtime: the first MAX_KEPT misses
         self.bin_steps = 60_000  # realtime: on-time ticks are also counted per bin of this many steps
         self.ticks_per_bin: list[int] = []
         self.on_time_per_bin: list[int] = []
@@ -60,9 +59,6 @@ class EffortGate:
             self._efforts[joint] = effort
             self._have[joint] = True
             return bool(self._have.all())
-        if step > self.latest_step[joint]:
-            self.latest[joint] = effort
-            self.latest_step[joint] = step
         if step != self.step:
             if step < self.step:
                 self.stale[joint] += 1
@@ -89,6 +85,31 @@ class EffortGate:
         for j in np.flatnonzero(~self._have):
             self.timeouts[j] += 1
             self.timeout_steps[j].append(self.step)
+        return self._fill_and_advance()
+
+    def take_deadline(self) -> np.ndarray:
+        """Realtime, at the deadline of the current step's tick: the efforts that arrived, the missing ones
+        filled in (hold/zero) and counted as misses; the tick counts as on time when none was missing."""
+        missed = np.flatnonzero(~self._have)
+        for j in missed:
+            self.misses[j] += 1
+            if len(self.miss_steps[j]) < self.MAX_KEPT:
+                self.miss_steps[j].append(self.step)
+        on_time = missed.size == 0
+        self.ticks += 1
+        self.ticks_all_on_time += on_time
+        b = self.step // self.bin_steps
+        while len(self.ticks_per_bin) <= b:
+            self.ticks_per_bin.append(0)
+            self.on_time_per_bin.append(0)
+        self.ticks_per_bin[b] += 1
+        self.on_time_per_bin[b] += on_time
+        return self._fill_and_advance()
+
+    MAX_KEPT = 10_000  # miss steps kept per joint
+
+    def _fill_and_advance(self) -> np.ndarray:
+        for j in np.flatnonzero(~self._have):
             self._efforts[j] = self.applied[j] if self.on_missing == "hold" else 0.0
         self.applied = self._efforts.copy()
         self._have[:] = False
@@ -102,20 +123,3 @@ class EffortGate:
     def ready(self) -> bool:
         """Lockstep: every joint has answered the current step."""
         return bool(self._have.all())
-
-    def take_realtime(self) -> np.ndarray:
-        """Torques at the tick that applies step ``self.step``: the latest efforts, counting misses."""
-        missed = self.latest_step < self.step
-        self.misses += missed
-        self.ticks += 1
-        on_time = not missed.any()
-        self.ticks_all_on_time += on_time
-        b = self.step // self.bin_steps
-        while len(self.ticks_per_bin) <= b:
-            self.ticks_per_bin.append(0)
-            self.on_time_per_bin.append(0)
-        self.ticks_per_bin[b] += 1
-        self.on_time_per_bin[b] += on_time
-        self.applied = self.latest.copy()
-        self.step += 1
-        return self.applied

@@ -39,8 +39,11 @@ from ..controller_factory import CONTROLLER_KINDS, build_guarded_controllers
 from ..core.checkpoint import load_checkpoint, save_checkpoint
 from ..faults.faulty_link import links_from_config
 from ..wire import joint_state_cdr
+from ..wire.trajectory_cdr import decode_first_joint
 from .diagnostics import DiagnosticsReporter, status
+from ..loop.cpu_meter import CpuMeter
 from ..loop.joint_loop import JointLoop
+from ..loop.rt_priority import apply_fifo, check_priority
 from .params import ParameterError, check_choice, declare, load_node_config
 from .runtime import announce_ready, run_node
 from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
@@ -54,10 +57,15 @@ class JointControllerNode(Node):
         super().__init__("joint_controller")
         p = declare(self, {"config_file": "", "joint": "", "controller": "dnbs", "reliability": "reliable",
                            "queue_depth": 10, "stats_file": "", "checkpoint_file": "", "resume": False,
-                           "incarnation": 0, "effort_subscribers": 1, "match_timeout_s": 10.0, "init_file": ""})
+                           "incarnation": 0, "effort_subscribers": 1, "match_timeout_s": 10.0, "init_file": "",
+                           "rt_priority": 0})
         if p["effort_subscribers"] < 1 or p["match_timeout_s"] <= 0:
             raise ParameterError("effort_subscribers must be >= 1 and match_timeout_s > 0 s")
         check_choice("joint", p["joint"], JOINT_NAMES)
+        try:
+            check_priority(p["rt_priority"])
+        except ValueError as exc:
+            raise ParameterError(f"parameter {exc}") from None
         check_choice("controller", p["controller"], CONTROLLER_KINDS)
         cfg = load_node_config(p["config_file"])
         self.p = p
@@ -95,7 +103,8 @@ class JointControllerNode(Node):
         self.malformed = 0
         self.states_received = 0
         self.efforts_sent = 0
-        self._names = [self.joint]
+        self._state_layout = joint_state_cdr.OneJointLayout(self.joint, ("position", "velocity"))
+        self._effort_layout = joint_state_cdr.OneJointLayout(self.joint, ("effort",))
         qos = loop_qos(p["reliability"], depth=p["queue_depth"])
         self.torque_limit = cfg["plant"]["torque_limit_nm"][index]
         # The effort topic is offered only once the first reference batch is in: the plant starts when
@@ -107,20 +116,27 @@ class JointControllerNode(Node):
         self._matched = False
         self.held_answers = 0
         self.create_subscription(JointState, state_topic(self.joint), self._on_state, qos, raw=True)
-        self.create_subscription(JointTrajectory, reference_topic(self.joint), self._on_reference, reference_qos())
+        self.malformed_references = 0
+        # raw: the batch is read straight from CDR (wire/trajectory_cdr.py), no rclpy message per point
+        self.create_subscription(JointTrajectory, reference_topic(self.joint), self._on_reference, reference_qos(),
+                                 raw=True)
         self.diagnostics = DiagnosticsReporter(self, lambda: [self._status()],
                                                lambda: self.clock_.stamp(max(0, self.loop_.last_step)))
+        self.cpu = CpuMeter()
+        self.rt_applied, rt_message = apply_fifo(p["rt_priority"])
+        if p["rt_priority"]:
+            print(rt_message, flush=True)
         announce_ready(f"joint_controller {self.joint}")
 
     def _on_state(self, data: bytes) -> None:
         try:
-            sec, nanosec, _, pos, vel, _ = joint_state_cdr.decode(data)
-            q, qd = pos[0], vel[0]
+            sec, nanosec, (q, qd) = self._state_layout.decode(data)
         except (ValueError, IndexError, struct.error, UnicodeDecodeError):
             self.malformed += 1
             return
         self.states_received += 1
         step = self.clock_.step_of_sec_nanosec(sec, nanosec)
+        self.cpu.mark(step)
         if self.kill_step is not None and step >= self.kill_step:
             print(f"KILLED joint_controller {self.joint} at step {step} (fault injection)", flush=True)
             os.kill(os.getpid(), signal.SIGKILL)
@@ -149,13 +165,16 @@ class JointControllerNode(Node):
         held, self._held = self._held, []
         self._send(held)
 
-    def _on_reference(self, msg: JointTrajectory) -> None:
+    def _on_reference(self, data: bytes) -> None:
+        try:
+            sec, nanosec, positions, velocities = decode_first_joint(data)
+        except (ValueError, IndexError, struct.error):
+            self.malformed_references += 1
+            return
         if self._pub is None:
             self._offer_effort()
-        first = self.clock_.step_of(msg.header.stamp)
-        pts = msg.points
-        self._publish(self.loop_.add_reference(first, [pt.positions[0] for pt in pts],
-                                               [pt.velocities[0] for pt in pts]))
+        first = self.clock_.step_of_sec_nanosec(sec, nanosec)
+        self._publish(self.loop_.add_reference(first, positions, velocities))
 
     def _publish(self, answers) -> None:
         if answers and self._pub is None:  # a bad state answered before any reference came
@@ -170,11 +189,11 @@ class JointControllerNode(Node):
         for step, effort in answers:
             sec, nanosec = self.clock_.sec_nanosec(step)
             if self._link is None:
-                self._pub.publish(joint_state_cdr.encode(sec, nanosec, self._names, (), (), (effort,)))
+                self._pub.publish(self._effort_layout.encode(sec, nanosec, effort))
             else:
                 fate = self._link.fate()
                 value = self._link.corrupt_value() if fate.corrupt else effort
-                self._link.send(joint_state_cdr.encode(sec, nanosec, self._names, (), (), (value,)), fate)
+                self._link.send(self._effort_layout.encode(sec, nanosec, value), fate)
             self.efforts_sent += 1
             if self.checkpoint is not None and step > 0 and step % self.checkpoint_every == 0:
                 self._save_checkpoint()
@@ -188,7 +207,7 @@ class JointControllerNode(Node):
         c["nonfinite_torques"] = loop.nonfinite_torques
         resets = getattr(loop.controller, "ekf_resets", {})
         c.update({f"ekf_resets_{k}": int(v[0]) for k, v in resets.items()})
-        c.update({"malformed_states": self.malformed, "states": self.states_received, "efforts": self.efforts_sent,
+        c.update({"malformed_states": self.malformed, "malformed_references": self.malformed_references, "states": self.states_received, "efforts": self.efforts_sent,
                   "duplicate_states": loop.duplicates, "last_step": loop.last_step,
                   "held_until_matched": self.held_answers})
         if self._link is not None:
@@ -206,6 +225,8 @@ class JointControllerNode(Node):
             self._save_checkpoint()
         counters = self.counters()
         counters["resumed_from_step"] = self.resumed_from
+        counters["rt_priority_applied"] = self.rt_applied
+        counters["cpu"] = self.cpu.report()
         if self.p["stats_file"]:
             tmp = f"{self.p['stats_file']}.tmp"
             with open(tmp, "w") as f:
@@ -215,6 +236,7 @@ class JointControllerNode(Node):
         print(f"STATS joint_controller {self.joint}: " + ", ".join(f"{k} {v}" for k, v in counters.items())
               + f", waiting for references {len(loop.pending_steps)}, reference steps buffered "
               f"{loop.reference_span}", flush=True)
+        print(self.cpu.line(f"joint_controller_{self.joint}"), flush=True)
 
 
 def main(args=None) -> int:

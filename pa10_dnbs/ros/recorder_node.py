@@ -11,7 +11,9 @@ On SIGINT/SIGTERM it takes what is still queued, then closes the bag
 (summary + metadata.yaml). It prints ``PROGRESS k`` (the step of
 /joint_states) now and then and, with ``end_stamp_ns`` >= 0, ``COMPLETE``
 once every stamped topic has a message stamped at or after it: started by
-the launcher, it is the run's observer.
+the launcher, it is the run's observer. Messages are taken every
+``poll_period_s`` (``polled.Inbox``), not one wake-up per message; each
+subscription keeps ``qos_depth`` messages, so nothing is lost between drains.
 """
 from __future__ import annotations
 
@@ -33,8 +35,10 @@ from ..wire.reference_buffer import ReferenceBuffer
 from ..wire.steps import StepClock, cdr_stamp_ns, to_ns
 from ..wire.topics import reference_topic
 from .bag_qos import bag_qos, subscription_qos, to_bag_qos
+from ..loop.cpu_meter import CpuMeter
 from .msg_types import message_class
 from .params import ParameterError, check_choice, declare, load_node_config
+from .polled import Inbox
 from .runtime import announce_ready, run_node, spin_until
 from .wire import CLOCK, JOINT_STATES, TF, TF_STATIC
 
@@ -61,10 +65,12 @@ class RecorderNode(Node):
         p = declare(self, {
             "bag": "", "force": False, "topics": [""], "all_topics": False, "time_source": "clock",
             "config_file": "", "custom_data": [""], "tf_rate_hz": 100.0, "end_stamp_ns": -1, "qos_depth": 2000,
-            "compression": "zstd",
+            "compression": "zstd", "poll_period_s": 0.01,
         })
         if not p["bag"]:
             raise ParameterError("parameter bag is required (the bag directory to write)")
+        if not p["poll_period_s"] > 0:
+            raise ParameterError(f"parameter poll_period_s must be > 0 s, got {p['poll_period_s']}")
         if p["time_source"] not in ("clock", "system"):
             raise ParameterError(f"parameter time_source must be clock or system, got {p['time_source']!r}")
         specs = [parse_topic_spec(s) for s in p["topics"] if s]
@@ -97,6 +103,8 @@ class RecorderNode(Node):
         self.refs = ReferenceBuffer(len(JOINT_NAMES), StepClock(cfg["simulation"]["dt_s"]))
         self._ref_joint = {reference_topic(j): i for i, j in enumerate(JOINT_NAMES)}
         self.writer = BagWriter(Path(p["bag"]), force=p["force"], custom_data=custom, compression=p["compression"])
+        self.cpu = CpuMeter()
+        self.inbox = Inbox(self, p["poll_period_s"])
         self._discover()
         self._timer = self.create_timer(0.2, self._discover)
         announce_ready("recorder")
@@ -123,9 +131,9 @@ class RecorderNode(Node):
             stamped = type_name in STAMPED_TYPES
             if stamped and self.end_ns >= 0:
                 self.reached[topic] = False
-            self._subs[topic] = self.create_subscription(
-                cls, topic, lambda data, t=topic, s=stamped: self._on_message(t, s, data),
-                subscription_qos(profiles, self.p["qos_depth"]), raw=True)
+            self._subs[topic] = self.inbox.subscribe(
+                cls, topic, subscription_qos(profiles, self.p["qos_depth"]),
+                lambda data, t=topic, s=stamped: self._on_message(t, s, data))
             self.get_logger().info(f"recording {topic} ({type_name})")
 
     # ------------------------------------------------------------- messages
@@ -152,6 +160,7 @@ class RecorderNode(Node):
         if len(data) < 12:
             return
         stamp_ns = cdr_stamp_ns(data)
+        self.cpu.mark(stamp_ns // self.dt_ns)
         if stamp_ns >= self._next_progress_ns:
             self._next_progress_ns = stamp_ns + PROGRESS_PERIOD_NS
             worst = self.refs.worst_abs_error  # NaN until /tf sampling has seen a state with its x_d
@@ -181,19 +190,20 @@ class RecorderNode(Node):
     # ------------------------------------------------------------- run / stop
     def loop(self, executor, stop) -> None:
         spin_until(executor, stop, stop)
-        # take what is still queued before closing the bag
+        # take what is still queued (and still arriving) before closing the bag
         self.destroy_timer(self._timer)
+        self.destroy_timer(self.inbox.timer)
         t_end = time.monotonic() + DRAIN_LIMIT_S
         idle_since = time.monotonic()
-        last = self.received
         while time.monotonic() < t_end and time.monotonic() - idle_since < DRAIN_IDLE_S:
-            executor.spin_once(timeout_sec=0.05)
-            if self.received != last:
-                last, idle_since = self.received, time.monotonic()
+            if self.inbox.drain():
+                idle_since = time.monotonic()
+            time.sleep(self.p["poll_period_s"])
 
     def close(self) -> None:
         self.writer.close()
         missing = [t for t in self.wanted if not self._subs.get(t)]
+        print(self.cpu.line("recorder"), flush=True)
         print(f"RECORDED {sum(self.writer.counts.values())} messages on {len(self.writer.counts)} topics into "
               f"{self.writer.path}" + (f"; never seen: {', '.join(missing)}" if missing else ""), flush=True)
 

@@ -7,9 +7,12 @@ is the time of the first point, time_from_start counts from it. Paced by
 (and, given ``duration_s``, stops lookahead_steps past the run's last step).
 Reports on /diagnostics the /clock messages it saw and those that went back
 in time (a fault: the reference it already sent cannot be taken back).
+/clock is taken every ``poll_period_s`` (``polled.Inbox``), not one wake-up
+per message: the lookahead covers many polls.
 """
 from __future__ import annotations
 
+import struct
 import sys
 
 import numpy as np
@@ -21,21 +24,27 @@ from .. import JOINT_NAMES
 from ..controller_factory import build_reference
 from .diagnostics import DiagnosticsReporter, status
 from .params import ParameterError, declare, load_node_config
+from ..loop.cpu_meter import CpuMeter
+from .polled import Inbox
 from .runtime import announce_ready, run_node
 from .wire import CLOCK, StepClock, loop_qos, reference_qos, reference_topic
 
 
 FAULT_KEYS = ("clock_backwards",)
+CLOCK_DEPTH = 1000  # /clock messages kept between two polls
 
 
 class ReferenceNode(Node):
     def __init__(self):
         super().__init__("reference")
-        p = declare(self, {"config_file": "", "batch_steps": 100, "lookahead_steps": 150, "duration_s": 0.0})
+        p = declare(self, {"config_file": "", "batch_steps": 100, "lookahead_steps": 150, "duration_s": 0.0,
+                           "poll_period_s": 0.01})
         cfg = load_node_config(p["config_file"])
         preview = cfg["reference"]["preview_steps"]
         if p["batch_steps"] < 1 or p["lookahead_steps"] <= preview:
             raise ParameterError(f"batch_steps must be >= 1 and lookahead_steps > reference.preview_steps = {preview}")
+        if not p["poll_period_s"] > 0:
+            raise ParameterError(f"parameter poll_period_s must be > 0 s, got {p['poll_period_s']}")
         self.reference = build_reference(cfg)
         self.clock_ = StepClock(cfg["simulation"]["dt_s"])
         self.batch = p["batch_steps"]
@@ -48,19 +57,30 @@ class ReferenceNode(Node):
         # a run of known length: nothing past its last step + lookahead (so a bag's count is fixed)
         self.last_step = int(round(p["duration_s"] / dt)) + self.lookahead if p["duration_s"] > 0 else None
         self._pubs = [self.create_publisher(JointTrajectory, reference_topic(j), reference_qos()) for j in JOINT_NAMES]
-        self.create_subscription(Clock, CLOCK, self._on_clock, loop_qos("reliable"))
+        self.cpu = CpuMeter()
+        self.inbox = Inbox(self, p["poll_period_s"])
+        self.inbox.subscribe(Clock, CLOCK, loop_qos("reliable", depth=CLOCK_DEPTH), self._on_clock)
         self._publish_through(self.lookahead)
         self.diagnostics = DiagnosticsReporter(self, self._diagnostics,
                                                lambda: self.clock_.stamp(max(0, self.clock_step)))
         announce_ready("reference")
 
-    def _on_clock(self, msg: Clock) -> None:
-        step = self.clock_.step_of(msg.clock)
+    def _on_clock(self, data: bytes) -> None:
+        """A /clock message (CDR bytes)."""
+        try:
+            step = self.clock_.step_of_cdr(data)
+        except struct.error:
+            return
         self.clock_messages += 1
         if step < self.clock_step:
             self.clock_backwards += 1
+        if step > self.clock_step:
+            self.cpu.mark(step)
         self.clock_step = max(self.clock_step, step)
         self._publish_through(step + self.lookahead)
+
+    def close(self) -> None:
+        print(self.cpu.line("reference"), flush=True)
 
     def _diagnostics(self) -> list:
         counters = {"clock_messages": self.clock_messages, "clock_backwards": self.clock_backwards,

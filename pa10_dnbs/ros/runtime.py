@@ -117,6 +117,8 @@ def _release_entities(node) -> None:
         node.destroy_timer(timer)
     for srv in list(node.services):
         node.destroy_service(srv)
+    for sub in getattr(node, "polled", []):  # polled.py: subscriptions outside the executor
+        sub.destroy()
 
 
 def _arm_teardown_watchdog(code: int) -> threading.Timer:

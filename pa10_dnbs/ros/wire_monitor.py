@@ -6,6 +6,9 @@ stamped k, the torque applied over step k from the effort field of
 /joint_states stamped k+1, x_d(k) from the reference batches. Prints
 ``PROGRESS k`` now and then and ``COMPLETE`` once every step has arrived.
 The launcher runs it as its own process, so the launcher never joins DDS.
+It takes its messages every ``poll_period_s`` (``polled.Inbox``), not one
+wake-up per message; /joint_states is reliable with a 2000-deep history, so
+nothing is lost between two drains.
 """
 from __future__ import annotations
 
@@ -21,16 +24,20 @@ from .. import JOINT_NAMES
 from ..wire.wire_record import WireRecord
 from ..wire import joint_state_cdr
 from .params import ParameterError, declare, load_node_config
-from .runtime import announce_ready, run_node
+from ..loop.cpu_meter import CpuMeter
+from .polled import Inbox
+from .runtime import announce_ready, run_node, spin_until
 from .wire import JOINT_STATES, StepClock, record_qos, reference_qos, reference_topic
 
 
 class WireMonitorNode(Node):
     def __init__(self):
         super().__init__("wire_monitor")
-        p = declare(self, {"config_file": "", "duration_s": 0.0, "out_file": ""})
+        p = declare(self, {"config_file": "", "duration_s": 0.0, "out_file": "", "poll_period_s": 0.01})
         if not p["out_file"]:
             raise ParameterError("parameter out_file is required")
+        if not p["poll_period_s"] > 0:
+            raise ParameterError(f"parameter poll_period_s must be > 0 s, got {p['poll_period_s']}")
         cfg = load_node_config(p["config_file"])
         dt_s = cfg["simulation"]["dt_s"]
         duration = p["duration_s"] if p["duration_s"] > 0 else cfg["simulation"]["duration_s"]
@@ -38,10 +45,13 @@ class WireMonitorNode(Node):
         self.out_file = p["out_file"]
         self.clock = StepClock(dt_s)
         self._announced = False
-        self.create_subscription(JointState, JOINT_STATES, self._on_joint_states, record_qos(), raw=True)
+        self.cpu = CpuMeter()
+        self.inbox = Inbox(self, p["poll_period_s"])
+        self.inbox.subscribe(JointState, JOINT_STATES, record_qos(), self._on_joint_states)
         for j, name in enumerate(JOINT_NAMES):
-            self.create_subscription(JointTrajectory, reference_topic(name), lambda m, j=j: self._on_reference(j, m),
-                                     reference_qos())
+            self.inbox.subscribe(JointTrajectory, reference_topic(name), reference_qos(),
+                                 lambda m, j=j: self._on_reference(j, m), raw=False)
+        self._last_step = -1
         announce_ready("wire_monitor")
 
     def _on_joint_states(self, data: bytes) -> None:
@@ -51,6 +61,9 @@ class WireMonitorNode(Node):
             self.record.malformed += 1
             return
         k = self.clock.step_of_sec_nanosec(sec, nanosec)
+        if k > self._last_step:
+            self._last_step = k
+            self.cpu.mark(k)
         if self.record.add_joint_states(k, pos, vel, eff):
             if k % 500 == 0:  # the step, and the worst |e| so far [rad] for the launcher's progress bar
                 print(f"PROGRESS {k} {self.record.worst_abs_error(k):.6g}", flush=True)
@@ -67,8 +80,13 @@ class WireMonitorNode(Node):
             self._announced = True
             print("COMPLETE", flush=True)
 
+    def loop(self, executor, stop) -> None:
+        spin_until(executor, stop, stop)
+        self.inbox.drain()  # what came after the last timer
+
     def close(self) -> None:
         self.record.save(Path(self.out_file))
+        print(self.cpu.line("wire_monitor"), flush=True)
 
 
 def main(args=None) -> int:

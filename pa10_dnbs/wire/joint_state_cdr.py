@@ -87,3 +87,57 @@ def decode(data: bytes):
     velocity, off = doubles(off)
     effort, off = doubles(off)
     return sec, nanosec, names, position, velocity, effort
+
+
+class OneJointLayout:
+    """Fast encode/decode of the one-joint JointState the 1 kHz loop sends: a fixed name and a fixed set of
+    one-value fields (states: position and velocity; efforts: effort only).
+
+    The bytes are those of ``encode`` (a template is encoded once, then only the stamp and the values are
+    written into a copy); ``decode`` reads a message of exactly this layout with two ``unpack_from`` calls
+    and falls back to the general ``decode`` for anything else, so odd but valid messages still decode and
+    malformed ones still raise.
+    """
+
+    _FIELDS = ("position", "velocity", "effort")
+
+    def __init__(self, name: str, fields: tuple[str, ...]):
+        if not fields or any(f not in self._FIELDS for f in fields):
+            raise ValueError(f"fields must be some of {self._FIELDS}, got {fields}")
+        self.name, self.fields = name, tuple(f for f in self._FIELDS if f in fields)
+        sentinels = {f: 1.0 + 2.0 ** -(20 + i) for i, f in enumerate(self._FIELDS)}
+        vals = {f: (sentinels[f],) if f in self.fields else () for f in self._FIELDS}
+        self.template = encode(0, 0, [name], vals["position"], vals["velocity"], vals["effort"])
+        self._offsets = [self.template.index(struct.pack("<d", sentinels[f])) for f in self.fields]
+        self._values = struct.Struct("<" + "".join(f"{o - p}xd" for o, p in zip(
+            self._offsets, [4 + 8] + [o + 8 for o in self._offsets[:-1]])))
+        self._head = 12
+        self._body_const = (self.template[self._head:self._offsets[0]],
+                            *(self.template[a + 8:b] for a, b in zip(self._offsets, self._offsets[1:])),
+                            self.template[self._offsets[-1] + 8:])
+
+    def encode(self, sec: int, nanosec: int, *values: float) -> bytes:
+        """Bytes of this joint's message stamped (sec, nanosec) with one value per field, in field order."""
+        buf = bytearray(self.template)
+        _STAMP.pack_into(buf, 4, sec, nanosec)
+        for off, v in zip(self._offsets, values):
+            struct.pack_into("<d", buf, off, v)
+        return bytes(buf)
+
+    def decode(self, data: bytes) -> tuple[int, int, tuple[float, ...]]:
+        """(sec, nanosec, values in field order); ValueError / struct.error / IndexError on malformed bytes."""
+        if len(data) == len(self.template) and data[:4] == self.template[:4] and self._same_shape(data):
+            sec, nanosec = _STAMP.unpack_from(data, 4)
+            return sec, nanosec, self._values.unpack_from(data, 12)
+        sec, nanosec, _, position, velocity, effort = decode(data)
+        got = {"position": position, "velocity": velocity, "effort": effort}
+        return sec, nanosec, tuple(got[f][0] for f in self.fields)
+
+    def _same_shape(self, data: bytes) -> bool:
+        offs = self._offsets
+        if data[self._head:offs[0]] != self._body_const[0]:
+            return False
+        for i in range(1, len(offs)):
+            if data[offs[i - 1] + 8:offs[i]] != self._body_const[i]:
+                return False
+        return data[offs[-1] + 8:] == self._body_const[-1]

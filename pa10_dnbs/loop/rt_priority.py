@@ -1,0 +1,56 @@
+"""SCHED_FIFO for every thread of this process (Linux), where the OS allows it.
+
+Linux schedules threads, not processes: the policy is set on each thread in
+/proc/self/task (the DDS threads included); threads started later inherit
+it from the thread that starts them. Needs root, CAP_SYS_NICE or an
+RLIMIT_RTPRIO (``ulimit -r``) at least the priority, and a cgroup with
+real-time runtime; otherwise nothing changes and the message says why.
+"""
+from __future__ import annotations
+
+import os
+
+MIN_PRIORITY, MAX_PRIORITY = 1, 99
+
+
+def check_priority(priority: int) -> None:
+    """ValueError unless 0 (off) or 1..99."""
+    if priority != 0 and not MIN_PRIORITY <= priority <= MAX_PRIORITY:
+        raise ValueError(f"rt_priority must be 0 (off) or {MIN_PRIORITY}..{MAX_PRIORITY}, got {priority}")
+
+
+def apply_fifo(priority: int) -> tuple[bool, str]:
+    """Put every thread of this process under SCHED_FIFO at ``priority``; (applied, what happened)."""
+    check_priority(priority)
+    if priority == 0:
+        return False, "rt_priority 0: default scheduling"
+    if not hasattr(os, "sched_setscheduler"):
+        return False, f"rt_priority {priority}: SCHED_FIFO is not available on this OS; default scheduling"
+    try:
+        tids = [int(t) for t in os.listdir("/proc/self/task")]
+    except OSError:
+        tids = [0]
+    done = 0
+    try:
+        for tid in tids:
+            try:
+                os.sched_setscheduler(tid, os.SCHED_FIFO, os.sched_param(priority))
+                done += 1
+            except ProcessLookupError:  # the thread ended meanwhile
+                continue
+    except PermissionError:
+        limit = _rlimit_rtprio()
+        return False, (f"rt_priority {priority}: SCHED_FIFO not permitted (needs root, CAP_SYS_NICE or "
+                       f"`ulimit -r` >= {priority}, now {limit}, and real-time runtime in the cgroup); "
+                       "default scheduling" + (f" (it was set on {done} threads, which keep it)" if done else ""))
+    return True, f"rt_priority {priority}: SCHED_FIFO on {done} threads"
+
+
+def _rlimit_rtprio():
+    try:
+        import resource
+
+        soft, _ = resource.getrlimit(resource.RLIMIT_RTPRIO)
+        return "unlimited" if soft == resource.RLIM_INFINITY else soft
+    except (ImportError, AttributeError, OSError):
+        return "unknown"

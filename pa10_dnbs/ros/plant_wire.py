@@ -1,0 +1,148 @@
+"""The plant's wire I/O: what it publishes each step and how it takes the efforts.
+
+Publishes /robot_description (the URDF, transient-local), /clock,
+/joint_states (all 7: position, velocity, and as effort the torque applied
+over the step that led to this state) and per joint /pa10/<joint>/state
+(that joint only, stamped k T), through each joint's fault-injecting state
+link when ``faults.state`` configures one. The seven /pa10/<joint>/effort
+subscriptions are polled (``polled.py``): the plant blocks on one wait set
+over them and takes every effort that is there at once, so it wakes once
+per batch of efforts, not once per effort. Decoded efforts come out
+saturated at Table 2 (counted) with their reception time; undecodable ones
+are counted and dropped.
+"""
+from __future__ import annotations
+
+import math
+import struct
+import time
+from pathlib import Path
+
+import numpy as np
+from rclpy.duration import Duration
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from std_msgs.msg import String
+
+from .. import JOINT_NAMES
+from ..faults.faulty_link import links_from_config
+from ..kinematics.urdf_chain import UrdfChain
+from ..wire import joint_state_cdr
+from .polled import PolledSubscription, SubscriptionWaitSet
+from .wire import (CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, StepClock, description_qos, effort_topic, loop_qos,
+                   record_qos, state_topic)
+
+
+CLOCK_CDR = struct.Struct("<HHiI")  # rosgraph_msgs/Clock: encapsulation (little-endian CDR), sec, nanosec
+
+
+class PlantWire:
+    def __init__(self, node, cfg: dict, clock: StepClock, reliability: str, state_depth: int, effort_depth: int):
+        """``reliability`` and the depths: QoS of the per-joint state and effort topics."""
+        self.node = node
+        self.clock = clock
+        n = len(JOINT_NAMES)
+        self.state_qos = loop_qos(reliability, depth=state_depth)
+        self.effort_qos = loop_qos(reliability, depth=effort_depth)
+        self._state_pubs = [node.create_publisher(JointState, state_topic(j), self.state_qos) for j in JOINT_NAMES]
+        self._clock_pub = node.create_publisher(Clock, CLOCK, loop_qos("reliable", depth=record_qos().depth))
+        self._js_pub = node.create_publisher(JointState, JOINT_STATES, record_qos())
+        self._effort_subs = [PolledSubscription(node, JointState, effort_topic(j), self.effort_qos) for j in JOINT_NAMES]
+        self._wait_set = SubscriptionWaitSet(node, self._effort_subs)
+        # the URDF, latched, as robot_state_publisher offers it (Foxglove and the recorder read it)
+        self._description_pub = node.create_publisher(String, ROBOT_DESCRIPTION, description_qos())
+        self._description_pub.publish(String(data=Path(cfg["plant"]["urdf"]).read_text()))
+        chain = UrdfChain.from_file(cfg["plant"]["urdf"])
+        self.state_links = [links_from_config(cfg, "state", i, self._state_pubs[i].publish, chain.joint(j).upper)
+                            for i, j in enumerate(JOINT_NAMES)]
+        self.torque_limit = np.array(cfg["plant"]["torque_limit_nm"], dtype=float)
+        self._limits = self.torque_limit.tolist()
+        self._state_layouts = [joint_state_cdr.OneJointLayout(j, ("position", "velocity")) for j in JOINT_NAMES]
+        self._effort_layouts = [joint_state_cdr.OneJointLayout(j, ("effort",)) for j in JOINT_NAMES]
+        self.waits = 0                 # wait set waits (each a possible wake-up)
+        self.wakeups_with_efforts = 0  # ... that returned with efforts queued
+        self.malformed = np.zeros(n, dtype=np.int64)
+        self.out_of_range = np.zeros(n, dtype=np.int64)
+
+    # ------------------------------------------------------------- out
+    def publish_state(self, k: int, q: np.ndarray, qd: np.ndarray, applied: np.ndarray, joints=None) -> int:
+        """State ``k`` on every per-joint topic (or only ``joints``, a resend); with all joints also /clock and
+        /joint_states. Returns the wall time [ns, system clock] just before the per-joint states went out."""
+        ql, qdl = q.tolist(), qd.tolist()
+        sec, nanosec = self.clock.sec_nanosec(k)
+        t_ns = time.time_ns()
+        for j in (range(len(JOINT_NAMES)) if joints is None else joints):
+            link = self.state_links[j]
+            if link is None:
+                self._state_pubs[j].publish(self._state_layouts[j].encode(sec, nanosec, ql[j], qdl[j]))
+                continue
+            fate = link.fate()
+            pos = link.corrupt_value() if fate.corrupt else ql[j]
+            link.send(self._state_layouts[j].encode(sec, nanosec, pos, qdl[j]), fate)
+        if joints is None:
+            self._clock_pub.publish(CLOCK_CDR.pack(0x0100, 0, sec, nanosec))  # raw CDR: no message conversion
+            self._js_pub.publish(joint_state_cdr.encode(sec, nanosec, JOINT_NAMES, ql, qdl, applied.tolist()))
+        return t_ns
+
+    # ------------------------------------------------------------- in
+    def wait(self, timeout_s: float) -> list[int]:
+        """Block until some effort is queued or ``timeout_s`` [s] passed; the joints with efforts queued."""
+        ready = self._wait_set.wait(timeout_s)
+        self.waits += 1
+        self.wakeups_with_efforts += bool(ready)
+        return ready
+
+    def take_efforts(self, joints=None) -> list[tuple[int, int, float, int]]:
+        """Every queued effort (of ``joints``, default all) as (joint, step, torque [N m], received [ns]),
+        saturated at Table 2."""
+        out = []
+        for joint in (range(len(self._effort_subs)) if joints is None else joints):
+            sub, layout = self._effort_subs[joint], self._effort_layouts[joint]
+            while (got := sub.take()) is not None:
+                data, received_ns = got
+                try:
+                    sec, nanosec, (u,) = layout.decode(data)
+                    u = float(u)
+                except (ValueError, IndexError, struct.error, UnicodeDecodeError):
+                    self.malformed[joint] += 1
+                    continue
+                lim = self._limits[joint]
+                if math.isfinite(u) and abs(u) > lim:  # out of range: counted, saturated at Table 2
+                    self.out_of_range[joint] += 1
+                    u = lim if u > 0 else -lim
+                out.append((joint, self.clock.step_of_sec_nanosec(sec, nanosec), u, received_ns))
+        return out
+
+    # ------------------------------------------------------------- graph
+    def lacking(self, state_subscribers: int, clock_subscribers: int, joint_states_subscribers: int,
+                recorders: int) -> list[str]:
+        """What is not matched yet (empty once the graph is complete)."""
+        node = self.node
+        out = [f"{state_topic(j)} (fewer than {state_subscribers} subscribers)"
+               for j, pub in zip(JOINT_NAMES, self._state_pubs) if pub.get_subscription_count() < state_subscribers]
+        out += [f"{effort_topic(j)} (no publisher)" for j, sub in zip(JOINT_NAMES, self._effort_subs)
+                if sub.get_publisher_count() < 1]
+        out += [f"{effort_topic(j)} (fewer than {recorders} recorders)" for j in JOINT_NAMES
+                if node.count_subscribers(effort_topic(j)) < 1 + recorders]
+        if self._clock_pub.get_subscription_count() < clock_subscribers:
+            out.append(f"{CLOCK} (fewer than {clock_subscribers} subscribers)")
+        if self._js_pub.get_subscription_count() < joint_states_subscribers:
+            out.append(f"{JOINT_STATES} (fewer than {joint_states_subscribers} subscribers)")
+        return out
+
+    def flush(self, timeout_s: float = 2.0) -> bool:
+        """Wait (at most ``timeout_s`` in all) until every subscriber acknowledged what the reliable publishers
+        sent, so the observer gets the last states before the plant's writers go away; True when all did."""
+        end = time.monotonic() + timeout_s
+        ok = True
+        for pub in [self._js_pub, self._clock_pub] + self._state_pubs:
+            left = max(0.0, end - time.monotonic())
+            ok = pub.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9))) and ok
+        return ok
+
+    def close(self) -> None:
+        for link in self.state_links:
+            if link is not None:
+                link.close()
+        self.flush()
+        self._wait_set.destroy()

@@ -1,0 +1,56 @@
+"""Realtime mode (deadline-synchronous) against lockstep (the realtime loss smoke run: test_graph_faults.py).
+
+A realtime tick applies exactly the efforts answering its state that came before the deadline, so a
+realtime run in which no effort missed is the lockstep run bit for bit. At a low real-time factor (0.1: a
+10 ms tick for 1 ms of simulated time) misses are rare even on a busy machine; if one happens the runs are
+compared up to it, and the test says so (pytest -rA shows it).
+"""
+import json
+
+import numpy as np
+import pytest
+
+from graph_harness import Launcher, exit_codes
+from pa10_dnbs import JOINT_NAMES
+from pa10_dnbs.run_data import RunData
+
+pytestmark = pytest.mark.graph  # starts ROS processes
+
+RTF = 0.1
+DURATION_S = 1.0
+
+
+def _realtime(tmp_path, domain, *args, name="rt"):
+    out = tmp_path / name
+    la = Launcher("--mode", "realtime", "--duration", DURATION_S, "--out", out, *args, domain_id=domain)
+    try:
+        rc = la.wait(timeout=300)
+    finally:
+        la.kill()
+    assert rc == 0, la.output
+    assert all(c == 0 for c in exit_codes(la.output).values())
+    return out, json.loads((out / "plant_stats.json").read_text())
+
+
+def test_realtime_without_misses_equals_lockstep_bit_for_bit(lockstep_run, tmp_path, domain):
+    out, stats = _realtime(tmp_path, domain, "--rtf", RTF)
+    n = int(round(DURATION_S * 1000))
+    assert stats["steps"] == n and stats["completed"] and stats["target_real_time_factor"] == RTF
+    firsts = [j["first_missed_step"] for j in stats["joints"] if j["first_missed_step"] is not None]
+    m = min(firsts, default=n)  # torques [0, m) and states [0, m] are those of a run without misses
+    rt = RunData.load_npz(out / "timeseries.npz")
+    ls = RunData.load_npz(lockstep_run["out"] / "timeseries.npz")
+    if m == n:
+        print(f"realtime at factor {RTF}: no effort missed its deadline; all {n} steps compared")
+    else:
+        missed = [j["name"] for j in stats["joints"] if j["first_missed_step"] == m]
+        print(f"realtime at factor {RTF}: first miss at step {m} ({', '.join(missed)}); on-time fraction "
+              f"{stats['on_time_fraction']:.4f}; compared torques of steps [0, {m}) and states [0, {m}]")
+    assert m > 0, "every joint missed the very first deadline: nothing to compare"
+    for field, upto in (("torque_nm", m), ("position_rad", m + 1), ("velocity_rad_s", m + 1)):
+        a, b = getattr(rt, field)[:upto], getattr(ls, field)[:upto]
+        assert np.array_equal(a, b), f"{field}: max diff {np.abs(a - b).max()} before the first miss"
+    if m < n:  # the missed effort was replaced by the joint's last torque (hold, the default)
+        for name in missed:
+            j = JOINT_NAMES.index(name)
+            assert rt.torque_nm[m, j] == rt.torque_nm[m - 1, j], name
