@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from cli_runner import run_cli
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
 
 from pa10_dnbs import JOINT_NAMES
@@ -55,8 +56,7 @@ def _write_run_bag(path, n=300, compression="zstd"):
 
 
 def _analyse(bag, tmp_path):
-    return subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "analyse", str(bag), "--out", str(tmp_path / "out")],
-                          cwd=REPO, capture_output=True, text=True, timeout=60)
+    return run_cli("analyse", bag, "--out", tmp_path / "out")
 
 
 def _assert_clear_error(r, *words):
@@ -148,12 +148,8 @@ def test_bag_missing_the_needed_topics(tmp_path):
 
 def test_replay_rejects_unknown_topics_before_joining_ros(tmp_path):
     bag = _write_bag(tmp_path / "b")
-    r = subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "replay", str(bag), "--topics", "/nope"],
-                       cwd=REPO, capture_output=True, text=True, timeout=60)
-    _assert_clear_error(r, "no such topic in the bag: /nope")
-    r = subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "replay", str(bag), "--rate", "0"],
-                       cwd=REPO, capture_output=True, text=True, timeout=60)
-    _assert_clear_error(r, "--rate")
+    _assert_clear_error(run_cli("replay", bag, "--topics", "/nope"), "no such topic in the bag: /nope")
+    _assert_clear_error(run_cli("replay", bag, "--rate", "0"), "--rate")
 
 
 def _recorder(domain, *params):
@@ -247,11 +243,9 @@ def test_launch_rejects_bad_live_and_compression_options_before_starting(tmp_pat
     for args, words in ((["--live", "70000"], "--live: port must be in 0..65535"),
                         (["--live", "0", "--live-hz", "0"], "--live-hz"),
                         (["--live", "0", "--live-host", "no-such-host.invalid"], "--live-host")):
-        r = subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "launch", "--duration", "1", "--out",
-                            str(tmp_path / "run"), *args], cwd=REPO, capture_output=True, text=True, timeout=60)
+        r = run_cli("launch", "--duration", "1", "--out", tmp_path / "run", *args)
         _assert_clear_error(r, words)
         assert "launch: domain" not in r.stdout and not (tmp_path / "run").exists()
-    r = subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "launch", "--duration", "1", "--out",
-                        str(tmp_path / "run"), "--record", str(tmp_path / "bag"), "--bag-compression", "lz4"],
-                       cwd=REPO, capture_output=True, text=True, timeout=60)
+    r = run_cli("launch", "--duration", "1", "--out", tmp_path / "run", "--record", tmp_path / "bag",
+                "--bag-compression", "lz4")
     assert r.returncode == 2 and "--bag-compression" in r.stderr and not (tmp_path / "bag").exists()

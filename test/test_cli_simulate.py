@@ -8,12 +8,15 @@ from pathlib import Path
 import pytest
 import yaml
 
+from cli_runner import run_cli
+
 from pa10_dnbs.config import default_config_path
 
 REPO = Path(__file__).resolve().parent.parent
 
 
-def _cli(*args, cwd=None):
+def _cli_process(*args, cwd=None):
+    """The console entry point in its own process (end to end); the other tests call it in-process."""
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     return subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", *map(str, args)], capture_output=True,
                           text=True, env=env, cwd=cwd, timeout=300)
@@ -21,7 +24,7 @@ def _cli(*args, cwd=None):
 
 def test_simulate_both_writes_metrics_figures_report_timeseries(tmp_path):
     out = tmp_path / "run"
-    r = _cli("simulate", "--controller", "both", "--duration", "1.0", "--out", out, "--no-progress")
+    r = _cli_process("simulate", "--controller", "both", "--duration", "1.0", "--out", out, "--no-progress")
     assert r.returncode == 0, r.stderr
     for sub in ("dnbs", "pid"):
         m = json.loads((out / sub / "metrics.json").read_text())
@@ -31,8 +34,13 @@ def test_simulate_both_writes_metrics_figures_report_timeseries(tmp_path):
         assert {"rms_error_rad", "max_abs_error_rad", "max_abs_torque_nm", "torque_limit_nm",
                 "saturated_fraction"} <= set(m["joints"][0])
         assert m["wall_time_s"] > 0 and m["real_time_factor"] > 0
-        for f in ("tracking.png", "errors.png", "torques.png", "timeseries.npz"):
+        for f in ("tracking.png", "errors.png", "startup.png", "torques.png", "timeseries.npz"):
             assert (out / sub / f).stat().st_size > 1000
+        assert {"settling_time_s", "max_abs_error_run_rad", "torque_variation",
+                "saturated_fraction_after_s"} <= set(m["joints"][0])
+    assert sorted(p.name for p in (out / "dnbs" / "checkpoints").iterdir()) == sorted(f"{j}.npz" for j in
+                                                                                     ("s1", "s2", "s3", "e1", "e2",
+                                                                                      "w1", "w2"))
     report = (out / "report.md").read_text()
     assert "DNBS RMS" in report and "PID RMS" in report and "errors_compare.png" in report
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temporary left
@@ -56,7 +64,7 @@ def _bad_config(tmp_path, edit):
 ])
 def test_bad_config_exits_2_names_key_writes_nothing(tmp_path, edit, named):
     out = tmp_path / "out"
-    r = _cli("simulate", "--config", _bad_config(tmp_path, edit), "--duration", "0.5", "--out", out)
+    r = run_cli("simulate", "--config", _bad_config(tmp_path, edit), "--duration", "0.5", "--out", out)
     assert r.returncode == 2
     assert named in r.stderr and "Traceback" not in r.stderr
     assert not out.exists()
@@ -64,7 +72,7 @@ def test_bad_config_exits_2_names_key_writes_nothing(tmp_path, edit, named):
 
 
 def test_bad_duration_exits_2(tmp_path):
-    r = _cli("simulate", "--duration", "-3", "--out", tmp_path / "o")
+    r = run_cli("simulate", "--duration", "-3", "--out", tmp_path / "o")
     assert r.returncode == 2 and "--duration" in r.stderr and not (tmp_path / "o").exists()
 
 
@@ -72,9 +80,9 @@ def test_existing_output_needs_force(tmp_path):
     out = tmp_path / "out"
     out.mkdir()
     (out / "keep.txt").write_text("mine")
-    r = _cli("simulate", "--controller", "pid", "--duration", "0.2", "--out", out)
+    r = run_cli("simulate", "--controller", "pid", "--duration", "0.2", "--out", out)
     assert r.returncode == 2 and "--force" in r.stderr
     assert (out / "keep.txt").read_text() == "mine"
-    r = _cli("simulate", "--controller", "pid", "--duration", "0.2", "--out", out, "--force", "--no-progress")
+    r = run_cli("simulate", "--controller", "pid", "--duration", "0.2", "--out", out, "--force", "--no-progress")
     assert r.returncode == 0, r.stderr
     assert not (out / "keep.txt").exists() and (out / "metrics.json").exists()

@@ -1,9 +1,8 @@
 """``pa10-dnbs study``: names checked before any work, the files and the row schema of a small study."""
 import json
-import subprocess
-import sys
-
 import pytest
+
+from cli_runner import run_cli
 
 from pa10_dnbs.study.scenarios import SCENARIOS, scenario_config
 
@@ -12,8 +11,7 @@ ROW_KEYS = {"scenario", "controller", "seed", "worst_rms_error_rad", "worst_sett
 
 
 def _cli(*args):
-    return subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "study", *map(str, args)], capture_output=True,
-                          text=True, timeout=300)
+    return run_cli("study", *args)
 
 
 @pytest.mark.parametrize("flag, value, valid", [("--scenarios", "nominal,moon", "payload_5kg"),
