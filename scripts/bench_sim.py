@@ -1,45 +1,68 @@
 #!/usr/bin/env python3
-"""Benchmark: real-time factor of the in-process closed loop (20 s, DNBS and PID).
+"""Benchmark: the in-process closed loop (DNBS and PID, 20 s): speed, and the DNBS targets.
 
-Prints figures; asserts nothing (the machines are shared and noisy). Repeats
-each run and reports the best and the median wall time.
+Prints, from --repeat interleaved runs of each controller:
+- the loop's wall time per 1 ms step (plant + 7 controllers, behind their state guards) and the real-time
+  factor, best and median;
+- the DNBS run's cost relative to the PID run (ratio of the medians, and of the best runs);
+- the DNBS figures of the default config against the controller's must and aim targets (docs/controller.md):
+  settling into the 1e-2 rad band, max |e|, torque variation, steps at the limit after 0.2 s, RMS [10, 20) s.
+Figures only; asserts nothing (the machines are shared and noisy: the load average is printed).
 
-    python scripts/bench_sim.py [--duration 20] [--repeat 3] [--controller dnbs]
+    python scripts/bench_sim.py [--duration 20] [--repeat 5]
 """
 from __future__ import annotations
 
 import argparse
 import statistics
 import sys
-import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
+from pa10_dnbs.report.metrics_file import metrics_dict, metrics_settings  # noqa: E402
 from pa10_dnbs.sim.closed_loop import simulate  # noqa: E402
+
+# (figure, must, aim) of the default config's cold-start DNBS run, worst joint
+TARGETS = [("worst_settling_time_s", 1.0, 0.5), ("worst_max_abs_error_run_rad", 0.12, 0.12),
+           ("worst_torque_variation", 10.0, 3.0), ("worst_saturated_fraction_after_s", 0.0, 0.0),
+           ("worst_rms_error_rad", 6e-4, 3e-4)]
+
+
+def _load() -> str:
+    return " ".join(Path("/proc/loadavg").read_text().split()[:3])
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=20.0, help="simulated seconds")
-    ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--controller", choices=("dnbs", "pid", "both"), default="both")
+    ap.add_argument("--repeat", type=int, default=5)
     args = ap.parse_args()
     cfg = load_config(default_config_path())
-    kinds = ("dnbs", "pid") if args.controller == "both" else (args.controller,)
     print(f"in-process closed loop, {args.duration:g} s simulated, T = {cfg['simulation']['dt_s'] * 1e3:g} ms, "
-          f"best/median of {args.repeat}")
-    for kind in kinds:
-        walls = []
-        for _ in range(args.repeat):
-            t0 = time.perf_counter()
+          f"{args.repeat} interleaved runs per controller; load average {_load()}")
+    per_step = {"dnbs": [], "pid": []}
+    last = {}
+    for _ in range(args.repeat):
+        for kind in per_step:
             run = simulate(cfg, kind, args.duration)
-            walls.append(time.perf_counter() - t0)  # includes plant set-up
-        best, med = min(walls), statistics.median(walls)
-        loop_us = run.wall_time_s / run.n_steps * 1e6
-        print(f"{kind:5s} real-time factor: best {args.duration / best:5.2f}x  median {args.duration / med:5.2f}x  "
-              f"(wall {best:.2f} s; {loop_us:.0f} us per 1 ms step in the last loop)")
+            per_step[kind].append(run.wall_time_s / run.n_steps * 1e6)
+            last[kind] = run
+    for kind, us in per_step.items():
+        print(f"{kind:5s} {min(us):6.1f} us per step best, {statistics.median(us):6.1f} median "
+              f"(real-time factor {1e3 / min(us):.1f}x best, {1e3 / statistics.median(us):.1f}x median)")
+    d, p = per_step["dnbs"], per_step["pid"]
+    print(f"DNBS run / PID run: {statistics.median(d) / statistics.median(p):.2f} (medians), "
+          f"{min(d) / min(p):.2f} (best runs)")
+    m = metrics_dict(last["dnbs"], metrics_settings(cfg, args.duration))
+    print("DNBS, default config, cold start (worst joint):")
+    for key, must, aim in TARGETS:
+        v = m[key]
+        ok = lambda t: v is not None and v <= t  # noqa: E731
+        print(f"  {key:34s} {'never' if v is None else format(v, '.4g'):>10s}   must <= {must:g}: "
+              f"{'yes' if ok(must) else 'NO'}   aim <= {aim:g}: {'yes' if ok(aim) else 'no'}")
+    print(f"load average at the end {_load()}")
     return 0
 
 

@@ -45,6 +45,7 @@ fails is reset to its initial weights and P0, and counted in ``ekf_resets``.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, fields
 
 import numpy as np
@@ -254,6 +255,10 @@ class DNBSControllers:
     def _guard(self) -> None:
         every = self.params.ekf_full_check_every
         full = every > 0 and self.steps % every == 0
+        a, t = self.alpha_ekf, self.torque_ekf
+        if not full and math.isfinite(a.w.sum() + t.w.sum() + a.last_hph.sum() + t.last_hph.sum()) \
+                and a.last_hph.min() >= 0.0 and t.last_hph.min() >= 0.0:
+            return  # the cheap check of both networks at once: every w and H^T P H finite, H^T P H >= 0
         for name, ekf in (("alpha", self.alpha_ekf), ("torque", self.torque_ekf)):
             bad = ekf.unhealthy(full)
             if bad.any():

@@ -23,6 +23,8 @@ returns them to their initial weights and P = p0 I.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -58,6 +60,7 @@ class EKFBank:
         self.P = self.p0[:, None, None] * np.eye(L)  # C-contiguous, always written in place
         self._diag = self.P.reshape(n, L * L)[:, :: L + 1]  # a view of the n diagonals, (n, L)
         self._q_col = self.q[:, None]
+        self._ones = self.eta if np.all(self.eta == 1.0) else None  # eta = 1 everywhere: skip multiplying by it
         self._nLL = np.empty((n, L, L))  # scratch
         self._nL = np.empty((n, L))
         self._PH = np.empty((n, L))
@@ -82,14 +85,15 @@ class EKFBank:
         m = 1.0 / (self.r + hph)
         sqrt_m = np.sqrt(m)
         v = PH * (sqrt_m if active is None else sqrt_m * active)[:, None]
-        self.w += v * (eta * sqrt_m * error)[:, None]     # eta K e, K = P H M
+        step = sqrt_m * error if eta is self._ones else eta * sqrt_m * error  # eta = 1: the same bits
+        self.w += v * step[:, None]                       # eta K e, K = P H M
         self.P -= np.multiply(v[:, :, None], v[:, None, :], out=self._nLL)  # K H^T P = v v^T: exactly symmetric
         q = self._q_col if active is None else (self.q * active)[:, None]
         d = self._diag
         if self.p_max == np.inf:
             d += q
         else:
-            d += q * (d < self.p_max)
+            np.add(d, q, out=d, where=d < self.p_max)
         self.last_hph = hph
         return hph * m
 
@@ -97,11 +101,11 @@ class EKFBank:
         """Bool (n,): rows that must be reset. Cheap check (every step): w finite and the last H^T P H finite
         and >= 0 (NaN or Inf anywhere in P that H reaches shows there). ``full``: also every entry of P finite,
         P symmetric and positive definite (a Cholesky factorisation, ~L^3/3 flops per row)."""
-        hph, ww = self.last_hph, np.add.reduce(np.multiply(self.w, self.w, out=self._nL), axis=1)
-        if np.isfinite(ww.sum()) and hph.min() >= 0.0 and np.isfinite(hph.sum()):
-            bad = np.zeros(hph.size, dtype=bool)  # every row finite (the totals are) and hph >= 0
+        hph = self.last_hph
+        if math.isfinite(self.w.sum()) and math.isfinite(hph.sum()) and hph.min() >= 0.0:
+            bad = np.zeros(hph.size, dtype=bool)  # every entry finite (so are the totals) and hph >= 0
         else:
-            bad = ~(np.isfinite(hph) & (hph >= 0.0) & np.isfinite(ww))
+            bad = ~(np.isfinite(hph) & (hph >= 0.0) & np.isfinite(self.w).all(axis=1))
         if full:
             try:
                 if np.isfinite(self.P).all() and np.array_equal(self.P, self.P.transpose(0, 2, 1)):

@@ -23,6 +23,14 @@ class StateGuard:
     margin_rad: float
     max_speed_rad_s: np.ndarray
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_low", np.asarray(self.lower_rad, dtype=float) - self.margin_rad)
+        object.__setattr__(self, "_high", np.asarray(self.upper_rad, dtype=float) + self.margin_rad)
+
+    def all_plausible(self, x1: np.ndarray, x2: np.ndarray) -> bool:
+        """True when every joint's state passes (one expression: NaN and +-inf fail every comparison)."""
+        return bool(((x1 >= self._low) & (x1 <= self._high) & (np.abs(x2) <= self.max_speed_rad_s)).all())
+
     def check(self, x1: np.ndarray, x2: np.ndarray) -> np.ndarray:
         """int (n,): OK for a plausible state, else the index of the reason in REASONS (the first that applies)."""
         with np.errstate(invalid="ignore"):
