@@ -7,8 +7,8 @@ arithmetic of a row does not depend on the other rows, so both agree bit for
 bit (test/test_dnbs_controller.py checks it).
 
 Per joint, at step k:
-    alpha = A w1^T S1(z1) + k_a e1        z1 = [x1, x_d(k+2)]     virtual control [rad/s]
-    u     = U w2^T S2(z2) + k_u e2        z2 = [x1, x2, alpha]    torque [N m], clipped to Table 2
+    alpha = A w1^T S1(z1) + x_d_dot + k_a e1    z1 = [x1, x_d(k+2)]     virtual control [rad/s]
+    u     = U w2^T S2(z2) + k_u e2              z2 = [x1, x2, alpha]    torque [N m], clipped to Table 2
     e1 = x_d(k) - x1,   e2 = alpha - x2
 Both HONNs (w1, w2) are trained every step by an EKF with learning rate
 eta in (0, 1] (eq. 7) on the dimensionless errors e1/E1 and e2/E2. A [rad/s]
@@ -21,9 +21,10 @@ w <- w + eta K e, the printed x2 - alpha is positive feedback (``e2_sign =
 'printed'`` reproduces it; test_dnbs_controller shows it diverge).
 
 The remedies for the learning transient (docs/controller.md gives each one's
-reason and reference; each is off in ``config/paper.yaml``):
-- robust term: the linear k_a e1 and k_u e2 above (Lewis, Yesildirek & Liu
-  1996); k = 0 is the paper's law;
+reason, reference and ablation; ``config/paper.yaml`` keeps only the anti-windup):
+- robust term: x_d_dot + k_a e1 in alpha and k_u e2 in u, so that k_u e2 is
+  Lewis's Kv r with r = e_dot + k_a e (Lewis, Yesildirek & Liu 1996); without
+  it (or with k = 0 and no feed-forward) the law is the paper's;
 - anti-windup: conditional integration, an update that would push a clipped
   torque further out is skipped (Astrom & Rundqwist 1989);
 - dead zone: the EKF trains on e - clip(e, -d, d), no adaptation on errors
@@ -37,8 +38,8 @@ reason and reference; each is off in ``config/paper.yaml``):
 - covariance bound: Q stops growing a diagonal entry of P beyond p_max
   (no covariance windup in unexcited directions; Haykin 2001, ch. 2).
 
-EKF guard: after every step both trainers are checked (finite w and P, and
-every ``ekf_full_check_every`` steps P symmetric positive definite); a row that
+EKF guard: after every step both trainers are checked (w and H^T P H finite, H^T P H >= 0, and every
+``ekf_full_check_every`` steps P finite, symmetric, positive definite); a row that
 fails is reset to its initial weights and P0, and counted in ``ekf_resets``.
 ``state_dict(row)`` / ``load_state_dict(row, state)`` carry what a restarted
 (or warm-started) controller needs to resume: weights, covariances, step count.
