@@ -47,8 +47,11 @@ def test_realtime_without_misses_equals_lockstep_bit_for_bit(lockstep_run, tmp_p
         print(f"realtime at factor {RTF}: first miss at step {m} ({', '.join(missed)}); on-time fraction "
               f"{stats['on_time_fraction']:.4f}; compared torques of steps [0, {m}) and states [0, {m}]")
     assert m > 0, "every joint missed the very first deadline: nothing to compare"
-    for field, upto in (("torque_nm", m), ("position_rad", m + 1), ("velocity_rad_s", m + 1)):
+    # a run's RunData holds states 0..n-1; state m (the last one a miss cannot have touched) exists when m < n
+    states = min(m + 1, n)
+    for field, upto in (("torque_nm", m), ("position_rad", states), ("velocity_rad_s", states)):
         a, b = getattr(rt, field)[:upto], getattr(ls, field)[:upto]
+        assert a.shape == (upto, len(JOINT_NAMES)) and b.shape == a.shape, (field, a.shape, b.shape)
         assert np.array_equal(a, b), f"{field}: max diff {np.abs(a - b).max()} before the first miss"
     if m < n:  # the missed effort was replaced by the joint's last torque (hold, the default)
         for name in missed:

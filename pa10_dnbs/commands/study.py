@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ..config import ConfigError, default_config_path, load_config
 from ..report.outputs import atomic_output_dir, check_output_dir
+from ..report.progress import ProgressBar
 from ..sim.closed_loop import CONTROLLERS
 from ..study.runner import run_study
 from ..study.scenarios import SCENARIOS
@@ -36,14 +37,17 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
     cfg = load_config(config_path)
     check_output_dir(out, force)
     n = len(scen) * len(ctrl) * seeds
-    bar = None
-    if progress:
-        from tqdm import tqdm
+    dt = cfg["simulation"]["dt_s"]
+    steps_per_run = int(round(duration_s / dt))
+    bar = ProgressBar(n * steps_per_run, dt, f"study ({n} runs)", enabled=None if progress else False)
+    done = []
 
-        bar = tqdm(total=n, desc="study", unit="run")
-    rows = run_study(cfg, scen, ctrl, seeds, duration_s, workers, on_done=(lambda r: bar.update(1)) if bar else None)
-    if bar is not None:
-        bar.close()
+    def finished(row: dict) -> None:  # simulated time of the finished runs, worst |e| among them
+        done.append(row)
+        bar.update(len(done) * steps_per_run, row["worst_max_abs_error_run_rad"])
+
+    rows = run_study(cfg, scen, ctrl, seeds, duration_s, workers, on_done=finished)
+    bar.close()
     command = (f"pa10-dnbs study --scenarios {','.join(scen)} --controllers {','.join(ctrl)} --seeds {seeds} "
                f"--duration {duration_s:g} --out {shlex.quote(str(out))}"
                + (f" --config {shlex.quote(str(config_path))}" if config_path != default_config_path() else ""))

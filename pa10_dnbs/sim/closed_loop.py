@@ -16,6 +16,7 @@ from ..controller_factory import build_guarded_controllers, build_reference, bui
 from ..core.reference import ReferenceSample
 from ..plant.from_config import open_client, plant_from_config
 from ..loop.guarded_controllers import GuardedControllers
+from ..report.progress import ProgressBar
 from ..run_data import RunData
 from .computed_torque import ComputedTorqueController
 
@@ -69,7 +70,7 @@ def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = Fal
         dist = disturbances or Disturbances()
         noise = _sensor_noise(dist, n, nj)
         delayed = [np.zeros(nj)] * dist.torque_delay_steps
-        bar = _progress_bar(n, controller) if progress else None
+        bar = ProgressBar(n, dt, f"simulate {controller}") if progress else None
         t0 = time.perf_counter()
         for k in range(n):
             q, qd = plant.state
@@ -83,11 +84,11 @@ def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = Fal
                 u = delayed.pop(0)
             plant.step(u)
             tau[k] = plant.applied_torque_nm
-            if bar is not None and k % 500 == 499:
-                bar.update(500)
+            if bar is not None and k % 100 == 99:
+                bar.update(k + 1, float(np.abs(ref[k - 99:k + 1] - pos[k - 99:k + 1]).max()))
         wall = time.perf_counter() - t0
         if bar is not None:
-            bar.update(n - bar.n)
+            bar.update(n)
             bar.close()
         return RunData(controller=controller, dt_s=dt, joint_names=JOINT_NAMES,
                        torque_limit_nm=np.array(cfg["plant"]["torque_limit_nm"]),
@@ -114,9 +115,3 @@ def _sensor_noise(dist: Disturbances, n: int, nj: int):
     rng = np.random.default_rng(dist.seed)
     return (rng.normal(0.0, dist.position_noise_std_rad, (n, nj)),
             rng.normal(0.0, dist.velocity_noise_std_rad_s, (n, nj)))
-
-
-def _progress_bar(n_steps: int, label: str):
-    from tqdm import tqdm
-
-    return tqdm(total=n_steps, desc=f"simulate {label}", unit="step", unit_scale=True, mininterval=0.5)
