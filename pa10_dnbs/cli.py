@@ -22,7 +22,7 @@ def _simulate(args: argparse.Namespace) -> int:
 
     return run_simulate(config_path=args.config, controller=args.controller, duration_s=args.duration,
                         out=args.out, force=args.force, progress=not args.no_progress and sys.stderr.isatty(),
-                        init_from=args.init_from)
+                        init_from=args.init_from, figures=not args.no_figures)
 
 
 def _launch(args: argparse.Namespace) -> int:
@@ -36,7 +36,7 @@ def _launch(args: argparse.Namespace) -> int:
                       restart=args.restart, netns=args.netns, init_from=args.init_from,
                       bag_compression=args.bag_compression, live_port=args.live, live_host=args.live_host,
                       live_hz=args.live_hz, real_time_factor=args.rtf, deadline_fraction=args.deadline_fraction,
-                      rt_priority=args.rt_priority)
+                      rt_priority=args.rt_priority, figures=not args.no_figures)
 
 
 def _study(args: argparse.Namespace) -> int:
@@ -50,7 +50,7 @@ def _analyse(args: argparse.Namespace) -> int:
     from .commands.analyse import run_analyse
 
     return run_analyse(args.bag, args.out, args.force, args.config,
-                       progress=not args.no_progress and sys.stderr.isatty())
+                       progress=not args.no_progress and sys.stderr.isatty(), figures=not args.no_figures)
 
 
 def _replay(args: argparse.Namespace) -> int:
@@ -70,6 +70,8 @@ def _add_run_args(p: argparse.ArgumentParser, controllers: tuple[str, ...], help
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
     p.add_argument("--force", action="store_true", help="replace an existing output directory")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-figures", action="store_true",
+                   help="write metrics, time series and report.md without figures (batch runs; ~3 s less)")
 
 
 def _add_live_args(p: argparse.ArgumentParser) -> None:
@@ -156,6 +158,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="YAML config (default: the one stored in the bag, else the shipped default)")
     an.add_argument("--force", action="store_true", help="replace an existing output directory")
     an.add_argument("--no-progress", action="store_true", help="no progress bar")
+    an.add_argument("--no-figures", action="store_true", help="metrics and report.md without figures")
     an.set_defaults(func=_analyse)
 
     rp = sub.add_parser("replay", help="publish a bag's topics with their recorded timing (like ros2 bag play)")

@@ -76,11 +76,13 @@ class Proc:
 
 
 class Launcher(Proc):
-    """``pa10-dnbs launch`` as a child process."""
+    """``pa10-dnbs launch`` as a child process; without figures unless ``figures`` (they cost ~3 s a run and
+    only the session's lockstep run checks them)."""
 
-    def __init__(self, *args, domain_id: int):
+    def __init__(self, *args, domain_id: int, figures: bool = False):
+        extra = () if figures else ("--no-figures",)
         super().__init__([sys.executable, "-m", "pa10_dnbs.cli", "launch", "--domain-id", domain_id, "--no-progress",
-                          *args], domain_id)
+                          *extra, *args], domain_id)
 
     def node_pids(self) -> dict[str, int]:
         m = self.wait_for(r"launch: domain \d+, \d+ nodes: (.*); observer (\w+)=(\d+)", 60)

@@ -46,6 +46,16 @@ def test_simulate_both_writes_metrics_figures_report_timeseries(tmp_path):
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temporary left
 
 
+def test_no_figures_writes_data_and_report_without_png(tmp_path):
+    out = tmp_path / "run"
+    r = run_cli("simulate", "--controller", "pid", "--duration", "0.2", "--out", out, "--no-progress", "--no-figures")
+    assert r.returncode == 0, r.stderr
+    assert (out / "metrics.json").is_file() and (out / "timeseries.npz").is_file()
+    assert not list(out.rglob("*.png"))
+    report = (out / "report.md").read_text()
+    assert "--no-figures" in report and ".png" not in report
+
+
 def _bad_config(tmp_path, edit):
     d = yaml.safe_load(default_config_path().read_text())
     d["plant"]["urdf"] = str((default_config_path().parent / d["plant"]["urdf"]).resolve())

@@ -35,8 +35,8 @@ def _faults(out):
 @pytest.mark.parametrize("states, efforts, seed", [("nan", "inf", 72), ("inf", "out_of_range", 73),
                                                      ("out_of_range", "nan", 74)])
 def test_corrupted_states_and_efforts_are_caught_and_counted(tmp_path, states, efforts, seed, domain):
-    rc, output, out = _launch(tmp_path, "run", "--duration", 2, "--corrupt-states", f"{states}:0.01",
-                              "--corrupt-efforts", f"{efforts}:0.01", "--fault-seed", seed, domain_id=domain)
+    rc, output, out = _launch(tmp_path, "run", "--duration", 1, "--corrupt-states", f"{states}:0.02",
+                              "--corrupt-efforts", f"{efforts}:0.02", "--fault-seed", seed, domain_id=domain)
     assert rc == 0, output
     m, joints = _faults(out)
     run = RunData.load_npz(out / "timeseries.npz")
@@ -48,11 +48,13 @@ def test_corrupted_states_and_efforts_are_caught_and_counted(tmp_path, states, e
         caught = ctrl["bad_states_position"] if states == "out_of_range" else ctrl["bad_states_nonfinite"]
         assert caught == sent and ctrl["bad_states_speed"] == 0, (name, plant, ctrl)
         bad = plant["out_of_range_efforts"] if efforts == "out_of_range" else plant["nonfinite_efforts"]
-        assert bad == ctrl["injected_effort_corrupted"], (name, plant, ctrl)
+        # the answer to the final state is sent but never applied (there is no step after it): if it was one of
+        # the corrupted efforts, the plant never sees it
+        assert ctrl["injected_effort_corrupted"] - 1 <= bad <= ctrl["injected_effort_corrupted"], (name, plant, ctrl)
         assert ctrl["nonfinite_torques"] == 0
         injected_states += sent
         injected_efforts += bad
-    assert injected_states > 50 and injected_efforts > 50  # ~1 % of 7 x 2000 messages each way
+    assert injected_states > 50 and injected_efforts > 50  # ~2 % of 7 x 1000 messages each way
 
 
 def _last_diagnostics(bag) -> dict:
@@ -67,24 +69,24 @@ def _last_diagnostics(bag) -> dict:
 
 def test_killed_controller_is_restarted_from_its_checkpoint(tmp_path, domain):
     bag = tmp_path / "bag"
-    rc, output, out = _launch(tmp_path, "run", "--duration", 8, "--kill", "e1@5", "--restart", "--record", bag,
+    rc, output, out = _launch(tmp_path, "run", "--duration", 5.5, "--kill", "e1@2.5", "--restart", "--record", bag,
                               domain_id=domain)
     assert rc == 0, output
     assert "launch: joint e1 controller exited with code -9; restarted (resume" in output
     m, joints = _faults(out)
     assert [r["joint"] for r in m["faults"]["restarts"]] == ["e1"]
     e1 = joints["e1"]
-    assert e1["controller"]["resumed_from_step"] == 4000  # the last periodic checkpoint (every 1 s) before 5 s
+    assert e1["controller"]["resumed_from_step"] == 2000  # the last periodic checkpoint (every 1 s) before 2.5 s
     outage = e1["plant"]["timeout_ranges"]
-    assert len(outage) == 1 and outage[0][0] == 5000, outage
+    assert len(outage) == 1 and outage[0][0] == 2500, outage
     assert (outage[0][1] - outage[0][0] + 1) * 1e-3 < 2.0  # back within 2 s of simulated time
     assert all(not joints[j]["plant"]["timeout_ranges"] for j in JOINT_NAMES if j != "e1")
     run = RunData.load_npz(out / "timeseries.npz")
     err = np.abs(run.error_rad)
     assert m["torques_within_limits"] and m["all_finite"]
-    assert err[7000:].max() < 0.02, err[7000:].max(axis=0)  # recovered: bounded errors after the restart
+    assert err[4500:].max() < 0.02, err[4500:].max(axis=0)  # recovered: bounded errors after the restart
     with Bag(bag) as b:
-        assert b.topics["/pa10/e1/effort"].count >= 7990
+        assert b.topics["/pa10/e1/effort"].count >= 5490
     # every node said what happened on /diagnostics: the plant WARNs about e1's outage, and only e1's
     diag = _last_diagnostics(bag)
     assert {f"pa10/{node}/{j}" for node in ("plant", "joint_controller") for j in JOINT_NAMES} | {"pa10/reference"} \
@@ -113,8 +115,8 @@ def test_killed_controller_without_restart_stops_the_run_and_keeps_the_bag(tmp_p
 def test_lost_and_late_messages_in_lockstep_change_nothing(tmp_path, _default_cfg, domain):
     """Dropped and delayed states and efforts on two joints: every loss is recovered by a resend, so the
     lockstep trajectory is the in-process one bit for bit."""
-    rc, output, out = _launch(tmp_path, "run", "--duration", 1.5, "--fault-joints", "s2,w1",
-                              "--drop-states", 0.01, "--drop-efforts", 0.01, "--delay-states", 1,
+    rc, output, out = _launch(tmp_path, "run", "--duration", 1.0, "--fault-joints", "s2,w1",
+                              "--drop-states", 0.005, "--drop-efforts", 0.005, "--delay-states", 1,
                               "--jitter-efforts", 2, "--fault-seed", 79, domain_id=domain)
     assert rc == 0, output
     _, joints = _faults(out)
@@ -131,7 +133,7 @@ def test_lost_and_late_messages_in_lockstep_change_nothing(tmp_path, _default_cf
         # one resend per lost message, whichever way it was going
         assert plant["resent_states"] == sent["dropped"] + ctrl["injected_effort_dropped"], (name, plant, ctrl)
     wire = RunData.load_npz(out / "timeseries.npz")
-    local = simulate(_default_cfg, "dnbs", 1.5)
+    local = simulate(_default_cfg, "dnbs", 1.0)
     for field in ("position_rad", "velocity_rad_s", "reference_rad", "torque_nm"):
         assert np.array_equal(getattr(local, field), getattr(wire, field)), field
 
@@ -190,12 +192,12 @@ def _veth_packets(ns: str, dev: str) -> int:
 def test_two_hosts_give_the_single_host_trajectory_bit_for_bit(tmp_path, two_hosts, _default_cfg, domain):
     a, b = two_hosts
     before = _veth_packets(a, "pa10ta")
-    rc, output, out = _launch(tmp_path, "run", "--duration", 2, "--netns", f"plant={a}", "--netns", f"reference={a}",
+    rc, output, out = _launch(tmp_path, "run", "--duration", 1, "--netns", f"plant={a}", "--netns", f"reference={a}",
                               "--netns", f"observer={a}", "--netns", f"controllers={b}", domain_id=domain)
     assert rc == 0, output
-    # every state and effort crossed the link: at least 2 x 7 x 2000 packets
-    assert _veth_packets(a, "pa10ta") - before > 2 * 7 * 2000
+    # every state and effort crossed the link: at least 2 x 7 x 1000 packets
+    assert _veth_packets(a, "pa10ta") - before > 2 * 7 * 1000
     wire = RunData.load_npz(out / "timeseries.npz")
-    local = simulate(_default_cfg, "dnbs", 2.0)
+    local = simulate(_default_cfg, "dnbs", 1.0)
     for field in ("position_rad", "velocity_rad_s", "reference_rad", "torque_nm"):
         assert np.array_equal(getattr(local, field), getattr(wire, field)), field

@@ -1,9 +1,9 @@
 """The live view of the node graph and of a replayed bag, watched by a Foxglove WebSocket client.
 
-A client connects (offering subprotocol foxglove.websocket.v1 and its current name foxglove.sdk.v1) while
-a lockstep run goes on, sees the channels advertised, subscribes and gets /joint_states whose decoded
-positions are the run's time series at the same stamps; clients that drop mid-run or stall change nothing
-in the run (bit for bit against the recorded lockstep run of the session fixture, also with --record);
+In one lockstep run with --record and --live: a client connects (offering subprotocol
+foxglove.websocket.v1 and its current name foxglove.sdk.v1), sees the channels advertised, subscribes and
+gets /joint_states whose decoded positions are the run's time series at the same stamps, while other
+clients drop mid-run or stall, and the run is the session's recorded lockstep run bit for bit;
 ``replay --live`` shows a bag at its recorded timing.
 """
 import json
@@ -65,40 +65,12 @@ def _check_tracking(messages, run: RunData) -> int:
     return full
 
 
-def test_a_client_watches_a_lockstep_run(tmp_path, domain):
-    out = tmp_path / "run"
-    la = Launcher("--duration", 4, "--out", out, "--live", 0, domain_id=domain)
-    client = None
-    try:
-        url = la.wait_for(LIVE_URL, 120).group(1)
-        client = FoxgloveClient(url)
-        assert client.subprotocol == "foxglove.sdk.v1"
-        assert client.wait_for_channels(CHANNELS, 30), client.channels
-        for topic, schema in CHANNELS.items():
-            ch = client.channels[topic]
-            assert ch["schemaName"] == schema
-            assert (ch["encoding"], ch["schemaEncoding"]) == (("json", "jsonschema") if topic == "/pa10/tracking"
-                                                              else ("cdr", "ros2msg"))
-        client.subscribe("/joint_states", "/pa10/tracking", "/robot_description")
-        client.pump(300, until=lambda: la.proc.poll() is not None)
-        rc = la.wait(120)
-    finally:
-        if client is not None:
-            client.close()
-        la.kill()
-    assert rc == 0, la.output
-    run = RunData.load_npz(out / "timeseries.npz")
-    assert _check_joint_states(client.messages["/joint_states"], run) >= 20
-    assert _check_tracking(client.messages["/pa10/tracking"], run) >= 10
-    assert client.count("/robot_description") >= 1
-    assert exit_codes(la.output)["live_view"] == 0
-    assert "frames shown in" in (out / "logs" / "live_view.log").read_text()
-
-
-def test_clients_that_drop_or_stall_change_nothing(lockstep_run, tmp_path, domain):
-    """With --record and --live, one client subscribes and never reads again, one drops its connection
-    mid-run without a closing handshake, one says goodbye politely: the run equals the session's recorded
-    lockstep run (same duration, no --live) bit for bit, and every process exits 0."""
+def test_clients_watch_drop_or_stall_and_change_nothing(lockstep_run, tmp_path, domain):
+    """One run with --record and --live, four clients. One watches: it sees the channels advertised, and the
+    /joint_states and tracking frames it gets are the run's time series at the same stamps. One subscribes
+    and never reads again, one drops its connection mid-run without a closing handshake, one says goodbye
+    politely. The run equals the session's recorded lockstep run (same duration, no --live) bit for bit,
+    and every process exits 0."""
     assert lockstep_run["rc"] == 0, lockstep_run["output"]
     out, bag = tmp_path / "run", tmp_path / "bag"
     la = Launcher("--duration", LOCKSTEP_DURATION_S, "--out", out, "--record", bag, "--live", 0, domain_id=domain)
@@ -107,10 +79,18 @@ def test_clients_that_drop_or_stall_change_nothing(lockstep_run, tmp_path, domai
         url = la.wait_for(LIVE_URL, 120).group(1)
         m = la.wait_for(r"; live view live_view=(\d+)", 10)
         live_pid = int(m.group(1))
-        stalled, dropped, polite = (FoxgloveClient(url) for _ in range(3))
-        clients = [stalled, dropped, polite]
+        watcher, stalled, dropped, polite = (FoxgloveClient(url) for _ in range(4))
+        clients = [watcher, stalled, dropped, polite]
+        assert watcher.subprotocol == "foxglove.sdk.v1"
         for c in clients:
-            assert c.wait_for_channels(CHANNELS, 30)
+            assert c.wait_for_channels(CHANNELS, 30), c.channels
+        for topic, schema in CHANNELS.items():
+            ch = watcher.channels[topic]
+            assert ch["schemaName"] == schema
+            assert (ch["encoding"], ch["schemaEncoding"]) == (("json", "jsonschema") if topic == "/pa10/tracking"
+                                                              else ("cdr", "ros2msg"))
+        watcher.subscribe("/joint_states", "/pa10/tracking", "/robot_description")
+        for c in (stalled, dropped, polite):
             c.subscribe(*CHANNELS)
         la.wait_for("launch: plant running", 120)
         assert dropped.pump(60, lambda: dropped.count("/joint_states") >= 5)
@@ -118,6 +98,7 @@ def test_clients_that_drop_or_stall_change_nothing(lockstep_run, tmp_path, domai
         dropped.ws.socket.close()
         assert polite.pump(60, lambda: polite.count("/joint_states") >= 10)
         polite.close()
+        watcher.pump(300, until=lambda: la.proc.poll() is not None)
         rc = la.wait(300)
     finally:
         for c in clients:
@@ -130,14 +111,19 @@ def test_clients_that_drop_or_stall_change_nothing(lockstep_run, tmp_path, domai
     codes = exit_codes(la.output)
     assert codes["live_view"] == 0 and all(c == 0 for c in codes.values()), codes
     assert not alive(live_pid)
+    assert "frames shown in" in (out / "logs" / "live_view.log").read_text()
+    run = RunData.load_npz(out / "timeseries.npz")
+    assert _check_joint_states(watcher.messages["/joint_states"], run) >= 20
+    assert _check_tracking(watcher.messages["/pa10/tracking"], run) >= 10
+    assert watcher.count("/robot_description") >= 1
     base = json.loads((lockstep_run["out"] / "metrics.json").read_text())
     watched = json.loads((out / "metrics.json").read_text())
     for key in ("joints", "worst_rms_error_rad", "all_finite", "torques_within_limits", "duration_s", "dt_s",
                 "window_s", "limit_hits"):
         assert watched[key] == base[key], key
-    a, b = RunData.load_npz(lockstep_run["out"] / "timeseries.npz"), RunData.load_npz(out / "timeseries.npz")
+    a = RunData.load_npz(lockstep_run["out"] / "timeseries.npz")
     for field in ("position_rad", "velocity_rad_s", "reference_rad", "torque_nm"):
-        assert np.array_equal(getattr(a, field), getattr(b, field)), field
+        assert np.array_equal(getattr(a, field), getattr(run, field)), field
 
 
 def test_replay_live_shows_the_bag_at_its_timing(lockstep_run, domain):

@@ -29,7 +29,8 @@ def _run_config(info: dict, config_path: Path | None, bag: Bag) -> tuple[dict, s
     return cfg, f"stored in the bag (recorded from {info.get('config_file', '?')})"
 
 
-def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None = None, progress: bool = False) -> int:
+def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None = None, progress: bool = False,
+                figures: bool = True) -> int:
     """Rebuild the run from the bag and write the report into ``out``. Raises BagError on a bad bag.
 
     ``progress``: a progress bar on stderr while the bag is read (report/progress.py; drawn on a terminal only).
@@ -69,7 +70,8 @@ def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None
                  f"source: rebuilt from the bag's /joint_states and reference topics ({info.get('mode', '?')} run)"]
         chain = robot_chain(bag, cfg)
         with atomic_output_dir(out, force) as tmp:
-            write_report(tmp, [run], [metrics], title="PA10-7CE run from a bag", notes=notes, chain=chain)
+            write_report(tmp, [run], [metrics], title="PA10-7CE run from a bag", notes=notes, chain=chain,
+                         figures=figures)
     print(f"{controller}: worst-joint RMS error {metrics['worst_rms_error_rad']:.3e} rad over {metrics['window_s']} s "
           f"({rec.n} steps from {bag.path})")
     print(f"wrote {out}/report.md")

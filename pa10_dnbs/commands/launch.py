@@ -33,7 +33,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                on_missing_effort: str, record: Path | None = None, fault_args=None, restart: str | None = None,
                netns: list[str] | None = None, init_from: Path | None = None, bag_compression: str = "zstd",
                live_port: int | None = None, live_host: str = "127.0.0.1", live_hz: float = 50.0,
-               real_time_factor: float = 1.0, deadline_fraction: float = 0.9, rt_priority: int = 0) -> int:
+               real_time_factor: float = 1.0, deadline_fraction: float = 0.9, rt_priority: int = 0,
+               figures: bool = True) -> int:
     """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code.
 
     ``fault_args``: the parsed fault flags (launch/fault_flags.py) applied to the config; the config the
@@ -137,7 +138,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                 notes.append(f"run shorter than the configured window {list(cfg['simulation']['window_s'])}: "
                              "metrics over the second half instead")
             write_report(tmp, [run], [metrics], title=f"PA10-7CE node graph run ({mode})", notes=notes,
-                         chain=UrdfChain.from_file(cfg["plant"]["urdf"]))
+                         chain=UrdfChain.from_file(cfg["plant"]["urdf"]), figures=figures)
     except GraphFailure as exc:
         print(f"pa10-dnbs launch: FAILED: {exc}", file=sys.stderr, flush=True)
         if record is not None and (record / "metadata.yaml").is_file():

@@ -16,7 +16,7 @@ CHOICES = {"dnbs": ("dnbs",), "pid": ("pid",), "ctc": ("ctc",), "both": ("dnbs",
 
 
 def run_simulate(config_path: Path | None, controller: str, duration_s: float | None, out: Path,
-                 force: bool, progress: bool, init_from: Path | None = None) -> int:
+                 force: bool, progress: bool, init_from: Path | None = None, figures: bool = True) -> int:
     """Run one or more controllers; write everything into ``out`` atomically. Returns the exit code.
 
     ``init_from``: a warm start of the DNBS controllers from the checkpoints of an earlier run (a run's
@@ -61,7 +61,7 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
                      f"metrics over the second half instead")
     with atomic_output_dir(out, force) as tmp:
         write_report(tmp, runs, metrics, title="PA10-7CE closed-loop run", notes=notes,
-                     chain=UrdfChain.from_file(cfg["plant"]["urdf"]))
+                     chain=UrdfChain.from_file(cfg["plant"]["urdf"]), figures=figures)
         for run in runs:
             if run.controller == "dnbs":
                 _save_checkpoints(tmp / "checkpoints" if len(runs) == 1 else tmp / "dnbs" / "checkpoints",

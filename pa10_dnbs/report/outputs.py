@@ -61,12 +61,15 @@ def atomic_output_dir(out: Path, force: bool):
         shutil.rmtree(old, ignore_errors=True)
 
 
-def write_run(directory: Path, run: RunData, metrics: dict, chain: UrdfChain | None = None) -> list[tuple[str, str]]:
-    """metrics.json, timeseries.npz and the figures of one run (the arm in 3D when ``chain`` is given);
-    returns (caption, file) pairs."""
+def write_run(directory: Path, run: RunData, metrics: dict, chain: UrdfChain | None = None,
+              figures: bool = True) -> list[tuple[str, str]]:
+    """metrics.json, timeseries.npz and (unless ``figures`` is False) the figures of one run (the arm in 3D
+    when ``chain`` is given); returns (caption, file) pairs."""
     directory.mkdir(parents=True, exist_ok=True)
     (directory / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
     run.save_npz(directory / "timeseries.npz")
+    if not figures:
+        return []
     tag = run.controller.upper()
     settling = [j["settling_time_s"] for j in metrics["joints"]]
     figs = [(f"{tag}: reference (solid) and actual (dashed) angles, Figs. 4-10", "tracking.png"),
@@ -85,19 +88,25 @@ def write_run(directory: Path, run: RunData, metrics: dict, chain: UrdfChain | N
 
 
 def write_report(directory: Path, runs: list[RunData], metrics: list[dict], title: str,
-                 notes: list[str], chain: UrdfChain | None = None) -> None:
-    """A single run's files at the top of ``directory``; several runs in sub-directories plus a comparison."""
+                 notes: list[str], chain: UrdfChain | None = None, figures: bool = True) -> None:
+    """A single run's files at the top of ``directory``; several runs in sub-directories plus a comparison.
+    ``figures=False`` (``--no-figures``): data and report.md only, no PNG (about 3 s less per run)."""
+    if not figures:
+        notes = notes + ["Figures not drawn (--no-figures); `pa10-dnbs analyse` of a bag, or a run without "
+                         "the flag, draws them."]
     if len(runs) == 1:
-        figs = write_run(directory, runs[0], metrics[0], chain)
+        figs = write_run(directory, runs[0], metrics[0], chain, figures)
     else:
         figs = []
         for run, m in zip(runs, metrics):
             sub = run.controller
-            figs += [(c, f"{sub}/{f}") for c, f in write_run(directory / sub, run, m, chain)]
-        error_figure(runs, directory / "errors_compare.png", tuple(metrics[0]["window_s"]),
-                     [[j["settling_time_s"] for j in m["joints"]] for m in metrics])
-        figs.insert(0, ("Tracking errors of " + " and ".join(r.controller.upper() for r in runs)
-                        + " overlaid (metrics window shaded)", "errors_compare.png"))
+            figs += [(c, f"{sub}/{f}") for c, f in write_run(directory / sub, run, m, chain, figures)]
+    if len(runs) > 1:
+        if figures:
+            error_figure(runs, directory / "errors_compare.png", tuple(metrics[0]["window_s"]),
+                         [[j["settling_time_s"] for j in m["joints"]] for m in metrics])
+            figs.insert(0, ("Tracking errors of " + " and ".join(r.controller.upper() for r in runs)
+                            + " overlaid (metrics window shaded)", "errors_compare.png"))
         (directory / "summary.json").write_text(json.dumps(
             {m["controller"]: {"worst_rms_error_rad": m["worst_rms_error_rad"],
                                "metrics": f"{m['controller']}/metrics.json"} for m in metrics}, indent=2) + "\n")
