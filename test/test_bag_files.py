@@ -30,16 +30,21 @@ def _write_bag(path, n=200, topic="/joint_states"):
     return path
 
 
-def _write_run_bag(path, n=300, compression="zstd"):
-    """A complete little run: /joint_states (7 joints) and one reference batch per joint, as the graph sends them."""
+def _write_run_bag(path, n=300, compression="zstd", ns=None):
+    """A complete little run: joint_states (7 joints) and one reference batch per joint, as the graph sends them.
+
+    ``ns`` None: the old layout (/joint_states at the root, /pa10/<joint>/reference); else every topic in ``ns``.
+    """
     from rosbags.typesys import Stores, get_typestore
 
     store = get_typestore(Stores.ROS2_JAZZY)
     T = store.types
     w = BagWriter(path, compression=compression)
-    w.add_topic("/joint_states", "sensor_msgs/msg/JointState", [QOS])
+    js = "/joint_states" if ns is None else f"{ns}/joint_states"
+    prefix = "/pa10" if ns is None else ns
+    w.add_topic(js, "sensor_msgs/msg/JointState", [QOS])
     for k in range(n + 1):
-        w.write("/joint_states", k * 1_000_000, joint_state_cdr.encode(
+        w.write(js, k * 1_000_000, joint_state_cdr.encode(
             0, k * 1_000_000, list(JOINT_NAMES), [0.001 * k] * 7, [1.0] * 7, [2.0] * 7))
     for j in JOINT_NAMES:
         pts = [T["trajectory_msgs/msg/JointTrajectoryPoint"](
@@ -49,8 +54,8 @@ def _write_run_bag(path, n=300, compression="zstd"):
         msg = T["trajectory_msgs/msg/JointTrajectory"](
             header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=0, nanosec=0), frame_id=""),
             joint_names=[j], points=pts)
-        w.add_topic(f"/pa10/{j}/reference", "trajectory_msgs/msg/JointTrajectory", [QOS])
-        w.write(f"/pa10/{j}/reference", 0, bytes(store.serialize_cdr(msg, "trajectory_msgs/msg/JointTrajectory")))
+        w.add_topic(f"{prefix}/{j}/reference", "trajectory_msgs/msg/JointTrajectory", [QOS])
+        w.write(f"{prefix}/{j}/reference", 0, bytes(store.serialize_cdr(msg, "trajectory_msgs/msg/JointTrajectory")))
     w.close()
     return path
 
@@ -143,7 +148,26 @@ def test_inconsistent_metadata(tmp_path):
 
 def test_bag_missing_the_needed_topics(tmp_path):
     bag = _write_bag(tmp_path / "b", topic="/other")
-    _assert_clear_error(_analyse(bag, tmp_path), "needs topics", "/joint_states", "/pa10/s1/reference")
+    _assert_clear_error(_analyse(bag, tmp_path), "needs topics", "/pa10/joint_states", "/pa10/s1/reference")
+
+
+def test_analyse_finds_the_arm_under_any_namespace_and_in_old_bags(tmp_path):
+    """The same run recorded under /arm2 (new layout) and with /joint_states at the root (old bags) gives the
+    same metrics; a bag whose joint_states and references are in different namespaces is refused."""
+    import json
+
+    old = _write_run_bag(tmp_path / "old", n=300)
+    new = _write_run_bag(tmp_path / "new", n=300, ns="/lab/arm2")
+    for bag in (old, new):
+        r = run_cli("analyse", bag, "--out", tmp_path / f"out_{bag.name}")
+        assert r.returncode in (0, 1) and "Traceback" not in r.stderr, r.stderr
+    a, b = (json.loads((tmp_path / f"out_{n}" / "metrics.json").read_text()) for n in ("old", "new"))
+    assert a["joints"] == b["joints"] and a["worst_rms_error_rad"] == b["worst_rms_error_rad"]
+    w = BagWriter(tmp_path / "mixed")
+    w.add_topic("/arm3/joint_states", "sensor_msgs/msg/JointState", [QOS])
+    w.write("/arm3/joint_states", 0, joint_state_cdr.encode(0, 0, list(JOINT_NAMES), [0.0] * 7, [0.0] * 7, [0.0] * 7))
+    w.close()
+    _assert_clear_error(_analyse(tmp_path / "mixed", tmp_path), "needs topics", "/pa10/s1/reference")
 
 
 def test_replay_rejects_unknown_topics_before_joining_ros(tmp_path):
@@ -163,7 +187,8 @@ def _recorder(domain, *params):
 def test_standalone_recorder_rejects_bad_parameters(tmp_path, domain):
     _assert_clear_error(_recorder(domain), "parameter bag is required")
     _assert_clear_error(_recorder(domain, f"bag:={tmp_path / 'b'}"), "all_topics")
-    _assert_clear_error(_recorder(domain, f"bag:={tmp_path / 'b'}", "topics:=[joint_states]"), "starting with '/'")
+    _assert_clear_error(_recorder(domain, f"bag:={tmp_path / 'b'}", "topics:=['/pa10//joint_states']"),
+                        "is not a topic name")
     existing = _write_bag(tmp_path / "old")
     before = sorted(p.name for p in existing.iterdir())
     _assert_clear_error(_recorder(domain, f"bag:={existing}", "all_topics:=true"), "exists", "--force")
@@ -182,6 +207,9 @@ def test_launcher_rejects_a_lockstep_bag_that_lost_messages(tmp_path, cfg):
     _, missing = _bag_run(bag, 1e-3, 300, "dnbs", cfg, 1.0, lockstep_stats=stats)
     assert "/pa10/s1/effort lacks 300 steps (first 0)" in missing and "/clock lacks 301 steps" in missing
     assert "/joint_states" not in missing  # that one is complete
+    new = _write_run_bag(tmp_path / "new", n=300, ns="/arm2")
+    _, missing = _bag_run(new, 1e-3, 300, "dnbs", cfg, 1.0, lockstep_stats=stats)
+    assert "/arm2/s1/effort lacks 300 steps (first 0)" in missing and "/arm2/joint_states" not in missing
 
 
 @pytest.mark.parametrize("compression,chunk_compression", [("zstd", "zstd"), ("none", "")])

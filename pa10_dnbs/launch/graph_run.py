@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .. import JOINT_NAMES
-from ..wire.topics import CLOCK, DIAGNOSTICS, JOINT_STATES, ROBOT_DESCRIPTION, effort_topic, reference_topic, state_topic
+from ..wire.topics import CLOCK, DEFAULT_NS, DIAGNOSTICS, ArmTopics
 from .domain_ids import lease_domain
 from .processes import ManagedProcess, stop_all
 from .shm_cleanup import remove_stale, shm_files
@@ -60,6 +60,7 @@ class GraphOptions:
     live_port: int | None = None     # serve the live view (Foxglove WebSocket) on this port; 0: a free one
     live_host: str = "127.0.0.1"
     live_hz: float = 50.0            # live view frames per second of wall time, at most
+    namespace: str = DEFAULT_NS      # the arm's ROS namespace: every node runs in it (topics relative to it)
 
 
 @dataclass
@@ -113,20 +114,21 @@ def node_env(domain_id: int, discovery_range: str = "LOCALHOST") -> dict:
     return env
 
 
-def _ros_args(node: str, params: dict) -> list[str]:
-    args = ["--ros-args", "-r", f"__node:={node}", "-r", "__ns:=/pa10"]
+def _ros_args(node: str, params: dict, ns: str = DEFAULT_NS) -> list[str]:
+    args = ["--ros-args", "-r", f"__node:={node}", "-r", f"__ns:={ns}"]
     for k, v in params.items():
         args += ["-p", f"{k}:={v}"]
     return args
 
 
-def graph_topics() -> list[str]:
-    """Every topic of the graph as recorder specs ('/name:pkg/msg/Type')."""
-    specs = [f"{CLOCK}:rosgraph_msgs/msg/Clock", f"{JOINT_STATES}:sensor_msgs/msg/JointState",
-             f"{ROBOT_DESCRIPTION}:std_msgs/msg/String", f"{DIAGNOSTICS}:diagnostic_msgs/msg/DiagnosticArray"]
+def graph_topics(ns: str = DEFAULT_NS) -> list[str]:
+    """Every topic of the graph of the arm in ``ns`` as recorder specs ('/name:pkg/msg/Type', resolved)."""
+    arm = ArmTopics(ns)
+    specs = [f"{CLOCK}:rosgraph_msgs/msg/Clock", f"{arm.joint_states}:sensor_msgs/msg/JointState",
+             f"{arm.robot_description}:std_msgs/msg/String", f"{DIAGNOSTICS}:diagnostic_msgs/msg/DiagnosticArray"]
     for j in JOINT_NAMES:
-        specs += [f"{state_topic(j)}:sensor_msgs/msg/JointState", f"{effort_topic(j)}:sensor_msgs/msg/JointState",
-                  f"{reference_topic(j)}:trajectory_msgs/msg/JointTrajectory"]
+        specs += [f"{arm.state(j)}:sensor_msgs/msg/JointState", f"{arm.effort(j)}:sensor_msgs/msg/JointState",
+                  f"{arm.reference(j)}:trajectory_msgs/msg/JointTrajectory"]
     return specs
 
 
@@ -160,36 +162,40 @@ def controller_command(opt: GraphOptions, workdir: Path, joint: str, incarnation
         if opt.init_from is not None:
             params["init_file"] = str(opt.init_from / f"{joint}.npz")
     return [sys.executable, "-m", "pa10_dnbs.ros.joint_controller_node"] + _ros_args(f"joint_controller_{joint}",
-                                                                                    params)
+                                                                                    params, opt.namespace)
 
 
 def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[tuple[str, list[str]]]:
     """(name, argv) of every process: the wire monitor, the recorder (with --record), the nine nodes,
     the plant last (it starts stepping once the others are matched)."""
     py = [sys.executable, "-m"]
+
+    def ros(node: str, params: dict) -> list[str]:
+        return _ros_args(node, params, opt.namespace)
+
     cfg = str(opt.config_path)
     if opt.record_bag is None:
-        cmds = [("wire_monitor", py + ["pa10_dnbs.ros.wire_monitor"] + _ros_args("wire_monitor", {
+        cmds = [("wire_monitor", py + ["pa10_dnbs.ros.wire_monitor"] + ros("wire_monitor", {
                     "config_file": cfg, "duration_s": opt.duration_s, "out_file": str(wire_file)}))]
     else:  # the recorder is the observer: the run is rebuilt from the bag
         end_ns = int(round(opt.duration_s / opt.dt_s)) * int(round(opt.dt_s * 1e9))
         custom = [f"controller={opt.controller}", f"mode={opt.mode}", f"duration_s={opt.duration_s!r}",
                   f"reliability={loop_reliability(opt)}", f"config_file={cfg}"]
-        cmds = [("recorder", py + ["pa10_dnbs.ros.recorder_node"] + _ros_args("recorder", {
+        cmds = [("recorder", py + ["pa10_dnbs.ros.recorder_node"] + ros("recorder", {
             "config_file": cfg, "bag": str(opt.record_bag), "force": str(opt.force_bag).lower(),
-            "topics": _yaml_list(graph_topics()), "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns,
+            "topics": _yaml_list(graph_topics(opt.namespace)), "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns,
             "compression": opt.bag_compression}))]
     if opt.live_port is not None:  # display only: started after the observer, never waited for by the plant
-        cmds.append((LIVE_VIEW, py + ["pa10_dnbs.ros.live_observer_node"] + _ros_args(LIVE_VIEW, {
+        cmds.append((LIVE_VIEW, py + ["pa10_dnbs.ros.live_observer_node"] + ros(LIVE_VIEW, {
             "config_file": cfg, "host": opt.live_host, "port": opt.live_port, "display_hz": opt.live_hz})))
     # realtime: smaller reference batches, so that decoding one (in each controller) never costs a tick its
     # deadline; lockstep keeps 100 points per message (fewer messages, and timing does not matter there)
     batch = REALTIME_REFERENCE_BATCH if opt.mode == "realtime" else 100
-    cmds.append(("reference", py + ["pa10_dnbs.ros.reference_node"] + _ros_args(
+    cmds.append(("reference", py + ["pa10_dnbs.ros.reference_node"] + ros(
         "reference", {"config_file": cfg, "duration_s": opt.duration_s, "batch_steps": batch})))
     for j in JOINT_NAMES:
         cmds.append((f"joint_controller_{j}", controller_command(opt, stats_file.parent, j)))
-    cmds.append(("plant", py + ["pa10_dnbs.ros.plant_node"] + _ros_args("plant", {
+    cmds.append(("plant", py + ["pa10_dnbs.ros.plant_node"] + ros("plant", {
         "config_file": cfg, "mode": opt.mode, "duration_s": opt.duration_s, "reliability": loop_reliability(opt),
         "effort_timeout_s": opt.effort_timeout_s, "on_missing_effort": opt.on_missing_effort,
         "real_time_factor": opt.real_time_factor, "deadline_fraction": opt.deadline_fraction,

@@ -1,7 +1,9 @@
 """joint_controller_node: one joint's DNBS (or PID) controller.
 
-Subscribes only to /pa10/<joint>/state and /pa10/<joint>/reference; publishes
-/pa10/<joint>/effort (sensor_msgs/JointState, effort only) stamped with the
+Node name ``joint_controller_<joint>`` unless remapped (``-r __node:=``).
+Subscribes only to <ns>/<joint>/state and <ns>/<joint>/reference (<ns>: the
+arm's namespace, /pa10 by default); publishes <ns>/<joint>/effort
+(sensor_msgs/JointState, effort only) stamped with the
 stamp of the state it answers, and its fault counters on /diagnostics. The
 effort publisher is created when the first reference batch arrives, so a
 plant that waits for every effort publisher starts with references in place;
@@ -22,6 +24,7 @@ starts from that file when it exists. Counters go to ``stats_file`` (JSON).
 """
 from __future__ import annotations
 
+import functools
 import json
 import os
 import signal
@@ -40,11 +43,11 @@ from ..core.checkpoint import load_checkpoint, save_checkpoint
 from ..faults.faulty_link import links_from_config
 from ..wire import joint_state_cdr
 from ..wire.trajectory_cdr import decode_first_joint
-from .diagnostics import DiagnosticsReporter, status
+from .diagnostics import DiagnosticsReporter, status, status_name
 from ..loop.cpu_meter import CpuMeter
 from ..loop.joint_loop import JointLoop
 from ..loop.rt_priority import apply_fifo, check_priority
-from .params import ParameterError, check_choice, declare, load_node_config
+from .params import ParameterError, check_choice, cli_parameter, declare, load_node_config
 from .runtime import announce_ready, run_node
 from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
 
@@ -53,8 +56,10 @@ FAULT_KEYS = ("bad_states_nonfinite", "bad_states_position", "bad_states_speed",
 
 
 class JointControllerNode(Node):
-    def __init__(self):
-        super().__init__("joint_controller")
+    def __init__(self, args=None):
+        """``args``: the command line (default sys.argv); its ``-p joint:=J`` names the node joint_controller_J."""
+        joint = cli_parameter(sys.argv if args is None else args, "joint")
+        super().__init__(f"joint_controller_{joint}" if joint in JOINT_NAMES else "joint_controller")
         p = declare(self, {"config_file": "", "joint": "", "controller": "dnbs", "reliability": "reliable",
                            "queue_depth": 10, "stats_file": "", "checkpoint_file": "", "resume": False,
                            "incarnation": 0, "effort_subscribers": 1, "match_timeout_s": 10.0, "init_file": "",
@@ -149,7 +154,7 @@ class JointControllerNode(Node):
         self._link = links_from_config(cfg, "effort", index, self._pub.publish, self.torque_limit)
         self._offered_at = time.monotonic()
         self._match_timer = self.create_timer(0.005, self._check_matched)
-        print(f"OFFERED joint_controller {self.joint} {effort_topic(self.joint)}", flush=True)
+        print(f"OFFERED joint_controller {self.joint} {self._pub.topic_name}", flush=True)
 
     def _check_matched(self) -> None:
         """Release the held answers once every expected subscriber has matched the effort publisher."""
@@ -158,7 +163,7 @@ class JointControllerNode(Node):
         if n < self.p["effort_subscribers"] and waited < self.p["match_timeout_s"]:
             return
         if n < self.p["effort_subscribers"]:
-            self.get_logger().warning(f"{effort_topic(self.joint)}: {n} of {self.p['effort_subscribers']} "
+            self.get_logger().warning(f"{self._pub.topic_name}: {n} of {self.p['effort_subscribers']} "
                                       f"subscribers after {waited:.1f} s; publishing anyway")
         self.destroy_timer(self._match_timer)
         self._matched = True
@@ -215,7 +220,7 @@ class JointControllerNode(Node):
         return c
 
     def _status(self):
-        return status(f"pa10/joint_controller/{self.joint}", f"joint_controller_{self.joint}", self.counters(),
+        return status(status_name(self, "joint_controller", self.joint), self.get_name(), self.counters(),
                       FAULT_KEYS)
 
     def close(self) -> None:
@@ -236,11 +241,11 @@ class JointControllerNode(Node):
         print(f"STATS joint_controller {self.joint}: " + ", ".join(f"{k} {v}" for k, v in counters.items())
               + f", waiting for references {len(loop.pending_steps)}, reference steps buffered "
               f"{loop.reference_span}", flush=True)
-        print(self.cpu.line(f"joint_controller_{self.joint}"), flush=True)
+        print(self.cpu.line(self.get_name()), flush=True)
 
 
 def main(args=None) -> int:
-    return run_node(JointControllerNode, args)
+    return run_node(functools.partial(JointControllerNode, args), args)
 
 
 if __name__ == "__main__":

@@ -17,6 +17,23 @@ def declare(node: Node, defaults: dict) -> dict:
     return {name: node.get_parameter(name).value for name in defaults}
 
 
+def cli_parameter(argv, name: str) -> str | None:
+    """The value of ``-p name:=value`` (or ``--param``) among the ROS arguments of ``argv``, else None (what a
+    node needs before it exists, e.g. for its name; a params file is not read here)."""
+    in_ros = False
+    argv = list(argv)
+    for i, a in enumerate(argv):
+        if a == "--ros-args":
+            in_ros = True
+        elif a == "--":
+            in_ros = False
+        elif in_ros and a in ("-p", "--param") and i + 1 < len(argv):
+            key, sep, value = argv[i + 1].partition(":=")
+            if sep and key == name:
+                return value.strip("'\"")
+    return None
+
+
 def load_node_config(path: str) -> dict:
     """The numeric config (config/*.yaml) a node runs with; '' means the shipped default."""
     try:

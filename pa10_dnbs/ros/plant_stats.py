@@ -14,7 +14,7 @@ import time
 
 from .. import JOINT_NAMES
 from ..loop.plant_timing import step_ranges
-from .diagnostics import status
+from .diagnostics import status, status_name
 
 FAULT_KEYS = ("effort_timeouts", "nonfinite_efforts", "out_of_range_efforts", "malformed_efforts")
 MAX_RANGES = 100  # miss ranges kept per joint in the stats file
@@ -32,7 +32,7 @@ def joint_counters(node, i: int) -> dict:
 
 
 def diagnostics_report(node) -> list:
-    return [status(f"pa10/plant/{name}", "plant", joint_counters(node, i), FAULT_KEYS)
+    return [status(status_name(node, "plant", name), node.get_name(), joint_counters(node, i), FAULT_KEYS)
             for i, name in enumerate(JOINT_NAMES)]
 
 

@@ -1,10 +1,11 @@
 """The plant's wire I/O: what it publishes each step and how it takes the efforts.
 
-Publishes /robot_description (the URDF, transient-local), /clock,
-/joint_states (all 7: position, velocity, and as effort the torque applied
-over the step that led to this state) and per joint /pa10/<joint>/state
+Names relative to the node's namespace (/pa10 by default, wire/topics.py).
+Publishes robot_description (the URDF, transient-local), /clock,
+joint_states (all 7: position, velocity, and as effort the torque applied
+over the step that led to this state) and per joint <joint>/state
 (that joint only, stamped k T), through each joint's fault-injecting state
-link when ``faults.state`` configures one. The seven /pa10/<joint>/effort
+link when ``faults.state`` configures one. The seven <joint>/effort
 subscriptions are polled (``polled.py``): the plant blocks on one wait set
 over them and takes every effort that is there at once, so it wakes once
 per batch of efforts, not once per effort. Decoded efforts come out

@@ -7,6 +7,10 @@ the bag. Log time is the latest /clock (``time_source: clock``, what
 ``--use-sim-time`` gives) or the system clock. It also writes /tf (at
 ``tf_rate_hz`` of simulated time) and /tf_static from /joint_states and the
 URDF's forward kinematics, since tf2_msgs has no Python wheel here.
+Topic names are recorded resolved (absolute); a relative name in ``topics``
+is resolved in the recorder's namespace, whose arm (``/pa10`` when the
+recorder runs at the root) gives the joint_states and reference topics /tf
+and PROGRESS are computed from.
 On SIGINT/SIGTERM it takes what is still queued, then closes the bag
 (summary + metadata.yaml). It prints ``PROGRESS k`` (the step of
 /joint_states) now and then and, with ``end_stamp_ns`` >= 0, ``COMPLETE``
@@ -33,14 +37,14 @@ from ..kinematics.urdf_chain import UrdfChain
 from ..wire import joint_state_cdr
 from ..wire.reference_buffer import ReferenceBuffer
 from ..wire.steps import StepClock, cdr_stamp_ns, to_ns
-from ..wire.topics import reference_topic
+from ..wire.topics import DEFAULT_NS, ArmTopics, resolve
 from .bag_qos import bag_qos, subscription_qos, to_bag_qos
 from ..loop.cpu_meter import CpuMeter
 from .msg_types import message_class
 from .params import ParameterError, check_choice, declare, load_node_config
 from .polled import Inbox
 from .runtime import announce_ready, run_node, spin_until
-from .wire import CLOCK, JOINT_STATES, TF, TF_STATIC
+from .wire import CLOCK, TF, TF_STATIC
 
 # types whose CDR body starts with a stamp (header.stamp, or the Clock's time)
 # (/diagnostics is stamped too, but on a wall-clock timer: it says nothing about completeness)
@@ -51,12 +55,12 @@ DRAIN_IDLE_S = 0.3   # at stop: take queued messages until none came for this lo
 DRAIN_LIMIT_S = 5.0
 
 
-def parse_topic_spec(spec: str) -> tuple[str, str | None]:
-    """'/name' or '/name:pkg/msg/Type' -> (name, type or None)."""
+def parse_topic_spec(spec: str, ns: str = DEFAULT_NS) -> tuple[str, str | None]:
+    """'name' or 'name:pkg/msg/Type' -> (absolute name, type or None); a relative name is resolved in ``ns``."""
     name, _, type_name = spec.partition(":")
-    if not name.startswith("/"):
-        raise ParameterError(f"topic {name!r}: give the full name, starting with '/'")
-    return name, type_name or None
+    if not name or name.endswith("/") or "//" in name:
+        raise ParameterError(f"topic {name!r} is not a topic name")
+    return resolve(name, ns), type_name or None
 
 
 class RecorderNode(Node):
@@ -73,7 +77,9 @@ class RecorderNode(Node):
             raise ParameterError(f"parameter poll_period_s must be > 0 s, got {p['poll_period_s']}")
         if p["time_source"] not in ("clock", "system"):
             raise ParameterError(f"parameter time_source must be clock or system, got {p['time_source']!r}")
-        specs = [parse_topic_spec(s) for s in p["topics"] if s]
+        ns = self.get_namespace()
+        self.arm = ArmTopics(ns if ns != "/" else DEFAULT_NS)
+        specs = [parse_topic_spec(s, self.arm.ns) for s in p["topics"] if s]
         if not specs and not p["all_topics"]:
             raise ParameterError("give parameter topics (a list of /names) or all_topics:=true")
         self.p = p
@@ -101,7 +107,7 @@ class RecorderNode(Node):
         check_choice("compression", p["compression"], COMPRESSIONS)
         # x_d from the reference batches, for the worst |e| on PROGRESS lines (sampled at tf_rate_hz)
         self.refs = ReferenceBuffer(len(JOINT_NAMES), StepClock(cfg["simulation"]["dt_s"]))
-        self._ref_joint = {reference_topic(j): i for i, j in enumerate(JOINT_NAMES)}
+        self._ref_joint = {self.arm.reference(j): i for i, j in enumerate(JOINT_NAMES)}
         self.writer = BagWriter(Path(p["bag"]), force=p["force"], custom_data=custom, compression=p["compression"])
         self.cpu = CpuMeter()
         self.inbox = Inbox(self, p["poll_period_s"])
@@ -143,7 +149,7 @@ class RecorderNode(Node):
         t_ns = self.now_ns if self.p["time_source"] == "clock" else time.time_ns()
         self.writer.write(topic, t_ns, data)
         self.received += 1
-        if topic == JOINT_STATES:
+        if topic == self.arm.joint_states:
             self._on_joint_states(data, t_ns)
         elif topic in self._ref_joint and self.chain is not None:
             self.refs.add_cdr(self._ref_joint[topic], data)

@@ -1,6 +1,6 @@
 """reference_node: publishes each joint's desired trajectory (eq. 27, Table 1) ahead of time.
 
-On /pa10/<joint>/reference (trajectory_msgs/JointTrajectory, one joint,
+On <ns>/<joint>/reference (<ns>: the arm's namespace, /pa10 by default; trajectory_msgs/JointTrajectory, one joint,
 reliable + transient-local) in batches of ``batch_steps`` points; header.stamp
 is the time of the first point, time_from_start counts from it. Paced by
 /clock: it keeps at least ``lookahead_steps`` published beyond the current step
@@ -22,7 +22,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from .. import JOINT_NAMES
 from ..controller_factory import build_reference
-from .diagnostics import DiagnosticsReporter, status
+from .diagnostics import DiagnosticsReporter, status, status_name
 from .params import ParameterError, declare, load_node_config
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
@@ -85,7 +85,7 @@ class ReferenceNode(Node):
     def _diagnostics(self) -> list:
         counters = {"clock_messages": self.clock_messages, "clock_backwards": self.clock_backwards,
                     "clock_step": self.clock_step, "published_through_step": self.published_until - 1}
-        return [status("pa10/reference", "reference", counters, FAULT_KEYS)]
+        return [status(status_name(self, "reference"), self.get_name(), counters, FAULT_KEYS)]
 
     def _publish_through(self, last_step: int) -> None:
         if self.last_step is not None:
