@@ -36,7 +36,7 @@ def _launch(args: argparse.Namespace) -> int:
                       restart=args.restart, netns=args.netns, init_from=args.init_from,
                       bag_compression=args.bag_compression, live_port=args.live, live_host=args.live_host,
                       live_hz=args.live_hz, real_time_factor=args.rtf, deadline_fraction=args.deadline_fraction,
-                      rt_priority=args.rt_priority, namespace=args.namespace)
+                      rt_priority=args.rt_priority, namespace=args.namespace, clock_hz=args.clock_hz)
 
 
 def _study(args: argparse.Namespace) -> int:
@@ -113,6 +113,9 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--namespace", default="/pa10", metavar="NS",
                     help="the arm's ROS namespace (default /pa10): every node runs in it, its topics are NS/s1/state, "
                          "NS/joint_states, ...; /clock, /tf, /tf_static, /diagnostics stay global")
+    la.add_argument("--clock-hz", type=float, default=100.0, metavar="HZ",
+                    help="/clock rate in Hz of simulated time (default 100, as `ros2 bag play --clock`); every node "
+                         "but the plant runs with use_sim_time:=true")
     la.add_argument("--domain-id", type=int, default=None, help="ROS_DOMAIN_ID (default: a free one, leased for the run so concurrent runs never share it)")
     la.add_argument("--reliability", choices=("reliable", "best_effort"), default=None,
                     help="QoS of the per-joint state/effort topics (default: best_effort with depth 1 in "

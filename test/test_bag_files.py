@@ -93,8 +93,9 @@ def test_writer_refuses_an_existing_path_without_force(tmp_path):
 
 
 def test_a_complete_run_bag_analyses(tmp_path):
-    """The baseline for the corruption tests below: undamaged, the same bag analyses with exit 0."""
-    r = _analyse(_write_run_bag(tmp_path / "b"), tmp_path)
+    """The baseline for the corruption tests below: undamaged, the same bag analyses with exit 0 (the current
+    layout, /pa10/joint_states; the corruption tests use old bags)."""
+    r = _analyse(_write_run_bag(tmp_path / "b", ns="/pa10"), tmp_path)
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "out" / "metrics.json").is_file()
 
@@ -151,18 +152,18 @@ def test_bag_missing_the_needed_topics(tmp_path):
     _assert_clear_error(_analyse(bag, tmp_path), "needs topics", "/pa10/joint_states", "/pa10/s1/reference")
 
 
-def test_analyse_finds_the_arm_under_any_namespace_and_in_old_bags(tmp_path):
-    """The same run recorded under /arm2 (new layout) and with /joint_states at the root (old bags) gives the
-    same metrics; a bag whose joint_states and references are in different namespaces is refused."""
-    import json
+def test_analysis_finds_the_arm_under_any_namespace_and_in_old_bags(tmp_path):
+    """The same run recorded under /lab/arm2 and in the old layout (/joint_states at the root) reads back the
+    same; a bag whose joint_states and references are in different namespaces is refused."""
+    from pa10_dnbs.bag.analysis import bag_arm, wire_record_from_bag
 
-    old = _write_run_bag(tmp_path / "old", n=300)
-    new = _write_run_bag(tmp_path / "new", n=300, ns="/lab/arm2")
-    for bag in (old, new):
-        r = run_cli("analyse", bag, "--out", tmp_path / f"out_{bag.name}")
-        assert r.returncode in (0, 1) and "Traceback" not in r.stderr, r.stderr
-    a, b = (json.loads((tmp_path / f"out_{n}" / "metrics.json").read_text()) for n in ("old", "new"))
-    assert a["joints"] == b["joints"] and a["worst_rms_error_rad"] == b["worst_rms_error_rad"]
+    runs = []
+    for name, ns in (("old", None), ("new", "/lab/arm2")):
+        with Bag(_write_run_bag(tmp_path / name, n=100, ns=ns)) as b:
+            assert bag_arm(b).joint_states == ("/joint_states" if ns is None else f"{ns}/joint_states")
+            runs.append(wire_record_from_bag(b, 1e-3, None).run_data("dnbs", JOINT_NAMES, [1.0] * 7, 1.0))
+    for field in ("position_rad", "velocity_rad_s", "reference_rad", "torque_nm"):
+        assert np.array_equal(getattr(runs[0], field), getattr(runs[1], field)), field
     w = BagWriter(tmp_path / "mixed")
     w.add_topic("/arm3/joint_states", "sensor_msgs/msg/JointState", [QOS])
     w.write("/arm3/joint_states", 0, joint_state_cdr.encode(0, 0, list(JOINT_NAMES), [0.0] * 7, [0.0] * 7, [0.0] * 7))
@@ -205,7 +206,7 @@ def test_launcher_rejects_a_lockstep_bag_that_lost_messages(tmp_path, cfg):
     assert missing is None and run.n_steps == 300
     stats = {"joints": [{"timeout_ranges": []} for _ in JOINT_NAMES]}
     _, missing = _bag_run(bag, 1e-3, 300, "dnbs", cfg, 1.0, lockstep_stats=stats)
-    assert "/pa10/s1/effort lacks 300 steps (first 0)" in missing and "/clock lacks 301 steps" in missing
+    assert "/pa10/s1/effort lacks 300 steps (first 0)" in missing and "/clock lacks 31 steps" in missing  # 100 Hz: steps 0, 10, ..., 300
     assert "/joint_states" not in missing  # that one is complete
     new = _write_run_bag(tmp_path / "new", n=300, ns="/arm2")
     _, missing = _bag_run(new, 1e-3, 300, "dnbs", cfg, 1.0, lockstep_stats=stats)

@@ -24,6 +24,7 @@ from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..wire.wire_record import load_wire_run
 from ..wire.steps import StepClock
+from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, ClockSchedule, check_clock_hz
 from ..wire.topics import CLOCK, DEFAULT_NS, ArmTopics, check_namespace
 
 
@@ -34,7 +35,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                netns: list[str] | None = None, init_from: Path | None = None, bag_compression: str = "zstd",
                live_port: int | None = None, live_host: str = "127.0.0.1", live_hz: float = 50.0,
                real_time_factor: float = 1.0, deadline_fraction: float = 0.9, rt_priority: int = 0,
-               namespace: str = DEFAULT_NS) -> int:
+               namespace: str = DEFAULT_NS, clock_hz: float = DEFAULT_CLOCK_HZ) -> int:
     """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code.
 
     ``fault_args``: the parsed fault flags (launch/fault_flags.py) applied to the config; the config the
@@ -46,6 +47,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     ``real_time_factor``, ``deadline_fraction``: realtime pacing (docs/timing.md); ``rt_priority``: SCHED_FIFO
     priority of plant and controllers (0: off). ``reliability`` None: the mode's default QoS.
     ``namespace``: the arm's ROS namespace (every node runs in it; /clock, /tf, /diagnostics stay global).
+    ``clock_hz``: /clock rate [Hz of simulated time], > 0 (the reference node is paced by /clock).
     """
     config_path = Path(config_path).resolve() if config_path else default_config_path()
     cfg = load_config(config_path)
@@ -75,6 +77,12 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     except ValueError:
         raise ConfigError(f"--rt-priority: must be 0 (off) or 1..99, got {rt_priority}") from None
     dt = cfg["simulation"]["dt_s"]
+    try:
+        check_clock_hz(clock_hz, dt)
+        if clock_hz == 0:
+            raise ValueError("must be > 0 Hz: the reference node is paced by /clock")
+    except ValueError as exc:
+        raise ConfigError(f"--clock-hz: {exc}") from None
     n_steps = int(round(duration_s / dt))
     if n_steps < 2:
         raise ConfigError(f"--duration: {duration_s} s is shorter than two steps of {dt} s")
@@ -102,7 +110,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                        force_bag=force, restart=restart, netns=namespaces, init_from=init_from,
                        bag_compression=bag_compression, live_port=live_port, live_host=live_host, live_hz=live_hz,
                        real_time_factor=real_time_factor, deadline_fraction=deadline_fraction,
-                       rt_priority=rt_priority, namespace=namespace)
+                       rt_priority=rt_priority, namespace=namespace, clock_hz=clock_hz)
     reliability = loop_reliability(opt)
     settings = metrics_settings(cfg, n_steps * dt)
     window = settings["window_s"]
@@ -119,7 +127,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                 source = f"the wire monitor's record of {ArmTopics(namespace).joint_states} and the reference topics"
             else:
                 run, missing = _bag_run(record, dt, n_steps, controller, cfg, stats["wall_time_s"],
-                                        lockstep_stats=stats if mode == "lockstep" else None)
+                                        lockstep_stats=stats if mode == "lockstep" else None, clock_hz=clock_hz)
                 source = f"the bag's {ArmTopics(namespace).joint_states} and reference topics ({record})"
             if missing:
                 raise GraphFailure(f"the record of the run is incomplete: {missing}")
@@ -161,12 +169,12 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
 
 
 def _bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, cfg: dict, wall_time_s: float,
-             lockstep_stats: dict | None):
+             lockstep_stats: dict | None, clock_hz: float = DEFAULT_CLOCK_HZ):
     """(RunData, what is missing or None) rebuilt from the bag just recorded; a bad bag is a failed run.
 
     With ``lockstep_stats`` (the plant's stats of a lockstep run) every step 0..n_steps must be in the bag
-    on /clock, the arm's joint_states and each joint's state topic, and on each effort topic except the steps the
-    plant filled in after a timeout. (Resent states and repeated answers add messages; none may be lost.)
+    on the arm's joint_states and each joint's state topic, and on each effort topic except the steps the
+    plant filled in after a timeout; /clock must hold the steps of ``ClockSchedule`` at ``clock_hz``. (Resent states and repeated answers add messages; none may be lost.)
     """
     clock = StepClock(dt)
     try:
@@ -188,7 +196,9 @@ def _bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, cfg: dict
     everything = set(range(n_steps + 1))
     for topic, seen in steps.items():
         expected = everything
-        if topic.endswith("/effort"):
+        if topic == CLOCK:
+            expected = ClockSchedule.steps(clock_hz, dt, n_steps)
+        elif topic.endswith("/effort"):
             joint = JOINT_NAMES.index(topic.split("/")[-2])
             filled = {k for a, b in lockstep_stats["joints"][joint]["timeout_ranges"] for k in range(a, b + 1)}
             expected = everything - filled - {n_steps}  # the answer to the last state may come after the end

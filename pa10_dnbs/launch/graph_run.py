@@ -11,6 +11,7 @@ LTTng-UST wait files) can be removed.
 from __future__ import annotations
 
 import json
+import math
 import os
 import signal
 import sys
@@ -20,6 +21,7 @@ from pathlib import Path
 
 from .. import JOINT_NAMES
 from ..wire.topics import CLOCK, DEFAULT_NS, DIAGNOSTICS, ArmTopics
+from ..wire.clock_schedule import DEFAULT_CLOCK_HZ
 from .domain_ids import lease_domain
 from .processes import ManagedProcess, stop_all
 from .shm_cleanup import remove_stale, shm_files
@@ -61,6 +63,7 @@ class GraphOptions:
     live_host: str = "127.0.0.1"
     live_hz: float = 50.0            # live view frames per second of wall time, at most
     namespace: str = DEFAULT_NS      # the arm's ROS namespace: every node runs in it (topics relative to it)
+    clock_hz: float = DEFAULT_CLOCK_HZ  # /clock rate [Hz of simulated time]; every node but the plant uses it
 
 
 @dataclass
@@ -144,6 +147,13 @@ def loop_reliability(opt: GraphOptions) -> str:
     return "best_effort" if opt.mode == "realtime" else "reliable"
 
 
+def reference_lookahead(opt: GraphOptions) -> int:
+    """Steps the reference node keeps published beyond the latest /clock: 150, or more when /clock comes less
+    often than every 100 steps (the plant must never need a reference past the next /clock)."""
+    every = math.ceil(1.0 / (opt.clock_hz * opt.dt_s) - 1e-9)
+    return max(150, every + 50)
+
+
 def _yaml_list(items: list[str]) -> str:
     return "[" + ",".join(f"'{i}'" for i in items) + "]"
 
@@ -156,7 +166,8 @@ def controller_command(opt: GraphOptions, workdir: Path, joint: str, incarnation
               "rt_priority": opt.rt_priority,
               "stats_file": str(workdir / f"controller_{joint}.json"), "incarnation": incarnation,
               "resume": str(incarnation > 0 and opt.restart != "fresh").lower(),
-              "effort_subscribers": 1 + int(opt.record_bag is not None)}  # the plant and the recorder
+              "effort_subscribers": 1 + int(opt.record_bag is not None),  # the plant and the recorder
+              "use_sim_time": "true"}
     if opt.controller == "dnbs":
         params["checkpoint_file"] = str(workdir / "checkpoints" / f"{joint}.npz")
         if opt.init_from is not None:
@@ -171,7 +182,7 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
     py = [sys.executable, "-m"]
 
     def ros(node: str, params: dict) -> list[str]:
-        return _ros_args(node, params, opt.namespace)
+        return _ros_args(node, {**params, "use_sim_time": "true"}, opt.namespace)
 
     cfg = str(opt.config_path)
     if opt.record_bag is None:
@@ -180,7 +191,8 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
     else:  # the recorder is the observer: the run is rebuilt from the bag
         end_ns = int(round(opt.duration_s / opt.dt_s)) * int(round(opt.dt_s * 1e9))
         custom = [f"controller={opt.controller}", f"mode={opt.mode}", f"duration_s={opt.duration_s!r}",
-                  f"reliability={loop_reliability(opt)}", f"config_file={cfg}"]
+                  f"reliability={loop_reliability(opt)}", f"config_file={cfg}", f"clock_hz={opt.clock_hz!r}",
+                  f"namespace={opt.namespace}"]
         cmds = [("recorder", py + ["pa10_dnbs.ros.recorder_node"] + ros("recorder", {
             "config_file": cfg, "bag": str(opt.record_bag), "force": str(opt.force_bag).lower(),
             "topics": _yaml_list(graph_topics(opt.namespace)), "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns,
@@ -192,16 +204,17 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
     # deadline; lockstep keeps 100 points per message (fewer messages, and timing does not matter there)
     batch = REALTIME_REFERENCE_BATCH if opt.mode == "realtime" else 100
     cmds.append(("reference", py + ["pa10_dnbs.ros.reference_node"] + ros(
-        "reference", {"config_file": cfg, "duration_s": opt.duration_s, "batch_steps": batch})))
+        "reference", {"config_file": cfg, "duration_s": opt.duration_s, "batch_steps": batch,
+                      "lookahead_steps": reference_lookahead(opt)})))
     for j in JOINT_NAMES:
         cmds.append((f"joint_controller_{j}", controller_command(opt, stats_file.parent, j)))
-    cmds.append(("plant", py + ["pa10_dnbs.ros.plant_node"] + ros("plant", {
+    cmds.append(("plant", py + ["pa10_dnbs.ros.plant_node"] + _ros_args("plant", {
         "config_file": cfg, "mode": opt.mode, "duration_s": opt.duration_s, "reliability": loop_reliability(opt),
         "effort_timeout_s": opt.effort_timeout_s, "on_missing_effort": opt.on_missing_effort,
         "real_time_factor": opt.real_time_factor, "deadline_fraction": opt.deadline_fraction,
         "rt_priority": opt.rt_priority,
         "stats_file": str(stats_file), "min_joint_states_subscribers": int(opt.record_bag is None),
-        "recorders": int(opt.record_bag is not None)})))
+        "recorders": int(opt.record_bag is not None), "clock_hz": opt.clock_hz}, opt.namespace)))
     return cmds
 
 

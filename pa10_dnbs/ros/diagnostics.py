@@ -13,6 +13,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from ..wire.topics import DIAGNOSTICS
+from .wall_timer import wall_timer
 
 PERIOD_S = 1.0  # wall seconds between reports
 
@@ -44,7 +45,7 @@ class DiagnosticsReporter:
         """``report()`` -> list[DiagnosticStatus]; ``stamp()`` -> builtin_interfaces Time (simulated)."""
         self._pub = node.create_publisher(DiagnosticArray, DIAGNOSTICS, diagnostics_qos())
         self._report, self._stamp = report, stamp
-        self.timer = node.create_timer(PERIOD_S, self.publish)
+        self.timer = wall_timer(node, PERIOD_S, self.publish)
 
     def publish(self) -> None:
         msg = DiagnosticArray(status=self._report())

@@ -50,6 +50,7 @@ from ..loop.rt_priority import apply_fifo, check_priority
 from .params import ParameterError, check_choice, cli_parameter, declare, load_node_config
 from .runtime import announce_ready, run_node
 from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
+from .wall_timer import wall_timer
 
 FAULT_KEYS = ("bad_states_nonfinite", "bad_states_position", "bad_states_speed", "nonfinite_torques",
               "ekf_resets_alpha", "ekf_resets_torque", "malformed_states")
@@ -153,7 +154,7 @@ class JointControllerNode(Node):
         self._pub = self.create_publisher(JointState, effort_topic(self.joint), qos)
         self._link = links_from_config(cfg, "effort", index, self._pub.publish, self.torque_limit)
         self._offered_at = time.monotonic()
-        self._match_timer = self.create_timer(0.005, self._check_matched)
+        self._match_timer = wall_timer(self, 0.005, self._check_matched)
         print(f"OFFERED joint_controller {self.joint} {self._pub.topic_name}", flush=True)
 
     def _check_matched(self) -> None:

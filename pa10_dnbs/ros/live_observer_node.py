@@ -35,6 +35,7 @@ from .params import ParameterError, declare, load_node_config
 from .runtime import announce_ready, run_node
 from ..wire.topics import DEFAULT_NS, DIAGNOSTICS, ArmTopics
 from .wire import description_qos, reference_qos
+from .wall_timer import wall_timer
 
 
 def newest_only_qos() -> QoSProfile:
@@ -76,7 +77,7 @@ class LiveObserverNode(Node):
             t = arm.reference(j)
             self.create_subscription(JointTrajectory, t, lambda d, t=t: feed(t, d), reference_qos(),
                                      raw=True)
-        self.create_timer(1.0 / p["display_hz"], self._frame)
+        wall_timer(self, 1.0 / p["display_hz"], self._frame)
         self._t0 = time.monotonic()
         print(f"LIVE {self.server.url}", flush=True)
         announce_ready("live_view")

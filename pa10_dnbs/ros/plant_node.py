@@ -13,6 +13,10 @@ paces the steps (``mode``):
   the tick are applied, a missing one is held or zeroed and counted as a
   miss; late tick starts are counted and not caught up.
 
+/clock goes out with the states of ``wire/clock_schedule.py``: one per
+1 / ``clock_hz`` of simulated time (default 100 Hz, as ``ros2 bag play
+--clock``; 0: none). The plant itself runs on wall time (no use_sim_time).
+
 Defensive: a non-finite effort counts as missing (hold or zero, counted), an
 out-of-range one is saturated at Table 2 and counted. Faults configured in
 ``faults.state`` are injected on each joint's state link. Fault counters go
@@ -36,6 +40,7 @@ from ..loop.effort_gate import EffortGate
 from ..loop.plant_timing import PlantTiming
 from ..loop.rt_priority import apply_fifo, check_priority
 from ..plant.from_config import open_client, plant_from_config
+from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, check_clock_hz
 from .diagnostics import DiagnosticsReporter
 from .params import ParameterError, check_choice, declare, load_node_config
 from .plant_lockstep import run_lockstep
@@ -55,7 +60,7 @@ class PlantNode(Node):
             "min_joint_states_subscribers": 0, "start_timeout_s": 30.0, "settle_s": 0.3,
             "state_subscribers": 1, "clock_subscribers": 1, "recorders": 0, "effort_queue_depth": 1000,
             "real_time_factor": 1.0, "deadline_fraction": 0.9, "late_tolerance": 0.1, "rt_priority": 0,
-            "warn_period_s": 1.0, "handshake_steps": 3,
+            "warn_period_s": 1.0, "handshake_steps": 3, "clock_hz": DEFAULT_CLOCK_HZ,
         })
         check_choice("mode", p["mode"], ("lockstep", "realtime"))
         check_choice("on_missing_effort", p["on_missing_effort"], ("hold", "zero"))
@@ -77,6 +82,10 @@ class PlantNode(Node):
         self.p = p
         cfg = load_node_config(p["config_file"])
         self.dt = cfg["simulation"]["dt_s"]
+        try:
+            check_clock_hz(p["clock_hz"], self.dt)
+        except ValueError as exc:
+            raise ParameterError(f"parameter clock_hz {exc}") from None
         duration = p["duration_s"] if p["duration_s"] > 0 else cfg["simulation"]["duration_s"]
         self.n_steps = int(round(duration / self.dt))
         self.clock_ = StepClock(self.dt)
@@ -88,7 +97,8 @@ class PlantNode(Node):
         # history, so a recorder that falls behind for a while still gets every message.
         self.wire = PlantWire(self, cfg, self.clock_, p["reliability"],
                               state_depth=1 if realtime else record_qos().depth,
-                              effort_depth=1 if realtime else p["effort_queue_depth"])
+                              effort_depth=1 if realtime else p["effort_queue_depth"], clock_hz=p["clock_hz"],
+                              last_step=self.n_steps)
         self.timing = PlantTiming(self.n_steps, len(JOINT_NAMES))
         self.cpu = CpuMeter()
         self.resends = [0] * len(JOINT_NAMES)

@@ -4,7 +4,8 @@ Like ``ros2 bag record``: each topic is subscribed (raw, no deserialising)
 once a publisher is discovered, with reliable / transient-local QoS only if
 every publisher offers it, and the publishers' offered QoS profiles go into
 the bag. Log time is the latest /clock (``time_source: clock``, what
-``--use-sim-time`` gives) or the system clock. It also writes /tf (at
+``--use-sim-time`` gives: in steps of 1 / clock_hz, 10 ms at the default
+100 Hz; the stamps inside the messages keep every step) or the system clock. It also writes /tf (at
 ``tf_rate_hz`` of simulated time) and /tf_static from /joint_states and the
 URDF's forward kinematics, since tf2_msgs has no Python wheel here.
 Topic names are recorded resolved (absolute); a relative name in ``topics``
@@ -45,6 +46,7 @@ from .params import ParameterError, check_choice, declare, load_node_config
 from .polled import Inbox
 from .runtime import announce_ready, run_node, spin_until
 from .wire import CLOCK, TF, TF_STATIC
+from .wall_timer import wall_timer
 
 # types whose CDR body starts with a stamp (header.stamp, or the Clock's time)
 # (/diagnostics is stamped too, but on a wall-clock timer: it says nothing about completeness)
@@ -112,7 +114,7 @@ class RecorderNode(Node):
         self.cpu = CpuMeter()
         self.inbox = Inbox(self, p["poll_period_s"])
         self._discover()
-        self._timer = self.create_timer(0.2, self._discover)
+        self._timer = wall_timer(self, 0.2, self._discover)
         announce_ready("recorder")
 
     # ------------------------------------------------------------- discovery

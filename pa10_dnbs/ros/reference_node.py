@@ -3,7 +3,9 @@
 On <ns>/<joint>/reference (<ns>: the arm's namespace, /pa10 by default; trajectory_msgs/JointTrajectory, one joint,
 reliable + transient-local) in batches of ``batch_steps`` points; header.stamp
 is the time of the first point, time_from_start counts from it. Paced by
-/clock: it keeps at least ``lookahead_steps`` published beyond the current step
+/clock (the plant's, 100 Hz of simulated time by default): it keeps at least
+``lookahead_steps`` published beyond the latest /clock step, which must cover
+the steps between two /clock messages (the launcher sees to it)
 (and, given ``duration_s``, stops lookahead_steps past the run's last step).
 Reports on /diagnostics the /clock messages it saw and those that went back
 in time (a fault: the reference it already sent cannot be taken back).
