@@ -47,7 +47,7 @@ from .diagnostics import DiagnosticsReporter, status, status_name
 from ..loop.cpu_meter import CpuMeter
 from ..loop.joint_loop import JointLoop
 from ..loop.rt_priority import apply_fifo, check_priority
-from .params import ParameterError, check_choice, cli_parameter, declare, load_node_config
+from .params import CONFIG_FILE, Param, ParameterError, check_choice, cli_parameter, declare, load_node_config
 from .runtime import announce_ready, run_node
 from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
 from .wall_timer import wall_timer
@@ -56,15 +56,29 @@ FAULT_KEYS = ("bad_states_nonfinite", "bad_states_position", "bad_states_speed",
               "ekf_resets_alpha", "ekf_resets_torque", "malformed_states")
 
 
+PARAMS = {
+    "config_file": CONFIG_FILE,
+    "joint": Param("", "the joint: s1, s2, s3, e1, e2, w1 or w2 (required; names the node joint_controller_<joint>)"),
+    "controller": Param("dnbs", "dnbs or pid"),
+    "reliability": Param("reliable", "state/effort QoS: reliable or best_effort"),
+    "queue_depth": Param(10, "keep_last depth of the state subscription and effort publisher [messages]", 1),
+    "stats_file": Param("", "JSON file for the counters at exit; '' = none"),
+    "checkpoint_file": Param("", "DNBS weights and covariances, saved every checkpoint.period_s [.npz]; '' = none"),
+    "resume": Param(False, "start from checkpoint_file when it exists"),
+    "incarnation": Param(0, "0 = first start; n = the launcher's n-th restart", 0),
+    "effort_subscribers": Param(1, "subscriptions (plant and recorders) to wait for before answering", 1),
+    "match_timeout_s": Param(10.0, "wall time after which answers go out without them [s]", 0.0),
+    "init_file": Param("", "warm start: DNBS checkpoint of an earlier run [.npz]; '' = cold start"),
+    "rt_priority": Param(0, "SCHED_FIFO priority 1..99 where allowed; 0 = off", 0, 99),
+}
+
+
 class JointControllerNode(Node):
     def __init__(self, args=None):
         """``args``: the command line (default sys.argv); its ``-p joint:=J`` names the node joint_controller_J."""
         joint = cli_parameter(sys.argv if args is None else args, "joint")
         super().__init__(f"joint_controller_{joint}" if joint in JOINT_NAMES else "joint_controller")
-        p = declare(self, {"config_file": "", "joint": "", "controller": "dnbs", "reliability": "reliable",
-                           "queue_depth": 10, "stats_file": "", "checkpoint_file": "", "resume": False,
-                           "incarnation": 0, "effort_subscribers": 1, "match_timeout_s": 10.0, "init_file": "",
-                           "rt_priority": 0})
+        p = declare(self, PARAMS)
         if p["effort_subscribers"] < 1 or p["match_timeout_s"] <= 0:
             raise ParameterError("effort_subscribers must be >= 1 and match_timeout_s > 0 s")
         check_choice("joint", p["joint"], JOINT_NAMES)

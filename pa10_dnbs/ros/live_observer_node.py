@@ -31,7 +31,7 @@ from ..live.schemas import live_channels
 from ..live.server import LiveServer, LiveServerError
 from ..live.view import LiveView
 from .diagnostics import diagnostics_qos
-from .params import ParameterError, declare, load_node_config
+from .params import CONFIG_FILE, Param, ParameterError, declare, load_node_config
 from .runtime import announce_ready, run_node
 from ..wire.topics import DEFAULT_NS, DIAGNOSTICS, ArmTopics
 from .wire import description_qos, reference_qos
@@ -44,10 +44,18 @@ def newest_only_qos() -> QoSProfile:
                       durability=DurabilityPolicy.VOLATILE)
 
 
+PARAMS = {
+    "config_file": CONFIG_FILE,
+    "host": Param("127.0.0.1", "address the Foxglove WebSocket server listens on"),
+    "port": Param(8765, "its TCP port; 0 = any free port", 0, 65535),
+    "display_hz": Param(50.0, "frames per second of wall time, at most [Hz], in (0, 1000]", 0.0, 1000.0),
+}
+
+
 class LiveObserverNode(Node):
     def __init__(self):
         super().__init__("live_view")
-        p = declare(self, {"config_file": "", "host": "127.0.0.1", "port": 8765, "display_hz": 50.0})
+        p = declare(self, PARAMS)
         if not 0 <= p["port"] <= 65535:
             raise ParameterError(f"parameter port must be in 0..65535, got {p['port']}")
         if not 0 < p["display_hz"] <= 1000:

@@ -42,7 +42,7 @@ from ..loop.rt_priority import apply_fifo, check_priority
 from ..plant.from_config import open_client, plant_from_config
 from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, check_clock_hz
 from .diagnostics import DiagnosticsReporter
-from .params import ParameterError, check_choice, declare, load_node_config
+from .params import CONFIG_FILE, Param, ParameterError, check_choice, declare, load_node_config
 from .plant_lockstep import run_lockstep
 from .plant_realtime import run_realtime
 from .plant_stats import diagnostics_report, plant_stats
@@ -51,17 +51,37 @@ from .runtime import announce_ready
 from .wire import StepClock, record_qos
 
 
+PARAMS = {
+    "config_file": CONFIG_FILE,
+    "mode": Param("lockstep", "lockstep (step once every effort is in) or realtime (wall-clock ticks)"),
+    "duration_s": Param(0.0, "simulated time to run [s]; 0 = simulation.duration_s of the config", 0.0),
+    "clock_hz": Param(DEFAULT_CLOCK_HZ, "/clock rate [Hz of simulated time]; 0 = no /clock", 0.0, 1e6),
+    "effort_timeout_s": Param(1.0, "lockstep: wall time to wait for an effort before replacing it [s]", 0.0),
+    "resend_s": Param(0.25, "lockstep: wall time before a missing effort's state is sent again [s]", 0.0),
+    "on_missing_effort": Param("hold", "what replaces a missing effort: hold (last torque) or zero"),
+    "reliability": Param("", "per-joint state/effort QoS: reliable, best_effort; '' = the mode's default"),
+    "stats_file": Param("", "JSON file for timing figures and counters at exit; '' = none"),
+    "min_joint_states_subscribers": Param(0, "joint_states subscribers to wait for before stepping", 0),
+    "start_timeout_s": Param(30.0, "wall time to wait for the graph to be matched [s]", 0.0),
+    "settle_s": Param(0.3, "wall time to wait after the graph is matched [s]", 0.0),
+    "state_subscribers": Param(1, "subscribers of each <joint>/state to wait for (besides recorders)", 0),
+    "clock_subscribers": Param(1, "/clock subscribers to wait for (besides recorders)", 0),
+    "recorders": Param(0, "recorders to wait for on every topic", 0),
+    "effort_queue_depth": Param(1000, "lockstep: keep_last depth of the effort subscriptions [messages]", 1),
+    "real_time_factor": Param(1.0, "realtime: a step of dt takes dt / real_time_factor of wall time", 0.0, 100.0),
+    "deadline_fraction": Param(0.9, "realtime: efforts count within this fraction of the tick, in (0, 1]", 0.0, 1.0),
+    "late_tolerance": Param(0.1, "realtime: a tick starting later than this fraction of a tick is late, in [0, 1)",
+                            0.0, 1.0),
+    "rt_priority": Param(0, "SCHED_FIFO priority 1..99 where allowed; 0 = off", 0, 99),
+    "warn_period_s": Param(1.0, "wall time between two warnings of the same kind [s]", 0.0),
+    "handshake_steps": Param(3, "realtime: states sent before the clock starts, to prime the wire [steps]", 1),
+}
+
+
 class PlantNode(Node):
     def __init__(self):
         super().__init__("plant")
-        p = declare(self, {
-            "config_file": "", "mode": "lockstep", "duration_s": 0.0, "effort_timeout_s": 1.0,
-            "resend_s": 0.25, "on_missing_effort": "hold", "reliability": "", "stats_file": "",
-            "min_joint_states_subscribers": 0, "start_timeout_s": 30.0, "settle_s": 0.3,
-            "state_subscribers": 1, "clock_subscribers": 1, "recorders": 0, "effort_queue_depth": 1000,
-            "real_time_factor": 1.0, "deadline_fraction": 0.9, "late_tolerance": 0.1, "rt_priority": 0,
-            "warn_period_s": 1.0, "handshake_steps": 3, "clock_hz": DEFAULT_CLOCK_HZ,
-        })
+        p = declare(self, PARAMS)
         check_choice("mode", p["mode"], ("lockstep", "realtime"))
         check_choice("on_missing_effort", p["on_missing_effort"], ("hold", "zero"))
         realtime = p["mode"] == "realtime"

@@ -42,7 +42,7 @@ from ..wire.topics import DEFAULT_NS, ArmTopics, resolve
 from .bag_qos import bag_qos, subscription_qos, to_bag_qos
 from ..loop.cpu_meter import CpuMeter
 from .msg_types import message_class
-from .params import ParameterError, check_choice, declare, load_node_config
+from .params import CONFIG_FILE, Param, ParameterError, check_choice, declare, load_node_config
 from .polled import Inbox
 from .runtime import announce_ready, run_node, spin_until
 from .wire import CLOCK, TF, TF_STATIC
@@ -65,14 +65,26 @@ def parse_topic_spec(spec: str, ns: str = DEFAULT_NS) -> tuple[str, str | None]:
     return resolve(name, ns), type_name or None
 
 
+PARAMS = {
+    "bag": Param("", "the bag directory to write (required)"),
+    "force": Param(False, "replace an existing bag"),
+    "topics": Param([""], "topics to record: names, optionally name:pkg/msg/Type; relative ones in the namespace"),
+    "all_topics": Param(False, "record every topic discovered"),
+    "time_source": Param("clock", "log time: clock (latest /clock) or system (wall time)"),
+    "config_file": CONFIG_FILE,
+    "custom_data": Param([""], "key=value entries for the bag's custom_data"),
+    "tf_rate_hz": Param(100.0, "/tf written from joint_states at this rate [Hz of simulated time]; 0 = none", 0.0),
+    "end_stamp_ns": Param(-1, "print COMPLETE once every stamped topic reached this stamp [ns]; -1 = never", -1),
+    "qos_depth": Param(2000, "keep_last depth of each subscription [messages]", 1),
+    "compression": Param("zstd", "MCAP chunk compression: zstd or none"),
+    "poll_period_s": Param(0.01, "wall time between two drains of the subscriptions [s]", 0.0),
+}
+
+
 class RecorderNode(Node):
     def __init__(self):
         super().__init__("recorder")
-        p = declare(self, {
-            "bag": "", "force": False, "topics": [""], "all_topics": False, "time_source": "clock",
-            "config_file": "", "custom_data": [""], "tf_rate_hz": 100.0, "end_stamp_ns": -1, "qos_depth": 2000,
-            "compression": "zstd", "poll_period_s": 0.01,
-        })
+        p = declare(self, PARAMS)
         if not p["bag"]:
             raise ParameterError("parameter bag is required (the bag directory to write)")
         if not p["poll_period_s"] > 0:

@@ -25,7 +25,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from .. import JOINT_NAMES
 from ..controller_factory import build_reference
 from .diagnostics import DiagnosticsReporter, status, status_name
-from .params import ParameterError, declare, load_node_config
+from .params import CONFIG_FILE, Param, ParameterError, declare, load_node_config
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
 from .runtime import announce_ready, run_node
@@ -36,11 +36,19 @@ FAULT_KEYS = ("clock_backwards",)
 CLOCK_DEPTH = 1000  # /clock messages kept between two polls
 
 
+PARAMS = {
+    "config_file": CONFIG_FILE,
+    "batch_steps": Param(100, "reference points per message [steps]", 1),
+    "lookahead_steps": Param(150, "steps kept published beyond the latest /clock (> reference.preview_steps)", 1),
+    "duration_s": Param(0.0, "the run's simulated time [s]: nothing past its end + lookahead; 0 = open-ended", 0.0),
+    "poll_period_s": Param(0.01, "wall time between two drains of /clock [s]", 0.0),
+}
+
+
 class ReferenceNode(Node):
     def __init__(self):
         super().__init__("reference")
-        p = declare(self, {"config_file": "", "batch_steps": 100, "lookahead_steps": 150, "duration_s": 0.0,
-                           "poll_period_s": 0.01})
+        p = declare(self, PARAMS)
         cfg = load_node_config(p["config_file"])
         preview = cfg["reference"]["preview_steps"]
         if p["batch_steps"] < 1 or p["lookahead_steps"] <= preview:
