@@ -25,12 +25,10 @@ starts from that file when it exists. Counters go to ``stats_file`` (JSON).
 from __future__ import annotations
 
 import functools
-import json
 import os
 import signal
 import struct
 import sys
-import time
 from pathlib import Path
 
 from rclpy.node import Node
@@ -38,6 +36,7 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from .. import JOINT_NAMES
+from ..atomic_file import write_json
 from ..controller_factory import CONTROLLER_KINDS, build_guarded_controllers
 from ..core.checkpoint import load_checkpoint, save_checkpoint
 from ..faults.faulty_link import links_from_config
@@ -45,6 +44,7 @@ from ..wire import joint_state_cdr
 from ..wire.trajectory_cdr import decode_first_joint
 from .diagnostics import DiagnosticsReporter, status, status_name
 from ..loop.cpu_meter import CpuMeter
+from ..loop.endpoint_match import MatchWait, Need
 from ..loop.joint_loop import JointLoop
 from ..loop.rt_priority import apply_fifo, check_priority
 from .params import CONFIG_FILE, Param, ParameterError, check_choice, cli_parameter, declare, load_node_config
@@ -167,19 +167,19 @@ class JointControllerNode(Node):
         cfg, index, qos = self._effort_setup
         self._pub = self.create_publisher(JointState, effort_topic(self.joint), qos)
         self._link = links_from_config(cfg, "effort", index, self._pub.publish, self.torque_limit)
-        self._offered_at = time.monotonic()
+        self._match = MatchWait([Need(self._pub.topic_name, "subscribers", self.p["effort_subscribers"],
+                                      self._pub.get_subscription_count)], self.p["match_timeout_s"])
         self._match_timer = wall_timer(self, 0.005, self._check_matched)
         print(f"OFFERED joint_controller {self.joint} {self._pub.topic_name}", flush=True)
 
     def _check_matched(self) -> None:
         """Release the held answers once every expected subscriber has matched the effort publisher."""
-        n = self._pub.get_subscription_count()
-        waited = time.monotonic() - self._offered_at
-        if n < self.p["effort_subscribers"] and waited < self.p["match_timeout_s"]:
+        status = self._match.poll()
+        if status == "waiting":
             return
-        if n < self.p["effort_subscribers"]:
-            self.get_logger().warning(f"{self._pub.topic_name}: {n} of {self.p['effort_subscribers']} "
-                                      f"subscribers after {waited:.1f} s; publishing anyway")
+        if status == "timeout":
+            self.get_logger().warning(f"{'; '.join(self._match.lacking)} after {self._match.waited_s:.1f} s; "
+                                      "publishing anyway")
         self.destroy_timer(self._match_timer)
         self._matched = True
         held, self._held = self._held, []
@@ -248,10 +248,7 @@ class JointControllerNode(Node):
         counters["rt_priority_applied"] = self.rt_applied
         counters["cpu"] = self.cpu.report()
         if self.p["stats_file"]:
-            tmp = f"{self.p['stats_file']}.tmp"
-            with open(tmp, "w") as f:
-                json.dump(counters, f, indent=2)
-            os.replace(tmp, self.p["stats_file"])
+            write_json(self.p["stats_file"], counters)
         loop = self.loop_
         print(f"STATS joint_controller {self.joint}: " + ", ".join(f"{k} {v}" for k, v in counters.items())
               + f", waiting for references {len(loop.pending_steps)}, reference steps buffered "

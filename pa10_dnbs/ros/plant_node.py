@@ -25,9 +25,7 @@ to /diagnostics every second; timing figures and counters go to
 """
 from __future__ import annotations
 
-import json
 import math
-import os
 import sys
 import time
 
@@ -35,8 +33,10 @@ from rclpy.node import Node
 from rclpy.task import Future
 
 from .. import JOINT_NAMES
+from ..atomic_file import write_json
 from ..loop.cpu_meter import CpuMeter
 from ..loop.effort_gate import EffortGate
+from ..loop.endpoint_match import MatchWait
 from ..loop.plant_timing import PlantTiming
 from ..loop.rt_priority import apply_fifo, check_priority
 from ..plant.from_config import open_client, plant_from_config
@@ -158,18 +158,18 @@ class PlantNode(Node):
 
     def wait_for_graph(self, executor, stop: Future) -> bool:
         """Spin until every endpoint has matched, then ``settle_s``; False when stopped first."""
-        t0 = time.perf_counter()
         rec = self.p["recorders"]  # each recorder subscribes to every topic, efforts included
+        wait = MatchWait(self.wire.needs(self.p["state_subscribers"] + rec, self.p["clock_subscribers"] + rec,
+                                         self.p["min_joint_states_subscribers"] + rec, rec), self.p["start_timeout_s"])
         while not stop.done():
-            lacking = self.wire.lacking(self.p["state_subscribers"] + rec, self.p["clock_subscribers"] + rec,
-                                        self.p["min_joint_states_subscribers"] + rec, rec)
-            if not lacking:
+            status = wait.poll()
+            if status == "met":
                 settle_end = time.perf_counter() + self.p["settle_s"]
                 while time.perf_counter() < settle_end and not stop.done():
                     executor.spin_once(timeout_sec=0.02)
                 return not stop.done()
-            if time.perf_counter() - t0 > self.p["start_timeout_s"]:
-                raise RuntimeError("graph incomplete after start_timeout_s: " + "; ".join(lacking))
+            if status == "timeout":
+                raise RuntimeError("graph incomplete after start_timeout_s: " + "; ".join(wait.lacking))
             executor.spin_once(timeout_sec=0.05)
         return False
 
@@ -191,10 +191,7 @@ class PlantNode(Node):
         self.wire.close()
         path = self.p["stats_file"]
         if path:
-            tmp = f"{path}.tmp"
-            with open(tmp, "w") as f:
-                json.dump(self.stats(), f, indent=2)
-            os.replace(tmp, path)
+            write_json(path, self.stats())
         print(self.cpu.line("plant"), flush=True)
         self._client.disconnect()
 

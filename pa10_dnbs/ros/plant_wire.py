@@ -30,11 +30,12 @@ from std_msgs.msg import String
 from .. import JOINT_NAMES
 from ..faults.faulty_link import links_from_config
 from ..kinematics.urdf_chain import UrdfChain
+from ..loop.endpoint_match import Need
 from ..wire import joint_state_cdr
 from ..wire.clock_schedule import ClockSchedule
 from .polled import PolledSubscription, SubscriptionWaitSet
 from .wire import (CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, StepClock, description_qos, effort_topic, loop_qos,
-                   record_qos, state_topic)
+                   record_qos, state_topic)  # relative names
 
 
 CLOCK_CDR = struct.Struct("<HHiI")  # rosgraph_msgs/Clock: encapsulation (little-endian CDR), sec, nanosec
@@ -124,20 +125,21 @@ class PlantWire:
         return out
 
     # ------------------------------------------------------------- graph
-    def lacking(self, state_subscribers: int, clock_subscribers: int, joint_states_subscribers: int,
-                recorders: int) -> list[str]:
-        """What is not matched yet (empty once the graph is complete)."""
+    def needs(self, state_subscribers: int, clock_subscribers: int, joint_states_subscribers: int,
+              recorders: int) -> list[Need]:
+        """The endpoints the graph must have matched before the first state goes out (``MatchWait``)."""
         node = self.node
-        out = [f"{state_topic(j)} (fewer than {state_subscribers} subscribers)"
-               for j, pub in zip(JOINT_NAMES, self._state_pubs) if pub.get_subscription_count() < state_subscribers]
-        out += [f"{effort_topic(j)} (no publisher)" for j, sub in zip(JOINT_NAMES, self._effort_subs)
-                if sub.get_publisher_count() < 1]
-        out += [f"{effort_topic(j)} (fewer than {recorders} recorders)" for j in JOINT_NAMES
-                if node.count_subscribers(effort_topic(j)) < 1 + recorders]
-        if self._clock_pub is not None and self._clock_pub.get_subscription_count() < clock_subscribers:
-            out.append(f"{CLOCK} (fewer than {clock_subscribers} subscribers)")
-        if self._js_pub.get_subscription_count() < joint_states_subscribers:
-            out.append(f"{JOINT_STATES} (fewer than {joint_states_subscribers} subscribers)")
+        out = [Need(pub.topic_name, "subscribers", state_subscribers, pub.get_subscription_count)
+               for pub in self._state_pubs]
+        out += [Need(node.resolve_topic_name(sub.topic), "publishers", 1, sub.get_publisher_count)
+                for sub in self._effort_subs]
+        # the plant's own subscription and one per recorder
+        out += [Need(node.resolve_topic_name(effort_topic(j)), "subscribers", 1 + recorders,
+                     lambda t=effort_topic(j): node.count_subscribers(t)) for j in JOINT_NAMES if recorders]
+        if self._clock_pub is not None:
+            out.append(Need(CLOCK, "subscribers", clock_subscribers, self._clock_pub.get_subscription_count))
+        out.append(Need(self._js_pub.topic_name, "subscribers", joint_states_subscribers,
+                        self._js_pub.get_subscription_count))
         return out
 
     def flush(self, timeout_s: float = 2.0) -> bool:

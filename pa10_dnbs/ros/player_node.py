@@ -26,6 +26,7 @@ from rclpy.qos import QoSProfile
 from rosgraph_msgs.msg import Clock
 
 from ..bag.bag_reader import Bag
+from ..loop.endpoint_match import MatchWait, Need
 from .. import JOINT_NAMES
 from ..wire.topics import CLOCK, find_arm, renamed
 from ..wire.steps import NS_PER_S
@@ -91,14 +92,15 @@ class PlayerNode(Node):
         return False
 
     def _wait_for_subscribers(self, stop) -> bool:
-        deadline = time.monotonic() + self.opt.wait_for_subscribers_s
+        wait = MatchWait([Need(p.topic_name, "subscribers", 1, p.get_subscription_count) for p in self.pubs.values()],
+                         self.opt.wait_for_subscribers_s)
         while not stop.done():
-            lacking = [t for t, p in self.pubs.items() if p.get_subscription_count() < 1]
-            if not lacking:
+            status = wait.poll()
+            if status == "met":
                 return True
-            if time.monotonic() > deadline:
+            if status == "timeout":
                 self.get_logger().error(f"no subscriber after {self.opt.wait_for_subscribers_s:g} s on: "
-                                        + ", ".join(lacking))
+                                        + ", ".join(wait.lacking))
                 self.exit_code = 1
                 return False
             time.sleep(WAIT_SLICE_S)
