@@ -52,3 +52,22 @@ def test_cli_parameter_reads_ros_args_only():
     argv = ["node", "-p", "joint:=s9", "--ros-args", "-r", "__ns:=/a", "-p", "joint:=e1", "--param", "x:='y'", "--"]
     assert cli_parameter(argv, "joint") == "e1" and cli_parameter(argv, "x") == "y"
     assert cli_parameter(["node", "--ros-args", "-p", "other:=1"], "joint") is None
+
+
+@pytest.mark.parametrize("args,word", [(("launch", "--namespace", "/pa10/"), "--namespace"),
+                                       (("launch", "--namespace", "arm2"), "--namespace"),
+                                       (("launch", "--clock-hz", "0"), "--clock-hz"),
+                                       (("launch", "--clock-hz", "2000"), "--clock-hz")])
+def test_launcher_refuses_a_bad_namespace_or_clock_rate_in_one_line(tmp_path, args, word):
+    from cli_runner import run_cli
+
+    r = run_cli(*args, "--duration", "1", "--out", tmp_path / "out")
+    assert r.returncode == 2 and word in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_replay_refuses_a_bad_namespace(tmp_path):
+    from cli_runner import run_cli
+
+    r = run_cli("replay", tmp_path / "no_bag", "--namespace", "/a//b")
+    assert r.returncode == 2 and "--namespace" in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
