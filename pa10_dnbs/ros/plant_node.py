@@ -74,7 +74,7 @@ PARAMS = {
                             0.0, 1.0),
     "rt_priority": Param(0, "SCHED_FIFO priority 1..99 where allowed; 0 = off", 0, 99),
     "warn_period_s": Param(1.0, "wall time between two warnings of the same kind [s]", 0.0),
-    "handshake_steps": Param(3, "realtime: states sent before the clock starts, to prime the wire [steps]", 1),
+    "handshake_steps": Param(3, "realtime: first steps that wait for every effort before the tick schedule starts [steps]", 1),
 }
 
 
