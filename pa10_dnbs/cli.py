@@ -36,7 +36,8 @@ def _launch(args: argparse.Namespace) -> int:
                       restart=args.restart, netns=args.netns, init_from=args.init_from,
                       bag_compression=args.bag_compression, live_port=args.live, live_host=args.live_host,
                       live_hz=args.live_hz, real_time_factor=args.rtf, deadline_fraction=args.deadline_fraction,
-                      rt_priority=args.rt_priority, figures=not args.no_figures)
+                      rt_priority=args.rt_priority, namespace=args.namespace, clock_hz=args.clock_hz,
+                      figures=not args.no_figures)
 
 
 def _study(args: argparse.Namespace) -> int:
@@ -59,7 +60,7 @@ def _replay(args: argparse.Namespace) -> int:
     return run_replay(args.bag, rate=args.rate, topics=args.topics, start_offset_s=args.start_offset, loop=args.loop,
                       clock_hz=args.clock, wait_for_subscribers_s=args.wait_for_subscribers,
                       queue_depth=args.queue_depth, live_port=args.live, live_host=args.live_host,
-                      live_hz=args.live_hz, config_path=args.config)
+                      live_hz=args.live_hz, config_path=args.config, namespace=args.namespace)
 
 
 def _add_run_args(p: argparse.ArgumentParser, controllers: tuple[str, ...], help_controller: str) -> None:
@@ -112,6 +113,12 @@ def build_parser() -> argparse.ArgumentParser:
                     help="SCHED_FIFO priority 1..99 for the plant and the controllers where the OS allows it "
                          "(root, CAP_SYS_NICE or ulimit -r); otherwise a message and default scheduling")
     _add_run_args(la, ("dnbs", "pid"), "the joint controllers: dnbs or pid (ctc is centralized: in-process only)")
+    la.add_argument("--namespace", default="/pa10", metavar="NS",
+                    help="the arm's ROS namespace (default /pa10): every node runs in it, its topics are NS/s1/state, "
+                         "NS/joint_states, ...; /clock, /tf, /tf_static, /diagnostics stay global")
+    la.add_argument("--clock-hz", type=float, default=100.0, metavar="HZ",
+                    help="/clock rate in Hz of simulated time (default 100, as `ros2 bag play --clock`); every node "
+                         "but the plant runs with use_sim_time:=true")
     la.add_argument("--domain-id", type=int, default=None, help="ROS_DOMAIN_ID (default: a free one, leased for the run so concurrent runs never share it)")
     la.add_argument("--reliability", choices=("reliable", "best_effort"), default=None,
                     help="QoS of the per-joint state/effort topics (default: best_effort with depth 1 in "
@@ -173,6 +180,9 @@ def build_parser() -> argparse.ArgumentParser:
                          "the recorded /clock is then not replayed")
     rp.add_argument("--wait-for-subscribers", type=float, default=0.0, metavar="SECONDS",
                     help="before playing, wait up to SECONDS until every topic has a subscriber (exit 1 if not)")
+    rp.add_argument("--namespace", default=None, metavar="NS",
+                    help="publish the arm's topics under NS (e.g. /arm2: /pa10/s1/state -> /arm2/s1/state); "
+                         "/clock, /tf, /tf_static, /diagnostics stay global (default: as recorded)")
     rp.add_argument("--queue-depth", type=int, default=1000,
                     help="keep_last depth of each publisher, at least (default 1000)")
     _add_live_args(rp)

@@ -72,7 +72,7 @@ class LiveClient:
                         subs = {topic: i + 1 for i, topic in enumerate(channels)}
                         ws.send(json.dumps({"op": "subscribe", "subscriptions": [
                             {"id": i, "channelId": channels[t]} for t, i in subs.items()]}))
-                        js_sub = subs["/joint_states"]
+                        js_sub = subs["/pa10/joint_states"]
                 elif frame[0] == 1 and int.from_bytes(frame[1:5], "little") == js_sub:
                     self.frames += 1
 

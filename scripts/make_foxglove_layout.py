@@ -2,7 +2,9 @@
 """Write config/foxglove_layout.json, the Foxglove layout of the live view (pa10_dnbs/live/layout.py), from the
 joint names, the Table 2 limits of the default config and the URDF's root link.
 
-    python scripts/make_foxglove_layout.py [--config FILE] [--out config/foxglove_layout.json]
+    python scripts/make_foxglove_layout.py [--config FILE] [--namespace /pa10] [--out config/foxglove_layout.json]
+
+``--namespace``: the arm's namespace the layout shows (the launcher's --namespace; default /pa10).
 """
 from __future__ import annotations
 
@@ -17,15 +19,18 @@ from pa10_dnbs import JOINT_NAMES  # noqa: E402
 from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
 from pa10_dnbs.kinematics.urdf_chain import UrdfChain  # noqa: E402
 from pa10_dnbs.live.layout import layout_json  # noqa: E402
+from pa10_dnbs.wire.topics import DEFAULT_NS, arm_topics  # noqa: E402
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--config", type=Path, default=default_config_path())
+    ap.add_argument("--namespace", default=DEFAULT_NS)
     ap.add_argument("--out", type=Path, default=ROOT / "config" / "foxglove_layout.json")
     args = ap.parse_args()
     cfg = load_config(args.config)
-    text = layout_json(JOINT_NAMES, cfg["plant"]["torque_limit_nm"], UrdfChain.from_file(cfg["plant"]["urdf"]).root_link)
+    text = layout_json(JOINT_NAMES, cfg["plant"]["torque_limit_nm"], UrdfChain.from_file(cfg["plant"]["urdf"]).root_link,
+                       arm_topics(args.namespace))
     args.out.write_text(text)
     print(f"wrote {args.out}")
     return 0

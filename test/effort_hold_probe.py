@@ -23,7 +23,7 @@ def main() -> int:
     from pa10_dnbs.ros.wire import effort_topic, loop_qos, state_topic
 
     rclpy.init(signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
-    node = rclpy.create_node("effort_hold_probe")
+    node = rclpy.create_node("effort_hold_probe", namespace="/pa10")  # the arm's namespace: relative names resolve
     qos = loop_qos("reliable")
     got = {"plant": 0, "recorder": 0}
 

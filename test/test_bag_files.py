@@ -30,16 +30,21 @@ def _write_bag(path, n=200, topic="/joint_states"):
     return path
 
 
-def _write_run_bag(path, n=300, compression="zstd"):
-    """A complete little run: /joint_states (7 joints) and one reference batch per joint, as the graph sends them."""
+def _write_run_bag(path, n=300, compression="zstd", ns=None):
+    """A complete little run: joint_states (7 joints) and one reference batch per joint, as the graph sends them.
+
+    ``ns`` None: the old layout (/joint_states at the root, /pa10/<joint>/reference); else every topic in ``ns``.
+    """
     from rosbags.typesys import Stores, get_typestore
 
     store = get_typestore(Stores.ROS2_JAZZY)
     T = store.types
     w = BagWriter(path, compression=compression)
-    w.add_topic("/joint_states", "sensor_msgs/msg/JointState", [QOS])
+    js = "/joint_states" if ns is None else f"{ns}/joint_states"
+    prefix = "/pa10" if ns is None else ns
+    w.add_topic(js, "sensor_msgs/msg/JointState", [QOS])
     for k in range(n + 1):
-        w.write("/joint_states", k * 1_000_000, joint_state_cdr.encode(
+        w.write(js, k * 1_000_000, joint_state_cdr.encode(
             0, k * 1_000_000, list(JOINT_NAMES), [0.001 * k] * 7, [1.0] * 7, [2.0] * 7))
     for j in JOINT_NAMES:
         pts = [T["trajectory_msgs/msg/JointTrajectoryPoint"](
@@ -49,8 +54,8 @@ def _write_run_bag(path, n=300, compression="zstd"):
         msg = T["trajectory_msgs/msg/JointTrajectory"](
             header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=0, nanosec=0), frame_id=""),
             joint_names=[j], points=pts)
-        w.add_topic(f"/pa10/{j}/reference", "trajectory_msgs/msg/JointTrajectory", [QOS])
-        w.write(f"/pa10/{j}/reference", 0, bytes(store.serialize_cdr(msg, "trajectory_msgs/msg/JointTrajectory")))
+        w.add_topic(f"{prefix}/{j}/reference", "trajectory_msgs/msg/JointTrajectory", [QOS])
+        w.write(f"{prefix}/{j}/reference", 0, bytes(store.serialize_cdr(msg, "trajectory_msgs/msg/JointTrajectory")))
     w.close()
     return path
 
@@ -88,8 +93,9 @@ def test_writer_refuses_an_existing_path_without_force(tmp_path):
 
 
 def test_a_complete_run_bag_analyses(tmp_path):
-    """The baseline for the corruption tests below: undamaged, the same bag analyses with exit 0."""
-    r = _analyse(_write_run_bag(tmp_path / "b"), tmp_path)
+    """The baseline for the corruption tests below: undamaged, the same bag analyses with exit 0 (the current
+    layout, /pa10/joint_states; the corruption tests use old bags)."""
+    r = _analyse(_write_run_bag(tmp_path / "b", ns="/pa10"), tmp_path)
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "out" / "metrics.json").is_file()
 
@@ -143,7 +149,26 @@ def test_inconsistent_metadata(tmp_path):
 
 def test_bag_missing_the_needed_topics(tmp_path):
     bag = _write_bag(tmp_path / "b", topic="/other")
-    _assert_clear_error(_analyse(bag, tmp_path), "needs topics", "/joint_states", "/pa10/s1/reference")
+    _assert_clear_error(_analyse(bag, tmp_path), "needs topics", "/pa10/joint_states", "/pa10/s1/reference")
+
+
+def test_analysis_finds_the_arm_under_any_namespace_and_in_old_bags(tmp_path):
+    """The same run recorded under /lab/arm2 and in the old layout (/joint_states at the root) reads back the
+    same; a bag whose joint_states and references are in different namespaces is refused."""
+    from pa10_dnbs.bag.analysis import bag_arm, wire_record_from_bag
+
+    runs = []
+    for name, ns in (("old", None), ("new", "/lab/arm2")):
+        with Bag(_write_run_bag(tmp_path / name, n=100, ns=ns)) as b:
+            assert bag_arm(b).joint_states == ("/joint_states" if ns is None else f"{ns}/joint_states")
+            runs.append(wire_record_from_bag(b, 1e-3, None).run_data("dnbs", JOINT_NAMES, [1.0] * 7, 1.0))
+    for field in ("position_rad", "velocity_rad_s", "reference_rad", "torque_nm"):
+        assert np.array_equal(getattr(runs[0], field), getattr(runs[1], field)), field
+    w = BagWriter(tmp_path / "mixed")
+    w.add_topic("/arm3/joint_states", "sensor_msgs/msg/JointState", [QOS])
+    w.write("/arm3/joint_states", 0, joint_state_cdr.encode(0, 0, list(JOINT_NAMES), [0.0] * 7, [0.0] * 7, [0.0] * 7))
+    w.close()
+    _assert_clear_error(_analyse(tmp_path / "mixed", tmp_path), "needs topics", "/pa10/s1/reference")
 
 
 def test_replay_rejects_unknown_topics_before_joining_ros(tmp_path):
@@ -163,7 +188,8 @@ def _recorder(domain, *params):
 def test_standalone_recorder_rejects_bad_parameters(tmp_path, domain):
     _assert_clear_error(_recorder(domain), "parameter bag is required")
     _assert_clear_error(_recorder(domain, f"bag:={tmp_path / 'b'}"), "all_topics")
-    _assert_clear_error(_recorder(domain, f"bag:={tmp_path / 'b'}", "topics:=[joint_states]"), "starting with '/'")
+    _assert_clear_error(_recorder(domain, f"bag:={tmp_path / 'b'}", "topics:=['/pa10//joint_states']"),
+                        "is not a topic name")
     existing = _write_bag(tmp_path / "old")
     before = sorted(p.name for p in existing.iterdir())
     _assert_clear_error(_recorder(domain, f"bag:={existing}", "all_topics:=true"), "exists", "--force")
@@ -180,8 +206,11 @@ def test_launcher_rejects_a_lockstep_bag_that_lost_messages(tmp_path, cfg):
     assert missing is None and run.n_steps == 300
     stats = {"joints": [{"timeout_ranges": []} for _ in JOINT_NAMES]}
     _, missing = _bag_run(bag, 1e-3, 300, "dnbs", cfg, 1.0, lockstep_stats=stats)
-    assert "/pa10/s1/effort lacks 300 steps (first 0)" in missing and "/clock lacks 301 steps" in missing
+    assert "/pa10/s1/effort lacks 300 steps (first 0)" in missing and "/clock lacks 31 steps" in missing  # 100 Hz: steps 0, 10, ..., 300
     assert "/joint_states" not in missing  # that one is complete
+    new = _write_run_bag(tmp_path / "new", n=300, ns="/arm2")
+    _, missing = _bag_run(new, 1e-3, 300, "dnbs", cfg, 1.0, lockstep_stats=stats)
+    assert "/arm2/s1/effort lacks 300 steps (first 0)" in missing and "/arm2/joint_states" not in missing
 
 
 @pytest.mark.parametrize("compression,chunk_compression", [("zstd", "zstd"), ("none", "")])

@@ -68,37 +68,39 @@ def test_metadata_counts_equal_the_messages_in_the_file(bag):
 def test_anyreader_reads_every_topic(bag):
     with AnyReader([bag]) as reader:
         topics = {c.topic: c for c in reader.connections}
-        assert set(PER_JOINT) | {"/clock", "/joint_states", "/robot_description", "/tf", "/tf_static"} <= set(topics)
+        assert set(PER_JOINT) | {"/clock", "/pa10/joint_states", "/pa10/robot_description", "/tf", "/tf_static"} <= set(topics)
         seen = set()
         for conn, t_ns, raw in reader.messages():
             if conn.topic not in seen:
                 msg = reader.deserialize(raw, conn.msgtype)
                 seen.add(conn.topic)
-                if conn.topic == "/joint_states":
+                if conn.topic == "/pa10/joint_states":
                     assert list(msg.name) == list(JOINT_NAMES) and len(msg.position) == 7
         assert seen == set(topics)
 
 
 def test_one_message_per_step_on_every_per_joint_topic(bag):
     with Bag(bag) as b:
-        for topic in PER_JOINT + ["/joint_states", "/clock"]:
+        for topic in PER_JOINT + ["/pa10/joint_states"]:
             stamps = sorted(_stamp_ns(d) for _, _, _, d in b.messages([topic]))
             assert stamps == [k * 1_000_000 for k in range(N_STEPS + 1)], topic
+        clock = sorted(_stamp_ns(d) for _, _, _, d in b.messages(["/clock"]))
+    assert clock == [k * 1_000_000 for k in range(0, N_STEPS + 1, 10)]  # 100 Hz of simulated time, the default
 
 
 def test_robot_description_and_tf_for_foxglove(bag, _default_cfg):
     with AnyReader([bag]) as reader:
         conns = {c.topic: c for c in reader.connections}
-        assert conns["/robot_description"].ext.offered_qos_profiles[0].durability.name == "TRANSIENT_LOCAL"
+        assert conns["/pa10/robot_description"].ext.offered_qos_profiles[0].durability.name == "TRANSIENT_LOCAL"
         msgs = {t: [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages(connections=[conns[t]])]
-                for t in ("/robot_description", "/tf_static", "/tf", "/joint_states")}
-    assert msgs["/robot_description"][0].data == open(_default_cfg["plant"]["urdf"]).read()
+                for t in ("/pa10/robot_description", "/tf_static", "/tf", "/pa10/joint_states")}
+    assert msgs["/pa10/robot_description"][0].data == open(_default_cfg["plant"]["urdf"]).read()
     static = msgs["/tf_static"][0].transforms
     assert [(t.header.frame_id, t.child_frame_id) for t in static] == [("link7", "flange")]
     tf = msgs["/tf"]
     assert len(tf) == N_STEPS // 10 + 1  # 100 Hz of simulated time
     chain = UrdfChain.from_file(_default_cfg["plant"]["urdf"])
-    states = {(m.header.stamp.sec, m.header.stamp.nanosec): m for m in msgs["/joint_states"]}
+    states = {(m.header.stamp.sec, m.header.stamp.nanosec): m for m in msgs["/pa10/joint_states"]}
     for m in (tf[0], tf[len(tf) // 2], tf[-1]):
         stamp = (m.transforms[0].header.stamp.sec, m.transforms[0].header.stamp.nanosec)
         js = states[stamp]
@@ -143,7 +145,7 @@ def test_faithful_replay(bag, tmp_path, domain):
     """A subscriber receives exactly the recorded messages: count, order and payload bytes."""
     specs = {"/pa10/s1/state": "sensor_msgs/msg/JointState", "/pa10/w2/effort": "sensor_msgs/msg/JointState",
              "/pa10/e1/reference": "trajectory_msgs/msg/JointTrajectory", "/clock": "rosgraph_msgs/msg/Clock",
-             "/robot_description": "std_msgs/msg/String"}
+             "/pa10/robot_description": "std_msgs/msg/String"}
     with Bag(bag) as b:
         recorded = {t: [bytes(d) for _, _, _, d in b.messages([t])] for t in specs}
     total = sum(map(len, recorded.values()))
@@ -172,9 +174,9 @@ def test_redrive_reproduces_the_recorded_states_bit_for_bit(bag, tmp_path, domai
     """Only the recorded efforts, replayed into a fresh lockstep plant (no controllers): same states, same bytes."""
     new_bag = tmp_path / "redriven"
     efforts = [f"/pa10/{j}/effort" for j in JOINT_NAMES]
-    topics = ["/joint_states:sensor_msgs/msg/JointState"] + [f"/pa10/{j}/state:sensor_msgs/msg/JointState"
-                                                              for j in JOINT_NAMES]
-    ros = ["--ros-args", "-p"]
+    topics = ["/pa10/joint_states:sensor_msgs/msg/JointState"] + [f"/pa10/{j}/state:sensor_msgs/msg/JointState"
+                                                                   for j in JOINT_NAMES]
+    ros = ["--ros-args", "-r", "__ns:=/pa10", "-p"]  # the arm's namespace, as the launcher starts them
     recorder = Proc([sys.executable, "-m", "pa10_dnbs.ros.recorder_node", *ros, f"bag:={new_bag}", "-p",
                      "topics:=[" + ",".join(f"'{t}'" for t in topics) + "]", "-p", f"end_stamp_ns:={N_STEPS * 10**6}",
                      "-p", "tf_rate_hz:=0.0"], domain_id=domain)
@@ -220,8 +222,8 @@ def test_interrupted_recording_leaves_a_complete_bag(tmp_path, domain):
     assert not (tmp_path / "run").exists()
     with Bag(bag) as b:  # Bag checks the footer, the summary and metadata.yaml against each other
         counts = {t: i.count for t, i in b.topics.items()}
-        assert counts["/joint_states"] > 100
-        states = sorted(_stamp_ns(d) for _, _, _, d in b.messages(["/joint_states"]))
+        assert counts["/pa10/joint_states"] > 100
+        states = sorted(_stamp_ns(d) for _, _, _, d in b.messages(["/pa10/joint_states"]))
     assert states == [k * 1_000_000 for k in range(len(states))]  # a prefix of the run, without gaps
 
 

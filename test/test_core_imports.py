@@ -33,7 +33,7 @@ def test_launcher_does_not_load_rclpy():
 
 # Layers from the ground up: a module may import its own layer and the ones below, never one above.
 LAYERS = [
-    {"__init__", "paths", "run_data", "core", "wire", "kinematics", "faults"},  # numpy-only data and maths
+    {"__init__", "paths", "atomic_file", "run_data", "core", "wire", "kinematics", "faults"},  # numpy-only data and maths
     {"config", "plant", "loop"},                                               # config, physics, loop logic
     {"controller_factory"},
     {"sim", "bag", "report", "live"},                                          # in-process runs, bags, outputs, live view

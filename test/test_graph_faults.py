@@ -108,7 +108,7 @@ def test_killed_controller_without_restart_stops_the_run_and_keeps_the_bag(tmp_p
     assert "the bag recorded so far is closed and readable" in output
     assert not out.exists()
     with Bag(bag) as b:  # footer, summary and metadata.yaml agree
-        n = b.topics["/joint_states"].count
+        n = b.topics["/pa10/joint_states"].count
         assert 1000 <= n < 10001
 
 

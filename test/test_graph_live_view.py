@@ -23,7 +23,7 @@ from pa10_dnbs.run_data import RunData
 pytestmark = pytest.mark.graph  # starts ROS processes
 
 STORE = get_typestore(Stores.ROS2_JAZZY)
-CHANNELS = {"/robot_description": "std_msgs/msg/String", "/joint_states": "sensor_msgs/msg/JointState",
+CHANNELS = {"/pa10/robot_description": "std_msgs/msg/String", "/pa10/joint_states": "sensor_msgs/msg/JointState",
             "/tf": "tf2_msgs/msg/TFMessage", "/tf_static": "tf2_msgs/msg/TFMessage",
             "/pa10/tracking": "pa10_dnbs/Tracking", "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray"}
 LIVE_URL = r"launch: live view at (ws://\S+)"
@@ -89,14 +89,14 @@ def test_clients_watch_drop_or_stall_and_change_nothing(lockstep_run, tmp_path, 
             assert ch["schemaName"] == schema
             assert (ch["encoding"], ch["schemaEncoding"]) == (("json", "jsonschema") if topic == "/pa10/tracking"
                                                               else ("cdr", "ros2msg"))
-        watcher.subscribe("/joint_states", "/pa10/tracking", "/robot_description")
+        watcher.subscribe("/pa10/joint_states", "/pa10/tracking", "/pa10/robot_description")
         for c in (stalled, dropped, polite):
             c.subscribe(*CHANNELS)
         la.wait_for("launch: plant running", 120)
-        assert dropped.pump(60, lambda: dropped.count("/joint_states") >= 5)
+        assert dropped.pump(60, lambda: dropped.count("/pa10/joint_states") >= 5)
         dropped.ws.socket.shutdown(socket.SHUT_RDWR)  # gone without a closing handshake
         dropped.ws.socket.close()
-        assert polite.pump(60, lambda: polite.count("/joint_states") >= 10)
+        assert polite.pump(60, lambda: polite.count("/pa10/joint_states") >= 10)
         polite.close()
         watcher.pump(300, until=lambda: la.proc.poll() is not None)
         rc = la.wait(300)
@@ -113,9 +113,9 @@ def test_clients_watch_drop_or_stall_and_change_nothing(lockstep_run, tmp_path, 
     assert not alive(live_pid)
     assert "frames shown in" in (out / "logs" / "live_view.log").read_text()
     run = RunData.load_npz(out / "timeseries.npz")
-    assert _check_joint_states(watcher.messages["/joint_states"], run) >= 20
+    assert _check_joint_states(watcher.messages["/pa10/joint_states"], run) >= 20
     assert _check_tracking(watcher.messages["/pa10/tracking"], run) >= 10
-    assert watcher.count("/robot_description") >= 1
+    assert watcher.count("/pa10/robot_description") >= 1
     base = json.loads((lockstep_run["out"] / "metrics.json").read_text())
     watched = json.loads((out / "metrics.json").read_text())
     for key in ("joints", "worst_rms_error_rad", "all_finite", "torques_within_limits", "duration_s", "dt_s",
@@ -131,13 +131,13 @@ def test_replay_live_shows_the_bag_at_its_timing(lockstep_run, domain):
     assert lockstep_run["rc"] == 0, lockstep_run["output"]
     bag = lockstep_run["bag"]
     player = Proc([sys.executable, "-m", "pa10_dnbs.cli", "replay", bag, "--live", 0, "--rate", 2, "--topics",
-                   "/joint_states"], domain_id=domain)
+                   "/pa10/joint_states"], domain_id=domain)
     client = None
     try:
         url = player.wait_for(r"LIVE waiting for a Foxglove client on (ws://\S+)", 60).group(1)
         client = FoxgloveClient(url)
         assert client.wait_for_channels(CHANNELS, 30)
-        client.subscribe("/joint_states", "/pa10/tracking", "/tf", "/robot_description")
+        client.subscribe("/pa10/joint_states", "/pa10/tracking", "/tf", "/pa10/robot_description")
         client.pump(120, until=lambda: player.proc.poll() is not None)
         rc = player.wait(60)
     finally:
@@ -147,12 +147,12 @@ def test_replay_live_shows_the_bag_at_its_timing(lockstep_run, domain):
     assert rc == 0, player.output
     assert f"PLAYED {int(LOCKSTEP_DURATION_S * 1000) + 1} messages" in player.output
     run = RunData.load_npz(lockstep_run["out"] / "timeseries.npz")
-    shown = client.messages["/joint_states"]
+    shown = client.messages["/pa10/joint_states"]
     assert _check_joint_states(shown, run) >= 20
     with Bag(bag) as b:
-        recorded = {bytes(d) for _, _, _, d in b.messages(["/joint_states"])}
+        recorded = {bytes(d) for _, _, _, d in b.messages(["/pa10/joint_states"])}
     assert all(p in recorded for _, p in shown)
     stamps = [t for t, _ in shown]
     assert stamps == sorted(stamps) and stamps[-1] == int(LOCKSTEP_DURATION_S * 1e9)  # the last state too
     assert _check_tracking(client.messages["/pa10/tracking"], run) >= 10
-    assert client.count("/tf") == len(shown) and client.count("/robot_description") >= 1
+    assert client.count("/tf") == len(shown) and client.count("/pa10/robot_description") >= 1

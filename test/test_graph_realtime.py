@@ -33,7 +33,9 @@ def _realtime(tmp_path, domain, *args, name="rt"):
 
 
 def test_realtime_without_misses_equals_lockstep_bit_for_bit(lockstep_run, tmp_path, domain):
-    out, stats = _realtime(tmp_path, domain, "--rtf", RTF)
+    # --effort-timeout bounds only the start-up handshake in realtime (ticks never wait past their deadline):
+    # generous, so that first answers slowed by a loaded machine are not misses at step 0
+    out, stats = _realtime(tmp_path, domain, "--rtf", RTF, "--effort-timeout", 10)
     n = int(round(DURATION_S * 1000))
     assert stats["steps"] == n and stats["completed"] and stats["target_real_time_factor"] == RTF
     firsts = [j["first_missed_step"] for j in stats["joints"] if j["first_missed_step"] is not None]

@@ -18,6 +18,7 @@ from pa10_dnbs.live import tracking
 from pa10_dnbs.live.decimator import Decimator
 from pa10_dnbs.live.options import check_live_options
 from pa10_dnbs.live.schemas import live_channels
+from pa10_dnbs.wire.topics import ArmTopics
 from pa10_dnbs.live.server import LiveServer
 from pa10_dnbs.live.view import LiveView, string_cdr
 from pa10_dnbs.wire import joint_state_cdr
@@ -108,15 +109,18 @@ def test_tracking_message_error_torque_and_nulls():
 
 def test_channels_use_schemas_foxglove_decodes():
     chans = {c.topic: c for c in live_channels()}
-    assert set(chans) == {"/robot_description", "/joint_states", "/tf", "/tf_static", "/pa10/tracking", "/diagnostics"}
+    assert set(chans) == {"/pa10/robot_description", "/pa10/joint_states", "/tf", "/tf_static", "/pa10/tracking", "/diagnostics"}
     for c in chans.values():
         if c.topic == "/pa10/tracking":
             assert (c.schema_encoding, c.message_encoding) == ("jsonschema", "json")
         else:
             assert (c.schema_encoding, c.message_encoding) == ("ros2msg", "cdr")
-    assert chans["/joint_states"].schema.startswith(b"std_msgs/Header header\nstring[] name\nfloat64[] position")
+    assert chans["/pa10/joint_states"].schema.startswith(b"std_msgs/Header header\nstring[] name\nfloat64[] position")
     assert b"MSG: geometry_msgs/TransformStamped" in chans["/tf"].schema
-    assert chans["/robot_description"].latched and chans["/tf_static"].latched and not chans["/tf"].latched
+    assert chans["/pa10/robot_description"].latched and chans["/tf_static"].latched and not chans["/tf"].latched
+    other = {c.topic for c in live_channels(ArmTopics("/arm2"))}
+    assert other == {"/arm2/robot_description", "/arm2/joint_states", "/tf", "/tf_static", "/arm2/tracking",
+                     "/diagnostics"}
 
 
 def test_string_cdr():
@@ -145,27 +149,27 @@ def live():
 
 def test_a_client_sees_the_arm_and_the_tracking_frames(live):
     server, view = live
-    view.on_message("/robot_description", string_msg(URDF.read_text()))
+    view.on_message("/pa10/robot_description", string_msg(URDF.read_text()))
     for j, name in enumerate(JOINT_NAMES):
         view.on_message(f"/pa10/{name}/reference", reference_cdr(name, 0, [0.5] * 200))
     client = FoxgloveClient(server.url)
     try:
         assert client.subprotocol == "foxglove.sdk.v1"
         assert client.wait_for_channels([c.topic for c in live_channels()], 10)
-        assert client.channels["/joint_states"]["schemaName"] == "sensor_msgs/msg/JointState"
+        assert client.channels["/pa10/joint_states"]["schemaName"] == "sensor_msgs/msg/JointState"
         client.subscribe(*client.channels)
-        assert _pump_ticking(client, view, lambda: client.count("/robot_description") and client.count("/tf_static"))
+        assert _pump_ticking(client, view, lambda: client.count("/pa10/robot_description") and client.count("/tf_static"))
         sent = {}
         for k in range(150):  # one state per 1/1024 s of (fake) wall time: a frame every 16th state
             data = state(k, [0.01 * k + 0.001 * j for j in range(7)])
             sent[k] = data
-            view.on_message("/joint_states", data)
+            view.on_message("/pa10/joint_states", data)
             view.tick(k / 1024)
         assert view.frames == 10
         assert client.pump(10, lambda: client.count("/pa10/tracking") == 10)
     finally:
         client.close()
-    got = client.messages["/joint_states"]
+    got = client.messages["/pa10/joint_states"]
     steps = [t // 10**6 for t, _ in got]
     assert steps == list(range(0, 150, 16))
     assert all(payload == sent[t // 10**6] for t, payload in got)  # forwarded byte for byte
@@ -189,15 +193,15 @@ def test_a_client_sees_the_arm_and_the_tracking_frames(live):
 
 def test_a_late_subscriber_gets_the_latched_urdf(live):
     server, view = live
-    view.on_message("/robot_description", string_msg(URDF.read_text()))
+    view.on_message("/pa10/robot_description", string_msg(URDF.read_text()))
     client = FoxgloveClient(server.url)
     try:
-        client.wait_for_channels(["/robot_description"], 10)
-        client.subscribe("/robot_description", "/tf_static")
-        assert _pump_ticking(client, view, lambda: client.count("/robot_description") and client.count("/tf_static"))
+        client.wait_for_channels(["/pa10/robot_description"], 10)
+        client.subscribe("/pa10/robot_description", "/tf_static")
+        assert _pump_ticking(client, view, lambda: client.count("/pa10/robot_description") and client.count("/tf_static"))
     finally:
         client.close()
-    assert string_cdr(client.messages["/robot_description"][0][1]) == URDF.read_text()
+    assert string_cdr(client.messages["/pa10/robot_description"][0][1]) == URDF.read_text()
 
 
 def test_a_stalled_client_does_not_block_logging(live):
@@ -207,15 +211,15 @@ def test_a_stalled_client_does_not_block_logging(live):
     reader = FoxgloveClient(server.url)
     try:
         for c in (stalled, reader):
-            c.wait_for_channels(["/joint_states"], 10)
-            c.subscribe("/joint_states")
+            c.wait_for_channels(["/pa10/joint_states"], 10)
+            c.subscribe("/pa10/joint_states")
         time.sleep(0.5)
         payload = state(1, [0.1] * 7)
         blob = b"\x00\x01\x00\x00" + bytes(200_000)  # large messages fill the stalled client's socket fast
         for i in range(600):  # 60 MB: far more than the stalled client's socket and queue hold
-            server.log("/joint_states", blob if i % 2 else payload, i)
-        server.log("/joint_states", payload, 10**9)  # the newest message reaches the client that reads
-        assert reader.pump(20, lambda: any(t == 10**9 for t, _ in reader.messages.get("/joint_states", [])))
+            server.log("/pa10/joint_states", blob if i % 2 else payload, i)
+        server.log("/pa10/joint_states", payload, 10**9)  # the newest message reaches the client that reads
+        assert reader.pump(20, lambda: any(t == 10**9 for t, _ in reader.messages.get("/pa10/joint_states", [])))
     finally:
         reader.close()
         stalled.close()
@@ -256,7 +260,7 @@ def test_layout_file_is_current_and_uses_only_served_channels(_default_cfg):
     assert sorted(_leaves(lay["layout"])) == sorted(lay["configById"])
     served = {c.topic for c in live_channels()}
     three_d = lay["configById"]["3D!arm"]
-    assert three_d["topics"]["/robot_description"]["visible"] and three_d["followTf"] == "base_link"
+    assert three_d["topics"]["/pa10/robot_description"]["visible"] and three_d["followTf"] == "base_link"
     assert lay["configById"]["DiagnosticSummary!pa10"]["topicToRender"] == "/diagnostics"
     plotted = []
     for pid, cfg in lay["configById"].items():

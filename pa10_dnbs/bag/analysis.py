@@ -1,4 +1,8 @@
-"""A run rebuilt from a bag alone: /joint_states and the reference topics -> RunData.
+"""A run rebuilt from a bag alone: the arm's joint_states and reference topics -> RunData.
+
+The arm is found in the bag's topics (``wire.topics.find_arm``): <ns>/joint_states with
+<ns>/<joint>/reference under any namespace, or an old bag's /joint_states and /robot_description at
+the root with /pa10/<joint>/reference.
 
 The same WireRecord as the live wire monitor, so a bag of a run gives the
 same time series, metrics and figures as the run itself. The run's config
@@ -19,7 +23,7 @@ from ..wire.wire_record import WireRecord
 from ..wire import joint_state_cdr
 from ..wire.steps import StepClock, to_ns
 from ..kinematics.urdf_chain import UrdfChain
-from ..wire.topics import JOINT_STATES, ROBOT_DESCRIPTION, reference_topic
+from ..wire.topics import ArmTopics, find_arm
 from .bag_reader import Bag, BagError
 from .custom_data import CUSTOM_CONFIG, CUSTOM_PREFIX
 
@@ -37,20 +41,26 @@ def run_info(bag: Bag) -> dict:
     return info
 
 
+def bag_arm(bag: Bag) -> ArmTopics:
+    """The arm whose topics the bag holds (the default /pa10 layout when none fits, so errors name those)."""
+    return find_arm(bag.topics, JOINT_NAMES[0]) or ArmTopics()
+
+
 def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None, progress=None) -> WireRecord:
     """Fill a WireRecord from the bag; ``n_steps`` None means up to the last /joint_states stamp.
 
     ``progress(step, worst_abs_error)``, if given, is called as /joint_states is read (every
     PROGRESS_EVERY states, and at the end) with the step reached and the worst |x_d - x| [rad] so far.
     """
-    needed = [JOINT_STATES] + [reference_topic(j) for j in JOINT_NAMES]
+    arm = bag_arm(bag)
+    needed = [arm.joint_states] + [arm.reference(j) for j in JOINT_NAMES]
     bag.require_topics(needed, "analysis")
     clock = StepClock(dt_s)
     store = get_typestore(Stores.ROS2_JAZZY)
     batches = []  # (joint, first step, offsets, positions), in the bag's order per joint
     ref_malformed = 0
     for j, name in enumerate(JOINT_NAMES):
-        for _, msgtype, _, data in bag.messages([reference_topic(name)]):
+        for _, msgtype, _, data in bag.messages([arm.reference(name)]):
             try:
                 msg = store.deserialize_cdr(data, msgtype)
             except Exception:
@@ -66,7 +76,7 @@ def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None, progress=No
             watch.add(*b)
     states = []
     malformed = 0
-    for _, _, _, data in bag.messages([JOINT_STATES]):
+    for _, _, _, data in bag.messages([arm.joint_states]):
         try:
             sec, nanosec, _, pos, vel, eff = joint_state_cdr.decode(data)
         except (ValueError, struct.error, UnicodeDecodeError):
@@ -82,7 +92,7 @@ def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None, progress=No
             if len(states) % PROGRESS_EVERY == 0:
                 progress(k, watch.worst_abs_error)
     if not states:
-        raise BagError(f"{bag.path}: no readable /joint_states message")
+        raise BagError(f"{bag.path}: no readable {arm.joint_states} message")
     n = n_steps if n_steps is not None else max(k for k, *_ in states)
     if watch is not None:
         progress(n, watch.worst_abs_error)
@@ -96,12 +106,13 @@ def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None, progress=No
 
 
 def robot_chain(bag: Bag, cfg: dict) -> UrdfChain | None:
-    """The arm's kinematics for the 3D figure: the bag's /robot_description, else the config's URDF file."""
-    if ROBOT_DESCRIPTION in bag.topics:
-        for _, msgtype, _, data in bag.messages([ROBOT_DESCRIPTION]):
+    """The arm's kinematics for the 3D figure: the bag's robot_description, else the config's URDF file."""
+    topic = bag_arm(bag).robot_description
+    if topic in bag.topics:
+        for _, msgtype, _, data in bag.messages([topic]):
             try:
                 return UrdfChain(get_typestore(Stores.ROS2_JAZZY).deserialize_cdr(data, msgtype).data)
             except Exception:
-                raise BagError(f"{bag.path}: /robot_description does not hold a readable URDF") from None
+                raise BagError(f"{bag.path}: {topic} does not hold a readable URDF") from None
     urdf = Path(cfg["plant"].get("urdf", ""))
     return UrdfChain.from_file(urdf) if urdf.is_file() else None

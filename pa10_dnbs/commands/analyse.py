@@ -5,13 +5,12 @@ import math
 from pathlib import Path
 
 from .. import JOINT_NAMES
-from ..bag.analysis import robot_chain, run_info, wire_record_from_bag
+from ..bag.analysis import bag_arm, robot_chain, run_info, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
 from ..config import default_config_path, load_config
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..report.progress import ProgressBar
-from ..wire.topics import JOINT_STATES
 
 
 def _run_config(info: dict, config_path: Path | None, bag: Bag) -> tuple[dict, str]:
@@ -48,7 +47,8 @@ def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None
                 raise BagError(f"{bag.path}: custom_data duration_s is not a number: {info['duration_s']!r}") from None
         bar = None
         if progress:
-            total = n_steps if n_steps is not None else bag.topics[JOINT_STATES].count if JOINT_STATES in bag.topics else 0
+            js = bag_arm(bag).joint_states
+            total = n_steps if n_steps is not None else bag.topics[js].count if js in bag.topics else 0
             bar = ProgressBar(total, dt, f"analyse {bag.path.name}")
         try:
             rec = wire_record_from_bag(bag, dt, n_steps, progress=bar.update if bar is not None else None)
@@ -56,7 +56,7 @@ def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None
             if bar is not None:
                 bar.close()
         if rec.malformed:
-            raise BagError(f"{bag.path}: corrupt bag: {rec.malformed} messages on /joint_states or the reference "
+            raise BagError(f"{bag.path}: corrupt bag: {rec.malformed} messages on joint_states or the reference "
                            "topics could not be decoded")
         missing = rec.missing()
         if missing:
@@ -67,7 +67,7 @@ def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None
                                seed=cfg["simulation"].get("seed"), malformed_messages=rec.malformed)
         notes = [f"bag: `{bag.path}` ({bag.message_count} messages on {len(bag.topics)} topics)",
                  f"config: {cfg_note}",
-                 f"source: rebuilt from the bag's /joint_states and reference topics ({info.get('mode', '?')} run)"]
+                 f"source: rebuilt from the bag's {bag_arm(bag).joint_states} and reference topics ({info.get('mode', '?')} run)"]
         chain = robot_chain(bag, cfg)
         with atomic_output_dir(out, force) as tmp:
             write_report(tmp, [run], [metrics], title="PA10-7CE run from a bag", notes=notes, chain=chain,

@@ -9,7 +9,7 @@ from pathlib import Path
 import yaml
 
 from .. import JOINT_NAMES
-from ..bag.analysis import wire_record_from_bag
+from ..bag.analysis import bag_arm, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
 from ..bag.bag_writer import COMPRESSIONS, check_bag_path
 from ..config import ConfigError, default_config_path, load_config
@@ -24,7 +24,8 @@ from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..wire.wire_record import load_wire_run
 from ..wire.steps import StepClock
-from ..wire.topics import CLOCK, JOINT_STATES, effort_topic, state_topic
+from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, ClockSchedule, check_clock_hz
+from ..wire.topics import CLOCK, DEFAULT_NS, ArmTopics, check_namespace
 
 
 
@@ -34,7 +35,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                netns: list[str] | None = None, init_from: Path | None = None, bag_compression: str = "zstd",
                live_port: int | None = None, live_host: str = "127.0.0.1", live_hz: float = 50.0,
                real_time_factor: float = 1.0, deadline_fraction: float = 0.9, rt_priority: int = 0,
-               figures: bool = True) -> int:
+               namespace: str = DEFAULT_NS, clock_hz: float = DEFAULT_CLOCK_HZ, figures: bool = True) -> int:
     """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code.
 
     ``fault_args``: the parsed fault flags (launch/fault_flags.py) applied to the config; the config the
@@ -45,11 +46,17 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     (Foxglove WebSocket) on ``live_host``:``live_port`` (0: a free port), ``live_hz`` frames per second at most.
     ``real_time_factor``, ``deadline_fraction``: realtime pacing (docs/timing.md); ``rt_priority``: SCHED_FIFO
     priority of plant and controllers (0: off). ``reliability`` None: the mode's default QoS.
+    ``namespace``: the arm's ROS namespace (every node runs in it; /clock, /tf, /diagnostics stay global).
+    ``clock_hz``: /clock rate [Hz of simulated time], > 0 (the reference node is paced by /clock).
     """
     config_path = Path(config_path).resolve() if config_path else default_config_path()
     cfg = load_config(config_path)
     if fault_args is not None:
         cfg = apply_fault_flags(cfg, fault_args)
+    try:
+        check_namespace(namespace)
+    except ValueError as exc:
+        raise ConfigError(f"--namespace: {exc}") from None
     if restart not in (None, "resume", "fresh"):
         raise ConfigError(f"--restart: expected resume or fresh, got {restart!r}")
     namespaces = parse_netns(netns or [])
@@ -70,6 +77,12 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     except ValueError:
         raise ConfigError(f"--rt-priority: must be 0 (off) or 1..99, got {rt_priority}") from None
     dt = cfg["simulation"]["dt_s"]
+    try:
+        check_clock_hz(clock_hz, dt)
+        if clock_hz == 0:
+            raise ValueError("must be > 0 Hz: the reference node is paced by /clock")
+    except ValueError as exc:
+        raise ConfigError(f"--clock-hz: {exc}") from None
     n_steps = int(round(duration_s / dt))
     if n_steps < 2:
         raise ConfigError(f"--duration: {duration_s} s is shorter than two steps of {dt} s")
@@ -97,7 +110,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                        force_bag=force, restart=restart, netns=namespaces, init_from=init_from,
                        bag_compression=bag_compression, live_port=live_port, live_host=live_host, live_hz=live_hz,
                        real_time_factor=real_time_factor, deadline_fraction=deadline_fraction,
-                       rt_priority=rt_priority)
+                       rt_priority=rt_priority, namespace=namespace, clock_hz=clock_hz)
     reliability = loop_reliability(opt)
     settings = metrics_settings(cfg, n_steps * dt)
     window = settings["window_s"]
@@ -111,11 +124,11 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
             if record is None:
                 run, missing = load_wire_run(result.wire_file, controller, JOINT_NAMES,
                                              cfg["plant"]["torque_limit_nm"], stats["wall_time_s"])
-                source = "the wire monitor's record of /joint_states and the reference topics"
+                source = f"the wire monitor's record of {ArmTopics(namespace).joint_states} and the reference topics"
             else:
                 run, missing = _bag_run(record, dt, n_steps, controller, cfg, stats["wall_time_s"],
-                                        lockstep_stats=stats if mode == "lockstep" else None)
-                source = f"the bag's /joint_states and reference topics ({record})"
+                                        lockstep_stats=stats if mode == "lockstep" else None, clock_hz=clock_hz)
+                source = f"the bag's {ArmTopics(namespace).joint_states} and reference topics ({record})"
             if missing:
                 raise GraphFailure(f"the record of the run is incomplete: {missing}")
             metrics = metrics_dict(
@@ -156,20 +169,21 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
 
 
 def _bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, cfg: dict, wall_time_s: float,
-             lockstep_stats: dict | None):
+             lockstep_stats: dict | None, clock_hz: float = DEFAULT_CLOCK_HZ):
     """(RunData, what is missing or None) rebuilt from the bag just recorded; a bad bag is a failed run.
 
     With ``lockstep_stats`` (the plant's stats of a lockstep run) every step 0..n_steps must be in the bag
-    on /clock, /joint_states and each joint's state topic, and on each effort topic except the steps the
-    plant filled in after a timeout. (Resent states and repeated answers add messages; none may be lost.)
+    on the arm's joint_states and each joint's state topic, and on each effort topic except the steps the
+    plant filled in after a timeout; /clock must hold the steps of ``ClockSchedule`` at ``clock_hz``. (Resent states and repeated answers add messages; none may be lost.)
     """
     clock = StepClock(dt)
     try:
         with Bag(bag_path) as bag:
             rec = wire_record_from_bag(bag, dt, n_steps)
+            arm = bag_arm(bag)
             steps = {}
             if lockstep_stats is not None:
-                per_step = [CLOCK, JOINT_STATES] + [t for j in JOINT_NAMES for t in (state_topic(j), effort_topic(j))]
+                per_step = [CLOCK, arm.joint_states] + [t for j in JOINT_NAMES for t in (arm.state(j), arm.effort(j))]
                 steps = {t: set() for t in per_step}
                 for topic, _, _, data in bag.messages([t for t in per_step if t in bag.topics]):
                     if len(data) >= 12:
@@ -182,8 +196,10 @@ def _bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, cfg: dict
     everything = set(range(n_steps + 1))
     for topic, seen in steps.items():
         expected = everything
-        if topic.endswith("/effort"):
-            joint = JOINT_NAMES.index(topic.split("/")[2])
+        if topic == CLOCK:
+            expected = ClockSchedule.steps(clock_hz, dt, n_steps)
+        elif topic.endswith("/effort"):
+            joint = JOINT_NAMES.index(topic.split("/")[-2])
             filled = {k for a, b in lockstep_stats["joints"][joint]["timeout_ranges"] for k in range(a, b + 1)}
             expected = everything - filled - {n_steps}  # the answer to the last state may come after the end
         lost = expected - seen

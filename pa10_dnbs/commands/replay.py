@@ -13,13 +13,17 @@ from ..live.options import check_live_options
 from ..live.schemas import live_channels
 from ..live.server import LiveServer, LiveServerError
 from ..live.view import LiveView
+from ..wire.topics import ArmTopics, check_namespace, find_arm
+from .. import JOINT_NAMES
 
 
 def run_replay(bag_path: Path, rate: float, topics: list[str] | None, start_offset_s: float, loop: bool,
                clock_hz: float, wait_for_subscribers_s: float, queue_depth: int, live_port: int | None = None,
-               live_host: str = "127.0.0.1", live_hz: float = 50.0, config_path: Path | None = None) -> int:
+               live_host: str = "127.0.0.1", live_hz: float = 50.0, config_path: Path | None = None,
+               namespace: str | None = None) -> int:
     """Validate the bag and the options before joining ROS, then play. Returns the exit code.
 
+    ``namespace``: publish the arm's topics under this namespace instead of the recorded one (None: as recorded).
     ``live_port``: also serve the live view on ``live_host``:``live_port`` (0: a free port); its Table 2 limits
     and step come from ``config_path``, else the config stored in the bag, else the shipped default.
     """
@@ -29,6 +33,11 @@ def run_replay(bag_path: Path, rate: float, topics: list[str] | None, start_offs
         raise ConfigError(f"--start-offset: must be >= 0 seconds, got {start_offset_s}")
     if not (math.isfinite(clock_hz) and clock_hz >= 0):
         raise ConfigError(f"--clock: must be a frequency >= 0 Hz, got {clock_hz}")
+    if namespace is not None:
+        try:
+            check_namespace(namespace)
+        except ValueError as exc:
+            raise ConfigError(f"--namespace: {exc}") from None
     if queue_depth < 1:
         raise ConfigError(f"--queue-depth: must be >= 1, got {queue_depth}")
     if live_port is not None:
@@ -46,16 +55,19 @@ def run_replay(bag_path: Path, rate: float, topics: list[str] | None, start_offs
         if start_offset_s > duration_s:
             raise ConfigError(f"--start-offset: {start_offset_s} s is past the bag's end ({duration_s:.3f} s)")
         opt = PlayOptions(rate=rate, topics=list(topics or []), start_offset_s=start_offset_s, loop=loop,
-                          clock_hz=clock_hz, wait_for_subscribers_s=wait_for_subscribers_s, queue_depth=queue_depth)
+                          clock_hz=clock_hz, wait_for_subscribers_s=wait_for_subscribers_s, queue_depth=queue_depth,
+                          namespace=namespace)
         if live_port is None:
             return run_node(functools.partial(PlayerNode, bag, opt), args=[])
         cfg = _live_config(bag, config_path)
+        arm = ArmTopics(namespace) if namespace else (find_arm(bag.topics, JOINT_NAMES[0]) or ArmTopics())
         try:
-            server = LiveServer(live_channels(), host=live_host, port=live_port)
+            server = LiveServer(live_channels(arm), host=live_host, port=live_port)
         except LiveServerError as exc:
             raise ConfigError(f"--live: {exc}") from None
         try:
-            view = LiveView(server, cfg["plant"]["torque_limit_nm"], cfg["simulation"]["dt_s"], display_hz=live_hz)
+            view = LiveView(server, cfg["plant"]["torque_limit_nm"], cfg["simulation"]["dt_s"], display_hz=live_hz,
+                            arm=arm)
             print(f"LIVE {server.url} (Foxglove: Open connection, Foxglove WebSocket)", flush=True)
             return run_node(functools.partial(PlayerNode, bag, opt, live=view), args=[])
         finally:

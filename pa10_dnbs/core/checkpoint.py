@@ -6,17 +6,16 @@ previous checkpoint intact.
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
 
+from ..atomic_file import atomic_path
+
 
 def save_checkpoint(path: Path, state: dict, step: int) -> None:
-    path = Path(path)
-    tmp = path.with_name(path.name + ".tmp.npz")
-    np.savez(tmp, step=np.array(step), **state)
-    os.replace(tmp, path)
+    with atomic_path(path, ".tmp.npz") as tmp:
+        np.savez(tmp, step=np.array(step), **state)
 
 
 def load_checkpoint(path: Path) -> tuple[dict, int]:

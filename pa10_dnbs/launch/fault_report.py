@@ -2,10 +2,9 @@
 from __future__ import annotations
 
 from .. import JOINT_NAMES
+from ..loop.plant_counters import FAULT_KEYS, REPORT_KEYS
 from .fault_flags import plain
 
-PLANT_KEYS = ("effort_timeouts", "nonfinite_efforts", "out_of_range_efforts", "malformed_efforts", "resent_states",
-              "missed_ticks", "timeout_ranges", "injected_state_faults")
 
 
 def fault_report(cfg: dict, plant_stats: dict, result) -> dict:
@@ -14,7 +13,7 @@ def fault_report(cfg: dict, plant_stats: dict, result) -> dict:
     for i, name in enumerate(JOINT_NAMES):
         pj = plant_stats["joints"][i]
         ctrl = result.controllers.get(name)
-        joints.append({"name": name, "plant": {k: pj.get(k) for k in PLANT_KEYS}, "controller": ctrl})
+        joints.append({"name": name, "plant": {k: pj.get(k) for k in REPORT_KEYS}, "controller": ctrl})
     return {"configured": plain(cfg["faults"]), "guards": plain(cfg["guards"]), "joints": joints,
             "restarts": result.restarts}
 
@@ -24,7 +23,7 @@ def fault_note(faults: dict) -> str:
     parts = []
     for j in faults["joints"]:
         p, c = j["plant"], j["controller"] or {}
-        items = [f"{k} {p[k]}" for k in ("effort_timeouts", "nonfinite_efforts", "out_of_range_efforts") if p[k]]
+        items = [f"{k} {p[k]}" for k in FAULT_KEYS if p.get(k)]
         inj = p.get("injected_state_faults") or {}
         items += [f"states {k} {v}" for k, v in inj.items() if k != "messages" and v]
         items += [f"{k} {v}" for k, v in c.items()

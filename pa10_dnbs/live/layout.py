@@ -2,26 +2,25 @@
 
 Written in the layout JSON the Foxglove app exports and imports (``configById``
 panel settings + a ``layout`` split tree): a 3D panel with the URDF arm from
-/robot_description posed by /tf, a plot of the seven tracking errors, a plot
+<ns>/robot_description posed by /tf, a plot of the seven tracking errors, a plot
 of the seven torques as fractions of their Table 2 limits with the limits at
 -1 and 1, and the /diagnostics summary and detail panels. The same layout
 works for a live connection and for a recorded bag (which holds /tf and the
-URDF, but no /pa10/tracking: its plots then stay empty; see docs/live_view.md).
+URDF, but no <ns>/tracking: its plots then stay empty; see docs/live_view.md).
 """
 from __future__ import annotations
 
 import json
 
-from ..wire.topics import DIAGNOSTICS, ROBOT_DESCRIPTION
-from . import tracking
+from ..wire.topics import DIAGNOSTICS, ArmTopics
 
 # one colour per joint (s1 .. w2), the same in both plots
 COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2")
 LIMIT_COLOUR = "#ff0000"
 
 
-def _series(field: str, j: int, label: str, colour: str) -> dict:
-    return {"value": f"{tracking.TOPIC}.{field}[{j}]", "enabled": True, "timestampMethod": "receiveTime",
+def _series(topic: str, field: str, j: int, label: str, colour: str) -> dict:
+    return {"value": f"{topic}.{field}[{j}]", "enabled": True, "timestampMethod": "receiveTime",
             "label": label, "color": colour}
 
 
@@ -34,22 +33,22 @@ def _plot(title: str, paths: list[dict], y_min=None, y_max=None) -> dict:
     return cfg
 
 
-def layout(joint_names, torque_limit_nm, root_frame: str = "base_link") -> dict:
-    """The layout as a JSON-ready dict."""
-    errors = [_series("error_rad", j, name, COLOURS[j % len(COLOURS)]) for j, name in enumerate(joint_names)]
-    torques = [_series("torque_over_limit", j, f"{name} (limit {lim:g} N m)", COLOURS[j % len(COLOURS)])
+def layout(joint_names, torque_limit_nm, root_frame: str = "base_link", arm: ArmTopics = ArmTopics()) -> dict:
+    """The layout of ``arm``'s topics as a JSON-ready dict."""
+    errors = [_series(arm.tracking, "error_rad", j, name, COLOURS[j % len(COLOURS)]) for j, name in enumerate(joint_names)]
+    torques = [_series(arm.tracking, "torque_over_limit", j, f"{name} (limit {lim:g} N m)", COLOURS[j % len(COLOURS)])
                for j, (name, lim) in enumerate(zip(joint_names, torque_limit_nm))]
-    torques += [_series("torque_fraction_limits", i, f"Table 2 limit ({sign})", LIMIT_COLOUR)
+    torques += [_series(arm.tracking, "torque_fraction_limits", i, f"Table 2 limit ({sign})", LIMIT_COLOUR)
                 for i, sign in enumerate(("-", "+"))]
     three_d = {
-        "foxglovePanelTitle": "PA10-7CE (URDF from /robot_description, posed by /tf)",
+        "foxglovePanelTitle": f"PA10-7CE (URDF from {arm.robot_description}, posed by /tf)",
         "cameraState": {"perspective": True, "distance": 3.5, "phi": 60, "thetaOffset": 45,
                         "targetOffset": [0, 0, 0.8], "target": [0, 0, 0], "targetOrientation": [0, 0, 0, 1],
                         "fovy": 45, "near": 0.01, "far": 500},
         "followMode": "follow-pose", "followTf": root_frame,
         "scene": {"transforms": {"showLabel": False, "axisScale": 0.5}},
         "transforms": {},
-        "topics": {ROBOT_DESCRIPTION: {"visible": True}},
+        "topics": {arm.robot_description: {"visible": True}},
         "layers": {"grid": {"visible": True, "frameLocked": True, "label": "Grid", "instanceId": "grid",
                             "layerId": "foxglove.Grid", "frameId": root_frame, "size": 4, "divisions": 20,
                             "lineWidth": 1, "color": "#8c8c8c80", "position": [0, 0, 0], "rotation": [0, 0, 0],
@@ -58,7 +57,7 @@ def layout(joint_names, torque_limit_nm, root_frame: str = "base_link") -> dict:
     }
     config = {
         "3D!arm": three_d,
-        "Plot!errors": _plot("Tracking error e = x_d - x [rad] (/pa10/tracking)", errors),
+        "Plot!errors": _plot(f"Tracking error e = x_d - x [rad] ({arm.tracking})", errors),
         "Plot!torques": _plot("Torque / Table 2 limit (limits at -1 and +1)", torques, -1.1, 1.1),
         "DiagnosticSummary!pa10": {"topicToRender": DIAGNOSTICS, "minLevel": 0, "pinnedIds": [],
                                    "hardwareIdFilter": "", "sortByLevel": True},
@@ -80,5 +79,5 @@ def layout(joint_names, torque_limit_nm, root_frame: str = "base_link") -> dict:
             "layout": tree}
 
 
-def layout_json(joint_names, torque_limit_nm, root_frame: str = "base_link") -> str:
-    return json.dumps(layout(joint_names, torque_limit_nm, root_frame), indent=2) + "\n"
+def layout_json(joint_names, torque_limit_nm, root_frame: str = "base_link", arm: ArmTopics = ArmTopics()) -> str:
+    return json.dumps(layout(joint_names, torque_limit_nm, root_frame, arm), indent=2) + "\n"

@@ -3,7 +3,8 @@
 ROS types go out as ``ros2msg`` schemas (the same text rosbag2 writes into an
 MCAP bag: the .msg followed by each dependency) with ``cdr`` payloads, so
 Foxglove decodes them natively and payloads are forwarded as they came off the
-wire. /pa10/tracking is JSON with a JSON schema.
+wire. <ns>/tracking is JSON with a JSON schema. Channel names are the ROS names
+resolved in the arm's namespace (``ArmTopics``): /pa10/joint_states, /pa10/robot_description, /tf, ...
 """
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import json
 from dataclasses import dataclass
 
 from ..bag.bag_writer import typestore
-from ..wire.topics import DIAGNOSTICS, JOINT_STATES, ROBOT_DESCRIPTION, TF, TF_STATIC
+from ..wire.topics import DIAGNOSTICS, TF, TF_STATIC, ArmTopics
 from . import tracking
 
 
@@ -35,13 +36,13 @@ def _ros(topic: str, msgtype: str, latched: bool = False) -> ChannelSpec:
     return ChannelSpec(topic, msgtype, "ros2msg", ros2msg_schema(msgtype), "cdr", latched)
 
 
-def live_channels() -> list[ChannelSpec]:
-    """Every channel of the live view, in the order they are advertised."""
+def live_channels(arm: ArmTopics = ArmTopics()) -> list[ChannelSpec]:
+    """Every channel of the live view of ``arm``, in the order they are advertised."""
     return [
-        _ros(ROBOT_DESCRIPTION, "std_msgs/msg/String", latched=True),
-        _ros(JOINT_STATES, "sensor_msgs/msg/JointState"),
+        _ros(arm.robot_description, "std_msgs/msg/String", latched=True),
+        _ros(arm.joint_states, "sensor_msgs/msg/JointState"),
         _ros(TF, "tf2_msgs/msg/TFMessage"),
         _ros(TF_STATIC, "tf2_msgs/msg/TFMessage", latched=True),
-        ChannelSpec(tracking.TOPIC, tracking.SCHEMA_NAME, "jsonschema", json.dumps(tracking.SCHEMA).encode(), "json"),
+        ChannelSpec(arm.tracking, tracking.SCHEMA_NAME, "jsonschema", json.dumps(tracking.SCHEMA).encode(), "json"),
         _ros(DIAGNOSTICS, "diagnostic_msgs/msg/DiagnosticArray"),
     ]

@@ -1,4 +1,4 @@
-"""/pa10/tracking: per-joint tracking error and torque of one displayed frame (JSON, with its JSON schema).
+"""<ns>/tracking (/pa10/tracking by default): per-joint tracking error and torque of one displayed frame (JSON, with its JSON schema).
 
 One message per frame the live view shows, built from that frame's
 /joint_states (stamp k T, x(k), and as effort the torque applied over step
@@ -13,7 +13,6 @@ import math
 
 from ..wire.steps import NS_PER_S
 
-TOPIC = "/pa10/tracking"
 SCHEMA_NAME = "pa10_dnbs/Tracking"
 
 _ARRAY = {"type": "array", "items": {"type": ["number", "null"]}}
@@ -46,7 +45,7 @@ def _num(v: float) -> float | None:
 
 def tracking_message(stamp_ns: int, step: int, joint_names, position_rad, reference_rad, torque_nm,
                      torque_limit_nm, worst_abs_error_rad: float) -> dict:
-    """The /pa10/tracking message (a dict ready for JSON) of one frame; all sequences in joint order."""
+    """The tracking message (a dict ready for JSON) of one frame; all sequences in joint order."""
     error = [xd - x for xd, x in zip(reference_rad, position_rad)]
     sec, nsec = divmod(int(stamp_ns), NS_PER_S)
     return {

@@ -1,7 +1,9 @@
-"""Keep PyBullet's C-level prints ("pybullet build time", "argv[0]=") off stdout.
+"""Keep PyBullet's C-level prints ("pybullet build time", "argv[0]=") off stdout and stderr.
 
-They are written with C stdio, fully buffered when stdout is a pipe, so the
-buffer is flushed into /dev/null before file descriptor 1 is restored.
+They are written with C stdio (the build time to stderr in the pinned
+wheel), fully buffered when the stream is a pipe, so the buffers are
+flushed into /dev/null before file descriptors 1 and 2 are restored. (A
+node's one error line on stderr must stay one line.)
 """
 from __future__ import annotations
 
@@ -15,14 +17,17 @@ _libc = ctypes.CDLL(None)
 
 @contextmanager
 def quiet_c_stdout():
-    """Send file descriptor 1 to /dev/null for the duration of the block."""
+    """Send file descriptors 1 and 2 to /dev/null for the duration of the block."""
     sys.stdout.flush()
-    saved = os.dup(1)
+    sys.stderr.flush()
+    saved = {fd: os.dup(fd) for fd in (1, 2)}
     try:
         with open(os.devnull, "wb") as null:
-            os.dup2(null.fileno(), 1)
+            for fd in saved:
+                os.dup2(null.fileno(), fd)
         yield
     finally:
         _libc.fflush(None)
-        os.dup2(saved, 1)
-        os.close(saved)
+        for fd, copy in saved.items():
+            os.dup2(copy, fd)
+            os.close(copy)

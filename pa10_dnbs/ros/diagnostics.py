@@ -1,7 +1,9 @@
 """Fault counters on /diagnostics (diagnostic_msgs/DiagnosticArray), as ROS nodes report health.
 
 One DiagnosticStatus per joint a node is responsible for: name
-``pa10/<node>/<joint>``, level OK, or WARN once any fault counter is non-zero,
+``<ns>/<role>/<joint>`` (``pa10/plant/s1``, ``pa10/joint_controller/s1``,
+``pa10/reference``: <ns> is the arm's namespace without its leading '/'),
+hardware_id the node's name, level OK, or WARN once any fault counter is non-zero,
 and every counter as a KeyValue. Published on a wall-clock timer, stamped
 with the node's latest simulated time.
 """
@@ -11,6 +13,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from ..wire.topics import DIAGNOSTICS
+from .wall_timer import wall_timer
 
 PERIOD_S = 1.0  # wall seconds between reports
 
@@ -18,6 +21,12 @@ PERIOD_S = 1.0  # wall seconds between reports
 def diagnostics_qos() -> QoSProfile:
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.VOLATILE)
+
+
+def status_name(node, *parts: str) -> str:
+    """``<ns>/<part>/<part>...``: the node's namespace (without the leading '/') and ``parts``."""
+    ns = node.get_namespace().strip("/")
+    return "/".join(([ns] if ns else []) + list(parts))
 
 
 def status(name: str, hardware_id: str, counters: dict, fault_keys) -> DiagnosticStatus:
@@ -36,7 +45,7 @@ class DiagnosticsReporter:
         """``report()`` -> list[DiagnosticStatus]; ``stamp()`` -> builtin_interfaces Time (simulated)."""
         self._pub = node.create_publisher(DiagnosticArray, DIAGNOSTICS, diagnostics_qos())
         self._report, self._stamp = report, stamp
-        self.timer = node.create_timer(PERIOD_S, self.publish)
+        self.timer = wall_timer(node, PERIOD_S, self.publish)
 
     def publish(self) -> None:
         msg = DiagnosticArray(status=self._report())

@@ -1,7 +1,9 @@
 """joint_controller_node: one joint's DNBS (or PID) controller.
 
-Subscribes only to /pa10/<joint>/state and /pa10/<joint>/reference; publishes
-/pa10/<joint>/effort (sensor_msgs/JointState, effort only) stamped with the
+Node name ``joint_controller_<joint>`` unless remapped (``-r __node:=``).
+Subscribes only to <ns>/<joint>/state and <ns>/<joint>/reference (<ns>: the
+arm's namespace, /pa10 by default); publishes <ns>/<joint>/effort
+(sensor_msgs/JointState, effort only) stamped with the
 stamp of the state it answers, and its fault counters on /diagnostics. The
 effort publisher is created when the first reference batch arrives, so a
 plant that waits for every effort publisher starts with references in place;
@@ -22,12 +24,11 @@ starts from that file when it exists. Counters go to ``stats_file`` (JSON).
 """
 from __future__ import annotations
 
-import json
+import functools
 import os
 import signal
 import struct
 import sys
-import time
 from pathlib import Path
 
 from rclpy.node import Node
@@ -35,30 +36,49 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from .. import JOINT_NAMES
+from ..atomic_file import write_json
 from ..controller_factory import CONTROLLER_KINDS, build_guarded_controllers
 from ..core.checkpoint import load_checkpoint, save_checkpoint
 from ..faults.faulty_link import links_from_config
 from ..wire import joint_state_cdr
 from ..wire.trajectory_cdr import decode_first_joint
-from .diagnostics import DiagnosticsReporter, status
+from .diagnostics import DiagnosticsReporter, status, status_name
 from ..loop.cpu_meter import CpuMeter
+from ..loop.endpoint_match import MatchWait, Need
 from ..loop.joint_loop import JointLoop
 from ..loop.rt_priority import apply_fifo, check_priority
-from .params import ParameterError, check_choice, declare, load_node_config
+from .params import CONFIG_FILE, Param, ParameterError, check_choice, cli_parameter, declare, load_node_config
 from .runtime import announce_ready, run_node
 from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
+from .wall_timer import wall_timer
 
 FAULT_KEYS = ("bad_states_nonfinite", "bad_states_position", "bad_states_speed", "nonfinite_torques",
               "ekf_resets_alpha", "ekf_resets_torque", "malformed_states")
 
 
+PARAMS = {
+    "config_file": CONFIG_FILE,
+    "joint": Param("", "the joint: s1, s2, s3, e1, e2, w1 or w2 (required; names the node joint_controller_<joint>)"),
+    "controller": Param("dnbs", "dnbs or pid"),
+    "reliability": Param("reliable", "state/effort QoS: reliable or best_effort"),
+    "queue_depth": Param(10, "keep_last depth of the state subscription and effort publisher [messages]", 1),
+    "stats_file": Param("", "JSON file for the counters at exit; '' = none"),
+    "checkpoint_file": Param("", "DNBS weights and covariances, saved every checkpoint.period_s [.npz]; '' = none"),
+    "resume": Param(False, "start from checkpoint_file when it exists"),
+    "incarnation": Param(0, "0 = first start; n = the launcher's n-th restart", 0),
+    "effort_subscribers": Param(1, "subscriptions (plant and recorders) to wait for before answering", 1),
+    "match_timeout_s": Param(10.0, "wall time after which answers go out without them [s]", 0.0),
+    "init_file": Param("", "warm start: DNBS checkpoint of an earlier run [.npz]; '' = cold start"),
+    "rt_priority": Param(0, "SCHED_FIFO priority 1..99 where allowed; 0 = off", 0, 99),
+}
+
+
 class JointControllerNode(Node):
-    def __init__(self):
-        super().__init__("joint_controller")
-        p = declare(self, {"config_file": "", "joint": "", "controller": "dnbs", "reliability": "reliable",
-                           "queue_depth": 10, "stats_file": "", "checkpoint_file": "", "resume": False,
-                           "incarnation": 0, "effort_subscribers": 1, "match_timeout_s": 10.0, "init_file": "",
-                           "rt_priority": 0})
+    def __init__(self, args=None):
+        """``args``: the command line (default sys.argv); its ``-p joint:=J`` names the node joint_controller_J."""
+        joint = cli_parameter(sys.argv if args is None else args, "joint")
+        super().__init__(f"joint_controller_{joint}" if joint in JOINT_NAMES else "joint_controller")
+        p = declare(self, PARAMS)
         if p["effort_subscribers"] < 1 or p["match_timeout_s"] <= 0:
             raise ParameterError("effort_subscribers must be >= 1 and match_timeout_s > 0 s")
         check_choice("joint", p["joint"], JOINT_NAMES)
@@ -147,19 +167,19 @@ class JointControllerNode(Node):
         cfg, index, qos = self._effort_setup
         self._pub = self.create_publisher(JointState, effort_topic(self.joint), qos)
         self._link = links_from_config(cfg, "effort", index, self._pub.publish, self.torque_limit)
-        self._offered_at = time.monotonic()
-        self._match_timer = self.create_timer(0.005, self._check_matched)
-        print(f"OFFERED joint_controller {self.joint} {effort_topic(self.joint)}", flush=True)
+        self._match = MatchWait([Need(self._pub.topic_name, "subscribers", self.p["effort_subscribers"],
+                                      self._pub.get_subscription_count)], self.p["match_timeout_s"])
+        self._match_timer = wall_timer(self, 0.005, self._check_matched)
+        print(f"OFFERED joint_controller {self.joint} {self._pub.topic_name}", flush=True)
 
     def _check_matched(self) -> None:
         """Release the held answers once every expected subscriber has matched the effort publisher."""
-        n = self._pub.get_subscription_count()
-        waited = time.monotonic() - self._offered_at
-        if n < self.p["effort_subscribers"] and waited < self.p["match_timeout_s"]:
+        status = self._match.poll()
+        if status == "waiting":
             return
-        if n < self.p["effort_subscribers"]:
-            self.get_logger().warning(f"{effort_topic(self.joint)}: {n} of {self.p['effort_subscribers']} "
-                                      f"subscribers after {waited:.1f} s; publishing anyway")
+        if status == "timeout":
+            self.get_logger().warning(f"{'; '.join(self._match.lacking)} after {self._match.waited_s:.1f} s; "
+                                      "publishing anyway")
         self.destroy_timer(self._match_timer)
         self._matched = True
         held, self._held = self._held, []
@@ -215,7 +235,7 @@ class JointControllerNode(Node):
         return c
 
     def _status(self):
-        return status(f"pa10/joint_controller/{self.joint}", f"joint_controller_{self.joint}", self.counters(),
+        return status(status_name(self, "joint_controller", self.joint), self.get_name(), self.counters(),
                       FAULT_KEYS)
 
     def close(self) -> None:
@@ -228,19 +248,16 @@ class JointControllerNode(Node):
         counters["rt_priority_applied"] = self.rt_applied
         counters["cpu"] = self.cpu.report()
         if self.p["stats_file"]:
-            tmp = f"{self.p['stats_file']}.tmp"
-            with open(tmp, "w") as f:
-                json.dump(counters, f, indent=2)
-            os.replace(tmp, self.p["stats_file"])
+            write_json(self.p["stats_file"], counters)
         loop = self.loop_
         print(f"STATS joint_controller {self.joint}: " + ", ".join(f"{k} {v}" for k, v in counters.items())
               + f", waiting for references {len(loop.pending_steps)}, reference steps buffered "
               f"{loop.reference_span}", flush=True)
-        print(self.cpu.line(f"joint_controller_{self.joint}"), flush=True)
+        print(self.cpu.line(self.get_name()), flush=True)
 
 
 def main(args=None) -> int:
-    return run_node(JointControllerNode, args)
+    return run_node(functools.partial(JointControllerNode, args), args)
 
 
 if __name__ == "__main__":

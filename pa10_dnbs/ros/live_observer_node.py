@@ -1,7 +1,9 @@
 """live_observer node: the running graph, live in Foxglove (a Foxglove WebSocket server; see live/view.py).
 
 An observer only: it publishes nothing on ROS and answers nothing, so the
-loop never waits for it. /joint_states is read with best effort and depth 1
+loop never waits for it. It reads the arm of its namespace (/pa10 by
+default, also when it runs at the root), and the Foxglove channels carry the resolved names
+(/pa10/joint_states, /pa10/robot_description, /tf, ...). joint_states is read with best effort and depth 1
 (a best-effort reader sends no acknowledgements the plant's writer would have
 to track) on a subscription that no executor spins: DDS keeps the newest
 state and the display timer takes it, so the 1 kHz messages cost no Python
@@ -29,10 +31,11 @@ from ..live.schemas import live_channels
 from ..live.server import LiveServer, LiveServerError
 from ..live.view import LiveView
 from .diagnostics import diagnostics_qos
-from .params import ParameterError, declare, load_node_config
+from .params import CONFIG_FILE, Param, ParameterError, declare, load_node_config
 from .runtime import announce_ready, run_node
-from ..wire.topics import DIAGNOSTICS, JOINT_STATES, ROBOT_DESCRIPTION, reference_topic
+from ..wire.topics import DEFAULT_NS, DIAGNOSTICS, ArmTopics
 from .wire import description_qos, reference_qos
+from .wall_timer import wall_timer
 
 
 def newest_only_qos() -> QoSProfile:
@@ -41,35 +44,48 @@ def newest_only_qos() -> QoSProfile:
                       durability=DurabilityPolicy.VOLATILE)
 
 
+PARAMS = {
+    "config_file": CONFIG_FILE,
+    "host": Param("127.0.0.1", "address the Foxglove WebSocket server listens on"),
+    "port": Param(8765, "its TCP port; 0 = any free port", 0, 65535),
+    "display_hz": Param(50.0, "frames per second of wall time, at most [Hz], in (0, 1000]", 0.0, 1000.0),
+}
+
+
 class LiveObserverNode(Node):
     def __init__(self):
         super().__init__("live_view")
-        p = declare(self, {"config_file": "", "host": "127.0.0.1", "port": 8765, "display_hz": 50.0})
+        p = declare(self, PARAMS)
         if not 0 <= p["port"] <= 65535:
             raise ParameterError(f"parameter port must be in 0..65535, got {p['port']}")
         if not 0 < p["display_hz"] <= 1000:
             raise ParameterError(f"parameter display_hz must be in (0, 1000] frames per second, got {p['display_hz']}")
         cfg = load_node_config(p["config_file"])
+        ns = self.get_namespace()
+        arm = ArmTopics(ns if ns != "/" else DEFAULT_NS)
         try:
-            self.server = LiveServer(live_channels(), host=p["host"], port=p["port"])
+            self.server = LiveServer(live_channels(arm), host=p["host"], port=p["port"])
         except LiveServerError as exc:
             raise ParameterError(str(exc)) from None
         self.view = LiveView(self.server, cfg["plant"]["torque_limit_nm"], cfg["simulation"]["dt_s"],
-                             display_hz=p["display_hz"])
+                             display_hz=p["display_hz"], arm=arm)
+        self.arm = arm
         feed = self.view.on_message
         # a node of its own, never added to the executor (and free of the launcher's name remapping)
-        self._poll_node = Node("live_view_states", namespace="/pa10", use_global_arguments=False)
-        self._states = self._poll_node.create_subscription(JointState, JOINT_STATES, lambda d: None,
+        self._poll_node = Node("live_view_states", namespace=arm.ns, use_global_arguments=False)
+        self._states = self._poll_node.create_subscription(JointState, arm.joint_states, lambda d: None,
                                                            newest_only_qos(), raw=True)
         self.states_taken = 0
-        self.create_subscription(String, ROBOT_DESCRIPTION, lambda d: feed(ROBOT_DESCRIPTION, d), description_qos(),
+        self.create_subscription(String, arm.robot_description, lambda d: feed(arm.robot_description, d),
+                                 description_qos(),
                                  raw=True)
         self.create_subscription(DiagnosticArray, DIAGNOSTICS, lambda d: feed(DIAGNOSTICS, d), diagnostics_qos(),
                                  raw=True)
         for j in JOINT_NAMES:
-            t = reference_topic(j)
-            self.create_subscription(JointTrajectory, t, lambda d, t=t: feed(t, d), reference_qos(), raw=True)
-        self.create_timer(1.0 / p["display_hz"], self._frame)
+            t = arm.reference(j)
+            self.create_subscription(JointTrajectory, t, lambda d, t=t: feed(t, d), reference_qos(),
+                                     raw=True)
+        wall_timer(self, 1.0 / p["display_hz"], self._frame)
         self._t0 = time.monotonic()
         print(f"LIVE {self.server.url}", flush=True)
         announce_ready("live_view")
@@ -80,7 +96,7 @@ class LiveObserverNode(Node):
             taken = self._states.handle.take_message(JointState, True)
         if taken is not None:
             self.states_taken += 1
-            self.view.on_message(JOINT_STATES, taken[0])
+            self.view.on_message(self.arm.joint_states, taken[0])
         self.view.tick(time.monotonic())
 
     def close(self) -> None:

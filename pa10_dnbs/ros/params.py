@@ -1,6 +1,18 @@
-"""Node parameters: declared in code with defaults, valued from the command line or a params file."""
+"""Node parameters: declared in code with defaults and descriptors, valued from the command line or a params file.
+
+Every parameter is a ``Param``: default, description (with the unit), read-only (all of ours: a node reads
+its parameters once, at start), and an inclusive range where there is one (FloatingPointRange or
+IntegerRange in the descriptor, so ``ros2 param describe`` shows it and rclpy refuses a value outside it).
+A bad value (outside the range, of the wrong type, or refused by a node's own check) is a
+``ParameterError``: one line on stderr and exit code 2 (``runtime.run_node``).
+"""
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any
+
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 
 from ..config import ConfigError, default_config_path, load_config
@@ -10,21 +22,87 @@ class ParameterError(ValueError):
     """A node parameter with a missing or bad value: reported in one line, exit code 2."""
 
 
-def declare(node: Node, defaults: dict) -> dict:
-    """Declare every parameter of ``defaults`` and return their current values."""
-    for name, value in defaults.items():
-        node.declare_parameter(name, value)
-    return {name: node.get_parameter(name).value for name in defaults}
+@dataclass(frozen=True)
+class Param:
+    """One node parameter: ``default`` (its type is the parameter's), ``description`` with the unit, and an
+    inclusive range [``lo``, ``hi``] (None: unbounded on that side; both None: no range)."""
+
+    default: Any
+    description: str
+    lo: float | int | None = None
+    hi: float | int | None = None
+    read_only: bool = True
+
+    def descriptor(self) -> ParameterDescriptor:
+        d = ParameterDescriptor(description=self.description, read_only=self.read_only)
+        if self.lo is None and self.hi is None:
+            return d
+        if isinstance(self.default, bool) or not isinstance(self.default, (int, float)):
+            raise TypeError(f"a range needs a numeric default, got {self.default!r}")
+        if isinstance(self.default, int):
+            d.integer_range = [IntegerRange(from_value=int(-2**63 if self.lo is None else self.lo),
+                                            to_value=int(2**63 - 1 if self.hi is None else self.hi), step=1)]
+        else:
+            d.floating_point_range = [FloatingPointRange(
+                from_value=float(-1.7976931348623157e308 if self.lo is None else self.lo),
+                to_value=float(1.7976931348623157e308 if self.hi is None else self.hi), step=0.0)]
+        return d
+
+    def range_text(self) -> str:
+        """The range for docs: '[0, 1]', '>= 0', '' (none)."""
+        if self.lo is None and self.hi is None:
+            return ""
+        if self.hi is None:
+            return f">= {self.lo:g}"
+        if self.lo is None:
+            return f"<= {self.hi:g}"
+        return f"[{self.lo:g}, {self.hi:g}]"
+
+
+def declare(node: Node, specs: dict[str, Param]) -> dict:
+    """Declare every parameter of ``specs`` with its descriptor and return their current values; a value
+    rclpy refuses (type, range) raises ParameterError naming the parameter."""
+    for name, spec in specs.items():
+        try:
+            node.declare_parameter(name, spec.default, spec.descriptor())
+        except ParameterException as exc:
+            raise ParameterError(f"parameter {name}: {_one_line(exc)} ({spec.description})") from None
+    return {name: node.get_parameter(name).value for name in specs}
+
+
+def _one_line(exc: Exception) -> str:
+    return " ".join(str(exc).split())
+
+
+def cli_parameter(argv, name: str) -> str | None:
+    """The value of ``-p name:=value`` (or ``--param``) among the ROS arguments of ``argv``, else None (what a
+    node needs before it exists, e.g. for its name; a params file is not read here)."""
+    in_ros = False
+    argv = list(argv)
+    for i, a in enumerate(argv):
+        if a == "--ros-args":
+            in_ros = True
+        elif a == "--":
+            in_ros = False
+        elif in_ros and a in ("-p", "--param") and i + 1 < len(argv):
+            key, sep, value = argv[i + 1].partition(":=")
+            if sep and key == name:
+                return value.strip("'\"")
+    return None
 
 
 def load_node_config(path: str) -> dict:
-    """The numeric config (config/*.yaml) a node runs with; '' means the shipped default."""
+    """The numeric config (config/*.yaml) a node runs with; '' means the shipped default. A bad file is a
+    ParameterError (parameter config_file)."""
     try:
         return load_config(path or default_config_path())
     except ConfigError as exc:
-        raise SystemExit(f"config error: {exc}") from None
+        raise ParameterError(f"parameter config_file: {exc}") from None
 
 
 def check_choice(name: str, value, choices) -> None:
     if value not in choices:
         raise ParameterError(f"parameter {name} must be one of {', '.join(map(str, choices))}, got {value!r}")
+
+
+CONFIG_FILE = Param("", "the YAML config (config/default.yaml and its units); '' = the shipped default")

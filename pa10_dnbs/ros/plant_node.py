@@ -13,6 +13,10 @@ paces the steps (``mode``):
   the tick are applied, a missing one is held or zeroed and counted as a
   miss; late tick starts are counted and not caught up.
 
+/clock goes out with the states of ``wire/clock_schedule.py``: one per
+1 / ``clock_hz`` of simulated time (default 100 Hz, as ``ros2 bag play
+--clock``; 0: none). The plant itself runs on wall time (no use_sim_time).
+
 Defensive: a non-finite effort counts as missing (hold or zero, counted), an
 out-of-range one is saturated at Table 2 and counted. Faults configured in
 ``faults.state`` are injected on each joint's state link. Fault counters go
@@ -21,9 +25,7 @@ to /diagnostics every second; timing figures and counters go to
 """
 from __future__ import annotations
 
-import json
 import math
-import os
 import sys
 import time
 
@@ -31,13 +33,16 @@ from rclpy.node import Node
 from rclpy.task import Future
 
 from .. import JOINT_NAMES
+from ..atomic_file import write_json
 from ..loop.cpu_meter import CpuMeter
 from ..loop.effort_gate import EffortGate
+from ..loop.endpoint_match import MatchWait
 from ..loop.plant_timing import PlantTiming
 from ..loop.rt_priority import apply_fifo, check_priority
 from ..plant.from_config import open_client, plant_from_config
+from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, check_clock_hz
 from .diagnostics import DiagnosticsReporter
-from .params import ParameterError, check_choice, declare, load_node_config
+from .params import CONFIG_FILE, Param, ParameterError, check_choice, declare, load_node_config
 from .plant_lockstep import run_lockstep
 from .plant_realtime import run_realtime
 from .plant_stats import diagnostics_report, plant_stats
@@ -46,17 +51,37 @@ from .runtime import announce_ready
 from .wire import StepClock, record_qos
 
 
+PARAMS = {
+    "config_file": CONFIG_FILE,
+    "mode": Param("lockstep", "lockstep (step once every effort is in) or realtime (wall-clock ticks)"),
+    "duration_s": Param(0.0, "simulated time to run [s]; 0 = simulation.duration_s of the config", 0.0),
+    "clock_hz": Param(DEFAULT_CLOCK_HZ, "/clock rate [Hz of simulated time]; 0 = no /clock", 0.0, 1e6),
+    "effort_timeout_s": Param(1.0, "lockstep: wall time to wait for an effort before replacing it [s]", 0.0),
+    "resend_s": Param(0.25, "lockstep: wall time before a missing effort's state is sent again [s]", 0.0),
+    "on_missing_effort": Param("hold", "what replaces a missing effort: hold (last torque) or zero"),
+    "reliability": Param("", "per-joint state/effort QoS: reliable, best_effort; '' = the mode's default"),
+    "stats_file": Param("", "JSON file for timing figures and counters at exit; '' = none"),
+    "min_joint_states_subscribers": Param(0, "joint_states subscribers to wait for before stepping", 0),
+    "start_timeout_s": Param(30.0, "wall time to wait for the graph to be matched [s]", 0.0),
+    "settle_s": Param(0.3, "wall time to wait after the graph is matched [s]", 0.0),
+    "state_subscribers": Param(1, "subscribers of each <joint>/state to wait for (besides recorders)", 0),
+    "clock_subscribers": Param(1, "/clock subscribers to wait for (besides recorders)", 0),
+    "recorders": Param(0, "recorders to wait for on every topic", 0),
+    "effort_queue_depth": Param(1000, "lockstep: keep_last depth of the effort subscriptions [messages]", 1),
+    "real_time_factor": Param(1.0, "realtime: a step of dt takes dt / real_time_factor of wall time", 0.0, 100.0),
+    "deadline_fraction": Param(0.9, "realtime: efforts count within this fraction of the tick, in (0, 1]", 0.0, 1.0),
+    "late_tolerance": Param(0.1, "realtime: a tick starting later than this fraction of a tick is late, in [0, 1)",
+                            0.0, 1.0),
+    "rt_priority": Param(0, "SCHED_FIFO priority 1..99 where allowed; 0 = off", 0, 99),
+    "warn_period_s": Param(1.0, "wall time between two warnings of the same kind [s]", 0.0),
+    "handshake_steps": Param(3, "realtime: first steps that wait for every effort before the tick schedule starts [steps]", 1),
+}
+
+
 class PlantNode(Node):
     def __init__(self):
         super().__init__("plant")
-        p = declare(self, {
-            "config_file": "", "mode": "lockstep", "duration_s": 0.0, "effort_timeout_s": 1.0,
-            "resend_s": 0.25, "on_missing_effort": "hold", "reliability": "", "stats_file": "",
-            "min_joint_states_subscribers": 0, "start_timeout_s": 30.0, "settle_s": 0.3,
-            "state_subscribers": 1, "clock_subscribers": 1, "recorders": 0, "effort_queue_depth": 1000,
-            "real_time_factor": 1.0, "deadline_fraction": 0.9, "late_tolerance": 0.1, "rt_priority": 0,
-            "warn_period_s": 1.0, "handshake_steps": 3,
-        })
+        p = declare(self, PARAMS)
         check_choice("mode", p["mode"], ("lockstep", "realtime"))
         check_choice("on_missing_effort", p["on_missing_effort"], ("hold", "zero"))
         realtime = p["mode"] == "realtime"
@@ -77,6 +102,10 @@ class PlantNode(Node):
         self.p = p
         cfg = load_node_config(p["config_file"])
         self.dt = cfg["simulation"]["dt_s"]
+        try:
+            check_clock_hz(p["clock_hz"], self.dt)
+        except ValueError as exc:
+            raise ParameterError(f"parameter clock_hz {exc}") from None
         duration = p["duration_s"] if p["duration_s"] > 0 else cfg["simulation"]["duration_s"]
         self.n_steps = int(round(duration / self.dt))
         self.clock_ = StepClock(self.dt)
@@ -88,7 +117,8 @@ class PlantNode(Node):
         # history, so a recorder that falls behind for a while still gets every message.
         self.wire = PlantWire(self, cfg, self.clock_, p["reliability"],
                               state_depth=1 if realtime else record_qos().depth,
-                              effort_depth=1 if realtime else p["effort_queue_depth"])
+                              effort_depth=1 if realtime else p["effort_queue_depth"], clock_hz=p["clock_hz"],
+                              last_step=self.n_steps)
         self.timing = PlantTiming(self.n_steps, len(JOINT_NAMES))
         self.cpu = CpuMeter()
         self.resends = [0] * len(JOINT_NAMES)
@@ -128,18 +158,18 @@ class PlantNode(Node):
 
     def wait_for_graph(self, executor, stop: Future) -> bool:
         """Spin until every endpoint has matched, then ``settle_s``; False when stopped first."""
-        t0 = time.perf_counter()
         rec = self.p["recorders"]  # each recorder subscribes to every topic, efforts included
+        wait = MatchWait(self.wire.needs(self.p["state_subscribers"] + rec, self.p["clock_subscribers"] + rec,
+                                         self.p["min_joint_states_subscribers"] + rec, rec), self.p["start_timeout_s"])
         while not stop.done():
-            lacking = self.wire.lacking(self.p["state_subscribers"] + rec, self.p["clock_subscribers"] + rec,
-                                        self.p["min_joint_states_subscribers"] + rec, rec)
-            if not lacking:
+            status = wait.poll()
+            if status == "met":
                 settle_end = time.perf_counter() + self.p["settle_s"]
                 while time.perf_counter() < settle_end and not stop.done():
                     executor.spin_once(timeout_sec=0.02)
                 return not stop.done()
-            if time.perf_counter() - t0 > self.p["start_timeout_s"]:
-                raise RuntimeError("graph incomplete after start_timeout_s: " + "; ".join(lacking))
+            if status == "timeout":
+                raise RuntimeError("graph incomplete after start_timeout_s: " + "; ".join(wait.lacking))
             executor.spin_once(timeout_sec=0.05)
         return False
 
@@ -161,10 +191,7 @@ class PlantNode(Node):
         self.wire.close()
         path = self.p["stats_file"]
         if path:
-            tmp = f"{path}.tmp"
-            with open(tmp, "w") as f:
-                json.dump(self.stats(), f, indent=2)
-            os.replace(tmp, path)
+            write_json(path, self.stats())
         print(self.cpu.line("plant"), flush=True)
         self._client.disconnect()
 

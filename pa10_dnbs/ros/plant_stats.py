@@ -13,26 +13,23 @@ import math
 import time
 
 from .. import JOINT_NAMES
+from ..loop.plant_counters import FAULT_KEYS, plant_counters
 from ..loop.plant_timing import step_ranges
-from .diagnostics import status
+from .diagnostics import status, status_name
 
-FAULT_KEYS = ("effort_timeouts", "nonfinite_efforts", "out_of_range_efforts", "malformed_efforts")
 MAX_RANGES = 100  # miss ranges kept per joint in the stats file
 
 
 def joint_counters(node, i: int) -> dict:
-    gate, wire = node.gate, node.wire
-    c = {"effort_timeouts": int(gate.timeouts[i]), "nonfinite_efforts": int(gate.nonfinite[i]),
-         "out_of_range_efforts": int(wire.out_of_range[i]), "malformed_efforts": int(wire.malformed[i]),
-         "missed_ticks": int(gate.misses[i]), "resent_states": int(node.resends[i])}
-    link = wire.state_links[i]
+    c = plant_counters(node.gate, node.wire, node.resends, i)
+    link = node.wire.state_links[i]
     if link is not None:
         c.update({f"injected_state_{k}": v for k, v in link.counters().items()})
     return c
 
 
 def diagnostics_report(node) -> list:
-    return [status(f"pa10/plant/{name}", "plant", joint_counters(node, i), FAULT_KEYS)
+    return [status(status_name(node, "plant", name), node.get_name(), joint_counters(node, i), FAULT_KEYS)
             for i, name in enumerate(JOINT_NAMES)]
 
 
@@ -45,16 +42,11 @@ def plant_stats(node) -> dict:
         link = wire.state_links[i]
         joints.append({
             "name": name,
-            "effort_timeouts": int(gate.timeouts[i]),
-            "missed_ticks": int(gate.misses[i]),
+            **plant_counters(gate, wire, node.resends, i),
             "first_missed_step": gate.miss_steps[i][0] if gate.miss_steps[i] else None,
             "miss_ranges": step_ranges(gate.miss_steps[i], MAX_RANGES),
-            "nonfinite_efforts": int(gate.nonfinite[i]),
             "stale_efforts": int(gate.stale[i]),
             "ahead_efforts_dropped": int(gate.dropped_ahead[i]),
-            "resent_states": int(node.resends[i]),
-            "malformed_efforts": int(wire.malformed[i]),
-            "out_of_range_efforts": int(wire.out_of_range[i]),
             "timeout_ranges": step_ranges(gate.timeout_steps[i]),
             "injected_state_faults": link.counters() if link is not None else None,
             **node.timing.joint_summary(i, k),

@@ -1,10 +1,13 @@
 """The plant's wire I/O: what it publishes each step and how it takes the efforts.
 
-Publishes /robot_description (the URDF, transient-local), /clock,
-/joint_states (all 7: position, velocity, and as effort the torque applied
-over the step that led to this state) and per joint /pa10/<joint>/state
+Names relative to the node's namespace (/pa10 by default, wire/topics.py).
+Publishes robot_description (the URDF, transient-local), /clock (with the
+states ``ClockSchedule`` picks: one per 1 / clock_hz of simulated time, and
+the last; none with clock_hz 0),
+joint_states (all 7: position, velocity, and as effort the torque applied
+over the step that led to this state) and per joint <joint>/state
 (that joint only, stamped k T), through each joint's fault-injecting state
-link when ``faults.state`` configures one. The seven /pa10/<joint>/effort
+link when ``faults.state`` configures one. The seven <joint>/effort
 subscriptions are polled (``polled.py``): the plant blocks on one wait set
 over them and takes every effort that is there at once, so it wakes once
 per batch of efforts, not once per effort. Decoded efforts come out
@@ -27,25 +30,32 @@ from std_msgs.msg import String
 from .. import JOINT_NAMES
 from ..faults.faulty_link import links_from_config
 from ..kinematics.urdf_chain import UrdfChain
+from ..loop.endpoint_match import Need
 from ..wire import joint_state_cdr
+from ..wire.clock_schedule import ClockSchedule
 from .polled import PolledSubscription, SubscriptionWaitSet
 from .wire import (CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, StepClock, description_qos, effort_topic, loop_qos,
-                   record_qos, state_topic)
+                   record_qos, state_topic)  # relative names
 
 
 CLOCK_CDR = struct.Struct("<HHiI")  # rosgraph_msgs/Clock: encapsulation (little-endian CDR), sec, nanosec
 
 
 class PlantWire:
-    def __init__(self, node, cfg: dict, clock: StepClock, reliability: str, state_depth: int, effort_depth: int):
-        """``reliability`` and the depths: QoS of the per-joint state and effort topics."""
+    def __init__(self, node, cfg: dict, clock: StepClock, reliability: str, state_depth: int, effort_depth: int,
+                 clock_hz: float, last_step: int):
+        """``reliability`` and the depths: QoS of the per-joint state and effort topics; ``clock_hz``: /clock
+        rate [Hz of simulated time] (0: no /clock); ``last_step``: the run's last state (it carries a /clock)."""
         self.node = node
         self.clock = clock
         n = len(JOINT_NAMES)
         self.state_qos = loop_qos(reliability, depth=state_depth)
         self.effort_qos = loop_qos(reliability, depth=effort_depth)
         self._state_pubs = [node.create_publisher(JointState, state_topic(j), self.state_qos) for j in JOINT_NAMES]
-        self._clock_pub = node.create_publisher(Clock, CLOCK, loop_qos("reliable", depth=record_qos().depth))
+        self._clock_pub = None
+        if clock_hz > 0:
+            self._clock_pub = node.create_publisher(Clock, CLOCK, loop_qos("reliable", depth=record_qos().depth))
+            self._clock_schedule = ClockSchedule(clock_hz, clock.dt_ns / 1e9, last_step)
         self._js_pub = node.create_publisher(JointState, JOINT_STATES, record_qos())
         self._effort_subs = [PolledSubscription(node, JointState, effort_topic(j), self.effort_qos) for j in JOINT_NAMES]
         self._wait_set = SubscriptionWaitSet(node, self._effort_subs)
@@ -66,8 +76,8 @@ class PlantWire:
 
     # ------------------------------------------------------------- out
     def publish_state(self, k: int, q: np.ndarray, qd: np.ndarray, applied: np.ndarray, joints=None) -> int:
-        """State ``k`` on every per-joint topic (or only ``joints``, a resend); with all joints also /clock and
-        /joint_states. Returns the wall time [ns, system clock] just before the per-joint states went out."""
+        """State ``k`` on every per-joint topic (or only ``joints``, a resend); with all joints also joint_states
+        and, when due, /clock. Returns the wall time [ns, system clock] just before the per-joint states went out."""
         ql, qdl = q.tolist(), qd.tolist()
         sec, nanosec = self.clock.sec_nanosec(k)
         t_ns = time.time_ns()
@@ -80,7 +90,8 @@ class PlantWire:
             pos = link.corrupt_value() if fate.corrupt else ql[j]
             link.send(self._state_layouts[j].encode(sec, nanosec, pos, qdl[j]), fate)
         if joints is None:
-            self._clock_pub.publish(CLOCK_CDR.pack(0x0100, 0, sec, nanosec))  # raw CDR: no message conversion
+            if self._clock_pub is not None and self._clock_schedule.due(k):
+                self._clock_pub.publish(CLOCK_CDR.pack(0x0100, 0, sec, nanosec))  # raw CDR: no message conversion
             self._js_pub.publish(joint_state_cdr.encode(sec, nanosec, JOINT_NAMES, ql, qdl, applied.tolist()))
         return t_ns
 
@@ -114,20 +125,21 @@ class PlantWire:
         return out
 
     # ------------------------------------------------------------- graph
-    def lacking(self, state_subscribers: int, clock_subscribers: int, joint_states_subscribers: int,
-                recorders: int) -> list[str]:
-        """What is not matched yet (empty once the graph is complete)."""
+    def needs(self, state_subscribers: int, clock_subscribers: int, joint_states_subscribers: int,
+              recorders: int) -> list[Need]:
+        """The endpoints the graph must have matched before the first state goes out (``MatchWait``)."""
         node = self.node
-        out = [f"{state_topic(j)} (fewer than {state_subscribers} subscribers)"
-               for j, pub in zip(JOINT_NAMES, self._state_pubs) if pub.get_subscription_count() < state_subscribers]
-        out += [f"{effort_topic(j)} (no publisher)" for j, sub in zip(JOINT_NAMES, self._effort_subs)
-                if sub.get_publisher_count() < 1]
-        out += [f"{effort_topic(j)} (fewer than {recorders} recorders)" for j in JOINT_NAMES
-                if node.count_subscribers(effort_topic(j)) < 1 + recorders]
-        if self._clock_pub.get_subscription_count() < clock_subscribers:
-            out.append(f"{CLOCK} (fewer than {clock_subscribers} subscribers)")
-        if self._js_pub.get_subscription_count() < joint_states_subscribers:
-            out.append(f"{JOINT_STATES} (fewer than {joint_states_subscribers} subscribers)")
+        out = [Need(pub.topic_name, "subscribers", state_subscribers, pub.get_subscription_count)
+               for pub in self._state_pubs]
+        out += [Need(node.resolve_topic_name(sub.topic), "publishers", 1, sub.get_publisher_count)
+                for sub in self._effort_subs]
+        # the plant's own subscription and one per recorder
+        out += [Need(node.resolve_topic_name(effort_topic(j)), "subscribers", 1 + recorders,
+                     lambda t=effort_topic(j): node.count_subscribers(t)) for j in JOINT_NAMES if recorders]
+        if self._clock_pub is not None:
+            out.append(Need(CLOCK, "subscribers", clock_subscribers, self._clock_pub.get_subscription_count))
+        out.append(Need(self._js_pub.topic_name, "subscribers", joint_states_subscribers,
+                        self._js_pub.get_subscription_count))
         return out
 
     def flush(self, timeout_s: float = 2.0) -> bool:
@@ -135,7 +147,7 @@ class PlantWire:
         sent, so the observer gets the last states before the plant's writers go away; True when all did."""
         end = time.monotonic() + timeout_s
         ok = True
-        for pub in [self._js_pub, self._clock_pub] + self._state_pubs:
+        for pub in [self._js_pub] + ([self._clock_pub] if self._clock_pub else []) + self._state_pubs:
             left = max(0.0, end - time.monotonic())
             ok = pub.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9))) and ok
         return ok

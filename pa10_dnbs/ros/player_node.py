@@ -2,14 +2,16 @@
 
 Payloads go out as recorded (raw CDR). Timing: a message logged at t is
 published at wall time w0 + (t - t_first) / rate. Options: topic selection,
-start offset [s], loop, /clock from the bag's timeline at ``clock_hz``
+start offset [s], loop, the arm's topics moved into another namespace
+(``namespace``: /pa10/s1/state -> /arm2/s1/state; global ones stay),
+/clock from the bag's timeline at ``clock_hz``
 (the recorded /clock is then not replayed), and waiting until every
 publisher has a subscriber. Publishers use the recorded reliability and
 durability, keep_last with at least ``queue_depth``. Topics whose message
 package is not installed (tf2_msgs) are skipped, with a warning.
 
 With a live view (``replay --live``, see live/view.py) the player waits for a
-Foxglove client to subscribe to /joint_states, then feeds the view each
+Foxglove client to subscribe to the arm's joint_states, then feeds the view each
 message of the topics it reads as it plays it (the URDF first, whatever the
 start offset), so the client sees the run at its recorded timing.
 """
@@ -24,7 +26,9 @@ from rclpy.qos import QoSProfile
 from rosgraph_msgs.msg import Clock
 
 from ..bag.bag_reader import Bag
-from ..wire.topics import CLOCK, JOINT_STATES, ROBOT_DESCRIPTION
+from ..loop.endpoint_match import MatchWait, Need
+from .. import JOINT_NAMES
+from ..wire.topics import CLOCK, find_arm, renamed
 from ..wire.steps import NS_PER_S
 from .bag_qos import from_bag_qos
 from .msg_types import message_class
@@ -42,6 +46,7 @@ class PlayOptions:
     clock_hz: float = 0.0                               # 0: no /clock from the player
     wait_for_subscribers_s: float = 0.0                 # 0: do not wait
     queue_depth: int = 1000
+    namespace: str | None = None                        # None: topics as recorded
 
 
 class PlayerNode(Node):
@@ -49,6 +54,8 @@ class PlayerNode(Node):
         """``live``: a LiveView to feed (replay --live), or None."""
         super().__init__("player")
         self.bag, self.opt, self.live = bag, opt, live
+        src = find_arm(bag.topics, JOINT_NAMES[0])
+        self.out_name = {t: renamed(t, src, opt.namespace) for t in bag.topics}  # bag topic -> published name
         topics = opt.topics or sorted(bag.topics)
         if opt.clock_hz > 0:
             topics = [t for t in topics if t != CLOCK]
@@ -61,36 +68,39 @@ class PlayerNode(Node):
                 self.skipped.append(t)
                 self.get_logger().warning(f"not playing {t}: {exc}")
                 continue
-            self.pubs[t] = self.create_publisher(cls, t, from_bag_qos(bag.qos_profiles(t), opt.queue_depth))
+            self.pubs[t] = self.create_publisher(cls, self.out_name[t],
+                                                 from_bag_qos(bag.qos_profiles(t), opt.queue_depth))
         self._clock_pub = self.create_publisher(Clock, CLOCK, QoSProfile(depth=10)) if opt.clock_hz > 0 else None
         self.published = 0
         self.exit_code = 0
         # topics read for the live view only (not published, or not played: /tf has no Python message package)
-        self._live_only = [t for t in (live.topics() if live else []) if t in bag.topics and t not in self.pubs]
-        if live is not None:
-            for topic, _, _, data in bag.messages([ROBOT_DESCRIPTION]):
-                live.on_message(topic, bytes(data))
+        shown = set(live.topics()) if live else set()
+        self._live_only = [t for t in bag.topics if self.out_name[t] in shown and t not in self.pubs]
+        if live is not None and src is not None:
+            for topic, _, _, data in bag.messages([src.robot_description]):
+                live.on_message(self.out_name[topic], bytes(data))
         announce_ready("player")
 
     def _wait_for_live_client(self, stop) -> bool:
-        """Hold playback until a Foxglove client subscribes to /joint_states (Ctrl-C stops waiting)."""
+        """Hold playback until a Foxglove client subscribes to the arm's joint_states (Ctrl-C stops waiting)."""
         print(f"LIVE waiting for a Foxglove client on {self.live.sink.url}", flush=True)
         while not stop.done():
             self.live.tick(time.perf_counter())  # sends the URDF to clients that subscribe meanwhile
-            if self.live.sink.wanted(JOINT_STATES):
+            if self.live.sink.wanted(self.live.arm.joint_states):
                 return True
             time.sleep(WAIT_SLICE_S)
         return False
 
     def _wait_for_subscribers(self, stop) -> bool:
-        deadline = time.monotonic() + self.opt.wait_for_subscribers_s
+        wait = MatchWait([Need(p.topic_name, "subscribers", 1, p.get_subscription_count) for p in self.pubs.values()],
+                         self.opt.wait_for_subscribers_s)
         while not stop.done():
-            lacking = [t for t, p in self.pubs.items() if p.get_subscription_count() < 1]
-            if not lacking:
+            status = wait.poll()
+            if status == "met":
                 return True
-            if time.monotonic() > deadline:
+            if status == "timeout":
                 self.get_logger().error(f"no subscriber after {self.opt.wait_for_subscribers_s:g} s on: "
-                                        + ", ".join(lacking))
+                                        + ", ".join(wait.lacking))
                 self.exit_code = 1
                 return False
             time.sleep(WAIT_SLICE_S)
@@ -128,7 +138,7 @@ class PlayerNode(Node):
                 self.pubs[topic].publish(bytes(data))
                 self.published += 1
             if self.live is not None:
-                self.live.on_message(topic, bytes(data))
+                self.live.on_message(self.out_name[topic], bytes(data))
         if self.live is not None:  # the last state of the pass
             self.live.tick(time.perf_counter() + self.live.decimator.period_s)
         return True

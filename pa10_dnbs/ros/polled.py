@@ -26,6 +26,8 @@ from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.qos import QoSProfile
 from rclpy.type_support import check_is_valid_msg_type
 
+from .wall_timer import wall_timer
+
 
 class PolledSubscription:
     """A subscription outside the executor; ``take()`` returns (message or CDR bytes, received [ns]) or None."""
@@ -72,7 +74,7 @@ class Inbox:
         self._node = node
         self._routes: list[tuple[PolledSubscription, Callable]] = []
         self.received = 0
-        self.timer = node.create_timer(period_s, self.drain)
+        self.timer = wall_timer(node, period_s, self.drain)
 
     def subscribe(self, msg_type, topic: str, qos: QoSProfile, callback: Callable, raw: bool = True
                   ) -> PolledSubscription:

@@ -4,9 +4,14 @@ Like ``ros2 bag record``: each topic is subscribed (raw, no deserialising)
 once a publisher is discovered, with reliable / transient-local QoS only if
 every publisher offers it, and the publishers' offered QoS profiles go into
 the bag. Log time is the latest /clock (``time_source: clock``, what
-``--use-sim-time`` gives) or the system clock. It also writes /tf (at
+``--use-sim-time`` gives: in steps of 1 / clock_hz, 10 ms at the default
+100 Hz; the stamps inside the messages keep every step) or the system clock. It also writes /tf (at
 ``tf_rate_hz`` of simulated time) and /tf_static from /joint_states and the
 URDF's forward kinematics, since tf2_msgs has no Python wheel here.
+Topic names are recorded resolved (absolute); a relative name in ``topics``
+is resolved in the recorder's namespace, whose arm (``/pa10`` when the
+recorder runs at the root) gives the joint_states and reference topics /tf
+and PROGRESS are computed from.
 On SIGINT/SIGTERM it takes what is still queued, then closes the bag
 (summary + metadata.yaml). It prints ``PROGRESS k`` (the step of
 /joint_states) now and then and, with ``end_stamp_ns`` >= 0, ``COMPLETE``
@@ -33,14 +38,15 @@ from ..kinematics.urdf_chain import UrdfChain
 from ..wire import joint_state_cdr
 from ..wire.reference_buffer import ReferenceBuffer
 from ..wire.steps import StepClock, cdr_stamp_ns, to_ns
-from ..wire.topics import reference_topic
+from ..wire.topics import DEFAULT_NS, ArmTopics, resolve
 from .bag_qos import bag_qos, subscription_qos, to_bag_qos
 from ..loop.cpu_meter import CpuMeter
 from .msg_types import message_class
-from .params import ParameterError, check_choice, declare, load_node_config
+from .params import CONFIG_FILE, Param, ParameterError, check_choice, declare, load_node_config
 from .polled import Inbox
 from .runtime import announce_ready, run_node, spin_until
-from .wire import CLOCK, JOINT_STATES, TF, TF_STATIC
+from .wire import CLOCK, TF, TF_STATIC
+from .wall_timer import wall_timer
 
 # types whose CDR body starts with a stamp (header.stamp, or the Clock's time)
 # (/diagnostics is stamped too, but on a wall-clock timer: it says nothing about completeness)
@@ -51,29 +57,43 @@ DRAIN_IDLE_S = 0.3   # at stop: take queued messages until none came for this lo
 DRAIN_LIMIT_S = 5.0
 
 
-def parse_topic_spec(spec: str) -> tuple[str, str | None]:
-    """'/name' or '/name:pkg/msg/Type' -> (name, type or None)."""
+def parse_topic_spec(spec: str, ns: str = DEFAULT_NS) -> tuple[str, str | None]:
+    """'name' or 'name:pkg/msg/Type' -> (absolute name, type or None); a relative name is resolved in ``ns``."""
     name, _, type_name = spec.partition(":")
-    if not name.startswith("/"):
-        raise ParameterError(f"topic {name!r}: give the full name, starting with '/'")
-    return name, type_name or None
+    if not name or name.endswith("/") or "//" in name:
+        raise ParameterError(f"topic {name!r} is not a topic name")
+    return resolve(name, ns), type_name or None
+
+
+PARAMS = {
+    "bag": Param("", "the bag directory to write (required)"),
+    "force": Param(False, "replace an existing bag"),
+    "topics": Param([""], "topics to record: names, optionally name:pkg/msg/Type; relative ones in the namespace"),
+    "all_topics": Param(False, "record every topic discovered"),
+    "time_source": Param("clock", "log time: clock (latest /clock) or system (wall time)"),
+    "config_file": CONFIG_FILE,
+    "custom_data": Param([""], "key=value entries for the bag's custom_data"),
+    "tf_rate_hz": Param(100.0, "/tf written from joint_states at this rate [Hz of simulated time]; 0 = none", 0.0),
+    "end_stamp_ns": Param(-1, "print COMPLETE once every stamped topic reached this stamp [ns]; -1 = never", -1),
+    "qos_depth": Param(2000, "keep_last depth of each subscription [messages]", 1),
+    "compression": Param("zstd", "MCAP chunk compression: zstd or none"),
+    "poll_period_s": Param(0.01, "wall time between two drains of the subscriptions [s]", 0.0),
+}
 
 
 class RecorderNode(Node):
     def __init__(self):
         super().__init__("recorder")
-        p = declare(self, {
-            "bag": "", "force": False, "topics": [""], "all_topics": False, "time_source": "clock",
-            "config_file": "", "custom_data": [""], "tf_rate_hz": 100.0, "end_stamp_ns": -1, "qos_depth": 2000,
-            "compression": "zstd", "poll_period_s": 0.01,
-        })
+        p = declare(self, PARAMS)
         if not p["bag"]:
             raise ParameterError("parameter bag is required (the bag directory to write)")
         if not p["poll_period_s"] > 0:
             raise ParameterError(f"parameter poll_period_s must be > 0 s, got {p['poll_period_s']}")
         if p["time_source"] not in ("clock", "system"):
             raise ParameterError(f"parameter time_source must be clock or system, got {p['time_source']!r}")
-        specs = [parse_topic_spec(s) for s in p["topics"] if s]
+        ns = self.get_namespace()
+        self.arm = ArmTopics(ns if ns != "/" else DEFAULT_NS)
+        specs = [parse_topic_spec(s, self.arm.ns) for s in p["topics"] if s]
         if not specs and not p["all_topics"]:
             raise ParameterError("give parameter topics (a list of /names) or all_topics:=true")
         self.p = p
@@ -101,12 +121,12 @@ class RecorderNode(Node):
         check_choice("compression", p["compression"], COMPRESSIONS)
         # x_d from the reference batches, for the worst |e| on PROGRESS lines (sampled at tf_rate_hz)
         self.refs = ReferenceBuffer(len(JOINT_NAMES), StepClock(cfg["simulation"]["dt_s"]))
-        self._ref_joint = {reference_topic(j): i for i, j in enumerate(JOINT_NAMES)}
+        self._ref_joint = {self.arm.reference(j): i for i, j in enumerate(JOINT_NAMES)}
         self.writer = BagWriter(Path(p["bag"]), force=p["force"], custom_data=custom, compression=p["compression"])
         self.cpu = CpuMeter()
         self.inbox = Inbox(self, p["poll_period_s"])
         self._discover()
-        self._timer = self.create_timer(0.2, self._discover)
+        self._timer = wall_timer(self, 0.2, self._discover)
         announce_ready("recorder")
 
     # ------------------------------------------------------------- discovery
@@ -143,7 +163,7 @@ class RecorderNode(Node):
         t_ns = self.now_ns if self.p["time_source"] == "clock" else time.time_ns()
         self.writer.write(topic, t_ns, data)
         self.received += 1
-        if topic == JOINT_STATES:
+        if topic == self.arm.joint_states:
             self._on_joint_states(data, t_ns)
         elif topic in self._ref_joint and self.chain is not None:
             self.refs.add_cdr(self._ref_joint[topic], data)

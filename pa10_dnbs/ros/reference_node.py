@@ -1,9 +1,11 @@
 """reference_node: publishes each joint's desired trajectory (eq. 27, Table 1) ahead of time.
 
-On /pa10/<joint>/reference (trajectory_msgs/JointTrajectory, one joint,
+On <ns>/<joint>/reference (<ns>: the arm's namespace, /pa10 by default; trajectory_msgs/JointTrajectory, one joint,
 reliable + transient-local) in batches of ``batch_steps`` points; header.stamp
 is the time of the first point, time_from_start counts from it. Paced by
-/clock: it keeps at least ``lookahead_steps`` published beyond the current step
+/clock (the plant's, 100 Hz of simulated time by default): it keeps at least
+``lookahead_steps`` published beyond the latest /clock step, which must cover
+the steps between two /clock messages (the launcher sees to it)
 (and, given ``duration_s``, stops lookahead_steps past the run's last step).
 Reports on /diagnostics the /clock messages it saw and those that went back
 in time (a fault: the reference it already sent cannot be taken back).
@@ -22,8 +24,8 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from .. import JOINT_NAMES
 from ..controller_factory import build_reference
-from .diagnostics import DiagnosticsReporter, status
-from .params import ParameterError, declare, load_node_config
+from .diagnostics import DiagnosticsReporter, status, status_name
+from .params import CONFIG_FILE, Param, ParameterError, declare, load_node_config
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
 from .runtime import announce_ready, run_node
@@ -34,11 +36,19 @@ FAULT_KEYS = ("clock_backwards",)
 CLOCK_DEPTH = 1000  # /clock messages kept between two polls
 
 
+PARAMS = {
+    "config_file": CONFIG_FILE,
+    "batch_steps": Param(100, "reference points per message [steps]", 1),
+    "lookahead_steps": Param(150, "steps kept published beyond the latest /clock (> reference.preview_steps)", 1),
+    "duration_s": Param(0.0, "the run's simulated time [s]: nothing past its end + lookahead; 0 = open-ended", 0.0),
+    "poll_period_s": Param(0.01, "wall time between two drains of /clock [s]", 0.0),
+}
+
+
 class ReferenceNode(Node):
     def __init__(self):
         super().__init__("reference")
-        p = declare(self, {"config_file": "", "batch_steps": 100, "lookahead_steps": 150, "duration_s": 0.0,
-                           "poll_period_s": 0.01})
+        p = declare(self, PARAMS)
         cfg = load_node_config(p["config_file"])
         preview = cfg["reference"]["preview_steps"]
         if p["batch_steps"] < 1 or p["lookahead_steps"] <= preview:
@@ -85,7 +95,7 @@ class ReferenceNode(Node):
     def _diagnostics(self) -> list:
         counters = {"clock_messages": self.clock_messages, "clock_backwards": self.clock_backwards,
                     "clock_step": self.clock_step, "published_through_step": self.published_until - 1}
-        return [status("pa10/reference", "reference", counters, FAULT_KEYS)]
+        return [status(status_name(self, "reference"), self.get_name(), counters, FAULT_KEYS)]
 
     def _publish_through(self, last_step: int) -> None:
         if self.last_step is not None:

@@ -1,4 +1,4 @@
-"""Topic names, QoS profiles and message conversions shared by the nodes.
+"""Topic names (relative to the node's namespace, see wire/topics.py), QoS profiles and message conversions shared by the nodes.
 
 Step k is carried as the stamp k * T (integer nanoseconds), so step and
 simulated time are the same thing on the wire.
@@ -9,7 +9,7 @@ from builtin_interfaces.msg import Duration, Time
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from ..wire import steps
-from ..wire.topics import (ARM_NS, CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, TF, TF_STATIC,  # noqa: F401 (re-exported)
+from ..wire.topics import (CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, TF, TF_STATIC,  # noqa: F401 (re-exported)
                           effort_topic, reference_topic, state_topic)
 
 

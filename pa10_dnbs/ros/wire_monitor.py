@@ -23,17 +23,25 @@ from trajectory_msgs.msg import JointTrajectory
 from .. import JOINT_NAMES
 from ..wire.wire_record import WireRecord
 from ..wire import joint_state_cdr
-from .params import ParameterError, declare, load_node_config
+from .params import CONFIG_FILE, Param, ParameterError, declare, load_node_config
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
 from .runtime import announce_ready, run_node, spin_until
 from .wire import JOINT_STATES, StepClock, record_qos, reference_qos, reference_topic
 
 
+PARAMS = {
+    "config_file": CONFIG_FILE,
+    "duration_s": Param(0.0, "the run's simulated time [s]; 0 = simulation.duration_s of the config", 0.0),
+    "out_file": Param("", "the record written at exit [.npz] (required)"),
+    "poll_period_s": Param(0.01, "wall time between two drains of the subscriptions [s]", 0.0),
+}
+
+
 class WireMonitorNode(Node):
     def __init__(self):
         super().__init__("wire_monitor")
-        p = declare(self, {"config_file": "", "duration_s": 0.0, "out_file": "", "poll_period_s": 0.01})
+        p = declare(self, PARAMS)
         if not p["out_file"]:
             raise ParameterError("parameter out_file is required")
         if not p["poll_period_s"] > 0:

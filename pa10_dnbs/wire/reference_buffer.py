@@ -1,7 +1,7 @@
 """x_d(k) per joint from the reference batches on the wire, for observers that show |e| as it happens.
 
-Fed with the raw JointTrajectory batches of /pa10/<joint>/reference (see
-joint_trajectory_cdr.py), it answers x_d at a step, the tracking error
+Fed with the raw JointTrajectory batches of <ns>/<joint>/reference (see
+trajectory_cdr.py), it answers x_d at a step, the tracking error
 e = x_d - x [rad] of a state, and keeps the worst |e| seen so far. Steps
 already shown can be forgotten so a long run does not grow it. No ROS, no numpy.
 """
@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 import struct
 
-from . import joint_trajectory_cdr
+from . import trajectory_cdr
 from .steps import StepClock
 
 
@@ -28,12 +28,12 @@ class ReferenceBuffer:
     def add_cdr(self, joint: int, data: bytes) -> bool:
         """Add a raw JointTrajectory batch of ``joint`` (first position of each point); False if malformed."""
         try:
-            sec, nanosec, _, points = joint_trajectory_cdr.decode(data)
+            sec, nanosec, _, points = trajectory_cdr.decode(data)
         except (ValueError, struct.error, UnicodeDecodeError):
             self.malformed += 1
             return False
         k0 = self.clock.step_of_sec_nanosec(sec, nanosec)
-        self._x[joint].update((k0 + self.clock.step_of_ns(t_ns), pos[0]) for pos, t_ns in points if pos)
+        self._x[joint].update((k0 + self.clock.step_of_ns(t_ns), pos[0]) for pos, _, t_ns in points if pos)
         return True
 
     def at(self, step: int) -> list[float]:

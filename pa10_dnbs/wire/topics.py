@@ -1,25 +1,133 @@
-"""Topic names of the graph (no ROS imports, so bag tools can use them without rclpy).
+"""Topic names of the graph, relative to the arm's namespace (no ROS imports: bag tools use them without rclpy).
 
-/pa10/<joint>/{state,effort,reference} per joint, /joint_states and /clock
-for the whole arm, /robot_description (URDF), /diagnostics (every node's fault
-counters) and, in bags, /tf and /tf_static.
+Nodes create RELATIVE names (``s1/state``, ``joint_states``, ...) and run in
+the arm's ROS namespace (``--ros-args -r __ns:=/pa10``, the default), so
+rcl resolves them to ``/pa10/s1/state``, ``/pa10/joint_states``, ... Four
+names are global whatever the namespace: /clock, /tf, /tf_static and
+/diagnostics. ``ArmTopics`` resolves every name for one namespace (what
+tools outside a node need: the launcher, the recorder's topic list, bag
+analysis); ``find_arm`` finds the layout of a recorded bag, old bags with
+/joint_states and /robot_description at the root included.
 """
-ARM_NS = "/pa10"
-JOINT_STATES = "/joint_states"
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+DEFAULT_NS = "/pa10"
+
+# relative to the arm's namespace
+JOINT_STATES = "joint_states"
+ROBOT_DESCRIPTION = "robot_description"
+TRACKING = "tracking"  # the live view's JSON channel (Foxglove only, not a ROS topic)
+
+# global
 CLOCK = "/clock"
-ROBOT_DESCRIPTION = "/robot_description"
 TF = "/tf"
 TF_STATIC = "/tf_static"
 DIAGNOSTICS = "/diagnostics"
 
+_NS_RE = re.compile(r"/[A-Za-z0-9_]+(/[A-Za-z0-9_]+)*")
+
 
 def state_topic(joint: str) -> str:
-    return f"{ARM_NS}/{joint}/state"
+    """Relative: the plant's state of ``joint`` [rad, rad/s]."""
+    return f"{joint}/state"
 
 
 def effort_topic(joint: str) -> str:
-    return f"{ARM_NS}/{joint}/effort"
+    """Relative: the controller's torque for ``joint`` [N m]."""
+    return f"{joint}/effort"
 
 
 def reference_topic(joint: str) -> str:
-    return f"{ARM_NS}/{joint}/reference"
+    """Relative: the reference batches of ``joint`` [rad, rad/s]."""
+    return f"{joint}/reference"
+
+
+def check_namespace(ns: str) -> str:
+    """``ns`` if it is a valid arm namespace (starts with '/', [A-Za-z0-9_] segments, no '//', no trailing '/',
+    no segment starting with a digit), else ValueError saying why."""
+    if not isinstance(ns, str) or not _NS_RE.fullmatch(ns) or any(s[0].isdigit() for s in ns.split("/")[1:]):
+        raise ValueError(f"expected a ROS namespace like /pa10 or /lab/arm2 ('/'-separated names of letters, digits "
+                         f"and '_', not starting with a digit; no '//' and no trailing '/'), got {ns!r}")
+    return ns
+
+
+def resolve(name: str, ns: str = DEFAULT_NS) -> str:
+    """The absolute name of ``name`` in namespace ``ns`` (absolute names stay as they are)."""
+    return name if name.startswith("/") else f"{ns}/{name}"
+
+
+@dataclass(frozen=True)
+class ArmTopics:
+    """Every topic name of one arm, resolved (absolute)."""
+
+    ns: str = DEFAULT_NS
+    joint_states: str = ""
+    robot_description: str = ""
+
+    def __post_init__(self):
+        if not self.joint_states:
+            object.__setattr__(self, "joint_states", resolve(JOINT_STATES, self.ns))
+        if not self.robot_description:
+            object.__setattr__(self, "robot_description", resolve(ROBOT_DESCRIPTION, self.ns))
+
+    @property
+    def tracking(self) -> str:
+        return resolve(TRACKING, self.ns)
+
+    def state(self, joint: str) -> str:
+        return resolve(state_topic(joint), self.ns)
+
+    def effort(self, joint: str) -> str:
+        return resolve(effort_topic(joint), self.ns)
+
+    def reference(self, joint: str) -> str:
+        return resolve(reference_topic(joint), self.ns)
+
+    def relative(self, topic: str) -> str:
+        """``topic`` as a node in ``ns`` names it (the inverse of ``resolve``); global names unchanged."""
+        if topic == self.joint_states:
+            return JOINT_STATES
+        if topic == self.robot_description:
+            return ROBOT_DESCRIPTION
+        prefix = self.ns + "/"
+        return topic[len(prefix):] if topic.startswith(prefix) else topic
+
+
+def arm_topics(ns: str = DEFAULT_NS) -> ArmTopics:
+    return ArmTopics(check_namespace(ns))
+
+
+def legacy_topics() -> ArmTopics:
+    """Bags recorded before the namespace rule: per-joint topics under /pa10, /joint_states and
+    /robot_description at the root."""
+    return ArmTopics(DEFAULT_NS, joint_states="/" + JOINT_STATES, robot_description="/" + ROBOT_DESCRIPTION)
+
+
+def find_arm(topics, joint: str) -> ArmTopics | None:
+    """The arm layout of a set of topic names (a bag's): the namespace whose ``<ns>/joint_states`` and
+    ``<ns>/<joint>/reference`` are both there, else the legacy layout if it fits, else None. Several arms:
+    the default namespace first, then the first in sorted order."""
+    names = set(topics)
+    suffix = "/" + JOINT_STATES
+    found = sorted(t[: -len(suffix)] for t in names if t.endswith(suffix) and len(t) > len(suffix))
+    found.sort(key=lambda ns: ns != DEFAULT_NS)
+    for ns in found:
+        arm = ArmTopics(ns)
+        if arm.reference(joint) in names:
+            return arm
+    legacy = legacy_topics()
+    if legacy.joint_states in names and legacy.reference(joint) in names:
+        return legacy
+    return None
+
+
+def renamed(topic: str, src: ArmTopics | None, ns: str | None) -> str:
+    """``topic`` of arm ``src`` moved into namespace ``ns`` (replay --namespace); global names, topics of no
+    arm, and any topic when ``ns`` is None stay as they are."""
+    if ns is None or src is None:
+        return topic
+    rel = src.relative(topic)
+    return topic if rel.startswith("/") else resolve(rel, ns)

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..atomic_file import atomic_path
+
 from ..run_data import RunData
 
 
@@ -80,10 +82,9 @@ class WireRecord:
 
     def save(self, path: Path) -> None:
         """npz at ``path``, written to a temporary name first."""
-        tmp = f"{path}.tmp.npz"
-        np.savez(tmp, dt_s=self.dt_s, position_rad=self.pos, velocity_rad_s=self.vel, effort_nm=self.eff,
-                 reference_rad=self.ref, got_state=self.got_state, got_ref=self.got_ref, malformed=self.malformed)
-        Path(tmp).replace(path)
+        with atomic_path(path, ".tmp.npz") as tmp:
+            np.savez(tmp, dt_s=self.dt_s, position_rad=self.pos, velocity_rad_s=self.vel, effort_nm=self.eff,
+                     reference_rad=self.ref, got_state=self.got_state, got_ref=self.got_ref, malformed=self.malformed)
 
     @classmethod
     def load(cls, path: Path) -> "WireRecord":

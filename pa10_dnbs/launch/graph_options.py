@@ -1,0 +1,66 @@
+"""What one run of the graph is given (``GraphOptions``) and what it gives back (``GraphResult``)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..wire.clock_schedule import DEFAULT_CLOCK_HZ
+from ..wire.topics import DEFAULT_NS
+
+
+class GraphFailure(RuntimeError):
+    """A node failed, exited early, or the run did not complete."""
+
+    def __init__(self, message: str, interrupted: bool = False):
+        super().__init__(message)
+        self.interrupted = interrupted
+
+
+@dataclass
+class GraphOptions:
+    config_path: Path
+    mode: str = "lockstep"
+    controller: str = "dnbs"
+    duration_s: float = 20.0
+    domain_id: int | None = None
+    reliability: str | None = None   # per-joint state/effort QoS; None: best_effort in realtime, reliable in lockstep
+    real_time_factor: float = 1.0    # realtime: a step of dt_s takes dt_s / real_time_factor of wall time
+    deadline_fraction: float = 0.9   # realtime: efforts must arrive within this fraction of the tick
+    rt_priority: int = 0             # SCHED_FIFO priority of plant and controllers (0: off)
+    effort_timeout_s: float = 1.0
+    on_missing_effort: str = "hold"
+    progress: bool = False
+    dt_s: float = 1e-3
+    record_bag: Path | None = None   # record every topic into this rosbag2 MCAP bag directory
+    force_bag: bool = False
+    restart: str | None = None       # 'resume' or 'fresh': restart a joint controller that died
+    max_restarts: int = 3            # per joint
+    netns: dict[str, str] = field(default_factory=dict)  # node group -> network namespace (multi-host)
+    init_from: Path | None = None    # warm start: a directory of <joint>.npz controller checkpoints
+    bag_compression: str = "zstd"    # 'zstd' (MCAP chunks, as `ros2 bag record -s mcap`) or 'none'
+    live_port: int | None = None     # serve the live view (Foxglove WebSocket) on this port; 0: a free one
+    live_host: str = "127.0.0.1"
+    live_hz: float = 50.0            # live view frames per second of wall time, at most
+    namespace: str = DEFAULT_NS      # the arm's ROS namespace: every node runs in it (topics relative to it)
+    clock_hz: float = DEFAULT_CLOCK_HZ  # /clock rate [Hz of simulated time]; every node but the plant uses it
+
+
+@dataclass
+class GraphResult:
+    stats: dict
+    exit_codes: dict[str, int]
+    domain_id: int
+    wall_total_s: float
+    wire_file: Path | None   # the wire monitor's record; None when the run went into the bag
+    bag: Path | None = None
+    restarts: list[dict] = field(default_factory=list)   # joint, exit code, wall time, resumed step
+    controllers: dict[str, dict] = field(default_factory=dict)  # joint -> counters of its last incarnation
+
+
+def loop_reliability(opt: GraphOptions) -> str:
+    """QoS reliability of the per-joint state/effort topics: as given, else the mode's default (realtime:
+    best effort, the sensor-data convention, so a late sample is overwritten, not re-sent; lockstep:
+    reliable, so nothing has to be re-requested)."""
+    if opt.reliability is not None:
+        return opt.reliability
+    return "best_effort" if opt.mode == "realtime" else "reliable"

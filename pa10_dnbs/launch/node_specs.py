@@ -1,0 +1,117 @@
+"""What to start: every node process of the graph as (name, argv), with its ROS arguments.
+
+Every node runs in the arm's namespace (``-r __ns:=NS``) under its own name (``-r __node:=``), and every
+node but the plant with ``use_sim_time:=true`` (the plant publishes /clock). Never imports rclpy.
+"""
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+from .. import JOINT_NAMES
+from ..wire.topics import CLOCK, DEFAULT_NS, DIAGNOSTICS, ArmTopics
+from .graph_options import GraphOptions, loop_reliability
+
+NODE_GROUPS = ("observer", "reference", "controllers", "plant")
+
+
+LIVE_VIEW = "live_view"  # the live observer: display only, its failure does not fail the run
+
+
+def node_group(name: str) -> str:
+    if name.startswith("joint_controller_"):
+        return "controllers"
+    return name if name in ("reference", "plant") else "observer"
+
+
+def _ros_args(node: str, params: dict, ns: str = DEFAULT_NS) -> list[str]:
+    args = ["--ros-args", "-r", f"__node:={node}", "-r", f"__ns:={ns}"]
+    for k, v in params.items():
+        args += ["-p", f"{k}:={v}"]
+    return args
+
+
+def graph_topics(ns: str = DEFAULT_NS) -> list[str]:
+    """Every topic of the graph of the arm in ``ns`` as recorder specs ('/name:pkg/msg/Type', resolved)."""
+    arm = ArmTopics(ns)
+    specs = [f"{CLOCK}:rosgraph_msgs/msg/Clock", f"{arm.joint_states}:sensor_msgs/msg/JointState",
+             f"{arm.robot_description}:std_msgs/msg/String", f"{DIAGNOSTICS}:diagnostic_msgs/msg/DiagnosticArray"]
+    for j in JOINT_NAMES:
+        specs += [f"{arm.state(j)}:sensor_msgs/msg/JointState", f"{arm.effort(j)}:sensor_msgs/msg/JointState",
+                  f"{arm.reference(j)}:trajectory_msgs/msg/JointTrajectory"]
+    return specs
+
+
+REALTIME_REFERENCE_BATCH = 20  # reference points per message in realtime (smaller bursts of work in the controllers)
+
+
+def reference_lookahead(opt: GraphOptions) -> int:
+    """Steps the reference node keeps published beyond the latest /clock: 150, or more when /clock comes less
+    often than every 100 steps (the plant must never need a reference past the next /clock)."""
+    every = math.ceil(1.0 / (opt.clock_hz * opt.dt_s) - 1e-9)
+    return max(150, every + 50)
+
+
+def _yaml_list(items: list[str]) -> str:
+    return "[" + ",".join(f"'{i}'" for i in items) + "]"
+
+
+def controller_command(opt: GraphOptions, workdir: Path, joint: str, incarnation: int = 0) -> list[str]:
+    """argv of joint ``joint``'s controller; a restarted one (incarnation > 0) resumes unless opt.restart is
+    'fresh', and is not killed again by faults.kill_controller_at_s."""
+    params = {"config_file": str(opt.config_path), "joint": joint, "controller": opt.controller,
+              "reliability": loop_reliability(opt), "queue_depth": 1 if opt.mode == "realtime" else 2000,
+              "rt_priority": opt.rt_priority,
+              "stats_file": str(workdir / f"controller_{joint}.json"), "incarnation": incarnation,
+              "resume": str(incarnation > 0 and opt.restart != "fresh").lower(),
+              "effort_subscribers": 1 + int(opt.record_bag is not None),  # the plant and the recorder
+              "use_sim_time": "true"}
+    if opt.controller == "dnbs":
+        params["checkpoint_file"] = str(workdir / "checkpoints" / f"{joint}.npz")
+        if opt.init_from is not None:
+            params["init_file"] = str(opt.init_from / f"{joint}.npz")
+    return [sys.executable, "-m", "pa10_dnbs.ros.joint_controller_node"] + _ros_args(f"joint_controller_{joint}",
+                                                                                    params, opt.namespace)
+
+
+def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[tuple[str, list[str]]]:
+    """(name, argv) of every process: the wire monitor, the recorder (with --record), the nine nodes,
+    the plant last (it starts stepping once the others are matched)."""
+    py = [sys.executable, "-m"]
+
+    def ros(node: str, params: dict) -> list[str]:
+        return _ros_args(node, {**params, "use_sim_time": "true"}, opt.namespace)
+
+    cfg = str(opt.config_path)
+    if opt.record_bag is None:
+        cmds = [("wire_monitor", py + ["pa10_dnbs.ros.wire_monitor"] + ros("wire_monitor", {
+                    "config_file": cfg, "duration_s": opt.duration_s, "out_file": str(wire_file)}))]
+    else:  # the recorder is the observer: the run is rebuilt from the bag
+        end_ns = int(round(opt.duration_s / opt.dt_s)) * int(round(opt.dt_s * 1e9))
+        custom = [f"controller={opt.controller}", f"mode={opt.mode}", f"duration_s={opt.duration_s!r}",
+                  f"reliability={loop_reliability(opt)}", f"config_file={cfg}", f"clock_hz={opt.clock_hz!r}",
+                  f"namespace={opt.namespace}"]
+        cmds = [("recorder", py + ["pa10_dnbs.ros.recorder_node"] + ros("recorder", {
+            "config_file": cfg, "bag": str(opt.record_bag), "force": str(opt.force_bag).lower(),
+            "topics": _yaml_list(graph_topics(opt.namespace)), "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns,
+            "compression": opt.bag_compression}))]
+    if opt.live_port is not None:  # display only: started after the observer, never waited for by the plant
+        cmds.append((LIVE_VIEW, py + ["pa10_dnbs.ros.live_observer_node"] + ros(LIVE_VIEW, {
+            "config_file": cfg, "host": opt.live_host, "port": opt.live_port, "display_hz": opt.live_hz})))
+    # realtime: smaller reference batches, so that decoding one (in each controller) never costs a tick its
+    # deadline; lockstep keeps 100 points per message (fewer messages, and timing does not matter there)
+    batch = REALTIME_REFERENCE_BATCH if opt.mode == "realtime" else 100
+    cmds.append(("reference", py + ["pa10_dnbs.ros.reference_node"] + ros(
+        "reference", {"config_file": cfg, "duration_s": opt.duration_s, "batch_steps": batch,
+                      "lookahead_steps": reference_lookahead(opt)})))
+    for j in JOINT_NAMES:
+        cmds.append((f"joint_controller_{j}", controller_command(opt, stats_file.parent, j)))
+    cmds.append(("plant", py + ["pa10_dnbs.ros.plant_node"] + _ros_args("plant", {
+        "config_file": cfg, "mode": opt.mode, "duration_s": opt.duration_s, "reliability": loop_reliability(opt),
+        "effort_timeout_s": opt.effort_timeout_s, "on_missing_effort": opt.on_missing_effort,
+        "real_time_factor": opt.real_time_factor, "deadline_fraction": opt.deadline_fraction,
+        "rt_priority": opt.rt_priority,
+        "stats_file": str(stats_file), "min_joint_states_subscribers": int(opt.record_bag is None),
+        "recorders": int(opt.record_bag is not None), "clock_hz": opt.clock_hz}, opt.namespace)))
+    return cmds

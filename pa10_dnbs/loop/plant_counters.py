@@ -1,0 +1,17 @@
+"""The plant's per-joint counters: one schema for /diagnostics, the stats file and metrics.json's faults."""
+from __future__ import annotations
+
+# non-zero means a fault: /diagnostics turns WARN and names them
+FAULT_KEYS = ("effort_timeouts", "nonfinite_efforts", "out_of_range_efforts", "malformed_efforts")
+# every counter, per joint (counts of steps or messages)
+COUNTER_KEYS = FAULT_KEYS + ("missed_ticks", "resent_states")
+# what metrics.json's faults section keeps of a joint's plant stats
+REPORT_KEYS = COUNTER_KEYS + ("timeout_ranges", "injected_state_faults")
+
+
+def plant_counters(gate, wire, resends, i: int) -> dict:
+    """COUNTER_KEYS of joint ``i`` from the effort gate (timeouts, non-finite, misses), the wire (out of range,
+    malformed) and the resend counts."""
+    values = (gate.timeouts[i], gate.nonfinite[i], wire.out_of_range[i], wire.malformed[i], gate.misses[i],
+              resends[i])
+    return {k: int(v) for k, v in zip(COUNTER_KEYS, values)}

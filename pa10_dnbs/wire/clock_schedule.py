@@ -1,0 +1,40 @@
+"""Which states carry a /clock message: one per 1 / clock_hz of simulated time, as `ros2 bag play --clock`.
+
+The plant publishes /clock with the first state of every period of ``1e9 / clock_hz`` ns of simulated
+time (state 0 included) and with the last state of the run, so a recorder sees /clock reach the end.
+The bag check of a lockstep run expects exactly these steps (``steps``).
+"""
+from __future__ import annotations
+
+from .steps import NS_PER_S, StepClock
+
+DEFAULT_CLOCK_HZ = 100.0  # simulated-time Hz, the default of `ros2 bag play --clock`
+
+
+def check_clock_hz(clock_hz: float, dt_s: float) -> None:
+    """ValueError unless 0 <= ``clock_hz`` [Hz] <= 1 / ``dt_s`` (at most one /clock per step; 0: off)."""
+    if not (clock_hz == clock_hz and 0 <= clock_hz <= 1.0 / dt_s + 1e-9):
+        raise ValueError(f"must be in [0, {1.0 / dt_s:g}] Hz of simulated time (0: no /clock), got {clock_hz}")
+
+
+class ClockSchedule:
+    def __init__(self, clock_hz: float, dt_s: float, last_step: int):
+        """``clock_hz`` > 0 [Hz of simulated time]; ``last_step``: the run's last state (always carries one)."""
+        self.period_ns = int(round(NS_PER_S / clock_hz))
+        self.clock = StepClock(dt_s)
+        self.last_step = last_step
+        self._period = -1  # the period of the latest /clock
+
+    def due(self, step: int) -> bool:
+        """True when state ``step`` (states come in increasing order) carries a /clock; records it."""
+        period = self.clock.ns(step) // self.period_ns
+        if period > self._period or step >= self.last_step:
+            self._period = period
+            return True
+        return False
+
+    @classmethod
+    def steps(cls, clock_hz: float, dt_s: float, last_step: int) -> set[int]:
+        """Every state 0..last_step that carries a /clock."""
+        s = cls(clock_hz, dt_s, last_step)
+        return {k for k in range(last_step + 1) if s.due(k)}

@@ -1,0 +1,36 @@
+#!/usr/bin/env python3
+"""Print the parameter tables of docs/graph.md (Markdown) from the nodes' descriptors (``PARAMS`` of each node).
+
+    .venv/bin/python scripts/param_tables.py > /tmp/params.md
+"""
+from __future__ import annotations
+
+import importlib
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+NODES = [("plant", "plant_node"), ("joint_controller_<joint>", "joint_controller_node"), ("reference", "reference_node"),
+         ("wire_monitor", "wire_monitor"), ("recorder", "recorder_node"), ("live_view", "live_observer_node")]
+
+
+def table(params: dict) -> str:
+    rows = ["| parameter | default | range | description |", "|---|---|---|---|"]
+    for name, p in params.items():
+        default = repr(p.default) if isinstance(p.default, str) else str(p.default).lower() \
+            if isinstance(p.default, bool) else str(p.default)
+        text = p.description.replace("<", "&lt;").replace(">", "&gt;")
+        rows.append(f"| `{name}` | `{default}` | {p.range_text()} | {text} |")
+    return "\n".join(rows)
+
+
+def main() -> int:
+    for name, module in NODES:
+        params = importlib.import_module(f"pa10_dnbs.ros.{module}").PARAMS
+        print(f"### `{name}` (`python -m pa10_dnbs.ros.{module}`)\n\n{table(params)}\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

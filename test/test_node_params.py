@@ -1,0 +1,31 @@
+"""Every node's bad parameter: exit code 2 and one line on stderr naming it, before the node does anything.
+
+Each case runs the node's main in its own process (rclpy starts, on the test's own domain); the cases run
+in parallel to keep the fast tier fast.
+"""
+import subprocess
+import sys
+
+from graph_harness import REPO, ros_env
+
+CASES = [  # (node module, bad parameter, word the error line must hold): one per node
+    ("plant_node", "deadline_fraction:=2.0", "deadline_fraction"),      # outside the descriptor's range
+    ("joint_controller_node", "queue_depth:=many", "queue_depth"),      # wrong type
+    ("reference_node", "config_file:=/no/such/config.yaml", "config_file"),
+    ("wire_monitor", "poll_period_s:=0.5", "out_file"),                 # a required parameter missing
+    ("recorder_node", "qos_depth:=0", "qos_depth"),
+    ("live_observer_node", "port:=70000", "port"),
+]
+TIMEOUT_S = 60
+
+
+def test_bad_parameter_exits_2_with_one_line(domain):
+    procs = [subprocess.Popen(["timeout", str(TIMEOUT_S), sys.executable, "-m", f"pa10_dnbs.ros.{module}",
+                               "--ros-args", "-p", param], cwd=REPO, env=ros_env(domain), text=True,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+             for module, param, _ in CASES]
+    results = [p.communicate(timeout=TIMEOUT_S + 10) for p in procs]
+    for (module, param, word), p, (out, err) in zip(CASES, procs, results):
+        lines = [ln for ln in err.splitlines() if ln.strip()]
+        assert p.returncode == 2, (module, param, p.returncode, out, err)
+        assert len(lines) == 1 and word in lines[0] and "Traceback" not in err, (module, param, err)
