@@ -24,6 +24,8 @@ starts from that file when it exists. Counters go to ``stats_file`` (JSON).
 """
 from __future__ import annotations
 
+from typing import NoReturn
+
 import functools
 import os
 import signal
@@ -48,7 +50,7 @@ from ..loop.endpoint_match import MatchWait, Need
 from ..loop.joint_loop import JointLoop
 from ..loop.rt_priority import apply_fifo, check_priority
 from .params import CONFIG_FILE, Param, ParameterError, check_choice, cli_parameter, declare, load_node_config
-from .runtime import announce_ready, run_node
+from .runtime import announce_ready, exit_process, run_node
 from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
 from .wall_timer import wall_timer
 
@@ -256,9 +258,9 @@ class JointControllerNode(Node):
         print(self.cpu.line(self.get_name()), flush=True)
 
 
-def main(args=None) -> int:
-    return run_node(functools.partial(JointControllerNode, args), args)
+def main(args=None) -> NoReturn:
+    exit_process(run_node(functools.partial(JointControllerNode, args), args))
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    main()

@@ -16,8 +16,8 @@ still arrive), /diagnostics too. Serves the live view on ``host``:``port``
 from __future__ import annotations
 
 import resource
-import sys
 import time
+from typing import NoReturn
 
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.node import Node
@@ -32,7 +32,7 @@ from ..live.server import LiveServer, LiveServerError
 from ..live.view import LiveView
 from .diagnostics import diagnostics_qos
 from .params import CONFIG_FILE, Param, ParameterError, declare, load_node_config
-from .runtime import announce_ready, run_node
+from .runtime import announce_ready, exit_process, run_node
 from ..wire.topics import DEFAULT_NS, DIAGNOSTICS, ArmTopics
 from .wire import description_qos, reference_qos
 from .wall_timer import wall_timer
@@ -108,9 +108,9 @@ class LiveObserverNode(Node):
               f"{self.view.malformed} malformed messages; CPU {use.ru_utime + use.ru_stime:.1f} s", flush=True)
 
 
-def main(args=None) -> int:
-    return run_node(LiveObserverNode, args)
+def main(args=None) -> NoReturn:
+    exit_process(run_node(LiveObserverNode, args))
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    main()

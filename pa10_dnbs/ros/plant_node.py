@@ -26,8 +26,8 @@ to /diagnostics every second; timing figures and counters go to
 from __future__ import annotations
 
 import math
-import sys
 import time
+from typing import NoReturn
 
 from rclpy.node import Node
 from rclpy.task import Future
@@ -202,11 +202,11 @@ def _check_positive(p: dict, *keys: str) -> None:
             raise ParameterError(f"parameter {k} must be a positive number, got {p[k]}")
 
 
-def main(args=None) -> int:
-    from .runtime import run_node
+def main(args=None) -> NoReturn:
+    from .runtime import exit_process, run_node
 
-    return run_node(PlantNode, args)
+    exit_process(run_node(PlantNode, args))
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    main()

@@ -24,9 +24,9 @@ from __future__ import annotations
 
 import json
 import struct
-import sys
 import time
 from pathlib import Path
+from typing import NoReturn
 
 from rclpy.node import Node
 
@@ -44,7 +44,7 @@ from ..loop.cpu_meter import CpuMeter
 from .msg_types import message_class
 from .params import CONFIG_FILE, Param, ParameterError, check_choice, declare, load_node_config
 from .polled import Inbox
-from .runtime import announce_ready, run_node, spin_until
+from .runtime import announce_ready, exit_process, run_node, spin_until
 from .wire import CLOCK, TF, TF_STATIC
 from .wall_timer import wall_timer
 
@@ -228,9 +228,9 @@ class RecorderNode(Node):
               f"{self.writer.path}" + (f"; never seen: {', '.join(missing)}" if missing else ""), flush=True)
 
 
-def main(args=None) -> int:
-    return run_node(RecorderNode, args)
+def main(args=None) -> NoReturn:
+    exit_process(run_node(RecorderNode, args))
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    main()

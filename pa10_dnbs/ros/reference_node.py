@@ -15,7 +15,7 @@ per message: the lookahead covers many polls.
 from __future__ import annotations
 
 import struct
-import sys
+from typing import NoReturn
 
 import numpy as np
 from rclpy.node import Node
@@ -28,7 +28,7 @@ from .diagnostics import DiagnosticsReporter, status, status_name
 from .params import CONFIG_FILE, Param, ParameterError, declare, load_node_config
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
-from .runtime import announce_ready, run_node
+from .runtime import announce_ready, exit_process, run_node
 from .wire import CLOCK, StepClock, loop_qos, reference_qos, reference_topic
 
 
@@ -116,9 +116,9 @@ class ReferenceNode(Node):
             self.published_until = k0 + self.batch
 
 
-def main(args=None) -> int:
-    return run_node(ReferenceNode, args)
+def main(args=None) -> NoReturn:
+    exit_process(run_node(ReferenceNode, args))
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    main()

@@ -4,7 +4,9 @@ Two workarounds for the rclpy 7.1.6 wheel:
 - ``EventsExecutor.spin()`` busy-loops, so nodes spin with
   ``spin_until_future_complete`` in short slices instead;
 - ``Node.destroy_node()`` sometimes never returns under load (see
-  ``_release_entities``), so teardown releases the endpoints itself.
+  ``_release_entities``), so teardown releases the endpoints itself, and a
+  node process leaves with ``exit_process`` (no interpreter finalization,
+  where the node handle would be destroyed the same way).
 rclpy's own signal handling is off (it raises KeyboardInterrupt wherever the
 interpreter is, including inside callbacks run by the C++ executor): SIGINT
 and SIGTERM complete a ``stop`` future that every spin loop checks; the node
@@ -16,7 +18,7 @@ import os
 import signal
 import sys
 import threading
-from typing import Callable
+from typing import Callable, NoReturn
 
 import rclpy
 from rclpy.executors import ExternalShutdownException
@@ -95,10 +97,27 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
         executor.shutdown()
         if node is not None:
             _release_entities(node)
+            node.destroy_node()  # the DDS participant goes with it (and its shared-memory files)
         rclpy.try_shutdown()
         signal.alarm(0)
         watchdog.cancel()
     return code
+
+
+def exit_process(code: int) -> NoReturn:
+    """End a node's process with ``code`` once ``run_node`` has torn it down, skipping the interpreter's
+    finalization.
+
+    At finalization the node handle is garbage-collected and can spin forever in
+    ``destroy_when_not_in_use()`` with the GIL held (the rclpy 7.1.6 wheel), by then with the default signal
+    dispositions back: seen as a controller that printed its STATS and was then killed by the launcher's
+    SIGTERM (exit -15). Files are written and closed by ``close()``, the endpoints released, the node
+    destroyed (so Fast DDS has removed its shared-memory files) and the context shut down before this is
+    called, under the teardown watchdog.
+    """
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
 
 
 def _release_entities(node) -> None:

@@ -13,8 +13,8 @@ nothing is lost between two drains.
 from __future__ import annotations
 
 import struct
-import sys
 from pathlib import Path
+from typing import NoReturn
 
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
@@ -26,7 +26,7 @@ from ..wire import joint_state_cdr
 from .params import CONFIG_FILE, Param, ParameterError, declare, load_node_config
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
-from .runtime import announce_ready, run_node, spin_until
+from .runtime import announce_ready, exit_process, run_node, spin_until
 from .wire import JOINT_STATES, StepClock, record_qos, reference_qos, reference_topic
 
 
@@ -97,9 +97,9 @@ class WireMonitorNode(Node):
         print(self.cpu.line("wire_monitor"), flush=True)
 
 
-def main(args=None) -> int:
-    return run_node(WireMonitorNode, args)
+def main(args=None) -> NoReturn:
+    exit_process(run_node(WireMonitorNode, args))
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    main()
