@@ -9,7 +9,7 @@ import pytest
 
 from pa10_dnbs.config import default_config_path, load_config
 
-LOCKSTEP_DURATION_S = 4.0
+LOCKSTEP_DURATION_S = 3.0
 
 
 _SHM_AT_START: set[str] = set()
@@ -51,7 +51,7 @@ def domain():
 
 @pytest.fixture(scope="session")
 def lockstep_run(tmp_path_factory):
-    """A 4 s lockstep DNBS run of the node graph, recorded into a bag: output dir, bag, exit code, output."""
+    """A 3 s lockstep DNBS run of the node graph, recorded into a bag: output dir, bag, exit code, output."""
     from graph_harness import Launcher
 
     from pa10_dnbs.launch.shm_cleanup import shm_files
@@ -63,7 +63,7 @@ def lockstep_run(tmp_path_factory):
     shm_before = shm_files()
     with lease_domain() as lease:
         la = Launcher("--mode", "lockstep", "--controller", "dnbs", "--duration", LOCKSTEP_DURATION_S, "--out", out,
-                      "--record", bag, domain_id=lease.domain_id, figures=True)
+                      "--record", bag, domain_id=lease.domain_id)
         try:
             pids = la.node_pids()
             rc = la.wait(timeout=300)

@@ -76,8 +76,8 @@ class Proc:
 
 
 class Launcher(Proc):
-    """``pa10-dnbs launch`` as a child process; without figures unless ``figures`` (they cost ~3 s a run and
-    only the session's lockstep run checks them)."""
+    """``pa10-dnbs launch`` as a child process; without figures unless ``figures`` (they cost ~3 s a run;
+    the report's figures are tested through ``simulate`` and ``analyse``, which share the writer)."""
 
     def __init__(self, *args, domain_id: int, figures: bool = False):
         extra = () if figures else ("--no-figures",)

@@ -1,6 +1,6 @@
 """Bags of the node graph: recorded in lockstep, read back by standard readers, analysed, replayed, re-driven.
 
-The recorded run is the session fixture ``lockstep_run`` (conftest.py): 4 s of lockstep DNBS with --record.
+The recorded run is the session fixture ``lockstep_run`` (conftest.py): 3 s of lockstep DNBS with --record.
 """
 import json
 import pickle

@@ -1,6 +1,6 @@
 """The node graph in lockstep: ready, converging over ROS, bit-identical to in-process, clean shutdown.
 
-One 4 s DNBS run, recorded into a bag (session fixture ``lockstep_run`` in conftest.py), is checked from
+One 3 s DNBS run, recorded into a bag (session fixture ``lockstep_run`` in conftest.py), is checked from
 several sides; test_bag_graph.py checks its bag.
 """
 import json
