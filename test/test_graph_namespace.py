@@ -36,7 +36,7 @@ def test_graph_in_namespace_arm2_records_arm2_topics_and_equals_in_process(tmp_p
             "/arm2/e1/reference"} <= topics
     assert counts["/arm2/joint_states"] == int(DURATION_S * 1000) + 1
 
-    r = run_cli("analyse", bag, "--out", tmp_path / "again", "--no-progress")
+    r = run_cli("analyse", bag, "--out", tmp_path / "again", "--no-progress", "--no-figures")
     assert r.returncode == 0, r.stderr
     analysed = json.loads((tmp_path / "again" / "metrics.json").read_text())
 
