@@ -78,6 +78,9 @@ PARAMS = {
 }
 
 
+FINAL_FLUSH_S = 10.0  # wall seconds the finished plant waits for every reliable subscriber to acknowledge
+
+
 class PlantNode(Node):
     def __init__(self):
         super().__init__("plant")
@@ -182,6 +185,9 @@ class PlantNode(Node):
             run_lockstep(self, executor, stop)
         else:
             run_realtime(self, executor, stop)
+        if self.finished and not stop.done() and not self.wire.flush(FINAL_FLUSH_S):
+            # the observer lags on a loaded machine: give it the run's last states before the writers go
+            self.get_logger().warning(f"not every subscriber acknowledged the last states within {FINAL_FLUSH_S:g} s")
 
     # ---------------------------------------------------------------- report
     def stats(self) -> dict:
