@@ -81,7 +81,7 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
     if stop.signal_name:
         failure = f"interrupted ({stop.signal_name})"
     say("launch: stopped: " + " ".join(f"{n}={c}" for n, c in codes.items())
-        + (f"; removed {len(shm_removed)} shared-memory files the nodes left in /dev/shm" if shm_removed else ""))
+        + (f"; removed the nodes' {len(shm_removed)} shared-memory files from /dev/shm" if shm_removed else ""))
     bad = {n: c for n, c in codes.items() if c != 0 and n != LIVE_VIEW}
     if codes.get(LIVE_VIEW, 0) != 0:
         say(f"launch: the live view exited with code {codes[LIVE_VIEW]}; the run itself is not affected")

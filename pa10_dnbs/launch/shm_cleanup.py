@@ -1,8 +1,10 @@
 """Remove the shared-memory files a run's ROS processes left behind, and only those.
 
 Fast DDS keeps segments in /dev/shm (``fastrtps_<hex>``, ``fastrtps_port<N>``
-with ``_el`` lock files and ``sem.fastrtps_port<N>_mutex`` semaphores). A clean
-exit removes them; a killed process does not. Port segments are numbered
+with ``_el`` lock files and ``sem.fastrtps_port<N>_mutex`` semaphores). A
+participant destroyed in order removes them; a killed process does not, and
+neither does a node of this graph, which leaves without destroying its node
+(``ros/runtime.py``: ``exit_process``). Port segments are numbered
 across all domains, so deleting by pattern would break other live graphs: a
 segment is removed only if it appeared during this run and no live process
 maps it (a semaphore counts as in use while its port segment is mapped).

@@ -4,9 +4,9 @@ Two workarounds for the rclpy 7.1.6 wheel:
 - ``EventsExecutor.spin()`` busy-loops, so nodes spin with
   ``spin_until_future_complete`` in short slices instead;
 - ``Node.destroy_node()`` sometimes never returns under load (see
-  ``_release_entities``), so teardown releases the endpoints itself, and a
-  node process leaves with ``exit_process`` (no interpreter finalization,
-  where the node handle would be destroyed the same way).
+  ``_release_entities``), so teardown releases the endpoints itself and a
+  node process leaves with ``exit_process``: no interpreter finalization,
+  where the node handle would be destroyed the same way.
 rclpy's own signal handling is off (it raises KeyboardInterrupt wherever the
 interpreter is, including inside callbacks run by the C++ executor): SIGINT
 and SIGTERM complete a ``stop`` future that every spin loop checks; the node
@@ -97,7 +97,6 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
         executor.shutdown()
         if node is not None:
             _release_entities(node)
-            node.destroy_node()  # the DDS participant goes with it (and its shared-memory files)
         rclpy.try_shutdown()
         signal.alarm(0)
         watchdog.cancel()
@@ -108,12 +107,13 @@ def exit_process(code: int) -> NoReturn:
     """End a node's process with ``code`` once ``run_node`` has torn it down, skipping the interpreter's
     finalization.
 
-    At finalization the node handle is garbage-collected and can spin forever in
-    ``destroy_when_not_in_use()`` with the GIL held (the rclpy 7.1.6 wheel), by then with the default signal
-    dispositions back: seen as a controller that printed its STATS and was then killed by the launcher's
-    SIGTERM (exit -15). Files are written and closed by ``close()``, the endpoints released, the node
-    destroyed (so Fast DDS has removed its shared-memory files) and the context shut down before this is
-    called, under the teardown watchdog.
+    The node handle is never destroyed: ``destroy_node()``, and the garbage collection of the handle at
+    finalization, can spin forever in ``destroy_when_not_in_use()`` with the GIL held (the rclpy 7.1.6
+    wheel; seen as a node killed by the teardown's SIGALRM, and, at finalization where the signal handlers
+    are back to their defaults, as a controller SIGTERMed by the launcher after its STATS). Files are
+    written and closed by ``close()``, the endpoints released and the context shut down before this is
+    called. The DDS participant's shared-memory files in /dev/shm stay behind: the launcher removes them
+    (``launch/shm_cleanup.py``), as it does for a killed node.
     """
     sys.stdout.flush()
     sys.stderr.flush()
