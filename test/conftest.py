@@ -42,11 +42,19 @@ def cfg(_default_cfg):
 
 @pytest.fixture
 def domain():
-    """A ROS_DOMAIN_ID leased for this test alone: no other test, suite or launcher on the host has it meanwhile."""
-    from pa10_dnbs.launch.domain_ids import lease_domain
+    """A ROS_DOMAIN_ID leased for this test alone: no other test, suite or launcher on the host has it meanwhile.
 
+    At the end, the shared-memory files the test's ROS processes left are removed, as the launcher does
+    after a run (nodes leave without destroying their DDS participant, pa10_dnbs/ros/runtime.py): only
+    files created during the test that no live process maps.
+    """
+    from pa10_dnbs.launch.domain_ids import lease_domain
+    from pa10_dnbs.launch.shm_cleanup import remove_stale, shm_files
+
+    before = shm_files()
     with lease_domain() as lease:
         yield lease.domain_id
+    remove_stale(shm_files() - before)
 
 
 @pytest.fixture(scope="session")
