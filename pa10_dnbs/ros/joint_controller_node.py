@@ -48,7 +48,7 @@ from .diagnostics import DiagnosticsReporter, status, status_name
 from ..loop.cpu_meter import CpuMeter
 from ..loop.endpoint_match import MatchWait, Need
 from ..loop.joint_loop import JointLoop
-from ..loop.rt_priority import apply_fifo, check_priority
+from ..loop.scheduling import apply_fifo, check_priority
 from .params import CONFIG_FILE, Param, ParameterError, check_choice, cli_parameter, declare, load_node_config
 from .runtime import announce_ready, exit_process, run_node
 from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic

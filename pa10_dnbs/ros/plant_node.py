@@ -38,7 +38,7 @@ from ..loop.cpu_meter import CpuMeter
 from ..loop.effort_gate import EffortGate
 from ..loop.endpoint_match import MatchWait
 from ..loop.plant_timing import PlantTiming
-from ..loop.rt_priority import apply_fifo, check_priority
+from ..loop.scheduling import apply_fifo, check_priority
 from ..plant.from_config import open_client, plant_from_config
 from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, check_clock_hz
 from .diagnostics import DiagnosticsReporter

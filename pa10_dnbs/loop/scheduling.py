@@ -1,0 +1,89 @@
+"""Scheduling policies for every thread of this process (Linux): SCHED_FIFO for the loop, SCHED_IDLE for
+observers.
+
+Linux schedules threads, not processes: a policy is set on each thread in
+/proc/self/task (the DDS threads included); threads started later inherit
+it from the thread that starts them.
+
+- ``apply_fifo(priority)``: plant and controllers (``--rt-priority``). Needs
+  root, CAP_SYS_NICE or an RLIMIT_RTPRIO (``ulimit -r``) at least the
+  priority, and a cgroup with real-time runtime; otherwise nothing changes
+  and the message says why.
+- ``apply_observer_scheduling('idle')``: SCHED_IDLE, what ``chrt --idle 0``
+  gives: the thread runs only on CPU time no other thread of normal policy
+  wants, and its wake-ups never preempt one. Any user may lower its own
+  policy, so it always applies on Linux. An observer at SCHED_IDLE can fall
+  behind while the loop keeps the CPU busy; its subscriptions' queues
+  (their QoS depth) are what it may fall behind by without losing anything.
+"""
+from __future__ import annotations
+
+import os
+
+MIN_PRIORITY, MAX_PRIORITY = 1, 99
+OBSERVER_SCHEDULING = ("normal", "idle")
+
+
+def check_priority(priority: int) -> None:
+    """ValueError unless 0 (off) or 1..99."""
+    if priority != 0 and not MIN_PRIORITY <= priority <= MAX_PRIORITY:
+        raise ValueError(f"rt_priority must be 0 (off) or {MIN_PRIORITY}..{MAX_PRIORITY}, got {priority}")
+
+
+def apply_fifo(priority: int) -> tuple[bool, str]:
+    """Put every thread of this process under SCHED_FIFO at ``priority``; (applied, what happened)."""
+    check_priority(priority)
+    if priority == 0:
+        return False, "rt_priority 0: default scheduling"
+    if not hasattr(os, "sched_setscheduler"):
+        return False, f"rt_priority {priority}: SCHED_FIFO is not available on this OS; default scheduling"
+    done, refused = _on_every_thread(os.SCHED_FIFO, priority)
+    if refused:
+        limit = _rlimit_rtprio()
+        return False, (f"rt_priority {priority}: SCHED_FIFO not permitted (needs root, CAP_SYS_NICE or "
+                       f"`ulimit -r` >= {priority}, now {limit}, and real-time runtime in the cgroup); "
+                       "default scheduling" + (f" (it was set on {done} threads, which keep it)" if done else ""))
+    return True, f"rt_priority {priority}: SCHED_FIFO on {done} threads"
+
+
+def apply_observer_scheduling(policy: str) -> tuple[bool, str]:
+    """``policy`` 'idle': every thread of this process under SCHED_IDLE; 'normal': nothing changes.
+    (applied, what happened); ValueError for another policy."""
+    if policy not in OBSERVER_SCHEDULING:
+        raise ValueError(f"scheduling must be one of {', '.join(OBSERVER_SCHEDULING)}, got {policy!r}")
+    if policy == "normal":
+        return False, "scheduling normal: default scheduling"
+    if not hasattr(os, "SCHED_IDLE"):
+        return False, "scheduling idle: SCHED_IDLE is not available on this OS; default scheduling"
+    done, refused = _on_every_thread(os.SCHED_IDLE, 0)
+    if refused:  # not expected: lowering one's own policy needs no privilege
+        return False, f"scheduling idle: SCHED_IDLE refused by the OS after {done} threads"
+    return True, f"scheduling idle: SCHED_IDLE on {done} threads"
+
+
+def _on_every_thread(policy: int, priority: int) -> tuple[int, bool]:
+    """Set ``policy`` on each thread of this process: (threads done, whether the OS refused one)."""
+    try:
+        tids = [int(t) for t in os.listdir("/proc/self/task")]
+    except OSError:
+        tids = [0]
+    done = 0
+    for tid in tids:
+        try:
+            os.sched_setscheduler(tid, policy, os.sched_param(priority))
+            done += 1
+        except ProcessLookupError:  # the thread ended meanwhile
+            continue
+        except PermissionError:
+            return done, True
+    return done, False
+
+
+def _rlimit_rtprio():
+    try:
+        import resource
+
+        soft, _ = resource.getrlimit(resource.RLIMIT_RTPRIO)
+        return "unlimited" if soft == resource.RLIM_INFINITY else soft
+    except (ImportError, AttributeError, OSError):
+        return "unknown"
