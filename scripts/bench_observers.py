@@ -131,7 +131,7 @@ def main() -> int:
             try:
                 stats, cpu, size, frames = one_run(mode, args.duration, args.reliability)
             except GraphFailure as exc:  # e.g. a node whose teardown outlived the grace period on a loaded machine
-                print(f"{mode:11s} run {i + 1}: FAILED ({str(exc).splitlines()[0]}); not counted")
+                print(f"{mode:11s} run {i + 1}: FAILED; not counted:\n{exc}")
                 continue
             rtfs[mode].append(stats["real_time_factor"])
             base = BASELINE[mode]

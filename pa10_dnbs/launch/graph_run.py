@@ -89,7 +89,7 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
         failure = "nodes exited with non-zero codes: " + ", ".join(f"{n}={c}" for n, c in bad.items())
         for p in procs:
             if p.name in bad:
-                failure += f"\n--- last lines of {p.name}'s log ---\n{p.tail(20)}"
+                failure += f"\n--- last lines of {p.name}'s log ---\n{p.tail(40)}"  # room for a stack dump
     if failure is not None:
         raise GraphFailure(failure, interrupted=failure.startswith("interrupted"))
     stats = json.loads(stats_file.read_text())

@@ -2,7 +2,8 @@
 
 Each child's stdout and stderr go to one log file; a reader thread also
 remembers the READY / RUNNING lines the nodes print. Stopping escalates:
-SIGINT, then SIGTERM after ``grace_int_s``, then SIGKILL after ``grace_term_s``.
+SIGINT, then SIGUSR1 (a node writes its threads' stacks to its log) and SIGTERM after
+``grace_int_s``, then SIGKILL after ``grace_term_s``.
 """
 from __future__ import annotations
 
@@ -80,11 +81,21 @@ class ManagedProcess:
 
 
 def stop_all(procs: list[ManagedProcess], grace_int_s: float = 5.0, grace_term_s: float = 3.0) -> dict[str, int]:
-    """SIGINT every running child, escalate for the stragglers; return each child's exit code."""
+    """SIGINT every running child, escalate for the stragglers; return each child's exit code.
+
+    A straggler gets SIGUSR1 before SIGTERM: a node then writes every thread's stack into its log
+    (``ros/runtime.py``), which says where a node that ignored SIGINT is stuck."""
     for sig, grace in ((signal.SIGINT, grace_int_s), (signal.SIGTERM, grace_term_s), (signal.SIGKILL, 5.0)):
         running = [p for p in procs if p.returncode is None]
         if not running:
             break
+        if sig == signal.SIGTERM:
+            for p in running:
+                try:
+                    os.kill(p.pid, signal.SIGUSR1)
+                except ProcessLookupError:
+                    pass
+            time.sleep(0.2)  # the dump is written by a C handler at once
         for p in running:
             try:
                 os.kill(p.pid, sig)

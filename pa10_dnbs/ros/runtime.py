@@ -10,10 +10,15 @@ Two workarounds for the rclpy 7.1.6 wheel:
 rclpy's own signal handling is off (it raises KeyboardInterrupt wherever the
 interpreter is, including inside callbacks run by the C++ executor): SIGINT
 and SIGTERM complete a ``stop`` future that every spin loop checks; the node
-then tears down and exits 0.
+then tears down and exits 0. A Python handler runs only when the main thread
+is back in Python, so a node stuck in C code ignores SIGINT: SIGUSR1 makes
+``faulthandler`` (C level, no GIL needed) write every thread's Python stack
+into the node's log, and the launcher sends it to a node that is still
+running 5 s after SIGINT, before SIGTERM (``kill -USR1 PID`` does it by hand).
 """
 from __future__ import annotations
 
+import faulthandler
 import os
 import signal
 import sys
@@ -58,6 +63,7 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
 
     signal.signal(signal.SIGINT, on_signal)
     signal.signal(signal.SIGTERM, on_signal)
+    faulthandler.register(signal.SIGUSR1, file=sys.stderr, all_threads=True)  # where a stuck node is stuck
     node = None
     executor = EventsExecutor()
     code = 0

@@ -1,0 +1,49 @@
+"""SIGUSR1 makes a node write every thread's Python stack into its log and go on; SIGINT still stops it with 0.
+
+The launcher sends SIGUSR1 to a node that ignored SIGINT for 5 s (launch/processes.py, stop_all), so that a
+node stuck in C code says where. One node process (the wire monitor, which needs no other node), ~3 s.
+"""
+import os
+import signal
+import subprocess
+import sys
+import time
+
+from graph_harness import REPO, ros_env
+
+TIMEOUT_S = 60
+
+
+def _wait_for(proc, word: str, timeout_s: float) -> list[str]:
+    lines, end = [], time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        line = proc.stdout.readline()
+        if not line:
+            break
+        lines.append(line)
+        if word in line:
+            return lines
+    raise AssertionError(f"no {word!r} within {timeout_s} s: {''.join(lines)}")
+
+
+def test_sigusr1_dumps_the_stacks_and_the_node_keeps_running(domain, tmp_path):
+    out = tmp_path / "wire.npz"
+    proc = subprocess.Popen(["timeout", str(TIMEOUT_S), sys.executable, "-m", "pa10_dnbs.ros.wire_monitor",
+                             "--ros-args", "-p", f"out_file:={out}"], cwd=REPO, env=ros_env(domain), text=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    try:
+        _wait_for(proc, "READY", TIMEOUT_S / 2)
+        # `timeout` runs the node as its child: signal the node itself
+        node = int(subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True, text=True).stdout.split()[0])
+        os.kill(node, signal.SIGUSR1)
+        dump = "".join(_wait_for(proc, "spin_until", 10))
+        assert "most recent call first" in dump and "runtime.py" in dump, dump
+        assert proc.poll() is None  # still running
+        os.kill(node, signal.SIGINT)
+        rest, _ = proc.communicate(timeout=20)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 0, rest
+    assert out.is_file()  # it closed normally: its record is written
