@@ -36,8 +36,8 @@ def _launch(args: argparse.Namespace) -> int:
                       restart=args.restart, netns=args.netns, init_from=args.init_from,
                       bag_compression=args.bag_compression, live_port=args.live, live_host=args.live_host,
                       live_hz=args.live_hz, real_time_factor=args.rtf, deadline_fraction=args.deadline_fraction,
-                      rt_priority=args.rt_priority, observer_scheduling=args.observer_scheduling,
-                      namespace=args.namespace, clock_hz=args.clock_hz, figures=not args.no_figures)
+                      rt_priority=args.rt_priority, namespace=args.namespace, clock_hz=args.clock_hz,
+                      figures=not args.no_figures)
 
 
 def _study(args: argparse.Namespace) -> int:
@@ -112,9 +112,6 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--rt-priority", type=int, default=0, metavar="N",
                     help="SCHED_FIFO priority 1..99 for the plant and the controllers where the OS allows it "
                          "(root, CAP_SYS_NICE or ulimit -r); otherwise a message and default scheduling")
-    la.add_argument("--observer-scheduling", choices=("idle", "normal"), default=None,
-                    help="CPU policy of the observers (wire monitor, recorder, live view): idle (SCHED_IDLE, only "
-                         "the CPU the loop leaves) or normal (default: idle in lockstep, normal in realtime)")
     _add_run_args(la, ("dnbs", "pid"), "the joint controllers: dnbs or pid (ctc is centralized: in-process only)")
     la.add_argument("--namespace", default="/pa10", metavar="NS",
                     help="the arm's ROS namespace (default /pa10): every node runs in it, its topics are NS/s1/state, "

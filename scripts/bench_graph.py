@@ -58,7 +58,7 @@ def _run(mode: str, factor: float, args) -> tuple[dict, dict[str, float]]:
     with tempfile.TemporaryDirectory(prefix="pa10_bench_") as tmp:
         opt = GraphOptions(config_path=default_config_path(), mode="lockstep" if mode == "record" else mode,
                            duration_s=args.duration, reliability=args.reliability, real_time_factor=factor,
-                           rt_priority=args.rt_priority, observer_scheduling=args.observer_scheduling,
+                           rt_priority=args.rt_priority,
                            record_bag=Path(tmp) / "bag" if mode == "record" else None)
         res = run_graph(opt, Path(tmp), say=lambda s: None)
         cpu = {}
@@ -85,8 +85,6 @@ def main() -> int:
     ap.add_argument("--reliability", default=None, choices=["reliable", "best_effort"],
                     help="QoS of the per-joint topics (default: the mode's own)")
     ap.add_argument("--rt-priority", type=int, default=0)
-    ap.add_argument("--observer-scheduling", default=None, choices=["idle", "normal"],
-                    help="CPU policy of the observer (default: the mode's own, idle in lockstep, normal in realtime)")
     args = ap.parse_args()
     print(f"node graph, DNBS, {args.duration:g} s simulated per run, {args.repeat} runs each; "
           f"load average before: {load()}", flush=True)

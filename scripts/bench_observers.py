@@ -11,15 +11,15 @@ Prints, for runs of --duration simulated seconds (default 10), modes interleaved
   with uncompressed chunks (`--bag-compression none`);
 - live: lockstep with the live view (`launch --live`) and one Foxglove
   WebSocket client subscribed to every channel for the whole run: its
-  real-time factor against plain lockstep, frames the client received;
-- lockstep-normal, record-normal: the same with the observers at normal CPU
-  priority instead of the lockstep default SCHED_IDLE (`--observer-scheduling
-  normal`): what the idle policy buys.
+  real-time factor against plain lockstep, frames the client received.
+A mode's cost is given twice: from the ratio of the medians, and as the
+median of each round's ratio to the lockstep run of the same round (the
+paired figure, which the machine's drift between rounds moves less).
 Realtime pacing and CPU per tick: scripts/bench_graph.py. Figures only; nothing is asserted (the machines
 are shared and noisy).
 
     python scripts/bench_observers.py [--duration 10] [--repeat 3]
-        [--modes lockstep record record-none live lockstep-normal record-normal]
+        [--modes lockstep record record-none live]
 """
 from __future__ import annotations
 
@@ -86,9 +86,8 @@ class LiveClient:
             self._thread.join(timeout=5)
 
 
-# the run each mode's cost is measured against
-BASELINE = {"lockstep": "lockstep", "record": "lockstep", "record-none": "lockstep", "live": "lockstep",
-            "lockstep-normal": "lockstep", "record-normal": "lockstep-normal"}
+# every mode's cost is measured against plain lockstep (the wire monitor as the observer)
+BASE = "lockstep"
 
 
 def one_run(mode: str, duration: float, reliability: str) -> tuple[dict, float, int, int]:
@@ -102,8 +101,7 @@ def one_run(mode: str, duration: float, reliability: str) -> tuple[dict, float, 
             res = run_graph(GraphOptions(config_path=default_config_path(), mode="lockstep",
                                          duration_s=duration, reliability=reliability,
                                          record_bag=bag, bag_compression="none" if mode == "record-none" else "zstd",
-                                         live_port=0 if client else None,
-                                         observer_scheduling="normal" if mode.endswith("-normal") else None),
+                                         live_port=0 if client else None),
                             Path(tmp), say=client.say if client else (lambda s: None))
         finally:
             if client is not None:
@@ -119,7 +117,7 @@ def main() -> int:
     ap.add_argument("--duration", type=float, default=10.0)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--modes", nargs="+", default=["lockstep", "record", "live"],
-                    choices=["lockstep", "record", "record-none", "live", "lockstep-normal", "record-normal"])
+                    choices=["lockstep", "record", "record-none", "live"])
     ap.add_argument("--reliability", default="reliable", choices=["reliable", "best_effort"])
     args = ap.parse_args()
     print(f"node graph, DNBS, {args.duration:g} s simulated, {args.reliability} QoS, {args.repeat} runs per mode; "
@@ -134,10 +132,9 @@ def main() -> int:
                 print(f"{mode:11s} run {i + 1}: FAILED; not counted:\n{exc}")
                 continue
             rtfs[mode].append(stats["real_time_factor"])
-            base = BASELINE[mode]
-            if mode != base and base in args.modes and len(rtfs[base]) == i + 1:
-                paired[mode].append(stats["real_time_factor"] / rtfs[base][i])
-            line = (f"{mode:11s} run {i + 1}: real-time factor {stats['real_time_factor']:.2f}, "
+            if mode != BASE and BASE in args.modes and len(rtfs[BASE]) == i + 1:
+                paired[mode].append(stats["real_time_factor"] / rtfs[BASE][i])
+            line = (f"{mode:11s} run {i + 1}: real-time factor {stats['real_time_factor']:.3f}, "
                     f"children CPU {cpu:.1f} s ({1e3 * cpu / stats['steps']:.2f} ms per step incl. start-up)")
             if size:
                 line += f", bag {size / 1e6:.1f} MB = {size / 1e6 / args.duration:.2f} MB per simulated second"
@@ -146,18 +143,18 @@ def main() -> int:
             print(line)
     for mode, r in rtfs.items():
         if r:
-            print(f"{mode:11s} real-time factor: best {max(r):.2f}, median {statistics.median(r):.2f} ({len(r)} runs)")
+            print(f"{mode:11s} real-time factor: best {max(r):.3f}, median {statistics.median(r):.3f} ({len(r)} runs)")
     print(f"load average at end: {open('/proc/loadavg').read().strip()}")
     for mode, what in (("record", "recording (zstd)"), ("record-none", "recording (uncompressed)"),
-                       ("live", "the live view with a client"),
-                       ("lockstep-normal", "observers at normal priority instead of SCHED_IDLE"),
-                       ("record-normal", "recording (zstd) with the observers at normal priority")):
-        base = BASELINE[mode]
-        if rtfs.get(base) and rtfs.get(mode):
-            cost = 1 - statistics.median(rtfs[mode]) / statistics.median(rtfs[base])
+                       ("live", "the live view with a client")):
+        if rtfs.get(BASE) and rtfs.get(mode):
+            cost = 1 - statistics.median(rtfs[mode]) / statistics.median(rtfs[BASE])
             ratios = ", ".join(f"{r:.2f}" for r in paired[mode])
-            print(f"{what} costs {100 * cost:.0f} % of the {base} rate (medians); keeps "
-                  f"{ratios or '-'} of the {base} rate of the same round")
+            line = f"{what} costs {100 * cost:.1f} % of the {BASE} rate (ratio of the medians)"
+            if paired[mode]:
+                line += (f", {100 * (1 - statistics.median(paired[mode])):.1f} % (median of the rounds' ratios: "
+                         f"{ratios})")
+            print(line)
     return 0
 
 

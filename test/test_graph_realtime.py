@@ -38,9 +38,6 @@ def test_realtime_without_misses_equals_lockstep_bit_for_bit(lockstep_run, tmp_p
     out, stats = _realtime(tmp_path, domain, "--rtf", RTF, "--effort-timeout", 10)
     n = int(round(DURATION_S * 1000))
     assert stats["steps"] == n and stats["completed"] and stats["target_real_time_factor"] == RTF
-    # realtime keeps the observer at normal priority (a paced loop may leave it no idle CPU)
-    assert json.loads((out / "metrics.json").read_text())["timing"]["observer_scheduling"] == "normal"
-    assert "scheduling normal: default scheduling" in (out / "logs" / "wire_monitor.log").read_text()
     firsts = [j["first_missed_step"] for j in stats["joints"] if j["first_missed_step"] is not None]
     m = min(firsts, default=n)  # torques [0, m) and states [0, m] are those of a run without misses
     rt = RunData.load_npz(out / "timeseries.npz")

@@ -1,4 +1,4 @@
-"""The lockstep plant's resend / timeout decisions, with a fake clock."""
+"""The lockstep plant's resend / timeout decisions, with a fake clock, and what the launcher says of a timeout."""
 import pytest
 
 from pa10_dnbs.loop.lockstep_policy import LockstepPolicy
@@ -28,3 +28,14 @@ def test_a_new_state_restarts_the_clock():
 def test_bad_periods_are_refused():
     with pytest.raises(ValueError):
         LockstepPolicy(resend_s=0.0)
+
+
+def test_a_nominal_lockstep_run_that_stepped_past_a_missing_effort_says_it_is_not_deterministic():
+    from pa10_dnbs.commands.launch import _unforced_timeouts
+
+    def stats(*timeouts):
+        return {"joints": [{"name": n, "effort_timeouts": t} for n, t in zip(("s1", "s2", "s3"), timeouts)]}
+
+    assert _unforced_timeouts(stats(0, 0, 0), 1.0) is None
+    msg = _unforced_timeouts(stats(0, 2, 1), 1.0)
+    assert "3 times (s2: 2, s3: 1; --effort-timeout 1 s" in msg and "not the in-process run bit for bit" in msg

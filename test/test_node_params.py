@@ -15,7 +15,7 @@ CASES = [  # (node module, bad parameter, word the error line must hold): one pe
     ("wire_monitor", "poll_period_s:=0.5", "out_file"),                 # a required parameter missing
     ("recorder_node", "qos_depth:=0", "qos_depth"),
     ("live_observer_node", "port:=70000", "port"),
-    ("live_observer_node", "scheduling:=fast", "scheduling"),           # not one of the choices
+    ("plant_node", "on_missing_effort:=guess", "on_missing_effort"),  # not one of the choices
 ]
 TIMEOUT_S = 60
 

@@ -1,5 +1,4 @@
-"""The plant's latency record, CPU meter and the scheduling helpers, SCHED_FIFO and SCHED_IDLE (no ROS processes)."""
-import os
+"""The plant's latency record, CPU meter and SCHED_FIFO helper (no ROS processes)."""
 import subprocess
 import sys
 
@@ -8,7 +7,7 @@ import pytest
 
 from pa10_dnbs.loop.cpu_meter import CpuMeter
 from pa10_dnbs.loop.plant_timing import PlantTiming, step_ranges
-from pa10_dnbs.loop.scheduling import apply_fifo, apply_observer_scheduling, check_priority
+from pa10_dnbs.loop.scheduling import apply_fifo, check_priority
 
 
 def test_latency_from_the_first_send_to_the_first_answer():
@@ -74,25 +73,3 @@ def test_rt_priority_is_applied_or_explained():
         assert "not permitted" in msg and "default scheduling" in msg
     assert apply_fifo(0) == (False, "rt_priority 0: default scheduling")
 
-
-IDLE_CHILD = """
-import os, threading, time
-from pa10_dnbs.loop.scheduling import apply_observer_scheduling
-t = threading.Thread(target=time.sleep, args=(1,)); t.start()
-ok, msg = apply_observer_scheduling("idle")
-later = []
-u = threading.Thread(target=lambda: later.append(os.sched_getscheduler(0))); u.start(); u.join()
-print(ok, os.sched_getscheduler(0) == os.SCHED_IDLE, os.sched_getscheduler(t.native_id) == os.SCHED_IDLE,
-      later[0] == os.SCHED_IDLE, msg)
-"""
-
-
-def test_observer_scheduling_idle_reaches_every_thread_and_later_ones():
-    """In a child process: SCHED_IDLE on the main thread, a running thread, and a thread started afterwards."""
-    out = subprocess.run([sys.executable, "-c", IDLE_CHILD], capture_output=True, text=True, check=True).stdout
-    applied, main, other, later, msg = out.split(" ", 4)
-    assert (applied, main, other, later) == ("True", "True", "True", "True"), out
-    assert "SCHED_IDLE on 2 threads" in msg
-    assert apply_observer_scheduling("normal") == (False, "scheduling normal: default scheduling")
-    with pytest.raises(ValueError, match="scheduling must be one of normal, idle"):
-        apply_observer_scheduling("fast")

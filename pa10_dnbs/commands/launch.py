@@ -17,10 +17,9 @@ from ..core.checkpoint import checkpoint_dir, load_joint_checkpoints
 from ..kinematics.urdf_chain import UrdfChain
 from ..launch.fault_flags import apply_fault_flags, faults_active, plain
 from ..launch.fault_report import fault_note, fault_report
-from ..launch.graph_options import observer_scheduling as observer_scheduling_of
 from ..launch.graph_run import GraphFailure, GraphOptions, loop_reliability, parse_netns, run_graph
 from ..live.options import check_live_options
-from ..loop.scheduling import OBSERVER_SCHEDULING, check_priority
+from ..loop.scheduling import check_priority
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..wire.wire_record import load_wire_run
@@ -36,7 +35,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                netns: list[str] | None = None, init_from: Path | None = None, bag_compression: str = "zstd",
                live_port: int | None = None, live_host: str = "127.0.0.1", live_hz: float = 50.0,
                real_time_factor: float = 1.0, deadline_fraction: float = 0.9, rt_priority: int = 0,
-               observer_scheduling: str | None = None, namespace: str = DEFAULT_NS,
+               namespace: str = DEFAULT_NS,
                clock_hz: float = DEFAULT_CLOCK_HZ, figures: bool = True) -> int:
     """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code.
 
@@ -47,8 +46,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     ``bag_compression``: 'zstd' or 'none' (with ``record``). ``live_port``: serve the live view
     (Foxglove WebSocket) on ``live_host``:``live_port`` (0: a free port), ``live_hz`` frames per second at most.
     ``real_time_factor``, ``deadline_fraction``: realtime pacing (docs/timing.md); ``rt_priority``: SCHED_FIFO
-    priority of plant and controllers (0: off); ``observer_scheduling``: 'idle' (SCHED_IDLE) or 'normal' for the
-    observers, None: the mode's default (lockstep idle, realtime normal). ``reliability`` None: the mode's default QoS.
+    priority of plant and controllers (0: off). ``reliability`` None: the mode's default QoS.
     ``namespace``: the arm's ROS namespace (every node runs in it; /clock, /tf, /diagnostics stay global).
     ``clock_hz``: /clock rate [Hz of simulated time], > 0 (the reference node is paced by /clock).
     """
@@ -79,9 +77,6 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         check_priority(rt_priority)
     except ValueError:
         raise ConfigError(f"--rt-priority: must be 0 (off) or 1..99, got {rt_priority}") from None
-    if observer_scheduling not in (None,) + OBSERVER_SCHEDULING:
-        raise ConfigError(f"--observer-scheduling: expected one of {', '.join(OBSERVER_SCHEDULING)}, "
-                          f"got {observer_scheduling!r}")
     dt = cfg["simulation"]["dt_s"]
     try:
         check_clock_hz(clock_hz, dt)
@@ -116,7 +111,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                        force_bag=force, restart=restart, netns=namespaces, init_from=init_from,
                        bag_compression=bag_compression, live_port=live_port, live_host=live_host, live_hz=live_hz,
                        real_time_factor=real_time_factor, deadline_fraction=deadline_fraction,
-                       rt_priority=rt_priority, observer_scheduling=observer_scheduling, namespace=namespace,
+                       rt_priority=rt_priority, namespace=namespace,
                        clock_hz=clock_hz)
     reliability = loop_reliability(opt)
     settings = metrics_settings(cfg, n_steps * dt)
@@ -142,7 +137,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                 run, settings, source="ros-graph", mode=mode, config_file=str(config_path),
                 seed=cfg["simulation"]["seed"], reliability=reliability, domain_id=result.domain_id,
                 wall_time_total_s=result.wall_total_s, limit_hits=stats["limit_hits"],
-                timing=timing_summary(stats) | {"observer_scheduling": observer_scheduling_of(opt)},
+                timing=timing_summary(stats),
                 node_exit_codes=result.exit_codes, bag=str(record) if record else None,
                 faults=fault_report(cfg, stats, result),
                 **({"warm_start_from": str(init_from)} if init_from is not None else {}))
@@ -154,6 +149,9 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                 notes.append(f"DNBS warm-started from the checkpoints in `{init_from}` (not a cold start)")
             if faults_active(cfg) or result.restarts:
                 notes.append(fault_note(metrics["faults"]))
+            elif mode == "lockstep" and (nondeterministic := _unforced_timeouts(stats, effort_timeout_s)):
+                notes.append(nondeterministic)
+                print(f"pa10-dnbs launch: warning: {nondeterministic}", file=sys.stderr, flush=True)
             if tuple(window) != tuple(cfg["simulation"]["window_s"]):
                 notes.append(f"run shorter than the configured window {list(cfg['simulation']['window_s'])}: "
                              "metrics over the second half instead")
@@ -214,6 +212,17 @@ def _bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, cfg: dict
             problems.append(f"{topic} lacks {len(lost)} steps (first {min(lost)})")
     run = rec.run_data(controller, JOINT_NAMES, cfg["plant"]["torque_limit_nm"], wall_time_s)
     return run, "; ".join(problems) or None
+
+
+def _unforced_timeouts(stats: dict, effort_timeout_s: float) -> str | None:
+    """What to say when a lockstep run without injected faults stepped past a missing effort, else None."""
+    joints = [(j["name"], j["effort_timeouts"]) for j in stats["joints"] if j["effort_timeouts"]]
+    if not joints:
+        return None
+    return (f"the plant stepped without an answer {sum(n for _, n in joints)} times "
+            f"({', '.join(f'{name}: {n}' for name, n in joints)}; --effort-timeout {effort_timeout_s:g} s of wall "
+            "time): no fault was injected, so a node stalled (a loaded machine?) and this lockstep run is not "
+            "the in-process run bit for bit")
 
 
 TIMING_KEYS = ("on_time_fraction", "late_start_ticks", "max_start_lateness_us", "target_real_time_factor",

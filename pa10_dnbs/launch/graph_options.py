@@ -27,7 +27,6 @@ class GraphOptions:
     real_time_factor: float = 1.0    # realtime: a step of dt_s takes dt_s / real_time_factor of wall time
     deadline_fraction: float = 0.9   # realtime: efforts must arrive within this fraction of the tick
     rt_priority: int = 0             # SCHED_FIFO priority of plant and controllers (0: off)
-    observer_scheduling: str | None = None  # 'idle' or 'normal' for observers; None: idle in lockstep, else normal
     effort_timeout_s: float = 1.0
     on_missing_effort: str = "hold"
     progress: bool = False
@@ -66,12 +65,3 @@ def loop_reliability(opt: GraphOptions) -> str:
         return opt.reliability
     return "best_effort" if opt.mode == "realtime" else "reliable"
 
-
-def observer_scheduling(opt: GraphOptions) -> str:
-    """CPU policy of the observers (wire monitor, recorder, live view): as given, else the mode's default.
-    Lockstep: 'idle' (SCHED_IDLE): the loop waits on message hops and leaves CPU idle, which the observers
-    use without ever preempting the loop; a 2000-deep queue per topic (seconds of lockstep) absorbs their lag.
-    Realtime: 'normal': a loop that is paced to use the whole machine would starve an idle observer."""
-    if opt.observer_scheduling is not None:
-        return opt.observer_scheduling
-    return "idle" if opt.mode == "lockstep" else "normal"

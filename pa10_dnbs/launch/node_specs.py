@@ -11,7 +11,7 @@ from pathlib import Path
 
 from .. import JOINT_NAMES
 from ..wire.topics import CLOCK, DEFAULT_NS, DIAGNOSTICS, ArmTopics
-from .graph_options import GraphOptions, loop_reliability, observer_scheduling
+from .graph_options import GraphOptions, loop_reliability
 
 NODE_GROUPS = ("observer", "reference", "controllers", "plant")
 
@@ -84,11 +84,9 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
         return _ros_args(node, {**params, "use_sim_time": "true"}, opt.namespace)
 
     cfg = str(opt.config_path)
-    sched = observer_scheduling(opt)
     if opt.record_bag is None:
         cmds = [("wire_monitor", py + ["pa10_dnbs.ros.wire_monitor"] + ros("wire_monitor", {
-                    "config_file": cfg, "duration_s": opt.duration_s, "out_file": str(wire_file),
-                    "scheduling": sched}))]
+                    "config_file": cfg, "duration_s": opt.duration_s, "out_file": str(wire_file)}))]
     else:  # the recorder is the observer: the run is rebuilt from the bag
         end_ns = int(round(opt.duration_s / opt.dt_s)) * int(round(opt.dt_s * 1e9))
         custom = [f"controller={opt.controller}", f"mode={opt.mode}", f"duration_s={opt.duration_s!r}",
@@ -97,11 +95,10 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
         cmds = [("recorder", py + ["pa10_dnbs.ros.recorder_node"] + ros("recorder", {
             "config_file": cfg, "bag": str(opt.record_bag), "force": str(opt.force_bag).lower(),
             "topics": _yaml_list(graph_topics(opt.namespace)), "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns,
-            "compression": opt.bag_compression, "scheduling": sched}))]
+            "compression": opt.bag_compression}))]
     if opt.live_port is not None:  # display only: started after the observer, never waited for by the plant
         cmds.append((LIVE_VIEW, py + ["pa10_dnbs.ros.live_observer_node"] + ros(LIVE_VIEW, {
-            "config_file": cfg, "host": opt.live_host, "port": opt.live_port, "display_hz": opt.live_hz,
-            "scheduling": sched})))
+            "config_file": cfg, "host": opt.live_host, "port": opt.live_port, "display_hz": opt.live_hz})))
     # realtime: smaller reference batches, so that decoding one (in each controller) never costs a tick its
     # deadline; lockstep keeps 100 points per message (fewer messages, and timing does not matter there)
     batch = REALTIME_REFERENCE_BATCH if opt.mode == "realtime" else 100

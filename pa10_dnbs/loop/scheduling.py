@@ -1,27 +1,25 @@
-"""Scheduling policies for every thread of this process (Linux): SCHED_FIFO for the loop, SCHED_IDLE for
-observers.
+"""SCHED_FIFO for the loop's processes (Linux), on every thread of this process.
 
-Linux schedules threads, not processes: a policy is set on each thread in
+Linux schedules threads, not processes: the policy is set on each thread in
 /proc/self/task (the DDS threads included); threads started later inherit
 it from the thread that starts them.
 
-- ``apply_fifo(priority)``: plant and controllers (``--rt-priority``). Needs
-  root, CAP_SYS_NICE or an RLIMIT_RTPRIO (``ulimit -r``) at least the
-  priority, and a cgroup with real-time runtime; otherwise nothing changes
-  and the message says why.
-- ``apply_observer_scheduling('idle')``: SCHED_IDLE, what ``chrt --idle 0``
-  gives: the thread runs only on CPU time no other thread of normal policy
-  wants, and its wake-ups never preempt one. Any user may lower its own
-  policy, so it always applies on Linux. An observer at SCHED_IDLE can fall
-  behind while the loop keeps the CPU busy; its subscriptions' queues
-  (their QoS depth) are what it may fall behind by without losing anything.
+``apply_fifo(priority)``: plant and controllers (``--rt-priority``). Needs
+root, CAP_SYS_NICE or an RLIMIT_RTPRIO (``ulimit -r``) at least the
+priority, and a cgroup with real-time runtime; otherwise nothing changes
+and the message says why.
+
+Observers (recorder, wire monitor, live view) keep the default policy. A
+lowered one (SCHED_IDLE, or nice 10) was tried and taken out: with other
+work on the machine the observers starved, lost the run or hung at
+teardown, and a lockstep run in CI stalled for over a second with them
+(docs/timing.md).
 """
 from __future__ import annotations
 
 import os
 
 MIN_PRIORITY, MAX_PRIORITY = 1, 99
-OBSERVER_SCHEDULING = ("normal", "idle")
 
 
 def check_priority(priority: int) -> None:
@@ -44,21 +42,6 @@ def apply_fifo(priority: int) -> tuple[bool, str]:
                        f"`ulimit -r` >= {priority}, now {limit}, and real-time runtime in the cgroup); "
                        "default scheduling" + (f" (it was set on {done} threads, which keep it)" if done else ""))
     return True, f"rt_priority {priority}: SCHED_FIFO on {done} threads"
-
-
-def apply_observer_scheduling(policy: str) -> tuple[bool, str]:
-    """``policy`` 'idle': every thread of this process under SCHED_IDLE; 'normal': nothing changes.
-    (applied, what happened); ValueError for another policy."""
-    if policy not in OBSERVER_SCHEDULING:
-        raise ValueError(f"scheduling must be one of {', '.join(OBSERVER_SCHEDULING)}, got {policy!r}")
-    if policy == "normal":
-        return False, "scheduling normal: default scheduling"
-    if not hasattr(os, "SCHED_IDLE"):
-        return False, "scheduling idle: SCHED_IDLE is not available on this OS; default scheduling"
-    done, refused = _on_every_thread(os.SCHED_IDLE, 0)
-    if refused:  # not expected: lowering one's own policy needs no privilege
-        return False, f"scheduling idle: SCHED_IDLE refused by the OS after {done} threads"
-    return True, f"scheduling idle: SCHED_IDLE on {done} threads"
 
 
 def _on_every_thread(policy: int, priority: int) -> tuple[int, bool]:

@@ -31,8 +31,7 @@ from ..live.schemas import live_channels
 from ..live.server import LiveServer, LiveServerError
 from ..live.view import LiveView
 from .diagnostics import diagnostics_qos
-from ..loop.scheduling import OBSERVER_SCHEDULING, apply_observer_scheduling
-from .params import CONFIG_FILE, SCHEDULING, Param, ParameterError, check_choice, declare, load_node_config
+from .params import CONFIG_FILE, Param, ParameterError, declare, load_node_config
 from .runtime import announce_ready, exit_process, run_node
 from ..wire.topics import DEFAULT_NS, DIAGNOSTICS, ArmTopics
 from .wire import description_qos, reference_qos
@@ -50,7 +49,6 @@ PARAMS = {
     "host": Param("127.0.0.1", "address the Foxglove WebSocket server listens on"),
     "port": Param(8765, "its TCP port; 0 = any free port", 0, 65535),
     "display_hz": Param(50.0, "frames per second of wall time, at most [Hz], in (0, 1000]", 0.0, 1000.0),
-    "scheduling": SCHEDULING,
 }
 
 
@@ -62,7 +60,6 @@ class LiveObserverNode(Node):
             raise ParameterError(f"parameter port must be in 0..65535, got {p['port']}")
         if not 0 < p["display_hz"] <= 1000:
             raise ParameterError(f"parameter display_hz must be in (0, 1000] frames per second, got {p['display_hz']}")
-        check_choice("scheduling", p["scheduling"], OBSERVER_SCHEDULING)
         cfg = load_node_config(p["config_file"])
         ns = self.get_namespace()
         arm = ArmTopics(ns if ns != "/" else DEFAULT_NS)
@@ -90,7 +87,6 @@ class LiveObserverNode(Node):
                                      raw=True)
         wall_timer(self, 1.0 / p["display_hz"], self._frame)
         self._t0 = time.monotonic()
-        print(apply_observer_scheduling(p["scheduling"])[1], flush=True)
         print(f"LIVE {self.server.url}", flush=True)
         announce_ready("live_view")
 

@@ -105,6 +105,4 @@ def check_choice(name: str, value, choices) -> None:
         raise ParameterError(f"parameter {name} must be one of {', '.join(map(str, choices))}, got {value!r}")
 
 
-SCHEDULING = Param("normal", "CPU policy of this observer: normal, or idle (SCHED_IDLE: only CPU time the loop "
-                   "leaves; it may fall behind by its subscriptions' QoS depth)")
 CONFIG_FILE = Param("", "the YAML config (config/default.yaml and its units); '' = the shipped default")

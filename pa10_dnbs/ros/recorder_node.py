@@ -42,8 +42,7 @@ from ..wire.topics import DEFAULT_NS, ArmTopics, resolve
 from .bag_qos import bag_qos, subscription_qos, to_bag_qos
 from ..loop.cpu_meter import CpuMeter
 from .msg_types import message_class
-from ..loop.scheduling import OBSERVER_SCHEDULING, apply_observer_scheduling
-from .params import CONFIG_FILE, SCHEDULING, Param, ParameterError, check_choice, declare, load_node_config
+from .params import CONFIG_FILE, Param, ParameterError, check_choice, declare, load_node_config
 from .polled import Inbox
 from .runtime import announce_ready, exit_process, run_node, spin_until
 from .wire import CLOCK, TF, TF_STATIC
@@ -79,7 +78,6 @@ PARAMS = {
     "qos_depth": Param(2000, "keep_last depth of each subscription [messages]", 1),
     "compression": Param("zstd", "MCAP chunk compression: zstd or none"),
     "poll_period_s": Param(0.01, "wall time between two drains of the subscriptions [s]", 0.0),
-    "scheduling": SCHEDULING,
 }
 
 
@@ -121,7 +119,6 @@ class RecorderNode(Node):
         self._next_progress_ns = 0
         self.dt_ns = int(round(cfg["simulation"]["dt_s"] * 1e9))
         check_choice("compression", p["compression"], COMPRESSIONS)
-        check_choice("scheduling", p["scheduling"], OBSERVER_SCHEDULING)
         # x_d from the reference batches, for the worst |e| on PROGRESS lines (sampled at tf_rate_hz)
         self.refs = ReferenceBuffer(len(JOINT_NAMES), StepClock(cfg["simulation"]["dt_s"]))
         self._ref_joint = {self.arm.reference(j): i for i, j in enumerate(JOINT_NAMES)}
@@ -130,7 +127,6 @@ class RecorderNode(Node):
         self.inbox = Inbox(self, p["poll_period_s"])
         self._discover()
         self._timer = wall_timer(self, 0.2, self._discover)
-        print(apply_observer_scheduling(p["scheduling"])[1], flush=True)
         announce_ready("recorder")
 
     # ------------------------------------------------------------- discovery

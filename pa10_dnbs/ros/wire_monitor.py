@@ -23,8 +23,7 @@ from trajectory_msgs.msg import JointTrajectory
 from .. import JOINT_NAMES
 from ..wire.wire_record import WireRecord
 from ..wire import joint_state_cdr
-from ..loop.scheduling import OBSERVER_SCHEDULING, apply_observer_scheduling
-from .params import CONFIG_FILE, SCHEDULING, Param, ParameterError, check_choice, declare, load_node_config
+from .params import CONFIG_FILE, Param, ParameterError, declare, load_node_config
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
 from .runtime import announce_ready, exit_process, run_node, spin_until
@@ -36,7 +35,6 @@ PARAMS = {
     "duration_s": Param(0.0, "the run's simulated time [s]; 0 = simulation.duration_s of the config", 0.0),
     "out_file": Param("", "the record written at exit [.npz] (required)"),
     "poll_period_s": Param(0.01, "wall time between two drains of the subscriptions [s]", 0.0),
-    "scheduling": SCHEDULING,
 }
 
 
@@ -48,7 +46,6 @@ class WireMonitorNode(Node):
             raise ParameterError("parameter out_file is required")
         if not p["poll_period_s"] > 0:
             raise ParameterError(f"parameter poll_period_s must be > 0 s, got {p['poll_period_s']}")
-        check_choice("scheduling", p["scheduling"], OBSERVER_SCHEDULING)
         cfg = load_node_config(p["config_file"])
         dt_s = cfg["simulation"]["dt_s"]
         duration = p["duration_s"] if p["duration_s"] > 0 else cfg["simulation"]["duration_s"]
@@ -63,7 +60,6 @@ class WireMonitorNode(Node):
             self.inbox.subscribe(JointTrajectory, reference_topic(name), reference_qos(),
                                  lambda m, j=j: self._on_reference(j, m), raw=False)
         self._last_step = -1
-        print(apply_observer_scheduling(p["scheduling"])[1], flush=True)
         announce_ready("wire_monitor")
 
     def _on_joint_states(self, data: bytes) -> None:
