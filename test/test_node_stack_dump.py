@@ -47,3 +47,39 @@ def test_sigusr1_dumps_the_stacks_and_the_node_keeps_running(domain, tmp_path):
             proc.wait()
     assert proc.returncode == 0, rest
     assert out.is_file()  # it closed normally: its record is written
+
+
+HUNG_TEARDOWN = """
+import ctypes, os, signal, threading
+import rclpy
+from rclpy.node import Node
+from pa10_dnbs.ros import runtime
+
+runtime.TEARDOWN_LIMIT_S = 1.5
+rclpy.try_shutdown = lambda: ctypes.PyDLL(None).sleep(60)  # hangs in C with the GIL held, as seen in CI
+
+
+class Probe(Node):
+    def __init__(self):
+        super().__init__("hung_teardown_probe")
+        threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT)).start()
+
+    def close(self):
+        print("CLOSED", flush=True)
+
+
+runtime.exit_process(runtime.run_node(Probe, []))
+"""
+
+
+def test_a_hung_rclpy_teardown_is_cut_short_with_the_nodes_own_code(domain):
+    """After close(), rclpy's teardown (here try_shutdown) blocks in C holding the GIL: the node still exits 0
+    at the limit, and its log holds the stacks of where it hung (the launcher reports it)."""
+    t0 = time.monotonic()
+    r = subprocess.run(["timeout", str(TIMEOUT_S), sys.executable, "-c", HUNG_TEARDOWN], cwd=REPO,
+                       env=ros_env(domain), capture_output=True, text=True)
+    wall = time.monotonic() - t0
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert wall < 30  # the 60 s hang was cut short
+    assert "CLOSED" in r.stdout
+    assert "Timeout (" in r.stderr and "_rclpy_teardown" in r.stderr, r.stderr

@@ -7,6 +7,9 @@ Two workarounds for the rclpy 7.1.6 wheel:
   ``_release_entities``), so teardown releases the endpoints itself and a
   node process leaves with ``exit_process``: no interpreter finalization,
   where the node handle would be destroyed the same way.
+A node's rclpy teardown (after ``close()`` wrote its files) that hangs in C
+is cut short after 5 s by ``exit_deadline`` with the node's own exit code,
+its stacks in the log.
 rclpy's own signal handling is off (it raises KeyboardInterrupt wherever the
 interpreter is, including inside callbacks run by the C++ executor): SIGINT
 and SIGTERM complete a ``stop`` future that every spin loop checks; the node
@@ -30,10 +33,12 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
 from rclpy.task import Future
 
+from . import exit_deadline
 from .params import ParameterError
 
 SLICE_S = 0.2  # longest a spin call runs before the stop future is checked again
-TEARDOWN_LIMIT_S = 5.0  # a teardown that takes longer is cut short
+TEARDOWN_LIMIT_S = 5.0  # a close() or an rclpy teardown that takes longer is cut short
+TEARDOWN_DUMP_LEAD_S = 0.5  # the stacks of a hung rclpy teardown are written this long before it is cut short
 
 
 def spin_until(executor, future: Future, stop: Future) -> None:
@@ -87,9 +92,8 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
         traceback.print_exc()
         code = 1
     finally:
-        # Last resort if teardown still hangs: the watchdog thread can only run
-        # while the main thread releases the GIL, so SIGALRM (default action:
-        # terminate) backs it up.
+        # close(): the node's own files and report. A hang there is a failure: the watchdog thread exits 3
+        # (it needs the GIL), SIGALRM (default action: terminate) backs it up.
         watchdog = _arm_teardown_watchdog(code)
         signal.alarm(int(TEARDOWN_LIMIT_S) + 2)
         if node is not None and hasattr(node, "close"):
@@ -98,14 +102,9 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
             except Exception as exc:  # pragma: no cover
                 print(f"close failed: {exc}", file=sys.stderr)
                 code = code or 1
-        if node is not None:
-            executor.remove_node(node)
-        executor.shutdown()
-        if node is not None:
-            _release_entities(node)
-        rclpy.try_shutdown()
         signal.alarm(0)
         watchdog.cancel()
+        _rclpy_teardown(node, executor, code)
     return code
 
 
@@ -144,6 +143,33 @@ def _release_entities(node) -> None:
         node.destroy_service(srv)
     for sub in getattr(node, "polled", []):  # polled.py: subscriptions outside the executor
         sub.destroy()
+
+
+def _rclpy_teardown(node, executor, code: int) -> None:
+    """Release the executor, the endpoints and the context, within TEARDOWN_LIMIT_S.
+
+    The node's work is done and written by now. Under load these rclpy calls can block in C with the GIL
+    held (seen: ``rclpy_logging_fini`` in ``try_shutdown``, ``destroy_service``, a subscription's
+    ``destroy``), where neither a Python thread nor a Python signal handler can run. So the limit is an
+    ``exit_deadline`` (a libc thread calls ``_exit(code)``: the node keeps its own exit code), and
+    ``faulthandler`` writes every thread's stack into the log just before it ("Timeout (...)!" and the
+    stacks: where the teardown hung).
+    """
+    deadline = exit_deadline.arm(TEARDOWN_LIMIT_S, code)
+    if deadline is None:  # no POSIX timer threads here: SIGALRM ends a hung teardown (exit -14)
+        signal.alarm(int(TEARDOWN_LIMIT_S) + 2)
+    faulthandler.dump_traceback_later(TEARDOWN_LIMIT_S - TEARDOWN_DUMP_LEAD_S, file=sys.stderr)
+    if node is not None:
+        executor.remove_node(node)
+    executor.shutdown()
+    if node is not None:
+        _release_entities(node)
+    rclpy.try_shutdown()
+    faulthandler.cancel_dump_traceback_later()
+    if deadline is None:
+        signal.alarm(0)
+    else:
+        deadline.cancel()
 
 
 def _arm_teardown_watchdog(code: int) -> threading.Timer:
