@@ -155,7 +155,7 @@ def _rclpy_teardown(node, executor, code: int) -> None:
     ``faulthandler`` writes every thread's stack into the log just before it ("Timeout (...)!" and the
     stacks: where the teardown hung).
     """
-    deadline = exit_deadline.arm(TEARDOWN_LIMIT_S, code)
+    deadline = exit_deadline.arm(TEARDOWN_LIMIT_S, code if 0 <= code <= 255 else 1)
     if deadline is None:  # no POSIX timer threads here: SIGALRM ends a hung teardown (exit -14)
         signal.alarm(int(TEARDOWN_LIMIT_S) + 2)
     faulthandler.dump_traceback_later(TEARDOWN_LIMIT_S - TEARDOWN_DUMP_LEAD_S, file=sys.stderr)
