@@ -32,10 +32,13 @@ class _ITimerSpec(ctypes.Structure):
 
 
 def _libc():
-    for lib in (ctypes.CDLL(None, use_errno=True), ctypes.CDLL(ctypes.util.find_library("rt") or "librt.so.1")):
-        if hasattr(lib, "timer_create"):
-            return lib
-    return None
+    """The C library holding timer_create: the process's own (glibc >= 2.34), else librt; None if neither."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    if hasattr(libc, "timer_create"):
+        return libc
+    rt = ctypes.util.find_library("rt")
+    lib = ctypes.CDLL(rt) if rt else None
+    return lib if lib is not None and hasattr(lib, "timer_create") else None
 
 
 class ExitDeadline:
