@@ -8,7 +8,7 @@ import sys
 
 from graph_harness import REPO, ros_env
 
-CASES = [  # (node module, bad parameter, word the error line must hold): one per node
+CASES = [  # (node module, bad parameter, word the error line must hold): each node, and each kind of check
     ("plant_node", "deadline_fraction:=2.0", "deadline_fraction"),      # outside the descriptor's range
     ("joint_controller_node", "queue_depth:=many", "queue_depth"),      # wrong type
     ("reference_node", "config_file:=/no/such/config.yaml", "config_file"),

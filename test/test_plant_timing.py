@@ -72,4 +72,3 @@ def test_rt_priority_is_applied_or_explained():
     else:
         assert "not permitted" in msg and "default scheduling" in msg
     assert apply_fifo(0) == (False, "rt_priority 0: default scheduling")
-

@@ -64,4 +64,3 @@ def loop_reliability(opt: GraphOptions) -> str:
     if opt.reliability is not None:
         return opt.reliability
     return "best_effort" if opt.mode == "realtime" else "reliable"
-
