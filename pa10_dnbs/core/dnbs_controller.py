@@ -51,8 +51,9 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from .ekf import EKFBank
+from .ekf import EKFBank, EKFRows
 from .honn import HONN, monomial_exponents
+from .padded_layout import shared_width
 from .reference import ReferenceSample
 
 
@@ -158,13 +159,32 @@ class DNBSControllers:
         a, t = params.alpha_net, params.torque_net
         self.alpha_honn = HONN(monomial_exponents(2, a.max_degree), a.input_scale)
         self.torque_honn = HONN(monomial_exponents(3, t.max_degree), t.input_scale)
-        w = [initial_weights(seed, j, self.alpha_honn.n_terms, self.torque_honn.n_terms,
-                             a.init_weight_std[i], t.init_weight_std[i]) for i, j in enumerate(joints)]
+        la, lt = self.alpha_honn.n_terms, self.torque_honn.n_terms
+        n = len(joints)
+        # Both networks of every joint train in one EKF bank: rows 0..n-1 the alpha networks, n..2n-1 the
+        # torque networks, each in its block of a padded row laid out so that every sum keeps its bits.
+        layout = shared_width((la, lt))
+        if layout is None:
+            raise ValueError(f"no shared row layout for networks of {la} and {lt} weights")
+        width, (oa, ot) = layout
+        w0 = np.zeros((2 * n, width))
+        for i, j in enumerate(joints):
+            w0[i, oa:oa + la], w0[n + i, ot:ot + lt] = initial_weights(seed, j, la, lt, a.init_weight_std[i],
+                                                                       t.init_weight_std[i])
         rem = params.remedies
         p_max = rem.p_max if rem.covariance_bound else np.inf
-        self.alpha_ekf = EKFBank(np.array([x[0] for x in w]), a.p0, a.q, a.r, a.eta, p_max)
-        self.torque_ekf = EKFBank(np.array([x[1] for x in w]), t.p0, t.q, t.r, t.eta, p_max)
-        n = len(joints)
+        self.ekf = EKFBank(w0, *(np.concatenate([getattr(a, k), getattr(t, k)]) for k in ("p0", "q", "r", "eta")),
+                           p_max)
+        self.alpha_ekf = EKFRows(self.ekf, slice(0, n), slice(oa, oa + la))
+        self.torque_ekf = EKFRows(self.ekf, slice(n, 2 * n), slice(ot, ot + lt))
+        self._H = np.zeros((2 * n, width))  # both regressors, padding exact zeros
+        self._S1, self._S2 = self._H[:n, oa:oa + la], self._H[n:, ot:ot + lt]
+        self._w1, self._w2 = self.ekf.w[:n], self.ekf.w[n:]   # views, padded rows
+        self._H1, self._H2 = self._H[:n], self._H[n:]
+        self._prod = np.empty((n, width))
+        self._eps = np.empty(2 * n)  # the training errors of the alpha rows, then the torque rows
+        self._eps1, self._eps2 = self._eps[:n], self._eps[n:]
+        self._two_ones = np.ones(2 * n)
 
         def on(flag, value, neutral):
             return np.broadcast_to(np.asarray(value, dtype=float), (n,)).copy() if flag else np.full(n, neutral)
@@ -204,48 +224,44 @@ class DNBSControllers:
         z1, z2 = self._z1, self._z2
         z1[:, 0] = x1
         z1[:, 1] = ref.position_ahead_rad
-        S1 = self.alpha_honn.regressor(z1)
+        self.alpha_honn.regressor(z1, out=self._S1)
         e1 = ref.position_rad - x1
-        alpha = self._A * self.alpha_ekf.output(S1) + self._k_a * e1
+        alpha = self._A * np.add.reduce(np.multiply(self._w1, self._H1, out=self._prod), axis=1) + self._k_a * e1
         if self._k_v:
             alpha = alpha + ref.velocity_rad_s
         z2[:, 0] = x1
         z2[:, 1] = x2
         z2[:, 2] = alpha
-        S2 = self.torque_honn.regressor(z2)
+        self.torque_honn.regressor(z2, out=self._S2)
         e2 = alpha - x2
-        u = self._U * self.torque_ekf.output(S2) + self._k_u * e2
+        u = self._U * np.add.reduce(np.multiply(self._w2, self._H2, out=self._prod), axis=1) + self._k_u * e2
         lim = self._lim
         u_out = np.minimum(np.maximum(u, -lim), lim)
 
         e2_train = -e2 if self._printed else e2
-        act1 = act2 = active
+        act = None if active is None else np.concatenate((active, active))  # (2n,): alpha rows, torque rows
         if self._anti_windup:
             # Conditional integration: while the torque is clipped, skip an update that would raise |u|:
             # e2 > 0 raises u directly; e1 > 0 raises alpha, and so u wherever du/dalpha > 0.
             sat = np.abs(u) >= lim
             if sat.any():
                 base = self._ones if active is None else active
-                act1 = base * (1.0 - (sat & (e1 * u > 0.0)))
-                act2 = base * (1.0 - (sat & (e2_train * u > 0.0)))
+                act = np.concatenate((base * (1.0 - (sat & (e1 * u > 0.0))),
+                                      base * (1.0 - (sat & (e2_train * u > 0.0)))))
         if self._dead_zone:
             e1 = e1 - np.clip(e1, -self._d1, self._d1)
             e2_train = e2_train - np.clip(e2_train, -self._d2, self._d2)
-        eps1 = e1 / self._E1
-        eps2 = e2_train / self._E2
-        ramp = min(1.0, self.steps / self._ramp_steps) if self._ramp_steps else 1.0
-        eta1 = self.alpha_ekf.eta * ramp if ramp != 1.0 else self.alpha_ekf.eta
-        eta2 = self.torque_ekf.eta * ramp if ramp != 1.0 else self.torque_ekf.eta
-        self.alpha_ekf.update(S1, eps1, eta1, act1)
-        self.torque_ekf.update(S2, eps2, eta2, act2)
+        np.divide(e1, self._E1, out=self._eps1)
+        np.divide(e2_train, self._E2, out=self._eps2)
+        eta = self.ekf.eta
+        if self._ramp_steps and self.steps < self._ramp_steps:
+            eta = eta * (self.steps / self._ramp_steps)
+        self.ekf.update(self._H, self._eps, eta, act)
         if self._sigma:
-            a1 = self._ones if act1 is None else act1
-            a2 = self._ones if act2 is None else act2
-            self.alpha_ekf.w *= (1.0 - np.minimum(1.0, self._sigma * np.abs(eps1) * a1))[:, None]
-            self.torque_ekf.w *= (1.0 - np.minimum(1.0, self._sigma * np.abs(eps2) * a2))[:, None]
+            a = self._two_ones if act is None else act
+            self.ekf.w *= (1.0 - np.minimum(1.0, self._sigma * np.abs(self._eps) * a))[:, None]
         if self._bound != np.inf:
-            np.clip(self.alpha_ekf.w, -self._bound, self._bound, out=self.alpha_ekf.w)
-            np.clip(self.torque_ekf.w, -self._bound, self._bound, out=self.torque_ekf.w)
+            np.clip(self.ekf.w, -self._bound, self._bound, out=self.ekf.w)
 
         self.alpha = alpha
         self.torque_unsaturated = u
@@ -256,15 +272,15 @@ class DNBSControllers:
     def _guard(self) -> None:
         every = self.params.ekf_full_check_every
         full = every > 0 and self.steps % every == 0
-        a, t = self.alpha_ekf, self.torque_ekf
-        if not full and math.isfinite(a.w.sum() + t.w.sum() + a.last_hph.sum() + t.last_hph.sum()) \
-                and a.last_hph.min() >= 0.0 and t.last_hph.min() >= 0.0:
+        ekf = self.ekf
+        if not full and math.isfinite(ekf.w.sum() + ekf.last_hph.sum()) and ekf.last_hph.min() >= 0.0:
             return  # the cheap check of both networks at once: every w and H^T P H finite, H^T P H >= 0
-        for name, ekf in (("alpha", self.alpha_ekf), ("torque", self.torque_ekf)):
-            bad = ekf.unhealthy(full)
-            if bad.any():
-                ekf.reset(bad)
-                self.ekf_resets[name] += bad
+        bad = ekf.unhealthy(full)
+        if bad.any():
+            ekf.reset(bad)
+            n = self.n_joints
+            self.ekf_resets["alpha"] += bad[:n]
+            self.ekf_resets["torque"] += bad[n:]
 
     def state_dict(self, row: int = 0) -> dict[str, np.ndarray]:
         """Row ``row``'s weights (L,), covariances (L, L), initial weights and counters (for np.savez)."""

@@ -132,3 +132,34 @@ class EKFBank:
             self.w[i] = self.w0[i]
             self.P[i] = np.eye(L) * self.p0[i]
             self.last_hph[i] = 0.0
+
+
+class EKFRows:
+    """One network's part of a bank that holds several: rows ``rows`` and weight columns ``cols`` (slices).
+
+    ``w`` (n, L), ``P`` (n, L, L) and ``w0`` are views into the bank (writes go to it); ``unhealthy`` looks
+    at these rows only. The bank's other columns of these rows are padding (see padded_layout).
+    """
+
+    def __init__(self, bank: EKFBank, rows: slice, cols: slice):
+        self.bank, self.rows, self.cols = bank, rows, cols
+
+    @property
+    def w(self) -> np.ndarray:
+        return self.bank.w[self.rows, self.cols]
+
+    @property
+    def P(self) -> np.ndarray:
+        return self.bank.P[self.rows, self.cols, self.cols]
+
+    @property
+    def w0(self) -> np.ndarray:
+        return self.bank.w0[self.rows, self.cols]
+
+    @property
+    def eta(self) -> np.ndarray:
+        return self.bank.eta[self.rows]
+
+    def unhealthy(self, full: bool = True) -> np.ndarray:
+        """Bool (n,) over these rows: see ``EKFBank.unhealthy``."""
+        return self.bank.unhealthy(full)[self.rows]

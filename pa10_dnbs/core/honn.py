@@ -48,21 +48,23 @@ class HONN:
             raise ValueError("input_scale must be finite and positive")
         # Term i is the product of D factors ext[:, f_i1] ... ext[:, f_iD], where
         # ext = [1, s_1, ..., s_p] and D is the largest total degree; a term of
-        # lower degree is padded with index 0 (the constant 1).
+        # lower degree is padded with index 0 (the constant 1). The factors are
+        # gathered in one take and multiplied left to right by one multiply.reduce:
+        # (f_i1 f_i2) f_i3 ..., the same bits as multiplying them one by one.
         degree = int(self.exponents.sum(axis=1).max(initial=0))
         factors = np.zeros((self.exponents.shape[0], max(degree, 1)), dtype=np.intp)
         for i, row in enumerate(self.exponents):
             idx = [j + 1 for j, d in enumerate(row) for _ in range(d)]
             factors[i, :len(idx)] = idx
-        self._factor_cols = [np.ascontiguousarray(factors[:, c]) for c in range(factors.shape[1])]
+        self._factors = factors
         self._inv_scale = 1.0 / self.input_scale
         self._alloc(0)
 
     def _alloc(self, n: int) -> None:
         self._ext = np.ones((n, self.input_scale.size + 1))
         self._zs = np.empty((n, self.input_scale.size))
+        self._gathered = np.empty((n,) + self._factors.shape)
         self._S = np.empty((n, self.exponents.shape[0]))
-        self._f = np.empty((n, self.exponents.shape[0]))
 
     @property
     def n_inputs(self) -> int:
@@ -74,10 +76,11 @@ class HONN:
         """L, the number of weights."""
         return self.exponents.shape[0]
 
-    def regressor(self, z: np.ndarray) -> np.ndarray:
+    def regressor(self, z: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """S(z), shape (n, L), for inputs z of shape (n, p) (one row per joint).
 
-        The result is this network's own buffer, overwritten by the next call: copy it to keep it.
+        Written into ``out`` (n, L) when given (any strides, e.g. a block of a wider array), else into this
+        network's own buffer, overwritten by the next call: copy it to keep it.
         """
         if z.ndim != 2 or z.shape[1] != self.input_scale.size:
             raise ValueError(f"expected inputs of shape (n, {self.input_scale.size}), got {z.shape}")
@@ -85,8 +88,5 @@ class HONN:
             self._alloc(z.shape[0])
         ext = self._ext
         np.tanh(np.multiply(z, self._inv_scale, out=self._zs), out=ext[:, 1:])
-        cols = self._factor_cols
-        out = np.take(ext, cols[0], axis=1, out=self._S)
-        for c in cols[1:]:
-            out *= np.take(ext, c, axis=1, out=self._f)
-        return out
+        np.take(ext, self._factors, axis=1, out=self._gathered, mode="clip")  # indices valid: no buffering
+        return np.multiply.reduce(self._gathered, axis=2, out=self._S if out is None else out)
