@@ -111,7 +111,9 @@ def build_parser() -> argparse.ArgumentParser:
                          "(default 0.9); a missing one is held or zeroed (--on-missing-effort) and counted")
     la.add_argument("--rt-priority", type=int, default=0, metavar="N",
                     help="SCHED_FIFO priority 1..99 for the plant and the controllers where the OS allows it "
-                         "(root, CAP_SYS_NICE or ulimit -r); otherwise a message and default scheduling")
+                         "(root, CAP_SYS_NICE or ulimit -r); otherwise a message and default scheduling. 0 (default): "
+                         "off. 50 is what ros2_control's controller manager asks for; observers keep the default "
+                         "policy and starve when the loop needs the whole machine (docs/timing.md)")
     _add_run_args(la, ("dnbs", "pid"), "the joint controllers: dnbs or pid (ctc is centralized: in-process only)")
     la.add_argument("--namespace", default="/pa10", metavar="NS",
                     help="the arm's ROS namespace (default /pa10): every node runs in it, its topics are NS/s1/state, "

@@ -54,3 +54,33 @@ def test_a_careless_offset_changes_the_bits():
     padded = np.zeros((200, 12))
     padded[:, :6] = own
     assert not np.array_equal(np.add.reduce(padded, axis=1), np.add.reduce(own, axis=1))
+
+
+def test_one_padded_bank_trains_two_networks_as_two_banks_do_bit_for_bit():
+    """The DNBS layout: alpha networks (6 weights) and torque networks (10) of 3 joints in one 12-wide bank."""
+    from pa10_dnbs.core.ekf import EKFBank
+
+    rng = np.random.default_rng(7)
+    n, (la, lt) = 3, (6, 10)
+    width, (oa, ot) = shared_width((la, lt))
+    wa, wt = rng.normal(size=(n, la)), rng.normal(size=(n, lt))
+    alone_a = EKFBank(wa, p0=1.0, q=0.01, r=1.0, eta=1.0, p_max=10.0)
+    alone_t = EKFBank(wt, p0=2.0, q=0.02, r=0.5, eta=1.0, p_max=10.0)
+    w0 = np.zeros((2 * n, width))
+    w0[:n, oa:oa + la], w0[n:, ot:ot + lt] = wa, wt
+    both = EKFBank(w0, p0=[1.0] * n + [2.0] * n, q=[0.01] * n + [0.02] * n, r=[1.0] * n + [0.5] * n,
+                   eta=1.0, p_max=10.0)
+    H = np.zeros((2 * n, width))
+    for k in range(500):
+        Ha, Ht = np.tanh(rng.normal(size=(n, la))), np.tanh(rng.normal(size=(n, lt)))
+        ea, et = rng.normal(size=n), rng.normal(size=n)
+        eta = np.full(n, min(1.0, k / 100))
+        act = (rng.random(n) > 0.1).astype(float)
+        alone_a.update(Ha, ea, eta, act)
+        alone_t.update(Ht, et, eta, act)
+        H[:n, oa:oa + la], H[n:, ot:ot + lt] = Ha, Ht
+        both.update(H, np.concatenate([ea, et]), np.concatenate([eta, eta]), np.concatenate([act, act]))
+    assert np.array_equal(both.w[:n, oa:oa + la], alone_a.w) and np.array_equal(both.w[n:, ot:ot + lt], alone_t.w)
+    assert np.array_equal(both.P[:n, oa:oa + la, oa:oa + la], alone_a.P)
+    assert np.array_equal(both.P[n:, ot:ot + lt, ot:ot + lt], alone_t.P)
+    assert not both.w[:n, :oa].any() and not both.w[n:, ot + lt:].any()  # the padding stays exact zeros

@@ -16,6 +16,7 @@ from .node_specs import LIVE_VIEW, controller_command
 from .processes import ManagedProcess
 
 READY_TIMEOUT_S = 60.0
+OBSERVER_CATCH_UP_S = 10.0  # wall time the observer has after the plant's end to report COMPLETE
 
 
 class StopRequest:
@@ -129,11 +130,14 @@ def watch(procs: list[ManagedProcess], opt: GraphOptions, say, stop: StopRequest
             time.sleep(0.05)
         else:
             return f"run did not finish within {limit_s:g} s"
-        end = time.monotonic() + 10.0  # the last messages may still be in flight
+        end = time.monotonic() + OBSERVER_CATCH_UP_S  # the last messages may still be in flight
         while not monitor.saw("COMPLETE") and time.monotonic() < end and not stop.signal_name:
             time.sleep(0.05)
         if not monitor.saw("COMPLETE") and not stop.signal_name:
-            return (f"the {monitor.name} did not receive the whole run\n--- last lines of its log ---\n"
+            hint = (" (under --rt-priority the plant and the controllers run SCHED_FIFO: when they need the whole "
+                    "machine they starve the observer, which keeps the default policy; try a lower --rtf, or "
+                    "no --rt-priority)" if opt.rt_priority else "")
+            return (f"the {monitor.name} did not receive the whole run{hint}\n--- last lines of its log ---\n"
                     + monitor.tail())
         return None
     finally:
