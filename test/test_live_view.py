@@ -166,7 +166,8 @@ def test_a_client_sees_the_arm_and_the_tracking_frames(live):
             view.on_message("/pa10/joint_states", data)
             view.tick(k / 1024)
         assert view.frames == 10
-        assert client.pump(10, lambda: client.count("/pa10/tracking") == 10)
+        # the SDK sends time broadcasts and channel messages on separate paths: wait for the last of both
+        assert client.pump(10, lambda: client.count("/pa10/tracking") == 10 and client.times[-1:] == [144 * 10**6])
     finally:
         client.close()
     got = client.messages["/pa10/joint_states"]

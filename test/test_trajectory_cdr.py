@@ -1,7 +1,8 @@
-"""The raw JointTrajectory reader (wire/trajectory_cdr.py) agrees with rclpy's serializer: every point, and the
-first joint's batch a controller reads."""
+"""The raw JointTrajectory reader and writer (wire/trajectory_cdr.py) agree with rclpy's serializer: every point,
+the first joint's batch a controller reads, and the batch the reference node writes."""
 import struct
 
+import numpy as np
 import pytest
 
 rclpy_serialization = pytest.importorskip("rclpy.serialization")
@@ -78,3 +79,26 @@ def test_rejects_garbage():
         trajectory_cdr.decode(data[:32] + b"\xff" * 4 + data[36:])
     with pytest.raises(ValueError, match="bad string length"):  # frame_id length past the end
         trajectory_cdr.decode(data[:12] + b"\xff" * 4 + data[16:])
+
+
+@pytest.mark.parametrize("name", ["s1", "e12", "w", "abcd", "a_long_joint_name"])  # both alignments of the points
+@pytest.mark.parametrize("n", [0, 1, 2, 20, 150])
+def test_the_reference_nodes_encoder_is_read_back_by_rclpy_and_by_the_reader(name, n):
+    rng = np.random.default_rng(n + len(name))
+    pos, vel = rng.uniform(-3, 3, n).tolist(), rng.uniform(-3, 3, n).tolist()
+    step_ns = 10_000_000  # 10 ms: the 150-point batch crosses a second of time_from_start
+    data = trajectory_cdr.encode_one_joint(12, 345_000_000, name, pos, vel, step_ns)
+    m = rclpy_serialization.deserialize_message(data, JointTrajectory)
+    assert m.joint_names == [name] and m.header.frame_id == ""
+    assert (m.header.stamp.sec, m.header.stamp.nanosec) == (12, 345_000_000)
+    assert [list(p.positions) for p in m.points] == [[x] for x in pos]
+    assert [list(p.velocities) for p in m.points] == [[x] for x in vel]
+    assert all(len(p.accelerations) == 0 and len(p.effort) == 0 for p in m.points)
+    assert [(p.time_from_start.sec, p.time_from_start.nanosec) for p in m.points] == \
+        [divmod(i * step_ns, 10**9) for i in range(n)]
+    assert decode_first_joint(data) == (12, 345_000_000, pos, vel)
+
+
+def test_the_encoder_refuses_mismatched_points():
+    with pytest.raises(ValueError, match="2 positions but 1 velocities"):
+        trajectory_cdr.encode_one_joint(0, 0, "s1", [0.0, 1.0], [0.0], 1_000_000)

@@ -5,7 +5,7 @@ simulated time are the same thing on the wire.
 """
 from __future__ import annotations
 
-from builtin_interfaces.msg import Duration, Time
+from builtin_interfaces.msg import Time
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from ..wire import steps
@@ -39,20 +39,9 @@ def description_qos() -> QoSProfile:
 
 
 class StepClock(steps.StepClock):
-    """Step arithmetic of ``wire/steps.py`` plus conversions to and from ``builtin_interfaces`` Time and Duration."""
+    """Step arithmetic of ``wire/steps.py`` plus the ``builtin_interfaces`` Time of a step (diagnostics stamps)."""
 
     def stamp(self, step: int, out: Time | None = None) -> Time:
         t = out if out is not None else Time()
         t.sec, t.nanosec = self.sec_nanosec(step)
         return t
-
-    def step_of(self, stamp: Time) -> int:
-        return self.step_of_sec_nanosec(stamp.sec, stamp.nanosec)
-
-    def duration(self, steps: int) -> Duration:
-        d = Duration()
-        d.sec, d.nanosec = self.sec_nanosec(steps)
-        return d
-
-    def steps_of(self, d: Duration) -> int:
-        return self.step_of_sec_nanosec(d.sec, d.nanosec)

@@ -22,7 +22,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 from .. import JOINT_NAMES
 from ..wire.wire_record import WireRecord
-from ..wire import joint_state_cdr
+from ..wire import joint_state_cdr, trajectory_cdr
 from .params import CONFIG_FILE, Param, ParameterError, declare, load_node_config
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
@@ -58,7 +58,7 @@ class WireMonitorNode(Node):
         self.inbox.subscribe(JointState, JOINT_STATES, record_qos(), self._on_joint_states)
         for j, name in enumerate(JOINT_NAMES):
             self.inbox.subscribe(JointTrajectory, reference_topic(name), reference_qos(),
-                                 lambda m, j=j: self._on_reference(j, m), raw=False)
+                                 lambda data, j=j: self._on_reference(j, data))
         self._last_step = -1
         announce_ready("wire_monitor")
 
@@ -77,10 +77,16 @@ class WireMonitorNode(Node):
                 print(f"PROGRESS {k} {self.record.worst_abs_error(k):.6g}", flush=True)
             self._check_complete()
 
-    def _on_reference(self, joint: int, msg: JointTrajectory) -> None:
-        self.record.add_reference(joint, self.clock.step_of(msg.header.stamp),
-                                  [self.clock.steps_of(pt.time_from_start) for pt in msg.points],
-                                  [pt.positions[0] for pt in msg.points])
+    def _on_reference(self, joint: int, data: bytes) -> None:
+        """A reference batch, read from its CDR bytes (wire/trajectory_cdr.py: no rclpy message per point)."""
+        try:
+            sec, nanosec, _, points = trajectory_cdr.decode(data)
+            positions = [pos[0] for pos, _, _ in points]
+        except (ValueError, IndexError, struct.error, UnicodeDecodeError):
+            self.record.malformed += 1
+            return
+        self.record.add_reference(joint, self.clock.step_of_sec_nanosec(sec, nanosec),
+                                  [self.clock.step_of_ns(t_ns) for _, _, t_ns in points], positions)
         self._check_complete()
 
     def _check_complete(self) -> None:
