@@ -42,16 +42,16 @@ def load() -> str:
         return "?"
 
 
-def one_run(mode: str, factor: float, args, attempts: int = 3) -> tuple[dict, dict[str, float]]:
+def one_run(mode: str, factor: float, args, attempts: int = 3) -> tuple[dict | None, dict[str, float]]:
     """Plant stats and {process: CPU per tick [us]} of one run (a failed run, e.g. a node whose teardown
-    outlived the launcher's grace period on a loaded machine, is reported and run again)."""
+    outlived the launcher's grace period on a loaded machine, is reported and run again); (None, {}) when
+    every attempt failed (e.g. an observer starved under --rt-priority): the run counts as 0 % on time."""
     for attempt in range(1, attempts + 1):
         try:
             return _run(mode, factor, args)
         except GraphFailure as exc:
             print(f"  ({mode} R={factor:g} attempt {attempt} failed: {str(exc).splitlines()[0]})", flush=True)
-            if attempt == attempts:
-                raise
+    return None, {}
 
 
 def _run(mode: str, factor: float, args) -> tuple[dict, dict[str, float]]:
@@ -67,6 +67,15 @@ def _run(mode: str, factor: float, args) -> tuple[dict, dict[str, float]]:
                 if m := CPU_LINE.match(line):
                     cpu[m.group(1)] = float(m.group(2))
     return res.stats, cpu
+
+
+def on_time(stats: dict | None) -> float:
+    """The fraction of ticks with every effort on time; 0 for a run that failed."""
+    return 0.0 if stats is None else stats["on_time_fraction"]
+
+
+def runs_text(values) -> str:
+    return ", ".join("failed" if v is None else f"{v:.3f}" for v in values)
 
 
 def med(xs):
@@ -96,6 +105,10 @@ def main() -> int:
             stats, cpu = one_run(mode, r, args)
             runs[(mode, r)].append((stats, cpu))
             line = f"run {i + 1} {mode:8s}"
+            if stats is None:
+                print(line + (f" R={r:<5g}" if mode == "realtime" else "") + f" failed every attempt; load {load()}",
+                      flush=True)
+                continue
             if mode == "realtime":
                 line += (f" R={r:<5g} on time {100 * stats['on_time_fraction']:6.2f} %, late starts "
                          f"{stats['late_start_ticks']:5d}, achieved factor {stats['real_time_factor']:.3f}")
@@ -119,25 +132,25 @@ def main() -> int:
         print(row)
     row = f"  {'total':22s}"
     for c in cases:
-        totals[c] = med([sum(cpu.values()) for _, cpu in runs[c]])
+        totals[c] = med([sum(cpu.values()) if cpu else None for _, cpu in runs[c]])
         row += f"{totals[c]:10.0f}"
     print(row)
 
     if args.factors:
         print("\nrealtime: ticks with every effort before the deadline, and state-to-effort latency per joint")
         for r in args.factors:
-            rs = [s for s, _ in runs[("realtime", r)]]
+            every = [s for s, _ in runs[("realtime", r)]]
+            rs = [s for s in every if s is not None]
             print(f"  R={r:g} (tick {1e3 * 1e-3 / r:.2f} ms, deadline {0.9e3 * 1e-3 / r:.2f} ms): on time "
-                  f"{100 * med([s['on_time_fraction'] for s in rs]):.2f} % (runs: "
-                  + ", ".join(f"{100 * s['on_time_fraction']:.2f}" for s in rs)
+                  f"{100 * med([on_time(s) for s in every]):.2f} % (runs: "
+                  + ", ".join("failed" if s is None else f"{100 * s['on_time_fraction']:.2f}" for s in every)
                   + f"), late starts {med([s['late_start_ticks'] for s in rs]):.0f}, achieved factor "
                   f"{med([s['real_time_factor'] for s in rs]):.3f}")
             for j, name in enumerate(JOINT_NAMES):
                 print(f"      {name}: p50 {med([s['joints'][j]['latency_median_us'] for s in rs]):6.0f} us, "
                       f"p99 {med([s['joints'][j]['latency_p99_us'] for s in rs]):6.0f} us, missed "
                       f"{med([s['joints'][j]['missed_ticks'] for s in rs]):.0f}")
-        ok = [r for r in args.factors if med([s["on_time_fraction"] for s, _ in runs[("realtime", r)]])
-              >= ON_TIME_TARGET]
+        ok = [r for r in args.factors if med([on_time(s) for s, _ in runs[("realtime", r)]]) >= ON_TIME_TARGET]
         print(f"\nsustainable real-time factor (median run >= {100 * ON_TIME_TARGET:.0f} % of ticks on time): "
               + (f"{max(ok):g}" if ok else f"none of {', '.join(f'{r:g}' for r in args.factors)}"))
         busiest = max(args.factors)
@@ -146,11 +159,11 @@ def main() -> int:
               f"{cpu_ms:.1f} cores fully busy (more in practice: to keep p99 latency under the 0.9 ms deadline "
               f"the cores must stay well below full load)")
     if not args.no_lockstep:
-        print(f"lockstep real-time factor: median {med([s['real_time_factor'] for s, _ in runs[('lockstep', 1.0)]]):.3f}"
-              f" (runs: " + ", ".join(f"{s['real_time_factor']:.3f}" for s, _ in runs[("lockstep", 1.0)]) + ")")
+        factors = [None if s is None else s["real_time_factor"] for s, _ in runs[("lockstep", 1.0)]]
+        print(f"lockstep real-time factor: median {med(factors):.3f} (runs: {runs_text(factors)})")
     if args.record:
-        print(f"lockstep with the recorder: real-time factor median "
-              f"{med([s['real_time_factor'] for s, _ in runs[('record', 1.0)]]):.3f}")
+        factors = [None if s is None else s["real_time_factor"] for s, _ in runs[("record", 1.0)]]
+        print(f"lockstep with the recorder: real-time factor median {med(factors):.3f} (runs: {runs_text(factors)})")
     print(f"load average after: {load()}")
     return 0
 

@@ -185,3 +185,25 @@ def test_weight_bounding_remedies(cfg, remedy):
     assert w_on < w_off
     if remedy == "projection":
         assert w_on <= 0.05 and np.abs(on.alpha_ekf.w).max() <= 0.05
+
+
+def test_network_settings_given_as_one_number_mean_that_number_for_every_joint(cfg):
+    import dataclasses
+
+    from pa10_dnbs.core.dnbs_controller import DNBSControllers
+
+    params = build_controllers(cfg, "dnbs", [1, 2]).params
+    keys = ("init_weight_std", "p0", "q", "r", "eta")
+
+    def with_(make):
+        nets = {name: dataclasses.replace(getattr(params, name), **{k: make(getattr(params, name), k) for k in keys})
+                for name in ("alpha_net", "torque_net")}
+        return DNBSControllers(dataclasses.replace(params, **nets), seed=3, joints=[1, 2])
+
+    scalar = with_(lambda net, k: float(getattr(net, k)[0]))
+    arrays = with_(lambda net, k: np.full(2, getattr(net, k)[0]))
+    ref = build_reference(cfg)
+    for k in range(20):
+        x1, x2 = np.array([0.1, -0.2]), np.array([0.01, 0.0])
+        assert scalar.step(x1, x2, ref.sample(k, [1, 2])).tobytes() == arrays.step(x1, x2, ref.sample(k, [1, 2])).tobytes()
+    assert scalar.ekf.w.tobytes() == arrays.ekf.w.tobytes() and scalar.ekf.P.tobytes() == arrays.ekf.P.tobytes()

@@ -112,3 +112,49 @@ def test_checkpoint_resume_continues_exactly(cfg, tmp_path):
     (tmp_path / "junk.npz").write_bytes(b"not a checkpoint")
     with pytest.raises(ValueError, match="not a readable checkpoint"):
         load_checkpoint(tmp_path / "junk.npz")
+
+
+def _factorises(P) -> bool:
+    try:
+        np.linalg.cholesky(P)
+        return True
+    except np.linalg.LinAlgError:
+        return False
+
+
+def _a_covariance_that_only_its_padding_condemns(ctrl, rng):
+    """A nearly singular torque-network P (10 x 10) that factorises alone but not inside the controller's
+    padded 12 x 12 row (LAPACK's sums run over other lengths there), loaded into ``ctrl``; None if this
+    LAPACK build shows no such case."""
+    state = ctrl.state_dict(0)
+    L = state["torque_P"].shape[0]
+    for _ in range(200):
+        A = rng.normal(size=(L, L - 1)) * 10.0 ** rng.uniform(-3, 3, size=L - 1)
+        B = A @ A.T
+        B = (B + B.T) / 2  # exactly symmetric, rank L-1: the factorisation's verdict hangs on rounding
+        lo, hi = -1e-6 * np.abs(B).max(), 1e-6 * np.abs(B).max()
+        for _ in range(60):  # the shift at which the 10 x 10 block stops factorising
+            mid = (lo + hi) / 2
+            lo, hi = (lo, mid) if _factorises(B + mid * np.eye(L)) else (mid, hi)
+        for shift in np.linspace(lo, hi, 41):
+            P = B + shift * np.eye(L)
+            ctrl.load_state_dict(0, {**state, "torque_P": P}, resume_steps=False)
+            if _factorises(P) and not _factorises(ctrl.ekf.P[ctrl.torque_ekf.rows][0]):
+                return P
+    return None
+
+
+def test_the_full_check_judges_each_networks_own_covariance_not_its_padded_row(cfg):
+    """A padded bank must condemn exactly what a bank of that network alone would."""
+    ctrl = build_controllers(cfg, "dnbs", [3])
+    P = _a_covariance_that_only_its_padding_condemns(ctrl, np.random.default_rng(0))
+    if P is None:
+        pytest.skip("this LAPACK factorises the padded and the unpadded matrices alike")
+    every = ctrl.params.ekf_full_check_every
+    ctrl.steps = every - 1  # the next step ends with a full check
+    ref = build_reference(cfg).sample(every - 1, [3])
+    ctrl.step(np.array([0.1]), np.zeros(1), ref, active=np.zeros(1))  # not trained: P stays as loaded
+    assert ctrl.torque_ekf.P[0].tobytes() == P.tobytes()
+    assert {k: int(v[0]) for k, v in ctrl.ekf_resets.items()} == {"alpha": 0, "torque": 0}
+    assert not ctrl.torque_ekf.unhealthy(full=True).any()
+    assert ctrl.ekf.unhealthy(full=True)[ctrl.n_joints]  # the padded row as a whole does not factorise

@@ -1,10 +1,11 @@
 """Decentralized neural backstepping controllers (eq. 23-26), one per joint, computed as rows of arrays.
 
-Row i is joint i's controller and reads only row i: its own angle x1 [rad],
-velocity x2 [rad/s] and reference. A joint-controller node holds a bank of
-one row; the in-process simulation holds all seven in one bank. The
-arithmetic of a row does not depend on the other rows, so both agree bit for
-bit (test/test_dnbs_controller.py checks it).
+Joint i's controller (the i-th of the bank's n joints) reads only its own
+angle x1 [rad], velocity x2 [rad/s] and reference; its two networks are rows
+i (alpha) and n + i (torque) of one EKF bank. A joint-controller node holds
+one joint; the in-process simulation holds all seven. The arithmetic of a
+row does not depend on the other rows, so both agree bit for bit
+(test/test_dnbs_controller.py checks it).
 
 Per joint, at step k:
     alpha = A w1^T S1(z1) + x_d_dot + k_a e1    z1 = [x1, x_d(k+2)]     virtual control [rad/s]
@@ -138,6 +139,11 @@ class DNBSParams:
                           ekf_full_check_every=self.ekf_full_check_every)
 
 
+def _per_joint(value, n: int) -> np.ndarray:
+    """A number or n values as a float array of shape (n,)."""
+    return np.broadcast_to(np.asarray(value, dtype=float), (n,))
+
+
 def initial_weights(seed: int, joint: int, n_alpha: int, n_torque: int, std_alpha: float, std_torque: float):
     """Joint ``joint``'s random initial weights (the paper: "initialized in a random way"), seeded by
     (seed, joint): the same in a bank of one as in a bank of seven."""
@@ -168,18 +174,19 @@ class DNBSControllers:
             raise ValueError(f"no shared row layout for networks of {la} and {lt} weights")
         width, (oa, ot) = layout
         w0 = np.zeros((2 * n, width))
+        std_a, std_t = _per_joint(a.init_weight_std, n), _per_joint(t.init_weight_std, n)
         for i, j in enumerate(joints):
-            w0[i, oa:oa + la], w0[n + i, ot:ot + lt] = initial_weights(seed, j, la, lt, a.init_weight_std[i],
-                                                                       t.init_weight_std[i])
+            w0[i, oa:oa + la], w0[n + i, ot:ot + lt] = initial_weights(seed, j, la, lt, std_a[i], std_t[i])
         rem = params.remedies
         p_max = rem.p_max if rem.covariance_bound else np.inf
-        self.ekf = EKFBank(w0, *(np.concatenate([getattr(a, k), getattr(t, k)]) for k in ("p0", "q", "r", "eta")),
-                           p_max)
+        self.ekf = EKFBank(w0, *(np.concatenate([_per_joint(getattr(a, k), n), _per_joint(getattr(t, k), n)])
+                                 for k in ("p0", "q", "r", "eta")), p_max)
         self.alpha_ekf = EKFRows(self.ekf, slice(0, n), slice(oa, oa + la))
         self.torque_ekf = EKFRows(self.ekf, slice(n, 2 * n), slice(ot, ot + lt))
+        self._blocks = ((self.alpha_ekf.rows, self.alpha_ekf.cols), (self.torque_ekf.rows, self.torque_ekf.cols))
         self._H = np.zeros((2 * n, width))  # both regressors, padding exact zeros
         self._S1, self._S2 = self._H[:n, oa:oa + la], self._H[n:, ot:ot + lt]
-        self._w1, self._w2 = self.ekf.w[:n], self.ekf.w[n:]   # views, padded rows
+        self._w1, self._w2 = self.ekf.w[:n], self.ekf.w[n:]   # views of ekf.w (updated in place), padded rows
         self._H1, self._H2 = self._H[:n], self._H[n:]
         self._prod = np.empty((n, width))
         self._eps = np.empty(2 * n)  # the training errors of the alpha rows, then the torque rows
@@ -187,7 +194,7 @@ class DNBSControllers:
         self._two_ones = np.ones(2 * n)
 
         def on(flag, value, neutral):
-            return np.broadcast_to(np.asarray(value, dtype=float), (n,)).copy() if flag else np.full(n, neutral)
+            return _per_joint(value, n).copy() if flag else np.full(n, neutral)
 
         self._k_a = on(rem.robust_term, rem.alpha_gain_per_s, 0.0)
         self._k_v = 1.0 if rem.robust_term and rem.velocity_feedforward else 0.0
@@ -275,7 +282,7 @@ class DNBSControllers:
         ekf = self.ekf
         if not full and math.isfinite(ekf.w.sum() + ekf.last_hph.sum()) and ekf.last_hph.min() >= 0.0:
             return  # the cheap check of both networks at once: every w and H^T P H finite, H^T P H >= 0
-        bad = ekf.unhealthy(full)
+        bad = ekf.unhealthy(full, self._blocks)  # the full check looks at each network's own block
         if bad.any():
             ekf.reset(bad)
             n = self.n_joints

@@ -36,6 +36,28 @@ def _per_row(name: str, value, n: int, allow_zero: bool) -> np.ndarray:
     return arr
 
 
+def _not_positive_definite(P: np.ndarray, skip: np.ndarray) -> np.ndarray:
+    """Bool (n,): which of the matrices P (n, L, L) are not finite, symmetric and positive definite; rows
+    where ``skip`` is True are not looked at one by one (they are already condemned)."""
+    bad = np.zeros(P.shape[0], dtype=bool)
+    try:
+        if np.isfinite(P).all() and np.array_equal(P, P.transpose(0, 2, 1)):
+            np.linalg.cholesky(P)  # all rows at once; one that fails sends us row by row
+            return bad
+    except np.linalg.LinAlgError:
+        pass
+    for i in np.flatnonzero(~skip):
+        Pi = P[i]
+        if not (np.isfinite(Pi).all() and np.array_equal(Pi, Pi.T)):
+            bad[i] = True
+            continue
+        try:
+            np.linalg.cholesky(Pi)
+        except np.linalg.LinAlgError:
+            bad[i] = True
+    return bad
+
+
 class EKFBank:
     """Weights w (n, L) and covariances P (n, L, L) of n networks, trained one EKF step per call.
 
@@ -70,10 +92,6 @@ class EKFBank:
     def n_rows(self) -> int:
         return self.w.shape[0]
 
-    def output(self, H: np.ndarray) -> np.ndarray:
-        """w^T H per row, shape (n,), for regressors H of shape (n, L)."""
-        return np.add.reduce(np.multiply(self.w, H, out=self._nL), axis=1)
-
     def update(self, H: np.ndarray, error: np.ndarray, eta: np.ndarray, active: np.ndarray | None = None) -> np.ndarray:
         """One step per row with regressor H (n, L), training error (n,), learning rate eta (n,) and
         ``active`` (n,) 1.0 to train, 0.0 to skip (None: every row trains); returns the gain g = H^T K (n,).
@@ -97,31 +115,21 @@ class EKFBank:
         self.last_hph = hph
         return hph * m
 
-    def unhealthy(self, full: bool = True) -> np.ndarray:
+    def unhealthy(self, full: bool = True, blocks=None) -> np.ndarray:
         """Bool (n,): rows that must be reset. Cheap check (every step): w finite and the last H^T P H finite
-        and >= 0 (NaN or Inf anywhere in P that H reaches shows there). ``full``: also every entry of P finite,
-        P symmetric and positive definite (a Cholesky factorisation, ~L^3/3 flops per row)."""
+        and >= 0 (NaN or Inf anywhere in P that H reaches shows there). ``full``: also P finite, symmetric and
+        positive definite (a Cholesky factorisation, ~L^3/3 flops per row), on the blocks ``blocks``: pairs
+        (rows, cols) of slices, P[rows, cols, cols] each (None: every row's whole P). A padded bank checks
+        each network's own block, as a bank of that network alone would: padding can tip a nearly singular
+        P's factorisation either way."""
         hph = self.last_hph
         if math.isfinite(self.w.sum()) and math.isfinite(hph.sum()) and hph.min() >= 0.0:
             bad = np.zeros(hph.size, dtype=bool)  # every entry finite (so are the totals) and hph >= 0
         else:
             bad = ~(np.isfinite(hph) & (hph >= 0.0) & np.isfinite(self.w).all(axis=1))
         if full:
-            try:
-                if np.isfinite(self.P).all() and np.array_equal(self.P, self.P.transpose(0, 2, 1)):
-                    np.linalg.cholesky(self.P)  # all rows at once; one that fails sends us row by row
-                    return bad
-            except np.linalg.LinAlgError:
-                pass
-            for i in np.flatnonzero(~bad):
-                P = self.P[i]
-                if not (np.isfinite(P).all() and np.array_equal(P, P.T)):
-                    bad[i] = True
-                    continue
-                try:
-                    np.linalg.cholesky(P)
-                except np.linalg.LinAlgError:
-                    bad[i] = True
+            for rows, cols in blocks if blocks is not None else ((slice(None), slice(None)),):
+                bad[rows] |= _not_positive_definite(self.P[rows, cols, cols], bad[rows])
         return bad
 
     def reset(self, rows) -> None:
@@ -137,8 +145,8 @@ class EKFBank:
 class EKFRows:
     """One network's part of a bank that holds several: rows ``rows`` and weight columns ``cols`` (slices).
 
-    ``w`` (n, L), ``P`` (n, L, L) and ``w0`` are views into the bank (writes go to it); ``unhealthy`` looks
-    at these rows only. The bank's other columns of these rows are padding (see padded_layout).
+    ``w`` (n, L), ``P`` (n, L, L) and ``w0`` are views into the bank (writes go to it). The bank's other
+    columns of these rows are padding (see padded_layout).
     """
 
     def __init__(self, bank: EKFBank, rows: slice, cols: slice):
@@ -156,10 +164,7 @@ class EKFRows:
     def w0(self) -> np.ndarray:
         return self.bank.w0[self.rows, self.cols]
 
-    @property
-    def eta(self) -> np.ndarray:
-        return self.bank.eta[self.rows]
-
     def unhealthy(self, full: bool = True) -> np.ndarray:
-        """Bool (n,) over these rows: see ``EKFBank.unhealthy``."""
-        return self.bank.unhealthy(full)[self.rows]
+        """Bool (n,) over these rows: ``EKFBank.unhealthy`` on this block (its cheap check still reads
+        the whole bank)."""
+        return self.bank.unhealthy(full, blocks=((self.rows, self.cols),))[self.rows]

@@ -9,8 +9,11 @@ fewer than 8 numbers one after the other from 0.0, up to 128 in 8
 interleaved partial sums added as a tree, more in halves. So a row's bits
 depend on where its numbers sit. ``shared_width`` finds the narrowest W, and
 each network's offset, at which the padded sum adds the network's own
-numbers in exactly the order its unpadded sum does (x + 0.0 = x), so the
-padded bank gives the same bits as one bank per network.
+numbers in exactly the order its unpadded sum does, so the padded bank
+gives the same bits as one bank per network. Adding a padding +0.0 leaves
+every x as it is but -0.0, which it turns into +0.0; a partial sum can only
+be -0.0 if the whole sum is a zero, and numpy's reduce starts from +0.0, so
+the whole sum is +0.0 either way (test_padded_layout pins this).
 (test/test_padded_layout.py checks the orders against numpy itself.)
 """
 from __future__ import annotations
