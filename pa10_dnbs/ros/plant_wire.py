@@ -54,7 +54,7 @@ class PlantWire:
         self._state_pubs = [node.create_publisher(JointState, state_topic(j), self.state_qos) for j in JOINT_NAMES]
         self._clock_pub = None
         if clock_hz > 0:
-            self._clock_pub = node.create_publisher(Clock, CLOCK, loop_qos("reliable", depth=record_qos().depth))
+            self._clock_pub = node.create_publisher(Clock, CLOCK, record_qos())
             self._clock_schedule = ClockSchedule(clock_hz, clock.dt_ns / 1e9, last_step)
         self._js_pub = node.create_publisher(JointState, JOINT_STATES, record_qos())
         self._effort_subs = [PolledSubscription(node, JointState, effort_topic(j), self.effort_qos) for j in JOINT_NAMES]

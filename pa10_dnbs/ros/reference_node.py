@@ -30,7 +30,7 @@ from .params import CONFIG_FILE, Param, ParameterError, declare, load_node_confi
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
 from .runtime import announce_ready, exit_process, run_node
-from .wire import CLOCK, StepClock, loop_qos, reference_qos, reference_topic
+from .wire import CLOCK, StepClock, record_qos, reference_qos, reference_topic
 
 
 FAULT_KEYS = ("clock_backwards",)
@@ -70,7 +70,7 @@ class ReferenceNode(Node):
         self._pubs = [self.create_publisher(JointTrajectory, reference_topic(j), reference_qos()) for j in JOINT_NAMES]
         self.cpu = CpuMeter()
         self.inbox = Inbox(self, p["poll_period_s"])
-        self.inbox.subscribe(Clock, CLOCK, loop_qos("reliable", depth=CLOCK_DEPTH), self._on_clock)
+        self.inbox.subscribe(Clock, CLOCK, record_qos(CLOCK_DEPTH), self._on_clock)
         self._publish_through(self.lookahead)
         self.diagnostics = DiagnosticsReporter(self, self._diagnostics,
                                                lambda: self.clock_.stamp(max(0, self.clock_step)))

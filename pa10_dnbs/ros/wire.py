@@ -14,7 +14,7 @@ from ..wire.topics import (CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, TF, TF_STATIC
 
 
 def loop_qos(reliability: str, depth: int = 10) -> QoSProfile:
-    """Per-joint 1 kHz state/effort and /clock: KEEP_LAST, volatile."""
+    """Per-joint 1 kHz state/effort: KEEP_LAST, volatile."""
     rel = {"reliable": ReliabilityPolicy.RELIABLE, "best_effort": ReliabilityPolicy.BEST_EFFORT}[reliability]
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=rel,
                       durability=DurabilityPolicy.VOLATILE)
@@ -27,9 +27,13 @@ def reference_qos(depth: int = 20) -> QoSProfile:
 
 
 def record_qos(depth: int = 2000) -> QoSProfile:
-    """Monitoring /joint_states: reliable with a deep queue so nothing is lost."""
+    """/joint_states and /clock: reliable, a deep queue, transient-local, so nothing is lost, not even to a
+    late match. DDS discovery is two-sided: the plant's writer can count a reader as matched (and send to it)
+    before that reader has matched the writer back, and a volatile reader drops what came before (the
+    reference node once saw no /clock for the first 200 steps and the graph stalled for 2 s). A transient-local
+    reader asks for the writer's history when its side of the match completes."""
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.RELIABLE,
-                      durability=DurabilityPolicy.VOLATILE)
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 def description_qos() -> QoSProfile:
