@@ -29,7 +29,11 @@ def _realtime(tmp_path, domain, *args, name="rt"):
         la.kill()
     assert rc == 0, la.output
     assert all(c == 0 for c in exit_codes(la.output).values())
-    return out, json.loads((out / "plant_stats.json").read_text())
+    stats = json.loads((out / "plant_stats.json").read_text())
+    assert (f"realtime --rtf {stats['target_real_time_factor']:g}: every effort before the deadline on "
+            f"{100 * stats['on_time_fraction']:.2f} % of ticks, late tick starts {stats['late_start_ticks']}"
+            in la.output)  # the launcher says it, not only report.md
+    return out, stats
 
 
 def test_realtime_without_misses_equals_lockstep_bit_for_bit(lockstep_run, tmp_path, domain):

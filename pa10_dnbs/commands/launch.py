@@ -165,6 +165,10 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     m = metrics
     print(f"{controller} ({mode}): worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over {m['window_s']} s, "
           f"real-time factor {m['real_time_factor']:.2f}")
+    if mode == "realtime":
+        t = m["timing"]
+        print(f"realtime --rtf {t['target_real_time_factor']:g}: every effort before the deadline on "
+              f"{100 * t['on_time_fraction']:.2f} % of ticks, late tick starts {t['late_start_ticks']}")
     if record is not None:
         size = sum(f.stat().st_size for f in record.iterdir())
         print(f"recorded {record} ({size / 1e6:.1f} MB, {size / 1e6 / (n_steps * dt):.2f} MB per simulated second, "
