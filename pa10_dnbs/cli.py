@@ -123,8 +123,9 @@ def build_parser() -> argparse.ArgumentParser:
                          "but the plant runs with use_sim_time:=true")
     la.add_argument("--domain-id", type=int, default=None, help="ROS_DOMAIN_ID (default: a free one, leased for the run so concurrent runs never share it)")
     la.add_argument("--reliability", choices=("reliable", "best_effort"), default=None,
-                    help="QoS of the per-joint state/effort topics (default: best_effort with depth 1 in "
-                         "realtime, the sensor-data convention; reliable in lockstep)")
+                    help="QoS of the per-joint state/effort topics (default: best_effort, depth 1 in realtime, "
+                         "the sensor-data convention; in lockstep best_effort too, reliable when --record or "
+                         "--netns is given; docs/timing.md)")
     la.add_argument("--effort-timeout", type=float, default=1.0, metavar="SECONDS",
                     help="lockstep: wall time to wait for a joint's effort before holding/zeroing it")
     la.add_argument("--on-missing-effort", choices=("hold", "zero"), default="hold",

@@ -29,8 +29,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from pa10_dnbs import JOINT_NAMES  # noqa: E402
 from pa10_dnbs.config import default_config_path  # noqa: E402
 from pa10_dnbs.launch.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
+from pa10_dnbs.launch.realtime_advice import ON_TIME_TARGET  # noqa: E402
 
-ON_TIME_TARGET = 0.99
 CPU_LINE = re.compile(r"^CPU (\S+) ([0-9.]+) us per step")
 
 

@@ -77,5 +77,9 @@ def test_warm_start_over_ros_equals_the_in_process_warm_start(lockstep_run, _def
         assert np.array_equal(getattr(local, field), getattr(wire, field)), field
     m = json.loads((tmp_path / "warm" / "metrics.json").read_text())
     assert m["warm_start_from"].endswith("checkpoints")
+    # an unrecorded lockstep run is best effort by default (a recorded one, the session run, reliable): the
+    # bit-for-bit equality holds for both
+    assert m["reliability"] == "best_effort"
+    assert json.loads((lockstep_run["out"] / "metrics.json").read_text())["reliability"] == "reliable"
     cold = RunData.load_npz(lockstep_run["out"] / "timeseries.npz")
     assert not np.array_equal(cold.torque_nm[:1000], wire.torque_nm)

@@ -12,6 +12,7 @@ import pytest
 
 from graph_harness import Launcher, exit_codes
 from pa10_dnbs import JOINT_NAMES
+from pa10_dnbs.launch.realtime_advice import ON_TIME_TARGET
 from pa10_dnbs.run_data import RunData
 
 pytestmark = pytest.mark.graph  # starts ROS processes
@@ -33,6 +34,9 @@ def _realtime(tmp_path, domain, *args, name="rt"):
     assert (f"realtime --rtf {stats['target_real_time_factor']:g}: every effort before the deadline on "
             f"{100 * stats['on_time_fraction']:.2f} % of ticks, late tick starts {stats['late_start_ticks']}"
             in la.output)  # the launcher says it, not only report.md
+    # and advises a lower factor exactly when the run fell short of the sustainable fraction
+    hint = f"realtime --rtf {stats['target_real_time_factor']:g}: below 99 % on time"
+    assert (hint in la.output) == (stats["on_time_fraction"] < ON_TIME_TARGET)
     return out, stats
 
 

@@ -18,6 +18,7 @@ from ..kinematics.urdf_chain import UrdfChain
 from ..launch.fault_flags import apply_fault_flags, faults_active, plain
 from ..launch.fault_report import fault_note, fault_report
 from ..launch.graph_run import GraphFailure, GraphOptions, loop_reliability, parse_netns, run_graph
+from ..launch.realtime_advice import ON_TIME_TARGET, realtime_hint
 from ..live.options import check_live_options
 from ..loop.scheduling import check_priority
 from ..report.metrics_file import metrics_dict, metrics_settings
@@ -169,6 +170,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         t = m["timing"]
         print(f"realtime --rtf {t['target_real_time_factor']:g}: every effort before the deadline on "
               f"{100 * t['on_time_fraction']:.2f} % of ticks, late tick starts {t['late_start_ticks']}")
+        if t["on_time_fraction"] < ON_TIME_TARGET:
+            print(realtime_hint(t["target_real_time_factor"], t["rt_priority_applied"]))
     if record is not None:
         size = sum(f.stat().st_size for f in record.iterdir())
         print(f"recorded {record} ({size / 1e6:.1f} MB, {size / 1e6 / (n_steps * dt):.2f} MB per simulated second, "

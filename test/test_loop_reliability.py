@@ -1,0 +1,32 @@
+"""Which QoS reliability the launcher gives the per-joint state/effort topics (launch/graph_options.py)."""
+from pathlib import Path
+
+import pytest
+
+from pa10_dnbs.launch.graph_options import GraphOptions, loop_reliability
+
+CFG = Path("config/default.yaml")
+
+
+@pytest.mark.parametrize("mode", ["lockstep", "realtime"])
+def test_best_effort_on_one_host_without_a_recorder(mode):
+    assert loop_reliability(GraphOptions(CFG, mode=mode)) == "best_effort"
+
+
+def test_lockstep_stays_reliable_when_a_bag_records_the_loop():
+    assert loop_reliability(GraphOptions(CFG, record_bag=Path("bag"))) == "reliable"
+
+
+def test_lockstep_stays_reliable_across_network_namespaces():
+    assert loop_reliability(GraphOptions(CFG, netns={"controllers": "ns1"})) == "reliable"
+
+
+def test_realtime_is_best_effort_even_when_recorded():
+    assert loop_reliability(GraphOptions(CFG, mode="realtime", record_bag=Path("bag"))) == "best_effort"
+
+
+@pytest.mark.parametrize("asked", ["reliable", "best_effort"])
+def test_an_explicit_choice_wins(asked):
+    for opt in (GraphOptions(CFG, reliability=asked), GraphOptions(CFG, reliability=asked, record_bag=Path("b")),
+                GraphOptions(CFG, mode="realtime", reliability=asked)):
+        assert loop_reliability(opt) == asked
