@@ -30,3 +30,17 @@ def test_bad_parameter_exits_2_with_one_line(domain):
         lines = [ln for ln in err.splitlines() if ln.strip()]
         assert p.returncode == 2, (module, param, p.returncode, out, err)
         assert len(lines) == 1 and word in lines[0] and "Traceback" not in err, (module, param, err)
+
+
+def test_a_half_built_node_is_not_destroyed_before_the_exit(domain):
+    """A node whose constructor fails keeps its rcl handle until the process ends: destroying it can spin
+    forever with the GIL held, and at that point no exit deadline is armed yet (a plant that rejected a
+    parameter once hung for more than 60 s, SIGTERM included)."""
+    import json
+
+    p = subprocess.run(["timeout", str(TIMEOUT_S), sys.executable, str(REPO / "test" / "failed_start_probe.py"),
+                        str(domain)], cwd=REPO, env=ros_env(domain), text=True, capture_output=True,
+                       timeout=TIMEOUT_S + 10)
+    assert p.returncode == 0, p.stderr
+    assert "FAILED parameter probe: rejected on purpose" in p.stderr
+    assert json.loads(p.stdout.strip().splitlines()[-1]) == {"code": 2, "alive": True}

@@ -37,6 +37,9 @@ from . import exit_deadline
 from .params import ParameterError
 
 SLICE_S = 0.2  # longest a spin call runs before the stop future is checked again
+# Failures of a node's start-up, kept until the process ends: their tracebacks hold the half-built node, and
+# freeing it destroys its rcl handle, which can spin forever with the GIL held (see ``exit_process``).
+_FAILED_STARTS: list[BaseException] = []
 TEARDOWN_LIMIT_S = 5.0  # a close() or an rclpy teardown that takes longer is cut short
 TEARDOWN_DUMP_LEAD_S = 0.5  # the stacks of a hung rclpy teardown are written this long before it is cut short
 
@@ -80,12 +83,17 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
         else:
             spin_until(executor, stop, stop)
         code = getattr(node, "exit_code", 0)
-    except (KeyboardInterrupt, ExternalShutdownException):
+    except (KeyboardInterrupt, ExternalShutdownException) as exc:
+        _FAILED_STARTS.append(exc)
         code = 0
     except (ParameterError, FileExistsError) as exc:  # the user's input: one line, no traceback
+        # kept, not freed at the end of this clause: a half-built node's handle must not be destroyed here,
+        # before any exit deadline is armed (seen once: a plant that rejected a parameter hung for 60 s+)
+        _FAILED_STARTS.append(exc)
         print(f"FAILED {exc}", file=sys.stderr, flush=True)
         code = 2
     except Exception as exc:  # a node that fails says why and exits non-zero
+        _FAILED_STARTS.append(exc)
         print(f"FAILED {type(exc).__name__}: {exc}", file=sys.stderr, flush=True)
         import traceback
 
