@@ -37,9 +37,10 @@ from . import exit_deadline
 from .params import ParameterError
 
 SLICE_S = 0.2  # longest a spin call runs before the stop future is checked again
-# Failures of a node's start-up, kept until the process ends: their tracebacks hold the half-built node, and
-# freeing it destroys its rcl handle, which can spin forever with the GIL held (see ``exit_process``).
-_FAILED_STARTS: list[BaseException] = []
+# Exceptions that ended run_node, kept until the process ends: a failed start-up's traceback holds the
+# half-built node, and freeing it destroys its rcl handle, which can spin forever with the GIL held
+# (see ``exit_process``).
+_KEPT_EXCEPTIONS: list[BaseException] = []
 TEARDOWN_LIMIT_S = 5.0  # a close() or an rclpy teardown that takes longer is cut short
 TEARDOWN_DUMP_LEAD_S = 0.5  # the stacks of a hung rclpy teardown are written this long before it is cut short
 
@@ -84,16 +85,16 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
             spin_until(executor, stop, stop)
         code = getattr(node, "exit_code", 0)
     except (KeyboardInterrupt, ExternalShutdownException) as exc:
-        _FAILED_STARTS.append(exc)
+        _KEPT_EXCEPTIONS.append(exc)
         code = 0
     except (ParameterError, FileExistsError) as exc:  # the user's input: one line, no traceback
         # kept, not freed at the end of this clause: a half-built node's handle must not be destroyed here,
         # before any exit deadline is armed (seen once: a plant that rejected a parameter hung for 60 s+)
-        _FAILED_STARTS.append(exc)
+        _KEPT_EXCEPTIONS.append(exc)
         print(f"FAILED {exc}", file=sys.stderr, flush=True)
         code = 2
     except Exception as exc:  # a node that fails says why and exits non-zero
-        _FAILED_STARTS.append(exc)
+        _KEPT_EXCEPTIONS.append(exc)
         print(f"FAILED {type(exc).__name__}: {exc}", file=sys.stderr, flush=True)
         import traceback
 
