@@ -21,7 +21,7 @@ TIMEOUT_S = 60
 
 
 def test_bad_parameter_exits_2_with_one_line(domain):
-    procs = [subprocess.Popen(["timeout", str(TIMEOUT_S), sys.executable, "-m", f"pa10_dnbs.ros.{module}",
+    procs = [subprocess.Popen(["timeout", "-k", "5", str(TIMEOUT_S), sys.executable, "-m", f"pa10_dnbs.ros.{module}",
                                "--ros-args", "-p", param], cwd=REPO, env=ros_env(domain), text=True,
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)
              for module, param, _ in CASES]
@@ -38,7 +38,7 @@ def test_a_half_built_node_is_not_destroyed_before_the_exit(domain):
     parameter once hung for more than 60 s, SIGTERM included)."""
     import json
 
-    p = subprocess.run(["timeout", str(TIMEOUT_S), sys.executable, str(REPO / "test" / "failed_start_probe.py"),
+    p = subprocess.run(["timeout", "-k", "5", str(TIMEOUT_S), sys.executable, str(REPO / "test" / "failed_start_probe.py"),
                         str(domain)], cwd=REPO, env=ros_env(domain), text=True, capture_output=True,
                        timeout=TIMEOUT_S + 10)
     assert p.returncode == 0, p.stderr

@@ -28,7 +28,7 @@ def _wait_for(proc, word: str, timeout_s: float) -> list[str]:
 
 def test_sigusr1_dumps_the_stacks_and_the_node_keeps_running(domain, tmp_path):
     out = tmp_path / "wire.npz"
-    proc = subprocess.Popen(["timeout", str(TIMEOUT_S), sys.executable, "-m", "pa10_dnbs.ros.wire_monitor",
+    proc = subprocess.Popen(["timeout", "-k", "5", str(TIMEOUT_S), sys.executable, "-m", "pa10_dnbs.ros.wire_monitor",
                              "--ros-args", "-p", f"out_file:={out}"], cwd=REPO, env=ros_env(domain), text=True,
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
     try:
@@ -76,7 +76,7 @@ def test_a_hung_rclpy_teardown_is_cut_short_with_the_nodes_own_code(domain):
     """After close(), rclpy's teardown (here try_shutdown) blocks in C holding the GIL: the node still exits 0
     at the limit, and its log holds the stacks of where it hung (the launcher reports it)."""
     t0 = time.monotonic()
-    r = subprocess.run(["timeout", str(TIMEOUT_S), sys.executable, "-c", HUNG_TEARDOWN], cwd=REPO,
+    r = subprocess.run(["timeout", "-k", "5", str(TIMEOUT_S), sys.executable, "-c", HUNG_TEARDOWN], cwd=REPO,
                        env=ros_env(domain), capture_output=True, text=True)
     wall = time.monotonic() - t0
     assert r.returncode == 0, r.stdout + r.stderr
