@@ -32,15 +32,20 @@ def test_bad_parameter_exits_2_with_one_line(domain):
         assert len(lines) == 1 and word in lines[0] and "Traceback" not in err, (module, param, err)
 
 
-def test_a_half_built_node_is_not_destroyed_before_the_exit(domain):
-    """A node whose constructor fails keeps its rcl handle until the process ends: destroying it can spin
-    forever with the GIL held, and at that point no exit deadline is armed yet (a plant that rejected a
-    parameter once hung for more than 60 s, SIGTERM included)."""
+def test_a_half_built_node_is_freed_only_under_the_exit_deadline(domain):
+    """A node whose constructor fails frees its half-built node (and with it the DDS participant and its
+    shared-memory files) only once the teardown's exit deadline is armed: destroying the handle can spin
+    forever with the GIL held (a plant that rejected a parameter once spun for 10 min, SIGTERM ignored)."""
     import json
 
-    p = subprocess.run(["timeout", "-k", "5", str(TIMEOUT_S), sys.executable, str(REPO / "test" / "failed_start_probe.py"),
-                        str(domain)], cwd=REPO, env=ros_env(domain), text=True, capture_output=True,
-                       timeout=TIMEOUT_S + 10)
+    from pa10_dnbs.launch.shm_cleanup import shm_files, unused
+
+    before = shm_files()
+    p = subprocess.run(["timeout", "-k", "5", str(TIMEOUT_S), sys.executable,
+                        str(REPO / "test" / "failed_start_probe.py"), str(domain)],
+                       cwd=REPO, env=ros_env(domain), text=True, capture_output=True, timeout=TIMEOUT_S + 10)
     assert p.returncode == 0, p.stderr
     assert "FAILED parameter probe: rejected on purpose" in p.stderr
-    assert json.loads(p.stdout.strip().splitlines()[-1]) == {"code": 2, "alive": True}
+    assert json.loads(p.stdout.strip().splitlines()[-1]) == {"code": 2, "events": ["armed", "freed"]}
+    leaked = unused(shm_files() - before)
+    assert not leaked, f"shared-memory files left behind: {sorted(leaked)}"

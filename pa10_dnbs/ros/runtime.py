@@ -22,6 +22,7 @@ running 5 s after SIGINT, before SIGTERM (``kill -USR1 PID`` does it by hand).
 from __future__ import annotations
 
 import faulthandler
+import gc
 import os
 import signal
 import sys
@@ -37,9 +38,10 @@ from . import exit_deadline
 from .params import ParameterError
 
 SLICE_S = 0.2  # longest a spin call runs before the stop future is checked again
-# Exceptions that ended run_node, kept until the process ends: a failed start-up's traceback holds the
-# half-built node, and freeing it destroys its rcl handle, which can spin forever with the GIL held
-# (see ``exit_process``).
+# Exceptions that ended run_node. A failed start-up's traceback holds the half-built node; freeing it
+# destroys its rcl handle, which can spin forever with the GIL held: it is kept until the teardown has armed
+# its exit deadline (``_rclpy_teardown``). Those of a built node are kept until the process ends, as the
+# node is (see ``exit_process``).
 _KEPT_EXCEPTIONS: list[BaseException] = []
 TEARDOWN_LIMIT_S = 5.0  # a close() or an rclpy teardown that takes longer is cut short
 TEARDOWN_DUMP_LEAD_S = 0.5  # the stacks of a hung rclpy teardown are written this long before it is cut short
@@ -88,8 +90,8 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
         _KEPT_EXCEPTIONS.append(exc)
         code = 0
     except (ParameterError, FileExistsError) as exc:  # the user's input: one line, no traceback
-        # kept, not freed at the end of this clause: a half-built node's handle must not be destroyed here,
-        # before any exit deadline is armed (seen once: a plant that rejected a parameter hung for 60 s+)
+        # kept, not freed at the end of this clause: a half-built node's handle must not be destroyed before
+        # the exit deadline is armed (seen once: a plant that rejected a parameter spun here for 10 min)
         _KEPT_EXCEPTIONS.append(exc)
         print(f"FAILED {exc}", file=sys.stderr, flush=True)
         code = 2
@@ -168,6 +170,11 @@ def _rclpy_teardown(node, executor, code: int) -> None:
     if deadline is None:  # no POSIX timer threads here: SIGALRM ends a hung teardown (exit -14)
         signal.alarm(int(TEARDOWN_LIMIT_S) + 2)
     faulthandler.dump_traceback_later(TEARDOWN_LIMIT_S - TEARDOWN_DUMP_LEAD_S, file=sys.stderr)
+    if node is None and _KEPT_EXCEPTIONS:
+        # the constructor failed: its half-built node goes now, under the deadline. Freeing it destroys the
+        # DDS participant (the context's last node) and so its shared-memory files, and can hang in C.
+        _KEPT_EXCEPTIONS.clear()
+        gc.collect()
     if node is not None:
         executor.remove_node(node)
     executor.shutdown()
