@@ -2,7 +2,7 @@
 """Benchmark: the ROS 2 node graph (plant + 7 DNBS controller processes + reference + observer).
 
 Prints, from --repeat runs of --duration simulated seconds each (default 2 x 10 s):
-- lockstep: the real-time factor it reaches;
+- lockstep: the real-time factor it reaches, and its ceiling on this machine's cores (cores x 1 ms / CPU per tick);
 - realtime at each factor R of --factors (default 1.0 0.75 0.5 0.35): the fraction of ticks at which every
   joint's effort came before the deadline (median of the runs), late tick starts, the achieved factor, and
   the state-to-effort latency p50 / p99 per joint;
@@ -18,6 +18,7 @@ Figures only; nothing is asserted.
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import statistics
 import sys
@@ -161,6 +162,11 @@ def main() -> int:
     if not args.no_lockstep:
         factors = [None if s is None else s["real_time_factor"] for s, _ in runs[("lockstep", 1.0)]]
         print(f"lockstep real-time factor: median {med(factors):.3f} (runs: {runs_text(factors)})")
+        cores = len(os.sched_getaffinity(0))
+        ceiling = cores * 1000.0 / totals[("lockstep", 1.0)]  # 1 ms of simulated time per tick, in us of CPU
+        print(f"lockstep ceiling on {cores} cores: {ceiling:.2f}x real time ({cores} ms of CPU per ms over "
+              f"{totals[('lockstep', 1.0)] / 1e3:.2f} ms of CPU per tick: the loop cannot go faster even with "
+              f"every core busy all the time); achieved {100 * med(factors) / ceiling:.0f} % of it")
     if args.record:
         factors = [None if s is None else s["real_time_factor"] for s, _ in runs[("record", 1.0)]]
         print(f"lockstep with the recorder: real-time factor median {med(factors):.3f} (runs: {runs_text(factors)})")
