@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Benchmark: the ROS 2 node graph (plant + 7 DNBS controller processes + reference + observer).
+"""Benchmark: the ROS 2 node graph (plant + 7 joint-controller processes + reference + observer).
 
 Prints, from --repeat runs of --duration simulated seconds each (default 2 x 10 s):
 - lockstep: the real-time factor it reaches, and its ceiling on this machine's cores (cores x 1 ms / CPU per tick);
@@ -10,10 +10,14 @@ Prints, from --repeat runs of --duration simulated seconds each (default 2 x 10 
   each process between its first and last step (start-up left out), per mode;
 - the sustainable factor: the highest R at which the median run had >= 99 % of ticks with every effort
   on time, and how many cores 1 kHz real time (R = 1) would need from the CPU per tick.
+``--controller pid`` runs the same graph with the PID baseline in the seven controller processes: the
+same wire and plant, a step about a fifth the cost of the DNBS step: the difference is what the DNBS
+arithmetic costs inside a node.
 The machine's load average is printed before and after: the figures mean little on a busy machine.
 Figures only; nothing is asserted.
 
     python scripts/bench_graph.py [--duration 10] [--repeat 2] [--factors 1.0 0.75 0.5 0.35] [--no-lockstep]
+                                  [--controller dnbs|pid]
 """
 from __future__ import annotations
 
@@ -58,8 +62,8 @@ def one_run(mode: str, factor: float, args, attempts: int = 3) -> tuple[dict | N
 def _run(mode: str, factor: float, args) -> tuple[dict, dict[str, float]]:
     with tempfile.TemporaryDirectory(prefix="pa10_bench_") as tmp:
         opt = GraphOptions(config_path=default_config_path(), mode="lockstep" if mode == "record" else mode,
-                           duration_s=args.duration, reliability=args.reliability, real_time_factor=factor,
-                           rt_priority=args.rt_priority,
+                           controller=args.controller, duration_s=args.duration, reliability=args.reliability,
+                           real_time_factor=factor, rt_priority=args.rt_priority,
                            record_bag=Path(tmp) / "bag" if mode == "record" else None)
         res = run_graph(opt, Path(tmp), say=lambda s: None)
         cpu = {}
@@ -95,9 +99,11 @@ def main() -> int:
     ap.add_argument("--reliability", default=None, choices=["reliable", "best_effort"],
                     help="QoS of the per-joint topics (default: the mode's own)")
     ap.add_argument("--rt-priority", type=int, default=0)
+    ap.add_argument("--controller", default="dnbs", choices=["dnbs", "pid"],
+                    help="what the seven controller processes run (default dnbs; pid: the wire's own cost)")
     args = ap.parse_args()
-    print(f"node graph, DNBS, {args.duration:g} s simulated per run, {args.repeat} runs each; "
-          f"load average before: {load()}", flush=True)
+    print(f"node graph, {args.controller.upper()}, {args.duration:g} s simulated per run, {args.repeat} runs "
+          f"each; load average before: {load()}", flush=True)
     cases = (([("lockstep", 1.0)] if not args.no_lockstep else []) + ([("record", 1.0)] if args.record else [])
              + [("realtime", r) for r in args.factors])
     runs: dict[tuple, list] = {c: [] for c in cases}

@@ -210,6 +210,7 @@ class DNBSControllers:
         self._A, self._E1 = a.output_scale, a.error_scale
         self._U, self._E2 = t.output_scale, t.error_scale
         self._lim = params.torque_limit_nm
+        self._neg_lim = -self._lim
         self._z1 = np.empty((n, 2))
         self._z2 = np.empty((n, 3))
         self._ones = np.ones(n)
@@ -243,7 +244,7 @@ class DNBSControllers:
         e2 = alpha - x2
         u = self._U * np.add.reduce(np.multiply(self._w2, self._H2, out=self._prod), axis=1) + self._k_u * e2
         lim = self._lim
-        u_out = np.minimum(np.maximum(u, -lim), lim)
+        u_out = np.minimum(np.maximum(u, self._neg_lim), lim)
 
         e2_train = -e2 if self._printed else e2
         act = None if active is None else np.concatenate((active, active))  # (2n,): alpha rows, torque rows
@@ -251,7 +252,7 @@ class DNBSControllers:
             # Conditional integration: while the torque is clipped, skip an update that would raise |u|:
             # e2 > 0 raises u directly; e1 > 0 raises alpha, and so u wherever du/dalpha > 0.
             sat = np.abs(u) >= lim
-            if sat.any():
+            if np.logical_or.reduce(sat):
                 base = self._ones if active is None else active
                 act = np.concatenate((base * (1.0 - (sat & (e1 * u > 0.0))),
                                       base * (1.0 - (sat & (e2_train * u > 0.0)))))
@@ -280,7 +281,9 @@ class DNBSControllers:
         every = self.params.ekf_full_check_every
         full = every > 0 and self.steps % every == 0
         ekf = self.ekf
-        if not full and math.isfinite(ekf.w.sum() + ekf.last_hph.sum()) and ekf.last_hph.min() >= 0.0:
+        hph = ekf.last_hph  # (ufunc reductions: the ndarray methods wrap them in Python, ~0.2 us each)
+        if not full and math.isfinite(np.add.reduce(ekf.w, None) + np.add.reduce(hph)) \
+                and np.minimum.reduce(hph) >= 0.0:
             return  # the cheap check of both networks at once: every w and H^T P H finite, H^T P H >= 0
         bad = ekf.unhealthy(full, self._blocks)  # the full check looks at each network's own block
         if bad.any():

@@ -29,7 +29,8 @@ class StateGuard:
 
     def all_plausible(self, x1: np.ndarray, x2: np.ndarray) -> bool:
         """True when every joint's state passes (one expression: NaN and +-inf fail every comparison)."""
-        return bool(((x1 >= self._low) & (x1 <= self._high) & (np.abs(x2) <= self.max_speed_rad_s)).all())
+        ok = (x1 >= self._low) & (x1 <= self._high) & (np.abs(x2) <= self.max_speed_rad_s)
+        return bool(np.logical_and.reduce(ok))
 
     def check(self, x1: np.ndarray, x2: np.ndarray) -> np.ndarray:
         """int (n,): OK for a plausible state, else the index of the reason in REASONS (the first that applies)."""

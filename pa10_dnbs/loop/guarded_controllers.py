@@ -8,6 +8,8 @@ non-finite torque is ever returned. One row per joint, arrays of shape (n,).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..core.reference import ReferenceSample
@@ -41,7 +43,9 @@ class GuardedControllers:
             # the untrusted rows get finite stand-in inputs and no training; their torque is replaced below
             u = self.controllers.step(np.where(ok, x1, ref.position_rad), np.where(ok, x2, 0.0), ref,
                                       active=ok.astype(float))
-        if ok is None and np.isfinite(u).all():
+        # one sum instead of isfinite + all: a NaN or an inf torque makes it non-finite (an overflow of the
+        # sum, torques near 1e308, only sends finite torques through the element-wise check below)
+        if ok is None and math.isfinite(np.add.reduce(u)):
             self.last_torque = u
             return u
         finite = np.isfinite(u)

@@ -1,0 +1,126 @@
+#!/usr/bin/env python3
+"""Fingerprint the controllers' results bit for bit, to show that a speed-up changed no result bit.
+
+Runs fixed scenarios in-process and prints one SHA-256 per scenario (of the raw bytes of every array it
+produced, in a fixed order):
+- ``default`` and ``paper``: the closed loop of config/default.yaml and config/paper.yaml, DNBS, 3 s;
+- ``noisy``: the default config with encoder noise and a 2-step torque delay, 2 s;
+- ``remedies``, ``printed``, ``bare``: a DNBS bank of seven and seven banks of one stepped directly on
+  seeded random states for 400 steps, with every remedy on (untrusted rows, saturation and one EKF
+  reset included), with the paper's printed sign of e2, and with no remedy; torques, virtual controls,
+  final weights, covariances and reset counts.
+``--save FILE`` writes the fingerprints (JSON); ``--compare FILE`` exits 1 naming each scenario whose
+fingerprint differs from the file's. Typical use around a change that must not move a bit:
+
+    .venv/bin/python scripts/result_fingerprint.py --save /tmp/before.json     # on the old commit
+    .venv/bin/python scripts/result_fingerprint.py --compare /tmp/before.json  # on the new one
+
+Fingerprints depend on numpy's build and the CPU's SIMD paths (tanh): compare on one machine.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import hashlib
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from pa10_dnbs.config import load_config  # noqa: E402
+from pa10_dnbs.controller_factory import dnbs_params  # noqa: E402
+from pa10_dnbs.core.dnbs_controller import DNBSControllers, Remedies  # noqa: E402
+from pa10_dnbs.core.reference import ReferenceSample  # noqa: E402
+from pa10_dnbs.paths import share_path  # noqa: E402
+from pa10_dnbs.sim.closed_loop import Disturbances, simulate  # noqa: E402
+
+ALL_REMEDIES = Remedies(robust_term=True, velocity_feedforward=True, alpha_gain_per_s=5.0,
+                        torque_gain_nms_per_rad=np.array([50.0, 50.0, 20.0, 20.0, 1.0, 1.0, 1.0]),
+                        anti_windup=True, dead_zone=True, dead_zone_rad=1e-4, dead_zone_rad_s=1e-3,
+                        e_modification=True, e_modification_sigma=1e-3, projection=True, weight_bound=0.5,
+                        learning_ramp=True, learning_ramp_s=0.05, covariance_bound=True, p_max=1.5)
+
+
+def digest(arrays: list[np.ndarray]) -> str:
+    """SHA-256 of the arrays' shapes and raw bytes, in order."""
+    h = hashlib.sha256()
+    for a in arrays:
+        a = np.ascontiguousarray(a)
+        h.update(repr((a.dtype.str, a.shape)).encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def run_arrays(run) -> list[np.ndarray]:
+    """Every float array of a RunData, by field name."""
+    return [v for _, v in sorted(vars(run).items()) if isinstance(v, np.ndarray) and v.dtype.kind == "f"]
+
+
+def closed_loop(config: Path, duration_s: float, disturbances: Disturbances | None = None) -> list[np.ndarray]:
+    return run_arrays(simulate(load_config(config), "dnbs", duration_s, disturbances=disturbances))
+
+
+def banks(params, steps: int = 400, seed: int = 1) -> list[np.ndarray]:
+    """A bank of seven and seven banks of one, stepped on the same seeded random inputs."""
+    rng = np.random.default_rng(seed)
+    seven = DNBSControllers(params, 7, range(7))
+    ones = [DNBSControllers(params.select([j]), 7, [j]) for j in range(7)]
+    rows7, rows1 = [], []
+    for k in range(steps):
+        x1, x2 = rng.normal(0.0, 0.5, 7), rng.normal(0.0, 2.0, 7)
+        if k % 97 == 5:
+            x1[3] = 50.0        # a large error: the torque saturates (anti-windup)
+        if k == 211:
+            x1[2] = np.inf      # a non-finite training error: the EKF guard resets the row
+        ref = ReferenceSample(rng.normal(0.0, 0.5, 7), rng.normal(0.0, 1.0, 7), rng.normal(0.0, 0.5, 7))
+        active = None if k % 3 else (rng.random(7) > 0.3).astype(float)
+        with np.errstate(invalid="ignore"):
+            u7 = seven.step(x1, x2, ref, active)
+            u1 = [b.step(x1[j:j + 1], x2[j:j + 1],
+                         ReferenceSample(*(a[j:j + 1] for a in (ref.position_rad, ref.velocity_rad_s,
+                                                                 ref.position_ahead_rad))),
+                         None if active is None else active[j:j + 1])[0] for j, b in enumerate(ones)]
+        rows7.append(np.concatenate([u7, seven.alpha, seven.torque_unsaturated]))
+        rows1.append(np.array(u1))
+    resets = np.concatenate([seven.ekf_resets["alpha"], seven.ekf_resets["torque"]])
+    return [np.array(rows7), np.array(rows1), seven.ekf.w, seven.ekf.P, resets]
+
+
+def fingerprints() -> dict[str, str]:
+    default = share_path("config", "default.yaml")
+    p = dnbs_params(load_config(default))
+    scenarios = {
+        "default": lambda: closed_loop(default, 3.0),
+        "paper": lambda: closed_loop(share_path("config", "paper.yaml"), 3.0),
+        "noisy": lambda: closed_loop(default, 2.0, Disturbances(1e-4, 1e-3, 2, 3)),
+        "remedies": lambda: banks(dataclasses.replace(p, remedies=ALL_REMEDIES)),
+        "printed": lambda: banks(dataclasses.replace(p, e2_sign="printed")),
+        "bare": lambda: banks(dataclasses.replace(p, remedies=Remedies())),
+    }
+    return {name: digest(make()) for name, make in scenarios.items()}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    group = ap.add_mutually_exclusive_group()
+    group.add_argument("--save", type=Path, help="write the fingerprints to this JSON file")
+    group.add_argument("--compare", type=Path, help="compare with a file written by --save; exit 1 on a difference")
+    args = ap.parse_args()
+    prints = fingerprints()
+    for name, h in prints.items():
+        print(f"{name:10s} {h}")
+    if args.save:
+        args.save.write_text(json.dumps(prints, indent=1) + "\n")
+    if args.compare:
+        before = json.loads(args.compare.read_text())
+        differ = sorted(n for n in prints.keys() | before.keys() if prints.get(n) != before.get(n))
+        print(f"{len(prints)} scenarios, {len(differ)} differ" + (f": {', '.join(differ)}" if differ else ""))
+        return 1 if differ else 0
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

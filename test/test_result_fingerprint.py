@@ -1,0 +1,52 @@
+"""scripts/result_fingerprint.py: the same run gives the same fingerprint, and one changed bit changes it."""
+from __future__ import annotations
+
+import dataclasses
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+
+SCRIPT = Path(__file__).resolve().parent.parent / "scripts" / "result_fingerprint.py"
+
+
+def _load():
+    spec = importlib.util.spec_from_file_location("result_fingerprint", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+fp = _load()
+
+
+def test_digest_sees_one_ulp_the_order_and_the_shape():
+    a = np.linspace(0.0, 1.0, 12)
+    b = a.copy()
+    b[5] = np.nextafter(b[5], 2.0)
+    assert fp.digest([a]) == fp.digest([a.copy()])
+    assert fp.digest([a]) != fp.digest([b])
+    assert fp.digest([a, b]) != fp.digest([b, a])
+    assert fp.digest([a]) != fp.digest([a.reshape(3, 4)])
+
+
+def test_banks_are_deterministic_and_sensitive_to_one_ulp_of_a_parameter():
+    from pa10_dnbs.config import default_config_path, load_config
+    from pa10_dnbs.controller_factory import dnbs_params
+
+    p = dataclasses.replace(dnbs_params(load_config(default_config_path())), remedies=fp.ALL_REMEDIES)
+    once = fp.digest(fp.banks(p, steps=60))
+    assert fp.digest(fp.banks(p, steps=60)) == once
+    scale = p.torque_net.output_scale.copy()
+    scale[4] = np.nextafter(scale[4], 100.0)  # one joint's U [N m], one ulp up
+    nudged = dataclasses.replace(p, torque_net=dataclasses.replace(p.torque_net, output_scale=scale))
+    assert fp.digest(fp.banks(nudged, steps=60)) != once
+
+
+def test_the_bank_of_seven_equals_the_banks_of_one_in_the_scenarios():
+    from pa10_dnbs.config import default_config_path, load_config
+    from pa10_dnbs.controller_factory import dnbs_params
+
+    p = dataclasses.replace(dnbs_params(load_config(default_config_path())), remedies=fp.ALL_REMEDIES)
+    rows7, rows1, *_ = fp.banks(p, steps=250)  # past the EKF reset at step 211
+    assert rows7[:, :7].tobytes() == rows1.tobytes()
