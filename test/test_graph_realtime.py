@@ -37,6 +37,9 @@ def _realtime(tmp_path, domain, *args, name="rt"):
     # and advises a lower factor exactly when the run fell short of the sustainable fraction
     hint = f"realtime --rtf {stats['target_real_time_factor']:g}: below 99 % on time"
     assert (hint in la.output) == (stats["on_time_fraction"] < ON_TIME_TARGET)
+    # every node but the plant ran SCHED_BATCH (no privilege needed): the controllers say so at exit
+    timing = json.loads((out / "metrics.json").read_text())["timing"]
+    assert timing["sched_batch"] is True and timing["controller_sched_policies"] == ["SCHED_BATCH"], timing
     return out, stats
 
 

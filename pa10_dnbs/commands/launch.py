@@ -36,7 +36,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                netns: list[str] | None = None, init_from: Path | None = None, bag_compression: str = "zstd",
                live_port: int | None = None, live_host: str = "127.0.0.1", live_hz: float = 50.0,
                real_time_factor: float = 1.0, deadline_fraction: float = 0.9, rt_priority: int = 0,
-               namespace: str = DEFAULT_NS,
+               sched_batch: bool = True, namespace: str = DEFAULT_NS,
                clock_hz: float = DEFAULT_CLOCK_HZ, figures: bool = True) -> int:
     """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code.
 
@@ -47,7 +47,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     ``bag_compression``: 'zstd' or 'none' (with ``record``). ``live_port``: serve the live view
     (Foxglove WebSocket) on ``live_host``:``live_port`` (0: a free port), ``live_hz`` frames per second at most.
     ``real_time_factor``, ``deadline_fraction``: realtime pacing (docs/timing.md); ``rt_priority``: SCHED_FIFO
-    priority of plant and controllers (0: off). ``reliability`` None: the mode's default QoS.
+    priority of plant and controllers (0: off); ``sched_batch``: every node but the plant under SCHED_BATCH.
+    ``reliability`` None: the mode's default QoS.
     ``namespace``: the arm's ROS namespace (every node runs in it; /clock, /tf, /diagnostics stay global).
     ``clock_hz``: /clock rate [Hz of simulated time], > 0 (the reference node is paced by /clock).
     """
@@ -112,7 +113,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                        force_bag=force, restart=restart, netns=namespaces, init_from=init_from,
                        bag_compression=bag_compression, live_port=live_port, live_host=live_host, live_hz=live_hz,
                        real_time_factor=real_time_factor, deadline_fraction=deadline_fraction,
-                       rt_priority=rt_priority, namespace=namespace,
+                       rt_priority=rt_priority, sched_batch=sched_batch, namespace=namespace,
                        clock_hz=clock_hz)
     reliability = loop_reliability(opt)
     settings = metrics_settings(cfg, n_steps * dt)
@@ -138,7 +139,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                 run, settings, source="ros-graph", mode=mode, config_file=str(config_path),
                 seed=cfg["simulation"]["seed"], reliability=reliability, domain_id=result.domain_id,
                 wall_time_total_s=result.wall_total_s, limit_hits=stats["limit_hits"],
-                timing=timing_summary(stats),
+                timing=timing_summary(stats, result.controllers, sched_batch),
                 node_exit_codes=result.exit_codes, bag=str(record) if record else None,
                 faults=fault_report(cfg, stats, result),
                 **({"warm_start_from": str(init_from)} if init_from is not None else {}))
@@ -238,9 +239,12 @@ TIMING_KEYS = ("on_time_fraction", "late_start_ticks", "max_start_lateness_us", 
                "cpu", "effort_waits_per_step", "effort_wakeups_per_step", "on_time_fraction_per_bin")
 
 
-def timing_summary(stats: dict) -> dict:
-    """The timing part of metrics.json: the plant's pacing figures and, per joint, misses and latency."""
-    return {k: stats.get(k) for k in TIMING_KEYS} | {"joints": stats["joints"]}
+def timing_summary(stats: dict, controllers: dict, sched_batch: bool) -> dict:
+    """The timing part of metrics.json: the plant's pacing figures and, per joint, misses and latency; whether
+    the nodes were asked for SCHED_BATCH and the policies the controllers ended with (their stats files)."""
+    policies = sorted({c["sched_policy"] for c in controllers.values() if c and "sched_policy" in c})
+    return ({k: stats.get(k) for k in TIMING_KEYS}
+            | {"sched_batch": sched_batch, "controller_sched_policies": policies, "joints": stats["joints"]})
 
 
 def _timing_note(stats: dict) -> str:

@@ -1,7 +1,8 @@
 """What to start: every node process of the graph as (name, argv), with its ROS arguments.
 
 Every node runs in the arm's namespace (``-r __ns:=NS``) under its own name (``-r __node:=``), and every
-node but the plant with ``use_sim_time:=true`` (the plant publishes /clock). Never imports rclpy.
+node but the plant with ``use_sim_time:=true`` (the plant publishes /clock) and ``sched_batch:=true``
+(unless ``GraphOptions.sched_batch`` is False). Never imports rclpy.
 """
 from __future__ import annotations
 
@@ -62,7 +63,7 @@ def controller_command(opt: GraphOptions, workdir: Path, joint: str, incarnation
     'fresh', and is not killed again by faults.kill_controller_at_s."""
     params = {"config_file": str(opt.config_path), "joint": joint, "controller": opt.controller,
               "reliability": loop_reliability(opt), "queue_depth": 1 if opt.mode == "realtime" else 2000,
-              "rt_priority": opt.rt_priority,
+              "rt_priority": opt.rt_priority, "sched_batch": str(opt.sched_batch).lower(),
               "stats_file": str(workdir / f"controller_{joint}.json"), "incarnation": incarnation,
               "resume": str(incarnation > 0 and opt.restart != "fresh").lower(),
               "effort_subscribers": 1 + int(opt.record_bag is not None),  # the plant and the recorder
@@ -81,7 +82,8 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
     py = [sys.executable, "-m"]
 
     def ros(node: str, params: dict) -> list[str]:
-        return _ros_args(node, {**params, "use_sim_time": "true"}, opt.namespace)
+        return _ros_args(node, {**params, "sched_batch": str(opt.sched_batch).lower(), "use_sim_time": "true"},
+                         opt.namespace)
 
     cfg = str(opt.config_path)
     if opt.record_bag is None:

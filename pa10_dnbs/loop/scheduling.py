@@ -1,19 +1,26 @@
-"""SCHED_FIFO for the loop's processes (Linux), on every thread of this process.
+"""Scheduling policies for the graph's processes (Linux), on every thread of this process.
 
 Linux schedules threads, not processes: the policy is set on each thread in
 /proc/self/task (the DDS threads included); threads started later inherit
 it from the thread that starts them.
 
+``apply_batch()``: SCHED_BATCH, which any process may choose. It keeps the
+thread's share of the CPU (same weight as the default policy) and only
+stops its wake-ups from preempting the running thread. The launcher gives
+it to every node but the plant: the plant is the loop's clock, the others
+are work its messages trigger, and a controller woken by its state no
+longer interrupts the plant between two of its seven state publishes
+(docs/timing.md, "SCHED_BATCH for everything but the plant").
+
 ``apply_fifo(priority)``: plant and controllers (``--rt-priority``). Needs
 root, CAP_SYS_NICE or an RLIMIT_RTPRIO (``ulimit -r``) at least the
 priority, and a cgroup with real-time runtime; otherwise nothing changes
-and the message says why.
+and the message says why. A policy a thread gets later replaces this one.
 
-Observers (recorder, wire monitor, live view) keep the default policy. A
-lowered one (SCHED_IDLE, or nice 10) was tried and taken out: with other
-work on the machine the observers starved, lost the run or hung at
-teardown, and a lockstep run in CI stalled for over a second with them
-(docs/timing.md).
+Observers (recorder, wire monitor, live view) are never lowered below their
+CPU share: SCHED_IDLE, or nice 10, was tried and taken out: with other work
+on the machine the observers starved, lost the run or hung at teardown, and
+a lockstep run in CI stalled for over a second with them (docs/timing.md).
 """
 from __future__ import annotations
 
@@ -42,6 +49,24 @@ def apply_fifo(priority: int) -> tuple[bool, str]:
                        f"`ulimit -r` >= {priority}, now {limit}, and real-time runtime in the cgroup); "
                        "default scheduling" + (f" (it was set on {done} threads, which keep it)" if done else ""))
     return True, f"rt_priority {priority}: SCHED_FIFO on {done} threads"
+
+
+def apply_batch() -> tuple[bool, str]:
+    """Put every thread of this process under SCHED_BATCH; (applied, what happened)."""
+    if not hasattr(os, "SCHED_BATCH"):
+        return False, "sched_batch: SCHED_BATCH is not available on this OS; default scheduling"
+    done, refused = _on_every_thread(os.SCHED_BATCH, 0)
+    if refused:  # a thread under SCHED_FIFO cannot leave it without the privilege that set it
+        return False, f"sched_batch: refused by the OS (after {done} threads); default scheduling"
+    return True, f"sched_batch: SCHED_BATCH on {done} threads"
+
+
+def policy_name(tid: int = 0) -> str:
+    """The scheduling policy of thread ``tid`` (0: the calling thread), e.g. 'SCHED_BATCH'."""
+    policy = os.sched_getscheduler(tid)
+    names = {getattr(os, n): n for n in ("SCHED_OTHER", "SCHED_BATCH", "SCHED_IDLE", "SCHED_FIFO", "SCHED_RR")
+             if hasattr(os, n)}
+    return names.get(policy, str(policy))
 
 
 def _on_every_thread(policy: int, priority: int) -> tuple[int, bool]:

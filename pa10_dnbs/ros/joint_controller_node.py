@@ -48,8 +48,8 @@ from .diagnostics import DiagnosticsReporter, status, status_name
 from ..loop.cpu_meter import CpuMeter
 from ..loop.endpoint_match import MatchWait, Need
 from ..loop.joint_loop import JointLoop
-from ..loop.scheduling import apply_fifo, check_priority
-from .params import CONFIG_FILE, Param, ParameterError, check_choice, cli_parameter, declare, load_node_config
+from ..loop.scheduling import apply_batch, apply_fifo, check_priority, policy_name
+from .params import CONFIG_FILE, SCHED_BATCH, Param, ParameterError, check_choice, cli_parameter, declare, load_node_config
 from .runtime import announce_ready, exit_process, run_node
 from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
 from .wall_timer import wall_timer
@@ -72,6 +72,7 @@ PARAMS = {
     "match_timeout_s": Param(10.0, "wall time after which answers go out without them [s]", 0.0),
     "init_file": Param("", "warm start: DNBS checkpoint of an earlier run [.npz]; '' = cold start"),
     "rt_priority": Param(0, "SCHED_FIFO priority 1..99 where allowed; 0 = off", 0, 99),
+    "sched_batch": SCHED_BATCH,
 }
 
 
@@ -145,6 +146,8 @@ class JointControllerNode(Node):
         self.diagnostics = DiagnosticsReporter(self, lambda: [self._status()],
                                                lambda: self.clock_.stamp(max(0, self.loop_.last_step)))
         self.cpu = CpuMeter()
+        if p["sched_batch"]:  # before SCHED_FIFO: a granted --rt-priority replaces it
+            print(apply_batch()[1], flush=True)
         self.rt_applied, rt_message = apply_fifo(p["rt_priority"])
         if p["rt_priority"]:
             print(rt_message, flush=True)
@@ -248,6 +251,7 @@ class JointControllerNode(Node):
         counters = self.counters()
         counters["resumed_from_step"] = self.resumed_from
         counters["rt_priority_applied"] = self.rt_applied
+        counters["sched_policy"] = policy_name()
         counters["cpu"] = self.cpu.report()
         if self.p["stats_file"]:
             write_json(self.p["stats_file"], counters)

@@ -31,7 +31,8 @@ from ..live.schemas import live_channels
 from ..live.server import LiveServer, LiveServerError
 from ..live.view import LiveView
 from .diagnostics import diagnostics_qos
-from .params import CONFIG_FILE, Param, ParameterError, declare, load_node_config
+from ..loop.scheduling import apply_batch
+from .params import CONFIG_FILE, SCHED_BATCH, Param, ParameterError, declare, load_node_config
 from .runtime import announce_ready, exit_process, run_node
 from ..wire.topics import DEFAULT_NS, DIAGNOSTICS, ArmTopics
 from .wire import description_qos, reference_qos
@@ -46,6 +47,7 @@ def newest_only_qos() -> QoSProfile:
 
 PARAMS = {
     "config_file": CONFIG_FILE,
+    "sched_batch": SCHED_BATCH,
     "host": Param("127.0.0.1", "address the Foxglove WebSocket server listens on"),
     "port": Param(8765, "its TCP port; 0 = any free port", 0, 65535),
     "display_hz": Param(50.0, "frames per second of wall time, at most [Hz], in (0, 1000]", 0.0, 1000.0),
@@ -88,6 +90,8 @@ class LiveObserverNode(Node):
         wall_timer(self, 1.0 / p["display_hz"], self._frame)
         self._t0 = time.monotonic()
         print(f"LIVE {self.server.url}", flush=True)
+        if p["sched_batch"]:
+            print(apply_batch()[1], flush=True)
         announce_ready("live_view")
 
     def _frame(self) -> None:

@@ -42,7 +42,8 @@ from ..wire.topics import DEFAULT_NS, ArmTopics, resolve
 from .bag_qos import bag_qos, subscription_qos, to_bag_qos
 from ..loop.cpu_meter import CpuMeter
 from .msg_types import message_class
-from .params import CONFIG_FILE, Param, ParameterError, check_choice, declare, load_node_config
+from ..loop.scheduling import apply_batch
+from .params import CONFIG_FILE, SCHED_BATCH, Param, ParameterError, check_choice, declare, load_node_config
 from .polled import Inbox
 from .runtime import announce_ready, exit_process, run_node, spin_until
 from .wire import CLOCK, TF, TF_STATIC
@@ -72,6 +73,7 @@ PARAMS = {
     "all_topics": Param(False, "record every topic discovered"),
     "time_source": Param("clock", "log time: clock (latest /clock) or system (wall time)"),
     "config_file": CONFIG_FILE,
+    "sched_batch": SCHED_BATCH,
     "custom_data": Param([""], "key=value entries for the bag's custom_data"),
     "tf_rate_hz": Param(100.0, "/tf written from joint_states at this rate [Hz of simulated time]; 0 = none", 0.0),
     "end_stamp_ns": Param(-1, "print COMPLETE once every stamped topic reached this stamp [ns]; -1 = never", -1),
@@ -127,6 +129,8 @@ class RecorderNode(Node):
         self.inbox = Inbox(self, p["poll_period_s"])
         self._discover()
         self._timer = wall_timer(self, 0.2, self._discover)
+        if p["sched_batch"]:
+            print(apply_batch()[1], flush=True)
         announce_ready("recorder")
 
     # ------------------------------------------------------------- discovery

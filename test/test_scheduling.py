@@ -1,0 +1,46 @@
+"""SCHED_BATCH for the nodes the plant's messages wake (loop/scheduling.py), and who gets it (node_specs)."""
+import subprocess
+import sys
+from pathlib import Path
+
+from pa10_dnbs.launch.graph_options import GraphOptions
+from pa10_dnbs.launch.node_specs import node_commands
+
+CHILD = """
+import os, threading, time
+from pa10_dnbs.loop.scheduling import apply_batch, policy_name
+before = threading.Thread(target=time.sleep, args=(1,)); before.start()
+ok, msg = apply_batch()
+after = threading.Thread(target=time.sleep, args=(1,)); after.start()
+tids = sorted(int(t) for t in os.listdir("/proc/self/task"))
+print(ok, ",".join(policy_name(t) for t in tids), msg, sep="|")
+"""
+
+
+def test_batch_is_set_on_every_thread_and_inherited():
+    """In a child process (the policy stays with it): every thread, the one started before included, and a
+    thread started after it inherit SCHED_BATCH; no privilege is needed."""
+    out = subprocess.run([sys.executable, "-c", CHILD], capture_output=True, text=True, check=True).stdout.strip()
+    applied, policies, msg = out.split("|")
+    assert applied == "True", msg
+    assert policies.split(",") == ["SCHED_BATCH"] * 3, policies  # main, the thread before, the thread after
+    assert msg == "sched_batch: SCHED_BATCH on 2 threads"
+
+
+def _param(argv, name):
+    values = [argv[i + 1].split(":=", 1)[1] for i, a in enumerate(argv[:-1]) if a == "-p"
+              and argv[i + 1].startswith(f"{name}:=")]
+    return values[0] if values else None
+
+
+def test_every_node_but_the_plant_is_asked_for_batch(tmp_path):
+    opt = GraphOptions(config_path=Path("config/default.yaml"), live_port=0)
+    cmds = dict(node_commands(opt, tmp_path / "stats.json", tmp_path / "wire.npz"))
+    assert {"plant", "reference", "wire_monitor", "live_view", "joint_controller_s1"} <= set(cmds)
+    for name, argv in cmds.items():
+        assert _param(argv, "sched_batch") == (None if name == "plant" else "true"), name
+    off = dict(node_commands(GraphOptions(config_path=Path("config/default.yaml"), sched_batch=False,
+                                          record_bag=tmp_path / "bag"), tmp_path / "s.json", tmp_path / "w.npz"))
+    assert "recorder" in off
+    for name, argv in off.items():
+        assert _param(argv, "sched_batch") == (None if name == "plant" else "false"), name
