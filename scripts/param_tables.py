@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import importlib
+import os
 import sys
 from pathlib import Path
 
@@ -26,9 +27,14 @@ def table(params: dict) -> str:
 
 
 def main() -> int:
+    from pa10_dnbs.launch.shm_cleanup import remove_stale, shm_files
+
+    before = shm_files()
     for name, module in NODES:
         params = importlib.import_module(f"pa10_dnbs.ros.{module}").PARAMS
         print(f"### `{name}` (`python -m pa10_dnbs.ros.{module}`)\n\n{table(params)}\n")
+    # importing the nodes loads rclpy, whose LTTng-UST creates /dev/shm/lttng-ust-wait-* and leaves them
+    remove_stale(shm_files() - before, frozenset({os.getpid()}))
     return 0
 
 
