@@ -112,8 +112,8 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--rt-priority", type=int, default=0, metavar="N",
                     help="SCHED_FIFO priority 1..99 for the plant and the controllers where the OS allows it "
                          "(root, CAP_SYS_NICE or ulimit -r); otherwise a message and default scheduling. 0 (default): "
-                         "off. 50 is what ros2_control's controller manager asks for; observers keep the default "
-                         "policy and starve when the loop needs the whole machine (docs/timing.md)")
+                         "off. 50 is what ros2_control's controller manager asks for; observers stay outside it "
+                         "and starve when the loop needs the whole machine (docs/timing.md)")
     la.add_argument("--no-sched-batch", action="store_true",
                     help="run every node at the default scheduling policy; by default all but the plant run "
                          "SCHED_BATCH (any user may), so the nodes the plant's messages wake do not preempt it "
