@@ -49,7 +49,8 @@ from ..loop.cpu_meter import CpuMeter
 from ..loop.endpoint_match import MatchWait, Need
 from ..loop.joint_loop import JointLoop
 from ..loop.scheduling import apply_batch, apply_fifo, check_priority, policy_name
-from .params import CONFIG_FILE, SCHED_BATCH, Param, ParameterError, check_choice, cli_parameter, declare, load_node_config
+from .params import (CONFIG_FILE, SCHED_BATCH, Param, ParameterError, check_choice, cli_parameter, declare,
+                     load_node_config)
 from .runtime import announce_ready, exit_process, run_node
 from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
 from .wall_timer import wall_timer
