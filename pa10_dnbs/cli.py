@@ -36,7 +36,7 @@ def _launch(args: argparse.Namespace) -> int:
                       restart=args.restart, netns=args.netns, init_from=args.init_from,
                       bag_compression=args.bag_compression, live_port=args.live, live_host=args.live_host,
                       live_hz=args.live_hz, real_time_factor=args.rtf, deadline_fraction=args.deadline_fraction,
-                      rt_priority=args.rt_priority, sched_batch=not args.no_sched_batch, namespace=args.namespace,
+                      rt_priority=args.rt_priority, sched_batch=args.sched_batch, namespace=args.namespace,
                       clock_hz=args.clock_hz, figures=not args.no_figures)
 
 
@@ -114,10 +114,10 @@ def build_parser() -> argparse.ArgumentParser:
                          "(root, CAP_SYS_NICE or ulimit -r); otherwise a message and default scheduling. 0 (default): "
                          "off. 50 is what ros2_control's controller manager asks for; observers stay outside it "
                          "and starve when the loop needs the whole machine (docs/timing.md)")
-    la.add_argument("--no-sched-batch", action="store_true",
-                    help="run every node at the default scheduling policy; by default all but the plant run "
-                         "SCHED_BATCH (any user may), so the nodes the plant's messages wake do not preempt it "
-                         "while it publishes (docs/timing.md)")
+    la.add_argument("--sched-batch", action="store_true",
+                    help="run every node but the plant under SCHED_BATCH (any user may), so the nodes the "
+                         "plant's messages wake do not preempt it while it publishes; opt-in: a small gain "
+                         "within this machine's noise (docs/timing.md)")
     _add_run_args(la, ("dnbs", "pid"), "the joint controllers: dnbs or pid (ctc is centralized: in-process only)")
     la.add_argument("--namespace", default="/pa10", metavar="NS",
                     help="the arm's ROS namespace (default /pa10): every node runs in it, its topics are NS/s1/state, "

@@ -64,7 +64,7 @@ def _run(mode: str, factor: float, args) -> tuple[dict, dict[str, float]]:
         opt = GraphOptions(config_path=default_config_path(), mode="lockstep" if mode == "record" else mode,
                            controller=args.controller, duration_s=args.duration, reliability=args.reliability,
                            real_time_factor=factor, rt_priority=args.rt_priority,
-                           sched_batch=not args.no_sched_batch,
+                           sched_batch=args.sched_batch,
                            record_bag=Path(tmp) / "bag" if mode == "record" else None)
         res = run_graph(opt, Path(tmp), say=lambda s: None)
         cpu = {}
@@ -100,8 +100,8 @@ def main() -> int:
     ap.add_argument("--reliability", default=None, choices=["reliable", "best_effort"],
                     help="QoS of the per-joint topics (default: the mode's own)")
     ap.add_argument("--rt-priority", type=int, default=0)
-    ap.add_argument("--no-sched-batch", action="store_true",
-                    help="every node at the default policy (default: all but the plant under SCHED_BATCH)")
+    ap.add_argument("--sched-batch", action="store_true",
+                    help="every node but the plant under SCHED_BATCH (default: every node at the default policy)")
     ap.add_argument("--controller", default="dnbs", choices=["dnbs", "pid"],
                     help="what the seven controller processes run (default dnbs; pid: the wire's own cost)")
     args = ap.parse_args()

@@ -34,12 +34,12 @@ def _param(argv, name):
 
 
 def test_every_node_but_the_plant_is_asked_for_batch(tmp_path):
-    opt = GraphOptions(config_path=Path("config/default.yaml"), live_port=0)
+    opt = GraphOptions(config_path=Path("config/default.yaml"), live_port=0, sched_batch=True)
     cmds = dict(node_commands(opt, tmp_path / "stats.json", tmp_path / "wire.npz"))
     assert {"plant", "reference", "wire_monitor", "live_view", "joint_controller_s1"} <= set(cmds)
     for name, argv in cmds.items():
         assert _param(argv, "sched_batch") == (None if name == "plant" else "true"), name
-    off = dict(node_commands(GraphOptions(config_path=Path("config/default.yaml"), sched_batch=False,
+    off = dict(node_commands(GraphOptions(config_path=Path("config/default.yaml"),  # the default: off
                                           record_bag=tmp_path / "bag"), tmp_path / "s.json", tmp_path / "w.npz"))
     assert "recorder" in off
     for name, argv in off.items():

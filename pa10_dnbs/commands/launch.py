@@ -36,7 +36,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                netns: list[str] | None = None, init_from: Path | None = None, bag_compression: str = "zstd",
                live_port: int | None = None, live_host: str = "127.0.0.1", live_hz: float = 50.0,
                real_time_factor: float = 1.0, deadline_fraction: float = 0.9, rt_priority: int = 0,
-               sched_batch: bool = True, namespace: str = DEFAULT_NS,
+               sched_batch: bool = False, namespace: str = DEFAULT_NS,
                clock_hz: float = DEFAULT_CLOCK_HZ, figures: bool = True) -> int:
     """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code.
 

@@ -1,8 +1,8 @@
 """What to start: every node process of the graph as (name, argv), with its ROS arguments.
 
 Every node runs in the arm's namespace (``-r __ns:=NS``) under its own name (``-r __node:=``), and every
-node but the plant with ``use_sim_time:=true`` (the plant publishes /clock) and ``sched_batch:=true``
-(unless ``GraphOptions.sched_batch`` is False). Never imports rclpy.
+node but the plant with ``use_sim_time:=true`` (the plant publishes /clock) and ``sched_batch`` as
+``GraphOptions.sched_batch`` says. Never imports rclpy.
 """
 from __future__ import annotations
 

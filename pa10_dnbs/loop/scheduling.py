@@ -6,11 +6,12 @@ it from the thread that starts them.
 
 ``apply_batch()``: SCHED_BATCH, which any process may choose. It keeps the
 thread's share of the CPU (same weight as the default policy) and only
-stops its wake-ups from preempting the running thread. The launcher gives
-it to every node but the plant: the plant is the loop's clock, the others
-are work its messages trigger, and a controller woken by its state no
-longer interrupts the plant between two of its seven state publishes
-(docs/timing.md, "SCHED_BATCH for everything but the plant").
+stops its wake-ups from preempting the running thread. The launcher's
+``--sched-batch`` gives it to every node but the plant: the plant is the
+loop's clock, the others are work its messages trigger, and a controller
+woken by its state no longer interrupts the plant between two of its seven
+state publishes (docs/timing.md, "SCHED_BATCH for everything but the plant":
+why it is opt-in).
 
 ``apply_fifo(priority)``: plant and controllers (``--rt-priority``). Needs
 root, CAP_SYS_NICE or an RLIMIT_RTPRIO (``ulimit -r``) at least the

@@ -107,4 +107,4 @@ def check_choice(name: str, value, choices) -> None:
 
 CONFIG_FILE = Param("", "the YAML config (config/default.yaml and its units); '' = the shipped default")
 SCHED_BATCH = Param(False, "SCHED_BATCH on every thread: the node's wake-ups do not preempt the plant (the "
-                           "launcher sets it on every node but the plant); false = the default policy")
+                           "launcher's --sched-batch sets it on every node but the plant); false = the default policy")
