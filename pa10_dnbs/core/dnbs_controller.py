@@ -216,7 +216,8 @@ class DNBSControllers:
         self._ones = np.ones(n)
         self.alpha = np.zeros(n)                 # last virtual control [rad/s]
         self.torque_unsaturated = np.zeros(n)    # last torque before the Table 2 clip [N m]
-        self.steps = 0
+        self.steps = 0                           # steps trained
+        self._pending = None                     # (e1, e2, u, active) of an answer not yet trained on
         self.ekf_resets = {"alpha": np.zeros(n, dtype=np.int64), "torque": np.zeros(n, dtype=np.int64)}
 
     @property
@@ -227,8 +228,22 @@ class DNBSControllers:
         """Torques (n,) [N m] for angles x1 (n,) [rad] and velocities x2 (n,) [rad/s]; trains both networks.
 
         ``active`` (n,) of 1.0 / 0.0: a row with 0 is not trained (its state was not trusted; its inputs must
-        still be finite) and its torque is to be ignored by the caller.
+        still be finite) and its torque is to be ignored by the caller. The same as ``answer`` then ``learn``.
         """
+        u = self.answer(x1, x2, ref, active)
+        self.learn()
+        return u
+
+    def answer(self, x1: np.ndarray, x2: np.ndarray, ref: ReferenceSample, active: np.ndarray | None = None) -> np.ndarray:
+        """The torques (n,) [N m] of ``step`` without the training, which is left pending for ``learn``.
+
+        The torque uses the weights before this step's update, so a caller can send it out first and train
+        afterwards, off the critical path (Astrom & Wittenmark: "calculate output", then "update state").
+        A training still pending from the previous step is done first: the results never depend on when, or
+        whether, ``learn`` is called between two answers.
+        """
+        if self._pending is not None:
+            self.learn()
         z1, z2 = self._z1, self._z2
         z1[:, 0] = x1
         z1[:, 1] = ref.position_ahead_rad
@@ -243,15 +258,29 @@ class DNBSControllers:
         self.torque_honn.regressor(z2, out=self._S2)
         e2 = alpha - x2
         u = self._U * np.add.reduce(np.multiply(self._w2, self._H2, out=self._prod), axis=1) + self._k_u * e2
-        lim = self._lim
-        u_out = np.minimum(np.maximum(u, self._neg_lim), lim)
+        self.alpha = alpha
+        self.torque_unsaturated = u
+        self._pending = (e1, e2, u, active)  # the regressors stay in self._H until learn()
+        return np.minimum(np.maximum(u, self._neg_lim), self._lim)
 
+    @property
+    def learning_pending(self) -> bool:
+        """True between an ``answer`` and its ``learn``."""
+        return self._pending is not None
+
+    def learn(self) -> None:
+        """Train both networks on the errors of the last ``answer`` (EKF update, remedies, guard); a no-op when
+        nothing is pending."""
+        if self._pending is None:
+            return
+        e1, e2, u, active = self._pending
+        self._pending = None
         e2_train = -e2 if self._printed else e2
         act = None if active is None else np.concatenate((active, active))  # (2n,): alpha rows, torque rows
         if self._anti_windup:
             # Conditional integration: while the torque is clipped, skip an update that would raise |u|:
             # e2 > 0 raises u directly; e1 > 0 raises alpha, and so u wherever du/dalpha > 0.
-            sat = np.abs(u) >= lim
+            sat = np.abs(u) >= self._lim
             if np.logical_or.reduce(sat):
                 base = self._ones if active is None else active
                 act = np.concatenate((base * (1.0 - (sat & (e1 * u > 0.0))),
@@ -270,12 +299,8 @@ class DNBSControllers:
             self.ekf.w *= (1.0 - np.minimum(1.0, self._sigma * np.abs(self._eps) * a))[:, None]
         if self._bound != np.inf:
             np.clip(self.ekf.w, -self._bound, self._bound, out=self.ekf.w)
-
-        self.alpha = alpha
-        self.torque_unsaturated = u
         self.steps += 1
         self._guard()
-        return u_out
 
     def _guard(self) -> None:
         every = self.params.ekf_full_check_every
@@ -293,7 +318,9 @@ class DNBSControllers:
             self.ekf_resets["torque"] += bad[n:]
 
     def state_dict(self, row: int = 0) -> dict[str, np.ndarray]:
-        """Row ``row``'s weights (L,), covariances (L, L), initial weights and counters (for np.savez)."""
+        """Row ``row``'s weights (L,), covariances (L, L), initial weights and counters (for np.savez), after
+        any pending training."""
+        self.learn()
         return {"joint": np.array(self.joints[row]),
                 "alpha_w": self.alpha_ekf.w[row].copy(), "alpha_P": self.alpha_ekf.P[row].copy(),
                 "alpha_w0": self.alpha_ekf.w0[row].copy(), "torque_w": self.torque_ekf.w[row].copy(),
@@ -306,6 +333,7 @@ class DNBSControllers:
         count (a restarted controller); a warm start of a new run keeps its own (it starts at step 0)."""
         if "joint" in state and int(state["joint"]) != self.joints[row]:
             raise ValueError(f"checkpoint of joint index {int(state['joint'])}, expected {self.joints[row]}")
+        self.learn()  # a pending training belongs to the state being replaced
         for name, ekf in (("alpha", self.alpha_ekf), ("torque", self.torque_ekf)):
             w, P = np.asarray(state[f"{name}_w"], float), np.asarray(state[f"{name}_P"], float)
             if w.shape != ekf.w[row].shape or P.shape != ekf.P[row].shape:

@@ -5,6 +5,10 @@ more than a margin, faster than the speed limit) is answered with its last
 torque ("hold") or zero, and its controller row is not trained on it; so is
 a non-finite torque from the controller. Each case is counted per joint. No
 non-finite torque is ever returned. One row per joint, arrays of shape (n,).
+
+``step`` answers and trains; a node calls ``answer``, publishes the torque,
+then ``learn``, so that the training of a learning controller (DNBS) is not
+between the state and its answer. The results are the same either way.
 """
 from __future__ import annotations
 
@@ -17,7 +21,8 @@ from ..core.state_guard import OK, REASONS, StateGuard
 
 
 class GuardedControllers:
-    """``controllers`` (a DNBS or PID bank with ``step(x1, x2, ref, active)``) behind ``guard``."""
+    """``controllers`` (a DNBS or PID bank with ``step(x1, x2, ref, active)``; a learning one also with
+    ``answer`` and ``learn``, see DNBSControllers) behind ``guard``."""
 
     def __init__(self, controllers, guard: StateGuard | None, on_bad_state: str = "hold"):
         if on_bad_state not in ("hold", "zero"):
@@ -29,11 +34,20 @@ class GuardedControllers:
         self.bad_states = {r: np.zeros(n, dtype=np.int64) for r in REASONS}
         self.nonfinite_torques = np.zeros(n, dtype=np.int64)
         self.last_torque = np.zeros(n)
+        self._answer = getattr(controllers, "answer", controllers.step)
+        # learn(): train on the last answer (a no-op for a controller that does not learn, or when done)
+        self.learn = getattr(controllers, "learn", _nothing)
 
     def step(self, x1: np.ndarray, x2: np.ndarray, ref: ReferenceSample) -> np.ndarray:
-        """Torques (n,) [N m], always finite, for states x1 (n,) [rad], x2 (n,) [rad/s]."""
+        """Torques (n,) [N m], always finite, for states x1 (n,) [rad], x2 (n,) [rad/s]; trains the controllers."""
+        u = self.answer(x1, x2, ref)
+        self.learn()
+        return u
+
+    def answer(self, x1: np.ndarray, x2: np.ndarray, ref: ReferenceSample) -> np.ndarray:
+        """The torques of ``step``, leaving a learning controller's training pending until ``learn``."""
         if self.guard is None or self.guard.all_plausible(x1, x2):
-            u = self.controllers.step(x1, x2, ref)
+            u = self._answer(x1, x2, ref)
             ok = None
         else:
             code = self.guard.check(x1, x2)
@@ -41,8 +55,8 @@ class GuardedControllers:
             for i, reason in enumerate(REASONS):
                 self.bad_states[reason] += code == i
             # the untrusted rows get finite stand-in inputs and no training; their torque is replaced below
-            u = self.controllers.step(np.where(ok, x1, ref.position_rad), np.where(ok, x2, 0.0), ref,
-                                      active=ok.astype(float))
+            u = self._answer(np.where(ok, x1, ref.position_rad), np.where(ok, x2, 0.0), ref,
+                             active=ok.astype(float))
         # one sum instead of isfinite + all: a NaN or an inf torque makes it non-finite (an overflow of the
         # sum, torques near 1e308, only sends finite torques through the element-wise check below)
         if ok is None and math.isfinite(np.add.reduce(u)):
@@ -56,3 +70,7 @@ class GuardedControllers:
             u = np.where(ok, u, self.last_torque if self.hold else 0.0)
         self.last_torque = u
         return u
+
+
+def _nothing() -> None:
+    """``learn`` of a controller that does not learn."""

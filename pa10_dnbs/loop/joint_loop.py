@@ -4,7 +4,9 @@ Receives the joint's state for step k and reference points by step, and
 answers each state exactly once with an effort. A state that arrives before
 its references (x_d(k) and x_d(k + preview)) waits for them, so the answer
 does not depend on message timing; a state seen again (a resend) gets the
-same effort back without training the networks twice.
+same effort back without training the networks twice. The answer comes
+before the training: ``on_state`` returns the effort with the training
+pending, and the node calls ``learn`` once the effort is out.
 
 Defensive: the answer comes from GuardedControllers, the same guard the
 in-process simulation steps through: a state that fails the StateGuard is
@@ -68,6 +70,16 @@ class JointLoop:
         return self._drain()
 
     @property
+    def learning_pending(self) -> bool:
+        """True when the last answer has not been trained on yet (a PID controller never has any)."""
+        return getattr(self.controller, "learning_pending", False)
+
+    def learn(self) -> None:
+        """Train the controller on its last answer: call it after publishing what ``on_state`` or
+        ``add_reference`` returned (the next answer trains first if this was not called)."""
+        self.guarded.learn()
+
+    @property
     def bad_states(self) -> dict[str, int]:
         """States rejected by the guard, by reason."""
         return {r: int(self.guarded.bad_states[r][0]) for r in REASONS}
@@ -80,7 +92,7 @@ class JointLoop:
         self._x1[0], self._x2[0] = q, qd
         sample = ReferenceSample(np.array([self._ref_pos[step]]), np.array([self._ref_vel[step]]),
                                  np.array([self._ref_pos[ahead]]))
-        return float(self.guarded.step(self._x1, self._x2, sample)[0])
+        return float(self.guarded.answer(self._x1, self._x2, sample)[0])
 
     def _drain(self) -> list[tuple[int, float]]:
         out = []

@@ -12,6 +12,9 @@ each recorder) have matched it, so a recorder never misses the first efforts
 of a restarted controller (after ``match_timeout_s`` they go out regardless,
 with a warning).
 
+Each state is answered first and trained on after the effort is published
+(``JointLoop.learn``), so the EKF update is not on the state-to-effort path.
+
 Defensive: implausible states are answered with the last torque or zero
 (JointLoop + StateGuard), the EKF guard resets a broken network; neither
 ever lets a non-finite torque out. Faults configured in ``faults.effort`` are
@@ -167,6 +170,7 @@ class JointControllerNode(Node):
             print(f"KILLED joint_controller {self.joint} at step {step} (fault injection)", flush=True)
             os.kill(os.getpid(), signal.SIGKILL)
         self._publish(self.loop_.on_state(step, q, qd))
+        self.loop_.learn()  # after the effort is out: the training is not on the state-to-effort path
 
     def _offer_effort(self) -> None:
         """Create the effort publisher (and its fault-injecting link, if configured)."""
@@ -201,6 +205,7 @@ class JointControllerNode(Node):
             self._offer_effort()
         first = self.clock_.step_of_sec_nanosec(sec, nanosec)
         self._publish(self.loop_.add_reference(first, positions, velocities))
+        self.loop_.learn()
 
     def _publish(self, answers) -> None:
         if answers and self._pub is None:  # a bad state answered before any reference came
@@ -245,6 +250,7 @@ class JointControllerNode(Node):
                       FAULT_KEYS)
 
     def close(self) -> None:
+        self.loop_.learn()  # a training left pending by an interrupted callback
         if self._link is not None:
             self._link.close()
         if self.checkpoint is not None and self.loop_.last_step >= 0:
