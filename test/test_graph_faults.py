@@ -76,7 +76,8 @@ def test_killed_controller_is_restarted_from_its_checkpoint(tmp_path, domain):
     m, joints = _faults(out)
     assert [r["joint"] for r in m["faults"]["restarts"]] == ["e1"]
     e1 = joints["e1"]
-    assert e1["controller"]["resumed_from_step"] == 1000  # the last periodic checkpoint (every 1 s) before 1.5 s
+    # the last periodic checkpoint before 1.5 s: every 1 s, e1 (joint 3 of 7) at 3/7 of each second
+    assert e1["controller"]["resumed_from_step"] == 1428
     outage = e1["plant"]["timeout_ranges"]
     assert len(outage) == 1 and outage[0][0] == 1500, outage
     assert (outage[0][1] - outage[0][0] + 1) * 1e-3 < 2.0  # back within 2 s of simulated time

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from pa10_dnbs.controller_factory import build_controllers, build_reference
-from pa10_dnbs.core.checkpoint import load_checkpoint, save_checkpoint
+from pa10_dnbs.core.checkpoint import checkpoint_due, checkpoint_phase, load_checkpoint, save_checkpoint
 from pa10_dnbs.core.reference import ReferenceSample
 from pa10_dnbs.core.state_guard import OK, REASONS, StateGuard
 from pa10_dnbs.loop.guarded_controllers import GuardedControllers
@@ -112,6 +112,16 @@ def test_checkpoint_resume_continues_exactly(cfg, tmp_path):
     (tmp_path / "junk.npz").write_bytes(b"not a checkpoint")
     with pytest.raises(ValueError, match="not a readable checkpoint"):
         load_checkpoint(tmp_path / "junk.npz")
+
+
+def test_periodic_checkpoints_of_the_joints_are_spread_over_the_period():
+    """Seven controllers saving on one step put a few ms of CPU into one tick: each joint has its own phase."""
+    phases = [checkpoint_phase(j, 7, 1000) for j in range(7)]
+    assert phases == [0, 142, 285, 428, 571, 714, 857]
+    due = [[k for k in range(1, 3001) if checkpoint_due(k, 1000, ph)] for ph in phases]
+    assert due[0] == [1000, 2000, 3000] and due[3] == [428, 1428, 2428]
+    assert all(len(d) == 3 for d in due) and len({k for d in due for k in d}) == 21  # never two on one step
+    assert not checkpoint_due(0, 1000, 0) and checkpoint_due(7, 1, 0)  # step 0 is never a save; every step
 
 
 def _factorises(P) -> bool:

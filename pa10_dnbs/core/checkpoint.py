@@ -2,10 +2,15 @@
 
 The file holds the arrays plus ``step`` (the last step answered). Written to
 a temporary sibling and renamed, so a process killed mid-write leaves the
-previous checkpoint intact.
+previous checkpoint intact. The archive is built in memory and written in
+one call (~0.3 ms of CPU, against ~0.5 ms for ``np.savez`` on the file).
+Periodic saves of the joints are spread over the period
+(``checkpoint_phase``): seven controllers saving on one step put a few ms
+of CPU into one tick.
 """
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import numpy as np
@@ -14,8 +19,21 @@ from ..atomic_file import atomic_path
 
 
 def save_checkpoint(path: Path, state: dict, step: int) -> None:
+    buf = io.BytesIO()
+    np.savez(buf, step=np.array(step), **state)
     with atomic_path(path, ".tmp.npz") as tmp:
-        np.savez(tmp, step=np.array(step), **state)
+        tmp.write_bytes(buf.getbuffer())
+
+
+def checkpoint_phase(joint: int, n_joints: int, every: int) -> int:
+    """The step within each period of ``every`` steps at which joint ``joint`` (of ``n_joints``) saves: the
+    joints' saves spread evenly over the period (joint 0 at its start)."""
+    return (joint * every) // n_joints
+
+
+def checkpoint_due(step: int, every: int, phase: int) -> bool:
+    """True at the periodic save steps phase + m * every (m >= 0), step 0 excepted."""
+    return step > 0 and step % every == phase
 
 
 def load_checkpoint(path: Path) -> tuple[dict, int]:

@@ -22,7 +22,8 @@ injected on the effort link; ``faults.kill_controller_at_s`` makes the
 process kill itself (SIGKILL) on the first state at or after that time
 (``incarnation`` 0 only: the launcher numbers restarts 1, 2, ...).
 With ``checkpoint_file`` the DNBS weights and covariances are saved every
-``checkpoint.period_s`` of simulated time and at exit, and ``resume:=true``
+``checkpoint.period_s`` of simulated time (each joint at its own phase of
+the period: joint i of 7 at i/7 of it) and at exit, and ``resume:=true``
 starts from that file when it exists. Counters go to ``stats_file`` (JSON).
 """
 from __future__ import annotations
@@ -43,7 +44,7 @@ from trajectory_msgs.msg import JointTrajectory
 from .. import JOINT_NAMES
 from ..atomic_file import write_json
 from ..controller_factory import CONTROLLER_KINDS, build_guarded_controllers
-from ..core.checkpoint import load_checkpoint, save_checkpoint
+from ..core.checkpoint import checkpoint_due, checkpoint_phase, load_checkpoint, save_checkpoint
 from ..faults.faulty_link import links_from_config
 from ..wire import joint_state_cdr
 from ..wire.trajectory_cdr import decode_first_joint
@@ -107,6 +108,7 @@ class JointControllerNode(Node):
         if self.checkpoint is not None and not hasattr(controller, "state_dict"):
             raise ParameterError(f"checkpoint_file: the {p['controller']} controller has no learned state to save")
         self.checkpoint_every = max(1, int(round(cfg["checkpoint"]["period_s"] / cfg["simulation"]["dt_s"])))
+        self.checkpoint_phase = checkpoint_phase(index, len(JOINT_NAMES), self.checkpoint_every)
         self.resumed_from = None
         if p["init_file"] and not (p["resume"] and self.checkpoint is not None and self.checkpoint.is_file()):
             # a warm start from an earlier run: its weights and covariances, this run's own step count
@@ -226,7 +228,7 @@ class JointControllerNode(Node):
                 value = self._link.corrupt_value() if fate.corrupt else effort
                 self._link.send(self._effort_layout.encode(sec, nanosec, value), fate)
             self.efforts_sent += 1
-            if self.checkpoint is not None and step > 0 and step % self.checkpoint_every == 0:
+            if self.checkpoint is not None and checkpoint_due(step, self.checkpoint_every, self.checkpoint_phase):
                 self._save_checkpoint()
 
     def _save_checkpoint(self) -> None:
