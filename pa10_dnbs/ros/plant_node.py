@@ -15,7 +15,8 @@ paces the steps (``mode``):
 
 /clock goes out with the states of ``wire/clock_schedule.py``: one per
 1 / ``clock_hz`` of simulated time (default 100 Hz, as ``ros2 bag play
---clock``; 0: none). The plant itself runs on wall time (no use_sim_time).
+--clock``; 0: none); in realtime it and joint_states follow at the tick's
+deadline (``plant_realtime.py``). The plant itself runs on wall time (no use_sim_time).
 
 Defensive: a non-finite effort counts as missing (hold or zero, counted), an
 out-of-range one is saturated at Table 2 and counted. Faults configured in
@@ -127,6 +128,7 @@ class PlantNode(Node):
         self.resends = [0] * len(JOINT_NAMES)
         self.schedule = None  # realtime: the TickSchedule
         self.finished = False
+        self._observed = None  # (k, q, qd, applied) of a state whose joint_states and /clock are still to go out
         self.exit_code = 0  # a signal before the end is a clean stop; "completed" in the stats says if it ran out
         self.wall_start = self.wall_end = math.nan
         self.diagnostics = DiagnosticsReporter(self, lambda: diagnostics_report(self),
@@ -137,11 +139,21 @@ class PlantNode(Node):
         announce_ready("plant")
 
     # ---------------------------------------------------------------- stepping
-    def publish_state(self, k: int, joints=None) -> None:
+    def publish_state(self, k: int, joints=None, observed: bool = True) -> None:
+        """State ``k`` (to ``joints`` only: a resend); ``observed=False`` keeps joint_states and /clock for
+        ``publish_observed`` (realtime: after the tick's deadline, out of the controllers' window)."""
         q, qd = self.plant.state
-        t_ns = self.wire.publish_state(k, q, qd, self.gate.applied, joints)
+        t_ns = self.wire.publish_state(k, q, qd, self.gate.applied, joints, observed)
         if joints is None:
             self.timing.published(k, t_ns)
+            if not observed:
+                self._observed = (k, q.tolist(), qd.tolist(), self.gate.applied.tolist())
+
+    def publish_observed(self) -> None:
+        """joint_states and /clock of the last state published with ``observed=False`` (once)."""
+        if self._observed is not None:
+            self.wire.publish_observed(*self._observed)
+            self._observed = None
 
     def take_efforts(self, joints=None) -> bool:
         """Offer every queued effort (of ``joints``, default all) to the gate; True when the current step is

@@ -9,7 +9,10 @@ blocks on the effort wait set until every joint has answered state k or the
 deadline (``deadline_fraction`` of the tick) has passed, taking what is
 there at each wake-up; at the deadline the missing efforts are held or
 zeroed and counted as misses (``EffortGate.take_deadline``), and the physics
-steps with exactly those torques. Then the plant sleeps until the next
+steps with exactly those torques. What only observers read of state k
+(joint_states, and /clock every 10th state at 100 Hz, with up to nine
+subscribers) goes out at the deadline, before the physics step: not in the
+window in which the seven controllers need the CPU. Then the plant sleeps until the next
 tick's start; a start later than ``late_tolerance`` of the tick is counted
 and the schedule shifts (no catch-up). Misses and late starts are warned
 about at most once per ``warn_period_s`` (``loop/miss_warnings.py``).
@@ -39,7 +42,7 @@ def run_realtime(node, executor, stop) -> None:
     # milliseconds), each at most effort_timeout_s; the tick schedule starts after them. A joint still silent
     # then misses that step like any other.
     for k in range(min(p["handshake_steps"], node.n_steps)):
-        node.publish_state(k)
+        node.publish_state(k, observed=False)
         t_end = clock() + p["effort_timeout_s"]
         ready = None
         while not node.take_efforts(ready) and not stop.done() and clock() < t_end:
@@ -48,9 +51,11 @@ def run_realtime(node, executor, stop) -> None:
             return
         warnings.missed(k, node.gate.missing)
         node.step(node.gate.take_deadline())
+        node.publish_observed()
     sched.begin(clock())
-    node.publish_state(node.gate.step)
+    node.publish_state(node.gate.step, observed=False)
     if node.finished:
+        node.publish_observed()
         return
     try:
         _ticks(node, executor, stop, sched, warnings, clock, next_housekeeping)
@@ -75,7 +80,9 @@ def _ticks(node, executor, stop, sched, warnings, clock, next_housekeeping) -> N
             return
         k = gate.step
         warnings.missed(k, gate.missing)
-        node.step(gate.take_deadline())
+        torques = gate.take_deadline()
+        node.publish_observed()  # state k's joint_states and /clock, now that the window is over
+        node.step(torques)
         # idle until the next tick (the last state goes out on schedule too): housekeeping, then sleep
         now = clock()
         if now >= next_housekeeping and not node.finished:
@@ -89,6 +96,7 @@ def _ticks(node, executor, stop, sched, warnings, clock, next_housekeeping) -> N
             time.sleep(left)
         if sched.begin(clock()):
             warnings.late_start(k + 1)
-        node.publish_state(k + 1)
+        node.publish_state(k + 1, observed=False)
         if node.finished:
+            node.publish_observed()
             return

@@ -75,9 +75,12 @@ class PlantWire:
         self.out_of_range = np.zeros(n, dtype=np.int64)
 
     # ------------------------------------------------------------- out
-    def publish_state(self, k: int, q: np.ndarray, qd: np.ndarray, applied: np.ndarray, joints=None) -> int:
-        """State ``k`` on every per-joint topic (or only ``joints``, a resend); with all joints also joint_states
-        and, when due, /clock. Returns the wall time [ns, system clock] just before the per-joint states went out."""
+    def publish_state(self, k: int, q: np.ndarray, qd: np.ndarray, applied: np.ndarray, joints=None,
+                      observed: bool = True) -> int:
+        """State ``k`` on every per-joint topic (or only ``joints``, a resend); with all joints and ``observed``
+        also joint_states and, when due, /clock (``observed=False``: the caller sends them later with
+        ``publish_observed(k, *self.observed_args(...))``). Returns the wall time [ns, system clock] just
+        before the per-joint states went out."""
         ql, qdl = q.tolist(), qd.tolist()
         sec, nanosec = self.clock.sec_nanosec(k)
         t_ns = time.time_ns()
@@ -89,11 +92,17 @@ class PlantWire:
             fate = link.fate()
             pos = link.corrupt_value() if fate.corrupt else ql[j]
             link.send(self._state_layouts[j].encode(sec, nanosec, pos, qdl[j]), fate)
-        if joints is None:
-            if self._clock_pub is not None and self._clock_schedule.due(k):
-                self._clock_pub.publish(CLOCK_CDR.pack(0x0100, 0, sec, nanosec))  # raw CDR: no message conversion
-            self._js_pub.publish(joint_state_cdr.encode(sec, nanosec, JOINT_NAMES, ql, qdl, applied.tolist()))
+        if joints is None and observed:
+            self.publish_observed(k, ql, qdl, applied.tolist())
         return t_ns
+
+    def publish_observed(self, k: int, q: list, qd: list, applied: list) -> None:
+        """What observers read of state ``k`` (lists of 7: [rad], [rad/s], the torque applied over step k - 1
+        [N m]): joint_states and, when due, /clock."""
+        sec, nanosec = self.clock.sec_nanosec(k)
+        if self._clock_pub is not None and self._clock_schedule.due(k):
+            self._clock_pub.publish(CLOCK_CDR.pack(0x0100, 0, sec, nanosec))  # raw CDR: no message conversion
+        self._js_pub.publish(joint_state_cdr.encode(sec, nanosec, JOINT_NAMES, q, qd, applied))
 
     # ------------------------------------------------------------- in
     def wait(self, timeout_s: float) -> list[int]:
