@@ -79,8 +79,8 @@ class PlantWire:
                       observed: bool = True) -> int:
         """State ``k`` on every per-joint topic (or only ``joints``, a resend); with all joints and ``observed``
         also joint_states and, when due, /clock (``observed=False``: the caller sends them later with
-        ``publish_observed(k, *self.observed_args(...))``). Returns the wall time [ns, system clock] just
-        before the per-joint states went out."""
+        ``publish_observed``). Returns the wall time [ns, system clock] just before the per-joint states went
+        out."""
         ql, qdl = q.tolist(), qd.tolist()
         sec, nanosec = self.clock.sec_nanosec(k)
         t_ns = time.time_ns()
