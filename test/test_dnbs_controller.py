@@ -207,3 +207,20 @@ def test_network_settings_given_as_one_number_mean_that_number_for_every_joint(c
         x1, x2 = np.array([0.1, -0.2]), np.array([0.01, 0.0])
         assert scalar.step(x1, x2, ref.sample(k, [1, 2])).tobytes() == arrays.step(x1, x2, ref.sample(k, [1, 2])).tobytes()
     assert scalar.ekf.w.tobytes() == arrays.ekf.w.tobytes() and scalar.ekf.P.tobytes() == arrays.ekf.P.tobytes()
+
+
+def test_clip_gives_the_bits_of_np_clip_signed_zeros_and_nan_included():
+    # the dead zone and the projection use the two-call clip; a numpy whose maximum/minimum treat +-0 or NaN
+    # differently from np.clip would change results, and this test would say so
+    from pa10_dnbs.core.dnbs_controller import clip
+    values = np.array([0.0, -0.0, 1e-3, -1e-3, 5e-4, -5e-4, np.nan, np.inf, -np.inf, 2.0, -2.0])
+    for n in (1, 2, 7, 14, 20):
+        for band in (0.0, -0.0, 5e-4, 1.0):
+            x = np.resize(values, n * len(values))
+            hi = np.full(x.size, band)
+            lo = -hi
+            want = np.clip(x, lo, hi)
+            assert clip(x, lo, hi).tobytes() == want.tobytes()
+            out = x.copy()
+            clip(out, lo, hi, out=out)
+            assert out.tobytes() == want.tobytes()

@@ -139,6 +139,14 @@ class DNBSParams:
                           ekf_full_check_every=self.ekf_full_check_every)
 
 
+def clip(x: np.ndarray, low, high, out: np.ndarray | None = None) -> np.ndarray:
+    """``np.clip(x, low, high, out=out)`` in two ufunc calls, without np.clip's Python wrapping (~1.5 us a call).
+
+    The same bits as np.clip, signed zeros and NaN included (test_dnbs_controller pins it against np.clip).
+    """
+    return np.minimum(np.maximum(x, low, out=out), high, out=out)
+
+
 def _per_joint(value, n: int) -> np.ndarray:
     """A number or n values as a float array of shape (n,)."""
     return np.broadcast_to(np.asarray(value, dtype=float), (n,))
@@ -191,7 +199,6 @@ class DNBSControllers:
         self._prod = np.empty((n, width))
         self._eps = np.empty(2 * n)  # the training errors of the alpha rows, then the torque rows
         self._eps1, self._eps2 = self._eps[:n], self._eps[n:]
-        self._two_ones = np.ones(2 * n)
 
         def on(flag, value, neutral):
             return _per_joint(value, n).copy() if flag else np.full(n, neutral)
@@ -199,16 +206,18 @@ class DNBSControllers:
         self._k_a = on(rem.robust_term, rem.alpha_gain_per_s, 0.0)
         self._k_v = 1.0 if rem.robust_term and rem.velocity_feedforward else 0.0
         self._k_u = on(rem.robust_term, rem.torque_gain_nms_per_rad, 0.0)
-        self._d1 = on(rem.dead_zone, rem.dead_zone_rad, 0.0)
-        self._d2 = on(rem.dead_zone, rem.dead_zone_rad_s, 0.0)
+        # the dead zone's bands (d1 of the alpha rows, then d2 of the torque rows) and their negatives
+        self._d = np.concatenate((on(rem.dead_zone, rem.dead_zone_rad, 0.0),
+                                  on(rem.dead_zone, rem.dead_zone_rad_s, 0.0)))
+        self._neg_d = -self._d
         self._sigma = rem.e_modification_sigma if rem.e_modification else 0.0
         self._bound = rem.weight_bound if rem.projection else np.inf
         self._ramp_steps = rem.learning_ramp_s / params.dt_s if rem.learning_ramp and rem.learning_ramp_s > 0 else 0.0
         self._anti_windup = rem.anti_windup
         self._dead_zone = rem.dead_zone
         self._printed = params.e2_sign == "printed"
-        self._A, self._E1 = a.output_scale, a.error_scale
-        self._U, self._E2 = t.output_scale, t.error_scale
+        self._A, self._U = a.output_scale, t.output_scale
+        self._E = np.concatenate((_per_joint(a.error_scale, n), _per_joint(t.error_scale, n)))  # E1 rows, E2 rows
         self._lim = params.torque_limit_nm
         self._neg_lim = -self._lim
         self._z1 = np.empty((n, 2))
@@ -285,20 +294,23 @@ class DNBSControllers:
                 base = self._ones if active is None else active
                 act = np.concatenate((base * (1.0 - (sat & (e1 * u > 0.0))),
                                       base * (1.0 - (sat & (e2_train * u > 0.0)))))
+        eps = self._eps  # both networks' errors in one array: the elementwise steps below are one call each
+        self._eps1[...] = e1
+        self._eps2[...] = e2_train
         if self._dead_zone:
-            e1 = e1 - np.clip(e1, -self._d1, self._d1)
-            e2_train = e2_train - np.clip(e2_train, -self._d2, self._d2)
-        np.divide(e1, self._E1, out=self._eps1)
-        np.divide(e2_train, self._E2, out=self._eps2)
+            eps -= clip(eps, self._neg_d, self._d)
+        np.divide(eps, self._E, out=eps)
         eta = self.ekf.eta
         if self._ramp_steps and self.steps < self._ramp_steps:
             eta = eta * (self.steps / self._ramp_steps)
         self.ekf.update(self._H, self._eps, eta, act)
         if self._sigma:
-            a = self._two_ones if act is None else act
-            self.ekf.w *= (1.0 - np.minimum(1.0, self._sigma * np.abs(self._eps) * a))[:, None]
+            leak = self._sigma * np.abs(eps)
+            if act is not None:
+                leak *= act
+            self.ekf.w *= (1.0 - np.minimum(1.0, leak))[:, None]
         if self._bound != np.inf:
-            np.clip(self.ekf.w, -self._bound, self._bound, out=self.ekf.w)
+            clip(self.ekf.w, -self._bound, self._bound, out=self.ekf.w)
         self.steps += 1
         self._guard()
 

@@ -65,7 +65,8 @@ class HONN:
         self._ext_s = self._ext[:, 1:]
         self._zs = np.empty((n, self.input_scale.size))
         self._gathered = np.empty((n,) + self._factors.shape)
-        self._factor_views = [self._gathered[:, :, d] for d in range(self._factors.shape[1])]  # each (n, L)
+        views = [self._gathered[:, :, d] for d in range(self._factors.shape[1])]  # each (n, L)
+        self._first, self._second, self._more = views[0], (views[1] if len(views) > 1 else None), views[2:]
         self._S = np.empty((n, self.exponents.shape[0]))
 
     @property
@@ -84,19 +85,17 @@ class HONN:
         Written into ``out`` (n, L) when given (any strides, e.g. a block of a wider array), else into this
         network's own buffer, overwritten by the next call: copy it to keep it.
         """
-        if z.ndim != 2 or z.shape[1] != self.input_scale.size:
-            raise ValueError(f"expected inputs of shape (n, {self.input_scale.size}), got {z.shape}")
-        if self._ext.shape[0] != z.shape[0]:
+        if z.shape != self._zs.shape:  # one test on the hot path: a new n re-allocates, a wrong shape raises
+            if z.ndim != 2 or z.shape[1] != self.input_scale.size:
+                raise ValueError(f"expected inputs of shape (n, {self.input_scale.size}), got {z.shape}")
             self._alloc(z.shape[0])
-        ext = self._ext
         np.tanh(np.multiply(z, self._inv_scale, out=self._zs), out=self._ext_s)
-        ext.take(self._factors, axis=1, out=self._gathered, mode="clip")  # indices valid: no buffering
+        self._ext.take(self._factors, axis=1, out=self._gathered, mode="clip")  # indices valid: no buffering
         S = self._S if out is None else out
-        first, *rest = self._factor_views
-        if not rest:
-            S[...] = first
+        if self._second is None:
+            S[...] = self._first
             return S
-        np.multiply(first, rest[0], out=S)
-        for factor in rest[1:]:
+        np.multiply(self._first, self._second, out=S)
+        for factor in self._more:
             np.multiply(S, factor, out=S)
         return S

@@ -33,6 +33,8 @@ class JointLoop:
         self.controller = guarded.controllers
         self.preview_steps = preview_steps
         self._x1, self._x2 = np.zeros(1), np.zeros(1)
+        # one sample, refilled each step (the controllers copy what they keep, as they do with x1 and x2)
+        self._sample = ReferenceSample(np.zeros(1), np.zeros(1), np.zeros(1))
         self._ref_pos: dict[int, float] = {}
         self._ref_vel: dict[int, float] = {}
         self._pending: dict[int, tuple[float, float]] = {}
@@ -90,8 +92,9 @@ class JointLoop:
 
     def _answer(self, step: int, q: float, qd: float, ahead: int) -> float:
         self._x1[0], self._x2[0] = q, qd
-        sample = ReferenceSample(np.array([self._ref_pos[step]]), np.array([self._ref_vel[step]]),
-                                 np.array([self._ref_pos[ahead]]))
+        sample = self._sample
+        sample.position_rad[0], sample.velocity_rad_s[0] = self._ref_pos[step], self._ref_vel[step]
+        sample.position_ahead_rad[0] = self._ref_pos[ahead]
         return float(self.guarded.answer(self._x1, self._x2, sample)[0])
 
     def _drain(self) -> list[tuple[int, float]]:
