@@ -10,6 +10,7 @@ from pathlib import Path
 
 from .config import ConfigError, default_config_path
 from .launch.fault_flags import add_fault_arguments
+from .loop.scheduling import DEFAULT_RT_PRIORITY
 from .bag.bag_reader import BagError
 from .bag.bag_writer import BagExistsError
 from .report.outputs import OutputExistsError
@@ -109,15 +110,14 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--deadline-fraction", type=float, default=0.9, metavar="F",
                     help="realtime: an effort counts when it arrives within this fraction of its tick "
                          "(default 0.9); a missing one is held or zeroed (--on-missing-effort) and counted")
-    la.add_argument("--rt-priority", type=int, default=0, metavar="N",
-                    help="SCHED_FIFO priority 1..99 for the plant and the controllers where the OS allows it "
-                         "(root, CAP_SYS_NICE or ulimit -r); otherwise a message and default scheduling. 0 (default): "
-                         "off. 50 is what ros2_control's controller manager asks for; observers stay outside it "
-                         "and starve when the loop needs the whole machine (docs/timing.md)")
+    la.add_argument("--rt-priority", type=int, default=DEFAULT_RT_PRIORITY, metavar="N",
+                    help=f"SCHED_FIFO priority 1..99 for every node of the graph where the OS allows it (root, "
+                         f"CAP_SYS_NICE or ulimit -r); otherwise one line and the default policy. Default "
+                         f"{DEFAULT_RT_PRIORITY}, as ros2_control's controller manager; 0: off (docs/timing.md)")
     la.add_argument("--sched-batch", action="store_true",
                     help="run every node but the plant under SCHED_BATCH (any user may), so the nodes the "
                          "plant's messages wake do not preempt it while it publishes; opt-in: a small gain "
-                         "within this machine's noise (docs/timing.md)")
+                         "within this machine's noise; a granted --rt-priority replaces it (docs/timing.md)")
     _add_run_args(la, ("dnbs", "pid"), "the joint controllers: dnbs or pid (ctc is centralized: in-process only)")
     la.add_argument("--namespace", default="/pa10", metavar="NS",
                     help="the arm's ROS namespace (default /pa10): every node runs in it, its topics are NS/s1/state, "

@@ -13,11 +13,12 @@ Prints, from --repeat runs of --duration simulated seconds each (default 2 x 10 
 ``--controller pid`` runs the same graph with the PID baseline in the seven controller processes: the
 same wire and plant, a step about a fifth the cost of the DNBS step: the difference is what the DNBS
 arithmetic costs inside a node.
-The machine's load average is printed before and after: the figures mean little on a busy machine.
+Every node runs under SCHED_FIFO 50 where the OS allows it, as ``launch`` does (``--rt-priority 0``: the
+default policy). The machine's load average is printed before and after: the figures mean little on a busy machine.
 Figures only; nothing is asserted.
 
     python scripts/bench_graph.py [--duration 10] [--repeat 2] [--factors 1.0 0.75 0.5 0.35] [--no-lockstep]
-                                  [--controller dnbs|pid]
+                                  [--controller dnbs|pid] [--rt-priority 0]
 """
 from __future__ import annotations
 
@@ -35,6 +36,7 @@ from pa10_dnbs import JOINT_NAMES  # noqa: E402
 from pa10_dnbs.config import default_config_path  # noqa: E402
 from pa10_dnbs.launch.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
 from pa10_dnbs.launch.realtime_advice import ON_TIME_TARGET  # noqa: E402
+from pa10_dnbs.loop.scheduling import DEFAULT_RT_PRIORITY, check_priority, fifo_permitted  # noqa: E402
 
 CPU_LINE = re.compile(r"^CPU (\S+) ([0-9.]+) us per step")
 
@@ -99,14 +101,21 @@ def main() -> int:
                     help="also lockstep with the recorder as the observer (what launch --record runs)")
     ap.add_argument("--reliability", default=None, choices=["reliable", "best_effort"],
                     help="QoS of the per-joint topics (default: the mode's own)")
-    ap.add_argument("--rt-priority", type=int, default=0)
+    ap.add_argument("--rt-priority", type=int, default=DEFAULT_RT_PRIORITY,
+                    help=f"as launch's (default {DEFAULT_RT_PRIORITY} where the OS allows SCHED_FIFO; 0: the default policy)")
     ap.add_argument("--sched-batch", action="store_true",
                     help="every node but the plant under SCHED_BATCH (default: every node at the default policy)")
     ap.add_argument("--controller", default="dnbs", choices=["dnbs", "pid"],
                     help="what the seven controller processes run (default dnbs; pid: the wire's own cost)")
     args = ap.parse_args()
+    check_priority(args.rt_priority)
+    permitted, why = fifo_permitted(args.rt_priority) if args.rt_priority else (False, "")
+    if args.rt_priority and not permitted:
+        print(why, flush=True)
+        args.rt_priority = 0
+    policy = f"SCHED_FIFO {args.rt_priority}" if args.rt_priority else "the default policy"
     print(f"node graph, {args.controller.upper()}, {args.duration:g} s simulated per run, {args.repeat} runs "
-          f"each; load average before: {load()}", flush=True)
+          f"each, every node under {policy}; load average before: {load()}", flush=True)
     cases = (([("lockstep", 1.0)] if not args.no_lockstep else []) + ([("record", 1.0)] if args.record else [])
              + [("realtime", r) for r in args.factors])
     runs: dict[tuple, list] = {c: [] for c in cases}

@@ -1,4 +1,5 @@
-"""SCHED_BATCH for the nodes the plant's messages wake (loop/scheduling.py), and who gets it (node_specs)."""
+"""SCHED_BATCH for the nodes the plant's messages wake, SCHED_FIFO for every node, and the probe (loop/scheduling.py);
+who gets them (node_specs)."""
 import subprocess
 import sys
 from pathlib import Path
@@ -44,3 +45,32 @@ def test_every_node_but_the_plant_is_asked_for_batch(tmp_path):
     assert "recorder" in off
     for name, argv in off.items():
         assert _param(argv, "sched_batch") == (None if name == "plant" else "false"), name
+
+
+def test_every_node_of_the_graph_gets_the_rt_priority(tmp_path):
+    """One scheduling class for the whole graph: with the loop alone under SCHED_FIFO an observer starved."""
+    for record in (None, tmp_path / "bag"):
+        opt = GraphOptions(config_path=Path("config/default.yaml"), live_port=0, rt_priority=50, record_bag=record)
+        cmds = dict(node_commands(opt, tmp_path / "stats.json", tmp_path / "wire.npz"))
+        assert {"plant", "reference", "live_view", "joint_controller_w2"} <= set(cmds)
+        assert ("recorder" if record else "wire_monitor") in cmds
+        for name, argv in cmds.items():
+            assert _param(argv, "rt_priority") == "50", name
+
+
+PROBE = """
+import os, threading
+from pa10_dnbs.loop.scheduling import apply_fifo, fifo_permitted, policy_name
+permitted, why = fifo_permitted(7)
+unchanged = all(policy_name(int(t)) == "SCHED_OTHER" for t in os.listdir("/proc/self/task"))
+applied, _ = apply_fifo(7)
+print(permitted, unchanged, applied, why, sep="|")
+"""
+
+
+def test_the_fifo_probe_answers_what_apply_fifo_then_does_and_changes_no_thread():
+    out = subprocess.run([sys.executable, "-c", PROBE], capture_output=True, text=True, check=True).stdout.strip()
+    permitted, unchanged, applied, why = out.split("|")
+    assert unchanged == "True"        # the probe's own thread gave the policy back and ended
+    assert permitted == applied, why  # root here: both True; an unprivileged user: both False, and why says so
+    assert ("SCHED_FIFO permitted" in why) if permitted == "True" else ("not permitted here" in why)

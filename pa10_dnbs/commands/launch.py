@@ -20,7 +20,7 @@ from ..launch.fault_report import fault_note, fault_report
 from ..launch.graph_run import GraphFailure, GraphOptions, loop_reliability, parse_netns, run_graph
 from ..launch.realtime_advice import ON_TIME_TARGET, realtime_hint
 from ..live.options import check_live_options
-from ..loop.scheduling import check_priority
+from ..loop.scheduling import DEFAULT_RT_PRIORITY, check_priority, fifo_permitted
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..wire.wire_record import load_wire_run
@@ -35,7 +35,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                on_missing_effort: str, record: Path | None = None, fault_args=None, restart: str | None = None,
                netns: list[str] | None = None, init_from: Path | None = None, bag_compression: str = "zstd",
                live_port: int | None = None, live_host: str = "127.0.0.1", live_hz: float = 50.0,
-               real_time_factor: float = 1.0, deadline_fraction: float = 0.9, rt_priority: int = 0,
+               real_time_factor: float = 1.0, deadline_fraction: float = 0.9, rt_priority: int = DEFAULT_RT_PRIORITY,
                sched_batch: bool = False, namespace: str = DEFAULT_NS,
                clock_hz: float = DEFAULT_CLOCK_HZ, figures: bool = True) -> int:
     """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code.
@@ -47,7 +47,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     ``bag_compression``: 'zstd' or 'none' (with ``record``). ``live_port``: serve the live view
     (Foxglove WebSocket) on ``live_host``:``live_port`` (0: a free port), ``live_hz`` frames per second at most.
     ``real_time_factor``, ``deadline_fraction``: realtime pacing (docs/timing.md); ``rt_priority``: SCHED_FIFO
-    priority of plant and controllers (0: off); ``sched_batch``: every node but the plant under SCHED_BATCH.
+    priority of every node where the OS grants it (0: off; refused: one line, and the default policy); ``sched_batch``: every node but the plant under SCHED_BATCH.
     ``reliability`` None: the mode's default QoS.
     ``namespace``: the arm's ROS namespace (every node runs in it; /clock, /tf, /diagnostics stay global).
     ``clock_hz``: /clock rate [Hz of simulated time], > 0 (the reference node is paced by /clock).
@@ -102,6 +102,11 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
             raise ConfigError(f"--init-from: {exc}") from None
         init_from = checkpoint_dir(init_from).resolve()
     check_output_dir(out, force)
+    if rt_priority:
+        permitted, why = fifo_permitted(rt_priority)
+        if not permitted:  # said once here, rather than by each of the ten nodes in its log
+            print(f"launch: {why}", flush=True)
+            rt_priority = 0
     if record is not None:
         record = Path(record).resolve()
         if record == Path(out).resolve() or Path(out).resolve() in record.parents:

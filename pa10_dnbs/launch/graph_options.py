@@ -26,7 +26,7 @@ class GraphOptions:
     reliability: str | None = None   # per-joint state/effort QoS; None: the mode's default (``loop_reliability``)
     real_time_factor: float = 1.0    # realtime: a step of dt_s takes dt_s / real_time_factor of wall time
     deadline_fraction: float = 0.9   # realtime: efforts must arrive within this fraction of the tick
-    rt_priority: int = 0             # SCHED_FIFO priority of plant and controllers (0: off)
+    rt_priority: int = 0             # SCHED_FIFO priority of every node, as granted (0: off; loop/scheduling.py)
     sched_batch: bool = False        # every node but the plant under SCHED_BATCH (loop/scheduling.py)
     effort_timeout_s: float = 1.0
     on_missing_effort: str = "hold"

@@ -2,7 +2,8 @@
 
 Every node runs in the arm's namespace (``-r __ns:=NS``) under its own name (``-r __node:=``), and every
 node but the plant with ``use_sim_time:=true`` (the plant publishes /clock) and ``sched_batch`` as
-``GraphOptions.sched_batch`` says. Never imports rclpy.
+``GraphOptions.sched_batch`` says; every node with ``rt_priority`` = ``GraphOptions.rt_priority`` (one
+scheduling class for the whole graph, loop/scheduling.py). Never imports rclpy.
 """
 from __future__ import annotations
 
@@ -82,8 +83,8 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
     py = [sys.executable, "-m"]
 
     def ros(node: str, params: dict) -> list[str]:
-        return _ros_args(node, {**params, "sched_batch": str(opt.sched_batch).lower(), "use_sim_time": "true"},
-                         opt.namespace)
+        return _ros_args(node, {**params, "sched_batch": str(opt.sched_batch).lower(), "use_sim_time": "true",
+                                "rt_priority": opt.rt_priority}, opt.namespace)
 
     cfg = str(opt.config_path)
     if opt.record_bag is None:

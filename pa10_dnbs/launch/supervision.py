@@ -134,9 +134,9 @@ def watch(procs: list[ManagedProcess], opt: GraphOptions, say, stop: StopRequest
         while not monitor.saw("COMPLETE") and time.monotonic() < end and not stop.signal_name:
             time.sleep(0.05)
         if not monitor.saw("COMPLETE") and not stop.signal_name:
-            hint = (" (--rt-priority asked for SCHED_FIFO for the plant and the controllers: where the OS granted "
-                    "it and they need the whole machine, they starve the observer, which keeps the default "
-                    "policy; try a lower --rtf, or no --rt-priority)" if opt.rt_priority else "")
+            hint = (" (every node ran under SCHED_FIFO (--rt-priority): where the loop needs the whole machine "
+                    "the observer can still fall behind it; try a lower --rtf, or --rt-priority 0)"
+                    if opt.rt_priority else "")
             return (f"the {monitor.name} did not receive the whole run{hint}\n--- last lines of its log ---\n"
                     + monitor.tail())
         return None

@@ -13,21 +13,26 @@ woken by its state no longer interrupts the plant between two of its seven
 state publishes (docs/timing.md, "SCHED_BATCH for everything but the plant":
 why it is opt-in).
 
-``apply_fifo(priority)``: plant and controllers (``--rt-priority``). Needs
-root, CAP_SYS_NICE or an RLIMIT_RTPRIO (``ulimit -r``) at least the
-priority, and a cgroup with real-time runtime; otherwise nothing changes
-and the message says why. A policy a thread gets later replaces this one.
+``apply_fifo(priority)``: SCHED_FIFO, on every node of the graph (``--rt-priority``, by default
+``DEFAULT_RT_PRIORITY`` = 50, what ros2_control's controller manager asks for on its loop thread).
+Needs root, CAP_SYS_NICE or an RLIMIT_RTPRIO (``ulimit -r``) at least the priority, and a cgroup with
+real-time runtime; the launcher asks once (``fifo_permitted``) and, where it is refused, says so and
+runs the graph at the default policy. A policy a thread gets later replaces this one.
+The whole graph shares the class: with the loop (plant, controllers) alone under SCHED_FIFO, an
+observer at the default policy starved whenever the loop needed the whole machine (a recorded lockstep
+run lost most of its bag, 3 of 3 runs; docs/timing.md, "SCHED_FIFO for the whole graph").
 
-Observers (recorder, wire monitor, live view) are never lowered below their
-CPU share: SCHED_IDLE, or nice 10, was tried and taken out: with other work
-on the machine the observers starved, lost the run or hung at teardown, and
-a lockstep run in CI stalled for over a second with them (docs/timing.md).
+Observers (recorder, wire monitor, live view) are never put below the loop: SCHED_IDLE, or nice 10,
+was tried and taken out: with other work on the machine the observers starved, lost the run or hung at
+teardown, and a lockstep run in CI stalled for over a second with them (docs/timing.md).
 """
 from __future__ import annotations
 
 import os
+import threading
 
 MIN_PRIORITY, MAX_PRIORITY = 1, 99
+DEFAULT_RT_PRIORITY = 50  # ros2_control's controller manager's SCHED_FIFO priority (its thread_priority)
 
 
 def check_priority(priority: int) -> None:
@@ -50,6 +55,37 @@ def apply_fifo(priority: int) -> tuple[bool, str]:
                        f"`ulimit -r` >= {priority}, now {limit}, and real-time runtime in the cgroup); "
                        "default scheduling" + (f" (it was set on {done} threads, which keep it)" if done else ""))
     return True, f"rt_priority {priority}: SCHED_FIFO on {done} threads"
+
+
+def fifo_permitted(priority: int) -> tuple[bool, str]:
+    """Whether this process's threads may take SCHED_FIFO at ``priority``: (permitted, what to say).
+
+    Asked on a short-lived thread of its own, which takes the policy and gives it back; no other thread
+    of the process changes. ``priority`` 0: (False, ...) without asking.
+    """
+    check_priority(priority)
+    if priority == 0:
+        return False, "rt_priority 0: default scheduling"
+    if not hasattr(os, "sched_setscheduler"):
+        return False, f"rt_priority {priority}: SCHED_FIFO is not available on this OS; default scheduling"
+    answer: list[BaseException | None] = []
+
+    def ask() -> None:
+        try:
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))  # 0: this thread only (Linux)
+            os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+            answer.append(None)
+        except OSError as exc:
+            answer.append(exc)
+
+    thread = threading.Thread(target=ask, name="fifo_probe")
+    thread.start()
+    thread.join()
+    if answer and answer[0] is None:
+        return True, f"rt_priority {priority}: SCHED_FIFO permitted"
+    return False, (f"rt_priority {priority}: SCHED_FIFO not permitted here (needs root, CAP_SYS_NICE or "
+                   f"`ulimit -r` >= {priority}, now {_rlimit_rtprio()}, and real-time runtime in the cgroup: "
+                   f"{answer[0] if answer else 'no answer'}); default scheduling")
 
 
 def apply_batch() -> tuple[bool, str]:

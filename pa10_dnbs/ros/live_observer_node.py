@@ -31,8 +31,8 @@ from ..live.schemas import live_channels
 from ..live.server import LiveServer, LiveServerError
 from ..live.view import LiveView
 from .diagnostics import diagnostics_qos
-from ..loop.scheduling import apply_batch
-from .params import CONFIG_FILE, SCHED_BATCH, Param, ParameterError, declare, load_node_config
+from ..loop.scheduling import apply_batch, apply_fifo
+from .params import CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, declare, load_node_config
 from .runtime import announce_ready, exit_process, run_node
 from ..wire.topics import DEFAULT_NS, DIAGNOSTICS, ArmTopics
 from .wire import description_qos, reference_qos
@@ -48,6 +48,7 @@ def newest_only_qos() -> QoSProfile:
 PARAMS = {
     "config_file": CONFIG_FILE,
     "sched_batch": SCHED_BATCH,
+    "rt_priority": RT_PRIORITY,
     "host": Param("127.0.0.1", "address the Foxglove WebSocket server listens on"),
     "port": Param(8765, "its TCP port; 0 = any free port", 0, 65535),
     "display_hz": Param(50.0, "frames per second of wall time, at most [Hz], in (0, 1000]", 0.0, 1000.0),
@@ -92,6 +93,8 @@ class LiveObserverNode(Node):
         print(f"LIVE {self.server.url}", flush=True)
         if p["sched_batch"]:
             print(apply_batch()[1], flush=True)
+        if p["rt_priority"]:  # after SCHED_BATCH: a granted priority replaces it
+            print(apply_fifo(p["rt_priority"])[1], flush=True)
         announce_ready("live_view")
 
     def _frame(self) -> None:

@@ -108,3 +108,5 @@ def check_choice(name: str, value, choices) -> None:
 CONFIG_FILE = Param("", "the YAML config (config/default.yaml and its units); '' = the shipped default")
 SCHED_BATCH = Param(False, "SCHED_BATCH on every thread: the node's wake-ups do not preempt the plant (the "
                            "launcher's --sched-batch sets it on every node but the plant); false = the default policy")
+RT_PRIORITY = Param(0, "SCHED_FIFO priority 1..99 on every thread, where the OS allows it (the launcher's "
+                         "--rt-priority); 0 = off", 0, 99)

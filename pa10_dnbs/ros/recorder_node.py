@@ -42,8 +42,8 @@ from ..wire.topics import DEFAULT_NS, ArmTopics, resolve
 from .bag_qos import bag_qos, subscription_qos, to_bag_qos
 from ..loop.cpu_meter import CpuMeter
 from .msg_types import message_class
-from ..loop.scheduling import apply_batch
-from .params import CONFIG_FILE, SCHED_BATCH, Param, ParameterError, check_choice, declare, load_node_config
+from ..loop.scheduling import apply_batch, apply_fifo
+from .params import CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, check_choice, declare, load_node_config
 from .polled import Inbox
 from .runtime import announce_ready, exit_process, run_node, spin_until
 from .wire import CLOCK, TF, TF_STATIC
@@ -74,6 +74,7 @@ PARAMS = {
     "time_source": Param("clock", "log time: clock (latest /clock) or system (wall time)"),
     "config_file": CONFIG_FILE,
     "sched_batch": SCHED_BATCH,
+    "rt_priority": RT_PRIORITY,
     "custom_data": Param([""], "key=value entries for the bag's custom_data"),
     "tf_rate_hz": Param(100.0, "/tf written from joint_states at this rate [Hz of simulated time]; 0 = none", 0.0),
     "end_stamp_ns": Param(-1, "print COMPLETE once every stamped topic reached this stamp [ns]; -1 = never", -1),
@@ -131,6 +132,8 @@ class RecorderNode(Node):
         self._timer = wall_timer(self, 0.2, self._discover)
         if p["sched_batch"]:
             print(apply_batch()[1], flush=True)
+        if p["rt_priority"]:  # after SCHED_BATCH: a granted priority replaces it
+            print(apply_fifo(p["rt_priority"])[1], flush=True)
         announce_ready("recorder")
 
     # ------------------------------------------------------------- discovery

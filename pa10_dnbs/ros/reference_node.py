@@ -26,8 +26,8 @@ from .. import JOINT_NAMES
 from ..controller_factory import build_reference
 from ..wire.trajectory_cdr import encode_one_joint
 from .diagnostics import DiagnosticsReporter, status, status_name
-from ..loop.scheduling import apply_batch
-from .params import CONFIG_FILE, SCHED_BATCH, Param, ParameterError, declare, load_node_config
+from ..loop.scheduling import apply_batch, apply_fifo
+from .params import CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, declare, load_node_config
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
 from .runtime import announce_ready, exit_process, run_node
@@ -41,6 +41,7 @@ CLOCK_DEPTH = 1000  # /clock messages kept between two polls
 PARAMS = {
     "config_file": CONFIG_FILE,
     "sched_batch": SCHED_BATCH,
+    "rt_priority": RT_PRIORITY,
     "batch_steps": Param(100, "reference points per message [steps]", 1),
     "lookahead_steps": Param(150, "steps kept published beyond the latest /clock (> reference.preview_steps)", 1),
     "duration_s": Param(0.0, "the run's simulated time [s]: nothing past its end + lookahead; 0 = open-ended", 0.0),
@@ -78,6 +79,8 @@ class ReferenceNode(Node):
                                                lambda: self.clock_.stamp(max(0, self.clock_step)))
         if p["sched_batch"]:
             print(apply_batch()[1], flush=True)
+        if p["rt_priority"]:  # after SCHED_BATCH: a granted priority replaces it
+            print(apply_fifo(p["rt_priority"])[1], flush=True)
         announce_ready("reference")
 
     def _on_clock(self, data: bytes) -> None:

@@ -23,8 +23,8 @@ from trajectory_msgs.msg import JointTrajectory
 from .. import JOINT_NAMES
 from ..wire.wire_record import WireRecord
 from ..wire import joint_state_cdr, trajectory_cdr
-from ..loop.scheduling import apply_batch
-from .params import CONFIG_FILE, SCHED_BATCH, Param, ParameterError, declare, load_node_config
+from ..loop.scheduling import apply_batch, apply_fifo
+from .params import CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, declare, load_node_config
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
 from .runtime import announce_ready, exit_process, run_node, spin_until
@@ -34,6 +34,7 @@ from .wire import JOINT_STATES, StepClock, record_qos, reference_qos, reference_
 PARAMS = {
     "config_file": CONFIG_FILE,
     "sched_batch": SCHED_BATCH,
+    "rt_priority": RT_PRIORITY,
     "duration_s": Param(0.0, "the run's simulated time [s]; 0 = simulation.duration_s of the config", 0.0),
     "out_file": Param("", "the record written at exit [.npz] (required)"),
     "poll_period_s": Param(0.01, "wall time between two drains of the subscriptions [s]", 0.0),
@@ -64,6 +65,8 @@ class WireMonitorNode(Node):
         self._last_step = -1
         if p["sched_batch"]:
             print(apply_batch()[1], flush=True)
+        if p["rt_priority"]:  # after SCHED_BATCH: a granted priority replaces it
+            print(apply_fifo(p["rt_priority"])[1], flush=True)
         announce_ready("wire_monitor")
 
     def _on_joint_states(self, data: bytes) -> None:
