@@ -13,6 +13,7 @@ import pytest
 from graph_harness import Launcher, exit_codes
 from pa10_dnbs import JOINT_NAMES
 from pa10_dnbs.launch.realtime_advice import ON_TIME_TARGET
+from pa10_dnbs.loop.scheduling import DEFAULT_RT_PRIORITY, fifo_permitted
 from pa10_dnbs.run_data import RunData
 
 pytestmark = pytest.mark.graph  # starts ROS processes
@@ -37,11 +38,14 @@ def _realtime(tmp_path, domain, *args, name="rt"):
     # and advises a lower factor exactly when the run fell short of the sustainable fraction
     hint = f"realtime --rtf {stats['target_real_time_factor']:g}: below 99 % on time"
     assert (hint in la.output) == (stats["on_time_fraction"] < ON_TIME_TARGET)
-    # the nodes ran with the policy asked for (--sched-batch: every node but the plant under SCHED_BATCH, no
-    # privilege needed; else the default): the controllers say so at exit
+    # the nodes ran with the policy asked for: SCHED_FIFO 50 by default wherever the OS grants it (it replaces
+    # --sched-batch); else --sched-batch's SCHED_BATCH for every node but the plant (no privilege needed), else
+    # the default policy. The controllers say so at exit.
     timing = json.loads((out / "metrics.json").read_text())["timing"]
-    policy = "SCHED_BATCH" if "--sched-batch" in args else "SCHED_OTHER"
-    assert timing["sched_batch"] is (policy == "SCHED_BATCH") and timing["controller_sched_policies"] == [policy], \
+    fifo = "--rt-priority" not in args and fifo_permitted(DEFAULT_RT_PRIORITY)[0]
+    policy = "SCHED_FIFO" if fifo else "SCHED_BATCH" if "--sched-batch" in args else "SCHED_OTHER"
+    assert timing["rt_priority_applied"] is fifo and timing["rt_priority"] == (DEFAULT_RT_PRIORITY if fifo else 0)
+    assert timing["sched_batch"] is ("--sched-batch" in args) and timing["controller_sched_policies"] == [policy], \
         timing
     return out, stats
 
@@ -49,7 +53,8 @@ def _realtime(tmp_path, domain, *args, name="rt"):
 def test_realtime_without_misses_equals_lockstep_bit_for_bit(lockstep_run, tmp_path, domain):
     # --effort-timeout bounds only the start-up handshake in realtime (ticks never wait past their deadline):
     # generous, so that first answers slowed by a loaded machine are not misses at step 0
-    # --sched-batch: the opt-in policy, end to end (a realtime run without misses is lockstep bit for bit)
+    # the launcher's default policy (SCHED_FIFO where allowed) with --sched-batch, which SCHED_FIFO replaces where
+    # it is granted and which is the policy end to end where it is not: a run without misses is lockstep bit for bit
     out, stats = _realtime(tmp_path, domain, "--rtf", RTF, "--effort-timeout", 10, "--sched-batch")
     n = int(round(DURATION_S * 1000))
     assert stats["steps"] == n and stats["completed"] and stats["target_real_time_factor"] == RTF
