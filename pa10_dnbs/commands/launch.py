@@ -47,7 +47,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     ``bag_compression``: 'zstd' or 'none' (with ``record``). ``live_port``: serve the live view
     (Foxglove WebSocket) on ``live_host``:``live_port`` (0: a free port), ``live_hz`` frames per second at most.
     ``real_time_factor``, ``deadline_fraction``: realtime pacing (docs/timing.md); ``rt_priority``: SCHED_FIFO
-    priority of every node where the OS grants it (0: off; refused: one line, and the default policy); ``sched_batch``: every node but the plant under SCHED_BATCH.
+    priority of every node where the OS grants it (0: off; refused: one line, and the default policy);
+    ``sched_batch``: every node but the plant under SCHED_BATCH.
     ``reliability`` None: the mode's default QoS.
     ``namespace``: the arm's ROS namespace (every node runs in it; /clock, /tf, /diagnostics stay global).
     ``clock_hz``: /clock rate [Hz of simulated time], > 0 (the reference node is paced by /clock).

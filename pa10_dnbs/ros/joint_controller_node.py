@@ -53,8 +53,8 @@ from ..loop.cpu_meter import CpuMeter
 from ..loop.endpoint_match import MatchWait, Need
 from ..loop.joint_loop import JointLoop
 from ..loop.scheduling import apply_batch, apply_fifo, check_priority, policy_name
-from .params import (CONFIG_FILE, SCHED_BATCH, Param, ParameterError, check_choice, cli_parameter, declare,
-                     load_node_config)
+from .params import (CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, check_choice, cli_parameter,
+                     declare, load_node_config)
 from .runtime import announce_ready, exit_process, run_node
 from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
 from .wall_timer import wall_timer
@@ -76,7 +76,7 @@ PARAMS = {
     "effort_subscribers": Param(1, "subscriptions (plant and recorders) to wait for before answering", 1),
     "match_timeout_s": Param(10.0, "wall time after which answers go out without them [s]", 0.0),
     "init_file": Param("", "warm start: DNBS checkpoint of an earlier run [.npz]; '' = cold start"),
-    "rt_priority": Param(0, "SCHED_FIFO priority 1..99 where allowed; 0 = off", 0, 99),
+    "rt_priority": RT_PRIORITY,
     "sched_batch": SCHED_BATCH,
 }
 

@@ -43,7 +43,7 @@ from ..loop.scheduling import apply_fifo, check_priority
 from ..plant.from_config import open_client, plant_from_config
 from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, check_clock_hz
 from .diagnostics import DiagnosticsReporter
-from .params import CONFIG_FILE, Param, ParameterError, check_choice, declare, load_node_config
+from .params import CONFIG_FILE, RT_PRIORITY, Param, ParameterError, check_choice, declare, load_node_config
 from .plant_lockstep import run_lockstep
 from .plant_realtime import run_realtime
 from .plant_stats import diagnostics_report, plant_stats
@@ -73,7 +73,7 @@ PARAMS = {
     "deadline_fraction": Param(0.9, "realtime: efforts count within this fraction of the tick, in (0, 1]", 0.0, 1.0),
     "late_tolerance": Param(0.1, "realtime: a tick starting later than this fraction of a tick is late, in [0, 1)",
                             0.0, 1.0),
-    "rt_priority": Param(0, "SCHED_FIFO priority 1..99 where allowed; 0 = off", 0, 99),
+    "rt_priority": RT_PRIORITY,
     "warn_period_s": Param(1.0, "wall time between two warnings of the same kind [s]", 0.0),
     "handshake_steps": Param(3, "realtime: first steps that wait for every effort before the tick schedule starts [steps]", 1),
 }
