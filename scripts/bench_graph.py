@@ -102,7 +102,8 @@ def main() -> int:
     ap.add_argument("--reliability", default=None, choices=["reliable", "best_effort"],
                     help="QoS of the per-joint topics (default: the mode's own)")
     ap.add_argument("--rt-priority", type=int, default=DEFAULT_RT_PRIORITY,
-                    help=f"as launch's (default {DEFAULT_RT_PRIORITY} where the OS allows SCHED_FIFO; 0: the default policy)")
+                    help=f"as launch's (default {DEFAULT_RT_PRIORITY} where the OS allows SCHED_FIFO; "
+                         "0: the default policy)")
     ap.add_argument("--sched-batch", action="store_true",
                     help="every node but the plant under SCHED_BATCH (default: every node at the default policy)")
     ap.add_argument("--controller", default="dnbs", choices=["dnbs", "pid"],

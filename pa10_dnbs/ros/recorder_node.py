@@ -43,7 +43,8 @@ from .bag_qos import bag_qos, subscription_qos, to_bag_qos
 from ..loop.cpu_meter import CpuMeter
 from .msg_types import message_class
 from ..loop.scheduling import apply_batch, apply_fifo
-from .params import CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, check_choice, declare, load_node_config
+from .params import (CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, check_choice, declare,
+                     load_node_config)
 from .polled import Inbox
 from .runtime import announce_ready, exit_process, run_node, spin_until
 from .wire import CLOCK, TF, TF_STATIC
