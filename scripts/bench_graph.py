@@ -36,7 +36,7 @@ from pa10_dnbs import JOINT_NAMES  # noqa: E402
 from pa10_dnbs.config import default_config_path  # noqa: E402
 from pa10_dnbs.launch.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
 from pa10_dnbs.launch.realtime_advice import ON_TIME_TARGET  # noqa: E402
-from pa10_dnbs.loop.scheduling import DEFAULT_RT_PRIORITY, check_priority, fifo_permitted  # noqa: E402
+from pa10_dnbs.loop.scheduling import DEFAULT_RT_PRIORITY, check_priority, granted_priority  # noqa: E402
 
 CPU_LINE = re.compile(r"^CPU (\S+) ([0-9.]+) us per step")
 
@@ -110,10 +110,9 @@ def main() -> int:
                     help="what the seven controller processes run (default dnbs; pid: the wire's own cost)")
     args = ap.parse_args()
     check_priority(args.rt_priority)
-    permitted, why = fifo_permitted(args.rt_priority) if args.rt_priority else (False, "")
-    if args.rt_priority and not permitted:
-        print(why, flush=True)
-        args.rt_priority = 0
+    args.rt_priority, refused = granted_priority(args.rt_priority)
+    if refused:
+        print(refused, flush=True)
     policy = f"SCHED_FIFO {args.rt_priority}" if args.rt_priority else "the default policy"
     print(f"node graph, {args.controller.upper()}, {args.duration:g} s simulated per run, {args.repeat} runs "
           f"each, every node under {policy}; load average before: {load()}", flush=True)

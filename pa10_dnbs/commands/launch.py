@@ -20,7 +20,7 @@ from ..launch.fault_report import fault_note, fault_report
 from ..launch.graph_run import GraphFailure, GraphOptions, loop_reliability, parse_netns, run_graph
 from ..launch.realtime_advice import ON_TIME_TARGET, realtime_hint
 from ..live.options import check_live_options
-from ..loop.scheduling import DEFAULT_RT_PRIORITY, check_priority, fifo_permitted
+from ..loop.scheduling import DEFAULT_RT_PRIORITY, check_priority, granted_priority
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..wire.wire_record import load_wire_run
@@ -103,11 +103,9 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
             raise ConfigError(f"--init-from: {exc}") from None
         init_from = checkpoint_dir(init_from).resolve()
     check_output_dir(out, force)
-    if rt_priority:
-        permitted, why = fifo_permitted(rt_priority)
-        if not permitted:  # said once here, rather than by each of the ten nodes in its log
-            print(f"launch: {why}", flush=True)
-            rt_priority = 0
+    rt_priority, refused = granted_priority(rt_priority)
+    if refused:  # said once here, rather than by each of the ten nodes in its log
+        print(f"launch: {refused}", flush=True)
     if record is not None:
         record = Path(record).resolve()
         if record == Path(out).resolve() or Path(out).resolve() in record.parents:

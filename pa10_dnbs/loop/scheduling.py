@@ -16,7 +16,7 @@ why it is opt-in).
 ``apply_fifo(priority)``: SCHED_FIFO, on every node of the graph (``--rt-priority``, by default
 ``DEFAULT_RT_PRIORITY`` = 50, what ros2_control's controller manager asks for on its loop thread).
 Needs root, CAP_SYS_NICE or an RLIMIT_RTPRIO (``ulimit -r``) at least the priority, and a cgroup with
-real-time runtime; the launcher asks once (``fifo_permitted``) and, where it is refused, says so and
+real-time runtime; the launcher asks once (``granted_priority``) and, where it is refused, says so and
 runs the graph at the default policy. A policy a thread gets later replaces this one.
 The whole graph shares the class: with the loop (plant, controllers) alone under SCHED_FIFO, an
 observer at the default policy starved whenever the loop needed the whole machine (a recorded lockstep
@@ -87,6 +87,15 @@ def fifo_permitted(priority: int) -> tuple[bool, str]:
     return False, (f"rt_priority {priority}: SCHED_FIFO not permitted here (needs root, CAP_SYS_NICE or "
                    f"`ulimit -r` >= {priority}, now {_rlimit_rtprio()}, and real-time runtime in the cgroup: "
                    f"{answer[0] if answer else 'no answer'}); default scheduling")
+
+
+def granted_priority(priority: int) -> tuple[int, str | None]:
+    """The priority the graph's nodes get: ``priority`` where the OS allows SCHED_FIFO at it, else 0 and the
+    line that says why (None when there is nothing to say)."""
+    if priority == 0:
+        return 0, None
+    permitted, why = fifo_permitted(priority)
+    return (priority, None) if permitted else (0, why)
 
 
 def apply_batch() -> tuple[bool, str]:
