@@ -25,6 +25,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from pa10_dnbs import JOINT_NAMES  # noqa: E402
 from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
 from pa10_dnbs.controller_factory import build_guarded_controllers, build_reference  # noqa: E402
 from pa10_dnbs.core.reference import ReferenceSample  # noqa: E402
@@ -80,7 +81,7 @@ def _dnbs_pass(cfg, run, rows):
 
 def _pid_pass(cfg, run) -> float:
     guarded = build_guarded_controllers(cfg, "pid")
-    refs = _references(cfg, run.n_steps, list(range(7)))
+    refs = _references(cfg, run.n_steps, list(range(len(JOINT_NAMES))))
     t = time.perf_counter()
     for k in range(run.n_steps):
         guarded.step(run.position_rad[k], run.velocity_rad_s[k], refs[k])
@@ -116,19 +117,22 @@ def main() -> int:
     plant = min(us(_plant_pass(cfg, run)) for _ in range(args.repeat))
     pid = min(us(_pid_pass(cfg, run)) for _ in range(args.repeat))
     banks = {}
-    for label, rows in (("bank of 7", list(range(7))), ("bank of 1 (s1)", [0]), ("bank of 1 (w2)", [6])):
+    nj = len(JOINT_NAMES)
+    one_rows = (0, nj - 1)  # the first and the last joint, each alone as in its node
+    for label, rows in ((f"bank of {nj}", list(range(nj))),
+                        *((f"bank of 1 ({JOINT_NAMES[j]})", [j]) for j in one_rows)):
         passes = [_dnbs_pass(cfg, run, rows)[0] for _ in range(args.repeat)]
         best = min(passes, key=lambda p: p["step"])
         banks[label] = {k: us(v) for k, v in best.items()}
     print(f"  plant (PyBullet step, state, torques)   {plant:6.1f} us")
     print(f"  PID bank of 7, guarded                  {pid:6.1f} us")
-    parts = list(banks["bank of 7"])
+    parts = list(banks[f"bank of {nj}"])
     print("  DNBS, guarded" + "".join(f"{label:>17s}" for label in banks))
     for part in parts:
         print(f"    {part:35s}" + "".join(f"{banks[label][part]:14.1f} us" for label in banks))
-    dnbs7, one = banks["bank of 7"]["step"], banks["bank of 1 (s1)"]["step"]
+    dnbs7, one = banks[f"bank of {nj}"]["step"], banks[f"bank of 1 ({JOINT_NAMES[0]})"]["step"]
     pid_run, dnbs_run = plant + pid, plant + dnbs7
-    fixed, per_joint = (7 * one - dnbs7) / 6, (dnbs7 - one) / 6  # step(n) = fixed + n per_joint
+    fixed, per_joint = (nj * one - dnbs7) / (nj - 1), (dnbs7 - one) / (nj - 1)  # step(n) = fixed + n per_joint
     print(f"  step(n) = {fixed:.1f} us + n x {per_joint:.1f} us: {fixed / dnbs7:.0%} of the bank of seven's step "
           f"does not depend on the number of joints (the cost of each numpy call)")
     print(f"run ratio from these parts: DNBS/PID = ({plant:.1f} + {dnbs7:.1f}) / ({plant:.1f} + {pid:.1f}) "
