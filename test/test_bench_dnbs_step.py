@@ -1,19 +1,8 @@
 """scripts/bench_dnbs_step.py: its timing wrappers change nothing the controller computes, and its parts add up."""
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
-
-SCRIPT = Path(__file__).resolve().parent.parent / "scripts" / "bench_dnbs_step.py"
-
-
-def _load():
-    spec = importlib.util.spec_from_file_location("bench_dnbs_step", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+from script_module import load_script
 
 
 def test_timed_pass_trains_the_bank_as_a_plain_pass_and_its_parts_add_up():
@@ -21,7 +10,7 @@ def test_timed_pass_trains_the_bank_as_a_plain_pass_and_its_parts_add_up():
     from pa10_dnbs.controller_factory import build_guarded_controllers
     from pa10_dnbs.sim.closed_loop import simulate
 
-    bench = _load()
+    bench = load_script("bench_dnbs_step")
     cfg = load_config(default_config_path())
     run = simulate(cfg, "dnbs", 0.3)
     rows = [0, 3, 6]

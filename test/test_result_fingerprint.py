@@ -2,22 +2,11 @@
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
-from pathlib import Path
 
 import numpy as np
+from script_module import load_script
 
-SCRIPT = Path(__file__).resolve().parent.parent / "scripts" / "result_fingerprint.py"
-
-
-def _load():
-    spec = importlib.util.spec_from_file_location("result_fingerprint", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-fp = _load()
+fp = load_script("result_fingerprint")
 
 
 def test_digest_sees_one_ulp_the_order_and_the_shape():
