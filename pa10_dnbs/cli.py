@@ -8,6 +8,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from .accel.build import KernelBuildError
 from .config import ConfigError, default_config_path
 from .launch.fault_flags import add_fault_arguments
 from .loop.scheduling import DEFAULT_RT_PRIORITY
@@ -203,7 +204,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except (ConfigError, OutputExistsError, BagExistsError, BagError) as exc:
+    except (ConfigError, KernelBuildError, OutputExistsError, BagExistsError, BagError) as exc:
         print(f"pa10-dnbs: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:

@@ -9,10 +9,11 @@ controller banks and times, per 1 ms step (best of ``--repeat`` passes over the 
   the training (remedies, bookkeeping);
 then the run-level ratio DNBS/PID these give, and the DNBS step a given ratio would allow. From the banks
 of one and seven, step(n) = fixed + n x per_joint: the fixed part is the cost of the step's sequence of
-small numpy calls, which does not depend on the number of joints; it sets the floor of the ratio.
+small numpy calls, which does not depend on the number of joints; it sets the floor of the ratio. The same
+for the compiled kernel (``dnbs.kernel: c``), whose training is one call: answer and training only.
 Figures only; asserts nothing (shared, noisy machines: the load average is printed).
 
-    python scripts/bench_dnbs_step.py [--duration 5] [--repeat 5] [--target 1.5]
+    python scripts/bench_dnbs_step.py [--duration 5] [--repeat 5] [--target 1.5] [--kernels numpy,c]
 """
 from __future__ import annotations
 
@@ -58,12 +59,16 @@ def _references(cfg, n: int, rows):
     return [ReferenceSample(p, v, a, None) for p, v, a in zip(*cols)]
 
 
-def _dnbs_pass(cfg, run, rows):
-    """One pass of a fresh DNBS bank of joints ``rows`` over the run's states: (seconds per part, the bank)."""
+def _dnbs_pass(cfg, run, rows, kernel: str = "numpy"):
+    """One pass of a fresh DNBS bank of joints ``rows`` over the run's states: (seconds per part, the bank).
+
+    kernel "c" (the compiled step, one call for the whole training): only the answer and the training."""
+    cfg = {**cfg, "dnbs": {**cfg["dnbs"], "kernel": kernel}}
     guarded = build_guarded_controllers(cfg, "dnbs", rows)
     c = guarded.controllers
     ekf_update, ekf_guard = _Timed(c.ekf.update), _Timed(c._guard)
-    c.ekf.update, c._guard = ekf_update, ekf_guard  # instance attributes: the controller calls these
+    if kernel == "numpy":
+        c.ekf.update, c._guard = ekf_update, ekf_guard  # instance attributes: the controller calls these
     q, qd = run.position_rad[:, rows], run.velocity_rad_s[:, rows]
     refs = _references(cfg, run.n_steps, rows)
     answer = learn = 0.0
@@ -75,6 +80,8 @@ def _dnbs_pass(cfg, run, rows):
         t2 = time.perf_counter()
         answer += t1 - t0
         learn += t2 - t1
+    if kernel != "numpy":
+        return {"answer": answer, "training": learn, "step": answer + learn}, c
     return {"answer": answer, "ekf update": ekf_update.total, "ekf guard": ekf_guard.total,
             "rest of training": learn - ekf_update.total - ekf_guard.total, "step": answer + learn}, c
 
@@ -107,6 +114,7 @@ def main() -> int:
     ap.add_argument("--duration", type=float, default=5.0, help="simulated seconds of the replayed run")
     ap.add_argument("--repeat", type=int, default=5, help="passes per part; the best is printed")
     ap.add_argument("--target", type=float, default=1.5, help="a DNBS/PID run ratio to show the budget of")
+    ap.add_argument("--kernels", default="numpy,c", help="DNBS kernels to time (numpy: parts of the step; c: compiled)")
     args = ap.parse_args()
     cfg = load_config(default_config_path())
     run = simulate(cfg, "dnbs", args.duration)
@@ -116,32 +124,40 @@ def main() -> int:
     us = lambda s: s / n * 1e6  # noqa: E731
     plant = min(us(_plant_pass(cfg, run)) for _ in range(args.repeat))
     pid = min(us(_pid_pass(cfg, run)) for _ in range(args.repeat))
-    banks = {}
     nj = len(JOINT_NAMES)
     one_rows = (0, nj - 1)  # the first and the last joint, each alone as in its node
-    for label, rows in ((f"bank of {nj}", list(range(nj))),
-                        *((f"bank of 1 ({JOINT_NAMES[j]})", [j]) for j in one_rows)):
-        passes = [_dnbs_pass(cfg, run, rows)[0] for _ in range(args.repeat)]
-        best = min(passes, key=lambda p: p["step"])
-        banks[label] = {k: us(v) for k, v in best.items()}
     print(f"  plant (PyBullet step, state, torques)   {plant:6.1f} us")
     print(f"  PID bank of 7, guarded                  {pid:6.1f} us")
-    parts = list(banks[f"bank of {nj}"])
-    print("  DNBS, guarded" + "".join(f"{label:>17s}" for label in banks))
-    for part in parts:
-        print(f"    {part:35s}" + "".join(f"{banks[label][part]:14.1f} us" for label in banks))
-    dnbs7, one = banks[f"bank of {nj}"]["step"], banks[f"bank of 1 ({JOINT_NAMES[0]})"]["step"]
+    steps = {}
+    for kernel in args.kernels.split(","):
+        banks = {}
+        for label, rows in ((f"bank of {nj}", list(range(nj))),
+                            *((f"bank of 1 ({JOINT_NAMES[j]})", [j]) for j in one_rows)):
+            passes = [_dnbs_pass(cfg, run, rows, kernel)[0] for _ in range(args.repeat)]
+            best = min(passes, key=lambda p: p["step"])
+            banks[label] = {k: us(v) for k, v in best.items()}
+        print(f"  DNBS ({kernel}), guarded".ljust(39) + "".join(f"{label:>17s}" for label in banks))
+        for part in banks[f"bank of {nj}"]:
+            print(f"    {part:35s}" + "".join(f"{banks[label][part]:14.1f} us" for label in banks))
+        steps[kernel] = banks[f"bank of {nj}"]["step"], banks[f"bank of 1 ({JOINT_NAMES[0]})"]["step"]
+    for kernel, (dnbs7, one) in steps.items():
+        _ratios(kernel, plant, pid, dnbs7, one, nj, args.target)
+    print(f"load average at the end {_load()}")
+    return 0
+
+
+def _ratios(kernel: str, plant: float, pid: float, dnbs7: float, one: float, nj: int, target: float) -> None:
+    """The run-level ratio one kernel's parts give, its fixed and per-joint cost, and a target's budget."""
+    print(f"{kernel}:")
     pid_run, dnbs_run = plant + pid, plant + dnbs7
     fixed, per_joint = (nj * one - dnbs7) / (nj - 1), (dnbs7 - one) / (nj - 1)  # step(n) = fixed + n per_joint
     print(f"  step(n) = {fixed:.1f} us + n x {per_joint:.1f} us: {fixed / dnbs7:.0%} of the bank of seven's step "
-          f"does not depend on the number of joints (the cost of each numpy call)")
-    print(f"run ratio from these parts: DNBS/PID = ({plant:.1f} + {dnbs7:.1f}) / ({plant:.1f} + {pid:.1f}) "
+          f"does not depend on the number of joints (the cost of each call)")
+    print(f"  run ratio from these parts: DNBS/PID = ({plant:.1f} + {dnbs7:.1f}) / ({plant:.1f} + {pid:.1f}) "
           f"= {dnbs_run / pid_run:.2f}")
-    budget = args.target * pid_run - plant
-    print(f"a ratio of {args.target:g} leaves the DNBS bank of seven {budget:.1f} us per step: "
-          f"{budget / dnbs7:.0%} of today's step, {budget / fixed:.0%} of its fixed part")
-    print(f"load average at the end {_load()}")
-    return 0
+    budget = target * pid_run - plant
+    print(f"  a ratio of {target:g} leaves the DNBS bank of seven {budget:.1f} us per step: "
+          f"{budget / dnbs7:.0%} of this step, {budget / fixed:.0%} of its fixed part")
 
 
 if __name__ == "__main__":

@@ -18,7 +18,7 @@ default policy). The machine's load average is printed before and after: the fig
 Figures only; nothing is asserted.
 
     python scripts/bench_graph.py [--duration 10] [--repeat 2] [--factors 1.0 0.75 0.5 0.35] [--no-lockstep]
-                                  [--controller dnbs|pid] [--rt-priority 0]
+                                  [--controller dnbs|pid] [--rt-priority 0] [--config config/compiled.yaml]
 """
 from __future__ import annotations
 
@@ -33,7 +33,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from pa10_dnbs import JOINT_NAMES  # noqa: E402
-from pa10_dnbs.config import default_config_path  # noqa: E402
+from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
 from pa10_dnbs.launch.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
 from pa10_dnbs.launch.realtime_advice import ON_TIME_TARGET  # noqa: E402
 from pa10_dnbs.loop.scheduling import DEFAULT_RT_PRIORITY, check_priority, granted_priority  # noqa: E402
@@ -63,7 +63,7 @@ def one_run(mode: str, factor: float, args, attempts: int = 3) -> tuple[dict | N
 
 def _run(mode: str, factor: float, args) -> tuple[dict, dict[str, float]]:
     with tempfile.TemporaryDirectory(prefix="pa10_bench_") as tmp:
-        opt = GraphOptions(config_path=default_config_path(), mode="lockstep" if mode == "record" else mode,
+        opt = GraphOptions(config_path=args.config, mode="lockstep" if mode == "record" else mode,
                            controller=args.controller, duration_s=args.duration, reliability=args.reliability,
                            real_time_factor=factor, rt_priority=args.rt_priority,
                            sched_batch=args.sched_batch,
@@ -108,14 +108,19 @@ def main() -> int:
                     help="every node but the plant under SCHED_BATCH (default: every node at the default policy)")
     ap.add_argument("--controller", default="dnbs", choices=["dnbs", "pid"],
                     help="what the seven controller processes run (default dnbs; pid: the wire's own cost)")
+    ap.add_argument("--config", type=Path, default=default_config_path(),
+                    help="YAML config of the runs (default config/default.yaml; config/compiled.yaml: the DNBS step "
+                         "on the compiled kernel)")
     args = ap.parse_args()
+    args.config = args.config.resolve()
+    load_config(args.config)  # a bad config fails here, with the key named, not in every run
     check_priority(args.rt_priority)
     args.rt_priority, refused = granted_priority(args.rt_priority)
     if refused:
         print(refused, flush=True)
     policy = f"SCHED_FIFO {args.rt_priority}" if args.rt_priority else "the default policy"
-    print(f"node graph, {args.controller.upper()}, {args.duration:g} s simulated per run, {args.repeat} runs "
-          f"each, every node under {policy}; load average before: {load()}", flush=True)
+    print(f"node graph, {args.controller.upper()} ({args.config.name}), {args.duration:g} s simulated per run, "
+          f"{args.repeat} runs each, every node under {policy}; load average before: {load()}", flush=True)
     cases = (([("lockstep", 1.0)] if not args.no_lockstep else []) + ([("record", 1.0)] if args.record else [])
              + [("realtime", r) for r in args.factors])
     runs: dict[tuple, list] = {c: [] for c in cases}

@@ -1,24 +1,29 @@
 #!/usr/bin/env python3
 """Benchmark: the in-process closed loop (DNBS and PID, 20 s): speed, and the DNBS targets.
 
-Prints, from --repeat interleaved runs of each controller:
+Prints, from --repeat interleaved runs of each controller (DNBS once per kernel of ``--kernels``: numpy,
+the reference, and c, the same step compiled; ``dnbs.kernel`` in config/default.yaml):
 - the loop's wall time per 1 ms step (plant + 7 controllers, behind their state guards) and the real-time
   factor, best and median;
-- the DNBS run's cost relative to the PID run (ratio of the medians, and of the best runs);
+- each DNBS run's cost relative to the PID run (ratio of the medians, and of the best runs), and whether
+  the kernels' runs were bit-identical;
 - the DNBS figures of the default config against the controller's must and aim targets (docs/controller.md):
   settling into the 1e-2 rad band, max |e|, torque variation, steps at the limit after 0.2 s, RMS [10, 20) s.
 Figures only; asserts nothing (the machines are shared and noisy: the load average is printed).
 
-    python scripts/bench_sim.py [--duration 20] [--repeat 5]
+    python scripts/bench_sim.py [--duration 20] [--repeat 5] [--kernels numpy,c]
 """
 from __future__ import annotations
 
 import argparse
+import copy
 import statistics
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+import numpy as np  # noqa: E402
 
 from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
 from pa10_dnbs.report.metrics_file import metrics_dict, metrics_settings  # noqa: E402
@@ -38,24 +43,37 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=20.0, help="simulated seconds")
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--kernels", default="numpy,c", help="comma-separated DNBS kernels to run: numpy, c")
     args = ap.parse_args()
     cfg = load_config(default_config_path())
+    kernels = [k.strip() for k in args.kernels.split(",") if k.strip()]
     print(f"in-process closed loop, {args.duration:g} s simulated, T = {cfg['simulation']['dt_s'] * 1e3:g} ms, "
           f"{args.repeat} interleaved runs per controller; load average {_load()}")
-    per_step = {"dnbs": [], "pid": []}
+    runs = {f"dnbs/{k}": ("dnbs", k) for k in kernels} | {"pid": ("pid", None)}
+    per_step = {label: [] for label in runs}
     last = {}
     for _ in range(args.repeat):
-        for kind in per_step:
-            run = simulate(cfg, kind, args.duration)
-            per_step[kind].append(run.wall_time_s / run.n_steps * 1e6)
-            last[kind] = run
-    for kind, us in per_step.items():
-        print(f"{kind:5s} {min(us):6.1f} us per step best, {statistics.median(us):6.1f} median "
+        for label, (kind, kernel) in runs.items():
+            run_cfg = copy.deepcopy(cfg)
+            if kernel:
+                run_cfg["dnbs"]["kernel"] = kernel
+            run = simulate(run_cfg, kind, args.duration)
+            per_step[label].append(run.wall_time_s / run.n_steps * 1e6)
+            last[label] = run
+    for label, us in per_step.items():
+        print(f"{label:10s} {min(us):6.1f} us per step best, {statistics.median(us):6.1f} median "
               f"(real-time factor {1e3 / min(us):.1f}x best, {1e3 / statistics.median(us):.1f}x median)")
-    d, p = per_step["dnbs"], per_step["pid"]
-    print(f"DNBS run / PID run: {statistics.median(d) / statistics.median(p):.2f} (medians), "
-          f"{min(d) / min(p):.2f} (best runs)")
-    m = metrics_dict(last["dnbs"], metrics_settings(cfg, args.duration))
+    p = per_step["pid"]
+    for k in kernels:
+        d = per_step[f"dnbs/{k}"]
+        print(f"DNBS run ({k}) / PID run: {statistics.median(d) / statistics.median(p):.2f} (medians), "
+              f"{min(d) / min(p):.2f} (best runs)")
+    if len(kernels) > 1:
+        a, *others = (last[f"dnbs/{k}"] for k in kernels)
+        same = all(np.array_equal(getattr(a, f), getattr(b, f)) for b in others
+                   for f in ("position_rad", "velocity_rad_s", "torque_nm"))
+        print(f"the kernels' last runs are bit-identical (positions, velocities, torques): {'yes' if same else 'NO'}")
+    m = metrics_dict(last[f"dnbs/{kernels[0]}"], metrics_settings(cfg, args.duration))
     print("DNBS, default config, cold start (worst joint):")
     for key, must, aim in TARGETS:
         v = m[key]

@@ -15,6 +15,9 @@ fingerprint differs from the file's. Typical use around a change that must not m
     .venv/bin/python scripts/result_fingerprint.py --save /tmp/before.json     # on the old commit
     .venv/bin/python scripts/result_fingerprint.py --compare /tmp/before.json  # on the new one
 
+``--kernel c`` runs every scenario on the compiled DNBS step (``dnbs.kernel: c``): compared with the
+numpy fingerprints, it shows that the kernel gives the reference's bits.
+
 Fingerprints depend on numpy's build and the CPU's SIMD paths (tanh): compare on one machine.
 """
 from __future__ import annotations
@@ -59,15 +62,21 @@ def run_arrays(run) -> list[np.ndarray]:
     return [v for _, v in sorted(vars(run).items()) if isinstance(v, np.ndarray) and v.dtype.kind == "f"]
 
 
-def closed_loop(config: Path, duration_s: float, disturbances: Disturbances | None = None) -> list[np.ndarray]:
-    return run_arrays(simulate(load_config(config), "dnbs", duration_s, disturbances=disturbances))
+def closed_loop(config: Path, duration_s: float, disturbances: Disturbances | None = None,
+                kernel: str = "numpy") -> list[np.ndarray]:
+    cfg = load_config(config)
+    cfg["dnbs"]["kernel"] = kernel
+    return run_arrays(simulate(cfg, "dnbs", duration_s, disturbances=disturbances))
 
 
-def banks(params, steps: int = 400, seed: int = 1) -> list[np.ndarray]:
+def banks(params, steps: int = 400, seed: int = 1, kernel: str = "numpy") -> list[np.ndarray]:
     """A bank of seven and seven banks of one, stepped on the same seeded random inputs."""
     rng = np.random.default_rng(seed)
-    seven = DNBSControllers(params, 7, range(7))
-    ones = [DNBSControllers(params.select([j]), 7, [j]) for j in range(7)]
+    bank = DNBSControllers
+    if kernel == "c":
+        from pa10_dnbs.accel.compiled_dnbs import CompiledDNBSControllers as bank
+    seven = bank(params, 7, range(7))
+    ones = [bank(params.select([j]), 7, [j]) for j in range(7)]
     rows7, rows1 = [], []
     for k in range(steps):
         x1, x2 = rng.normal(0.0, 0.5, 7), rng.normal(0.0, 2.0, 7)
@@ -89,16 +98,16 @@ def banks(params, steps: int = 400, seed: int = 1) -> list[np.ndarray]:
     return [np.array(rows7), np.array(rows1), seven.ekf.w, seven.ekf.P, resets]
 
 
-def fingerprints() -> dict[str, str]:
+def fingerprints(kernel: str = "numpy") -> dict[str, str]:
     default = share_path("config", "default.yaml")
     p = dnbs_params(load_config(default))
     scenarios = {
-        "default": lambda: closed_loop(default, 3.0),
-        "paper": lambda: closed_loop(share_path("config", "paper.yaml"), 3.0),
-        "noisy": lambda: closed_loop(default, 2.0, Disturbances(1e-4, 1e-3, 2, 3)),
-        "remedies": lambda: banks(dataclasses.replace(p, remedies=ALL_REMEDIES)),
-        "printed": lambda: banks(dataclasses.replace(p, e2_sign="printed")),
-        "bare": lambda: banks(dataclasses.replace(p, remedies=Remedies())),
+        "default": lambda: closed_loop(default, 3.0, kernel=kernel),
+        "paper": lambda: closed_loop(share_path("config", "paper.yaml"), 3.0, kernel=kernel),
+        "noisy": lambda: closed_loop(default, 2.0, Disturbances(1e-4, 1e-3, 2, 3), kernel=kernel),
+        "remedies": lambda: banks(dataclasses.replace(p, remedies=ALL_REMEDIES), kernel=kernel),
+        "printed": lambda: banks(dataclasses.replace(p, e2_sign="printed"), kernel=kernel),
+        "bare": lambda: banks(dataclasses.replace(p, remedies=Remedies()), kernel=kernel),
     }
     return {name: digest(make()) for name, make in scenarios.items()}
 
@@ -108,8 +117,9 @@ def main() -> int:
     group = ap.add_mutually_exclusive_group()
     group.add_argument("--save", type=Path, help="write the fingerprints to this JSON file")
     group.add_argument("--compare", type=Path, help="compare with a file written by --save; exit 1 on a difference")
+    ap.add_argument("--kernel", choices=("numpy", "c"), default="numpy", help="the DNBS step's kernel (dnbs.kernel)")
     args = ap.parse_args()
-    prints = fingerprints()
+    prints = fingerprints(args.kernel)
     for name, h in prints.items():
         print(f"{name:10s} {h}")
     if args.save:

@@ -24,3 +24,8 @@ def test_timed_pass_trains_the_bank_as_a_plain_pass_and_its_parts_add_up():
     assert np.array_equal(timed.ekf.P, plain.controllers.ekf.P)
     assert all(v > 0.0 for v in parts.values())
     assert np.isclose(sum(v for k, v in parts.items() if k != "step"), parts["step"])
+    compiled_parts, compiled = bench._dnbs_pass(cfg, run, rows, "c")  # the compiled step, timed: the same bank
+    assert np.array_equal(compiled.ekf.w, plain.controllers.ekf.w)
+    assert np.array_equal(compiled.ekf.P, plain.controllers.ekf.P)
+    assert set(compiled_parts) == {"answer", "training", "step"}
+    assert np.isclose(compiled_parts["answer"] + compiled_parts["training"], compiled_parts["step"])

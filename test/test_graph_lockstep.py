@@ -83,3 +83,25 @@ def test_warm_start_over_ros_equals_the_in_process_warm_start(lockstep_run, _def
     assert json.loads((lockstep_run["out"] / "metrics.json").read_text())["reliability"] == "reliable"
     cold = RunData.load_npz(lockstep_run["out"] / "timeseries.npz")
     assert not np.array_equal(cold.torque_nm[:1000], wire.torque_nm)
+
+
+def test_the_nodes_on_the_compiled_kernel_give_the_numpy_bits(_default_cfg, tmp_path, domain):
+    """``--config config/compiled.yaml``: every joint controller steps the compiled DNBS kernel, and the
+    lockstep run is the in-process numpy run bit for bit."""
+    from graph_harness import Launcher
+
+    from pa10_dnbs.paths import share_path
+
+    la = Launcher("--config", share_path("config", "compiled.yaml"), "--duration", 1.0, "--out", tmp_path / "c",
+                  domain_id=domain)
+    try:
+        rc = la.wait(timeout=300)
+    finally:
+        la.kill()
+    assert rc == 0, la.output
+    for log in (tmp_path / "c" / "logs").glob("joint_controller_*.log"):
+        assert "CompiledDNBSControllers" in log.read_text(), log.name
+    wire = RunData.load_npz(tmp_path / "c" / "timeseries.npz")
+    local = simulate(_default_cfg, "dnbs", 1.0)
+    for field in ("position_rad", "velocity_rad_s", "torque_nm"):
+        assert np.array_equal(getattr(local, field), getattr(wire, field)), field

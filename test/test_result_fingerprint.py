@@ -39,3 +39,13 @@ def test_the_bank_of_seven_equals_the_banks_of_one_in_the_scenarios():
     p = dataclasses.replace(dnbs_params(load_config(default_config_path())), remedies=fp.ALL_REMEDIES)
     rows7, rows1, *_ = fp.banks(p, steps=250)  # past the EKF reset at step 211
     assert rows7[:, :7].tobytes() == rows1.tobytes()
+
+
+def test_the_compiled_kernel_gives_the_banks_fingerprint():
+    """``--kernel c``: the bank scenarios (every remedy, untrusted rows, saturation, an EKF reset at step 211)
+    have the numpy reference's fingerprint."""
+    from pa10_dnbs.config import default_config_path, load_config
+    from pa10_dnbs.controller_factory import dnbs_params
+
+    p = dataclasses.replace(dnbs_params(load_config(default_config_path())), remedies=fp.ALL_REMEDIES)
+    assert fp.digest(fp.banks(p, steps=250, kernel="c")) == fp.digest(fp.banks(p, steps=250))

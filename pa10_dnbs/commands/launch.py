@@ -9,6 +9,7 @@ from pathlib import Path
 import yaml
 
 from .. import JOINT_NAMES
+from ..accel.build import library_path
 from ..bag.analysis import bag_arm, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
 from ..bag.bag_writer import COMPRESSIONS, check_bag_path
@@ -80,6 +81,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         check_priority(rt_priority)
     except ValueError:
         raise ConfigError(f"--rt-priority: must be 0 (off) or 1..99, got {rt_priority}") from None
+    if controller == "dnbs" and cfg["dnbs"]["kernel"] == "c":
+        library_path()  # built once here, before the seven controllers start (KernelBuildError if it cannot be)
     dt = cfg["simulation"]["dt_s"]
     try:
         check_clock_hz(clock_hz, dt)

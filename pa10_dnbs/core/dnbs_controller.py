@@ -322,6 +322,11 @@ class DNBSControllers:
         if not full and math.isfinite(np.add.reduce(ekf.w, None) + np.add.reduce(hph)) \
                 and np.minimum.reduce(hph) >= 0.0:
             return  # the cheap check of both networks at once: every w and H^T P H finite, H^T P H >= 0
+        self._reset_unhealthy(full)
+
+    def _reset_unhealthy(self, full: bool) -> None:
+        """The EKF guard past its cheap check: reset (and count) the rows ``EKFBank.unhealthy`` names."""
+        ekf = self.ekf
         bad = ekf.unhealthy(full, self._blocks)  # the full check looks at each network's own block
         if bad.any():
             ekf.reset(bad)

@@ -104,6 +104,7 @@ class JointControllerNode(Node):
         self.loop_ = JointLoop(build_guarded_controllers(cfg, p["controller"], [index]),
                                cfg["reference"]["preview_steps"])
         controller = self.loop_.controller
+        print(f"CONTROLLER joint_controller {p['joint']}: {type(controller).__name__}", flush=True)
         self.checkpoint = Path(p["checkpoint_file"]) if p["checkpoint_file"] else None
         if self.checkpoint is not None and not hasattr(controller, "state_dict"):
             raise ParameterError(f"checkpoint_file: the {p['controller']} controller has no learned state to save")

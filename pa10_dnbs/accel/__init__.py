@@ -1,0 +1,8 @@
+"""Optional compiled kernel of the DNBS step (``dnbs.kernel: c``), bit-identical to the numpy reference.
+
+The numeric core (``pa10_dnbs/core``) stays numpy only and is the reference: the compiled bank
+subclasses ``DNBSControllers`` and replaces only the arithmetic of ``answer`` and ``learn`` with one C
+kernel (``dnbs_kernel.c``, built on first use by the machine's C compiler into a per-user cache).
+Same inputs, same result bits (test/test_compiled_dnbs.py); about 7 us per seven-joint step instead
+of about 49 us (scripts/bench_dnbs_step.py, docs/timing.md).
+"""

@@ -1,0 +1,73 @@
+"""Build (once) and locate the shared library of ``dnbs_kernel.c``.
+
+The library goes to ``$PA10_DNBS_CACHE`` (default ``$XDG_CACHE_HOME/pa10_dnbs``, else
+``~/.cache/pa10_dnbs``), named by a hash of the source and the compiler command, so an edited source
+or other flags build anew. It is compiled to a temporary file and renamed into place: processes that
+start together (the seven joint controllers) never load a half-written library.
+
+    python -m pa10_dnbs.accel.build     # builds if needed, prints the library's path
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+SOURCE = Path(__file__).with_name("dnbs_kernel.c")
+# -ffp-contract=off: no fused multiply-add (it would change result bits); no -ffast-math for the same reason
+FLAGS = ("-O3", "-ffp-contract=off", "-fno-fast-math", "-fPIC", "-shared")
+
+
+class KernelBuildError(RuntimeError):
+    """The compiled kernel cannot be built or loaded here; the message says why and what to do."""
+
+
+def cache_dir() -> Path:
+    """Where built libraries are kept."""
+    if os.environ.get("PA10_DNBS_CACHE"):
+        return Path(os.environ["PA10_DNBS_CACHE"])
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "pa10_dnbs"
+
+
+def _compiler() -> str:
+    cc = os.environ.get("CC", "cc")
+    path = shutil.which(cc)
+    if path is None:
+        raise KernelBuildError(f"dnbs.kernel: c needs a C compiler, and {cc!r} is not on PATH (set CC, install gcc, "
+                               f"or use dnbs.kernel: numpy)")
+    return path
+
+
+def library_path() -> Path:
+    """The path of the built library (building it first if it is not there)."""
+    cc = _compiler()
+    key = hashlib.sha256(SOURCE.read_bytes() + "\0".join((cc, *FLAGS)).encode()).hexdigest()[:16]
+    target = cache_dir() / f"libdnbs_kernel-{key}.so"
+    if target.is_file():
+        return target
+    target.parent.mkdir(parents=True, exist_ok=True)
+    tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+    try:
+        done = subprocess.run([cc, *FLAGS, "-o", str(tmp), str(SOURCE), "-lm"], capture_output=True, text=True,
+                              timeout=120)
+        if done.returncode != 0:
+            raise KernelBuildError(f"dnbs.kernel: c: compiling {SOURCE.name} failed:\n{done.stderr.strip()}")
+        os.replace(tmp, target)
+    finally:
+        tmp.unlink(missing_ok=True)
+    for old in target.parent.glob("libdnbs_kernel-*.so"):  # builds of earlier sources (a process that has
+        if old != target:                                    # one loaded keeps it: unlinking is safe)
+            old.unlink(missing_ok=True)
+    return target
+
+
+if __name__ == "__main__":
+    try:
+        print(library_path())
+    except KernelBuildError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(2)

@@ -1,0 +1,131 @@
+"""``dnbs.kernel: c``: the compiled DNBS step gives the numpy reference's bits, in every branch of the law.
+
+Each test runs the same inputs through a ``DNBSControllers`` bank and a ``CompiledDNBSControllers`` bank
+and asserts equal bits (torques, alpha, weights, covariances, counters), not closeness: the kernel is an
+implementation of the reference, not an approximation of it.
+"""
+import copy
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from pa10_dnbs.accel import compiled_dnbs
+from pa10_dnbs.accel.build import KernelBuildError
+from pa10_dnbs.accel.compiled_dnbs import CompiledDNBSControllers
+from pa10_dnbs.config import default_config_path
+from pa10_dnbs.controller_factory import build_controllers, build_guarded_controllers, build_reference
+from pa10_dnbs.sim.closed_loop import simulate
+
+
+def _kernels(cfg):
+    c = copy.deepcopy(cfg)
+    c["dnbs"]["kernel"] = "c"
+    return cfg, c
+
+
+def _every_remedy(cfg):
+    """Every remedy on, eta < 1, a wider torque network (max degree 3: L = 20, another padded width)."""
+    d = cfg["dnbs"]
+    rem = d["remedies"]
+    for name in ("dead_zone", "e_modification", "projection"):
+        rem[name]["enabled"] = True
+    rem["dead_zone"]["alpha_rad"], rem["dead_zone"]["torque_rad_s"] = [1e-3] * 7, [2e-3] * 7
+    rem["e_modification"]["sigma"] = 1e-3
+    rem["projection"]["weight_bound"] = 0.5
+    d["alpha_net"]["eta"], d["torque_net"]["eta"] = [0.7] * 7, [0.9] * 7
+    d["torque_net"]["max_degree"] = 3
+    d["torque_net"]["input_scale"] = [3.0, 3.0, 3.0]
+    return cfg
+
+
+def _same_state(a, b) -> bool:
+    return (all(np.array_equal(getattr(a.ekf, f), getattr(b.ekf, f)) for f in ("w", "P", "last_hph"))
+            and np.array_equal(a.alpha, b.alpha) and np.array_equal(a.torque_unsaturated, b.torque_unsaturated)
+            and a.steps == b.steps
+            and all(np.array_equal(a.ekf_resets[k], b.ekf_resets[k]) for k in ("alpha", "torque")))
+
+
+def test_a_closed_loop_on_the_kernel_is_the_numpy_loop_bit_for_bit(cfg):
+    numpy_cfg, c_cfg = _kernels(cfg)
+    a, b = simulate(numpy_cfg, "dnbs", 2.0), simulate(c_cfg, "dnbs", 2.0)
+    assert isinstance(b.extra["controllers"], CompiledDNBSControllers)
+    for field in ("position_rad", "velocity_rad_s", "torque_nm"):
+        assert np.array_equal(getattr(a, field), getattr(b, field)), field
+
+
+@pytest.mark.parametrize("variant", ["default", "every_remedy", "printed_sign"])
+def test_every_branch_of_the_step_gives_the_same_bits(cfg, variant):
+    """Saturation and anti-windup, the learning ramp, the covariance bound, untrusted rows (``active``),
+    an EKF reset, and per variant the dead zone, e-modification, projection, eta < 1, another width, or
+    the diverging printed sign; on random states that keep the torques hitting their limits."""
+    if variant == "every_remedy":
+        cfg = _every_remedy(cfg)
+    if variant == "printed_sign":
+        cfg["dnbs"]["e2_sign"] = "printed"
+    cfg["dnbs"]["remedies"]["learning_ramp"]["ramp_s"] = 0.3  # the ramp ends inside the run
+    numpy_cfg, c_cfg = _kernels(cfg)
+    ref = build_reference(cfg)
+    ref_bank, c_bank = build_guarded_controllers(numpy_cfg, "dnbs"), build_guarded_controllers(c_cfg, "dnbs")
+    assert isinstance(c_bank.controllers, CompiledDNBSControllers)
+    rng = np.random.default_rng(11)
+    n = 900
+    k = np.arange(n)
+    x1 = ref.position(k) + 0.2 * np.sin(0.02 * k)[:, None] + 1e-2 * rng.normal(size=(n, 7))
+    x2 = ref.velocity(k) + 0.5 * rng.normal(size=(n, 7))
+    x2[200:230, 1] = 1e3      # implausible speed: an untrusted row, not trained
+    x1[400, 5] = np.nan        # a non-finite state
+    for step in range(n):
+        if step == 600:  # a broken network: the guard resets it, in both
+            for g in (ref_bank, c_bank):
+                g.controllers.ekf.P[9, 2, 2] = np.nan
+        with np.errstate(invalid="ignore", over="ignore"):
+            u, v = ref_bank.step(x1[step], x2[step], ref.sample(step)), c_bank.step(x1[step], x2[step], ref.sample(step))
+        assert np.array_equal(u, v, equal_nan=True), step
+        assert _same_state(ref_bank.controllers, c_bank.controllers), step
+    assert c_bank.controllers.ekf_resets["torque"][2] >= 1
+    assert ref_bank.bad_states["speed"][1] == c_bank.bad_states["speed"][1] == 30
+    assert (np.abs(ref_bank.controllers.torque_unsaturated) >= np.asarray(cfg["plant"]["torque_limit_nm"])).any() \
+        or variant != "default"
+
+
+def test_a_single_joint_bank_answer_then_learn_and_checkpoints(cfg):
+    """A node's bank of one: answer, then learn; a checkpoint of the reference loads into the kernel's bank
+    and both go on alike (the kernel works on the bank's own arrays)."""
+    numpy_cfg, c_cfg = _kernels(cfg)
+    ref = build_reference(cfg)
+    a, b = build_controllers(numpy_cfg, "dnbs", [4]), build_controllers(c_cfg, "dnbs", [4])
+    x1, x2 = np.array([0.05]), np.array([0.3])
+    for k in range(300):
+        assert np.array_equal(a.answer(x1, x2, ref.sample(k, [4])), b.answer(x1, x2, ref.sample(k, [4])))
+        assert b.learning_pending
+        if k % 3:
+            a.learn()
+            b.learn()
+        x1, x2 = x1 + 1e-3 * x2, x2 * 0.99
+    state = a.state_dict(0)  # trains the pending step first, in both
+    assert all(np.array_equal(v, b.state_dict(0)[key]) for key, v in state.items())
+    fresh = build_controllers(c_cfg, "dnbs", [4])
+    fresh.load_state_dict(0, state)
+    for k in range(300, 400):
+        assert np.array_equal(a.step(x1, x2, ref.sample(k, [4])), fresh.step(x1, x2, ref.sample(k, [4])))
+    # (a checkpoint holds each network's own block of P, not the padding's diagonal, which nothing reads)
+    assert all(np.array_equal(v, fresh.state_dict(0)[key]) for key, v in a.state_dict(0).items())
+
+
+def test_without_a_compiler_the_error_names_the_key_and_the_cli_exits_2(cfg, tmp_path, monkeypatch):
+    monkeypatch.setenv("CC", "no-such-compiler-pa10")
+    monkeypatch.setenv("PA10_DNBS_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setattr(compiled_dnbs, "_LIB", None)  # as in a new process: not loaded yet
+    with pytest.raises(KernelBuildError, match="dnbs.kernel: c"):
+        build_controllers(_kernels(cfg)[1], "dnbs")
+    config = tmp_path / "c.yaml"
+    config.write_text(f"extends: {default_config_path()}\ndnbs:\n  kernel: c\n")
+    out = tmp_path / "run"
+    done = subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "simulate", "--config", str(config),
+                           "--duration", "0.1", "--out", str(out), "--no-progress"],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2, done.stderr
+    assert "dnbs.kernel: c" in done.stderr and "no-such-compiler-pa10" in done.stderr
+    assert not out.exists()
