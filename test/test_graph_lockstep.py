@@ -87,21 +87,32 @@ def test_warm_start_over_ros_equals_the_in_process_warm_start(lockstep_run, _def
 
 def test_the_nodes_on_the_compiled_kernel_give_the_numpy_bits(_default_cfg, tmp_path, domain):
     """``--config config/compiled.yaml``: every joint controller steps the compiled DNBS kernel, and the
-    lockstep run is the in-process numpy run bit for bit."""
+    lockstep run is the in-process numpy run bit for bit.
+
+    A run in which the plant had to replace efforts (the start-up stall the launcher warns about: the
+    reference node's first /clock messages delayed by DDS discovery, seen in 1 of 25 runs of this config)
+    is not the in-process run by design; it is run again, up to three times, and must then be clean."""
     from graph_harness import Launcher
 
     from pa10_dnbs.paths import share_path
 
-    la = Launcher("--config", share_path("config", "compiled.yaml"), "--duration", 1.0, "--out", tmp_path / "c",
-                  domain_id=domain)
-    try:
-        rc = la.wait(timeout=300)
-    finally:
-        la.kill()
-    assert rc == 0, la.output
-    for log in (tmp_path / "c" / "logs").glob("joint_controller_*.log"):
-        assert "CompiledDNBSControllers" in log.read_text(), log.name
-    wire = RunData.load_npz(tmp_path / "c" / "timeseries.npz")
+    for attempt in range(3):
+        out = tmp_path / f"c{attempt}"
+        la = Launcher("--config", share_path("config", "compiled.yaml"), "--duration", 1.0, "--out", out,
+                      domain_id=domain)
+        try:
+            rc = la.wait(timeout=300)
+        finally:
+            la.kill()
+        assert rc == 0, la.output
+        m = json.loads((out / "metrics.json").read_text())
+        if all(j["effort_timeouts"] == 0 for j in m["timing"]["joints"]):
+            break
+    assert all(j["effort_timeouts"] == 0 for j in m["timing"]["joints"]), m["timing"]["joints"]
+    logs = sorted((out / "logs").glob("joint_controller_*.log"))
+    assert len(logs) == 7 and all("CompiledDNBSControllers" in log.read_text() for log in logs)
+    wire = RunData.load_npz(out / "timeseries.npz")
     local = simulate(_default_cfg, "dnbs", 1.0)
-    for field in ("position_rad", "velocity_rad_s", "torque_nm"):
-        assert np.array_equal(getattr(local, field), getattr(wire, field)), field
+    for field in ("torque_nm", "position_rad", "velocity_rad_s"):
+        a, b = getattr(local, field), getattr(wire, field)
+        assert np.array_equal(a, b), f"{field}: first (step, joint) that differs {np.argwhere(a != b)[:3].tolist()}"
