@@ -76,6 +76,8 @@ def test_every_branch_of_the_step_gives_the_same_bits(cfg, variant):
     x2 = ref.velocity(k) + 0.5 * rng.normal(size=(n, 7))
     x2[200:230, 1] = 1e3      # implausible speed: an untrusted row, not trained
     x1[400, 5] = np.nan        # a non-finite state
+    limit = np.asarray(cfg["plant"]["torque_limit_nm"])
+    saturated = 0
     for step in range(n):
         if step == 600:  # a broken network: the guard resets it, in both
             for g in (ref_bank, c_bank):
@@ -84,10 +86,10 @@ def test_every_branch_of_the_step_gives_the_same_bits(cfg, variant):
             u, v = ref_bank.step(x1[step], x2[step], ref.sample(step)), c_bank.step(x1[step], x2[step], ref.sample(step))
         assert np.array_equal(u, v, equal_nan=True), step
         assert _same_state(ref_bank.controllers, c_bank.controllers), step
+        saturated += bool((np.abs(c_bank.controllers.torque_unsaturated) >= limit).any())
     assert c_bank.controllers.ekf_resets["torque"][2] >= 1
     assert ref_bank.bad_states["speed"][1] == c_bank.bad_states["speed"][1] == 30
-    assert (np.abs(ref_bank.controllers.torque_unsaturated) >= np.asarray(cfg["plant"]["torque_limit_nm"])).any() \
-        or variant != "default"
+    assert saturated > 0  # the anti-windup branch was taken
 
 
 def test_a_single_joint_bank_answer_then_learn_and_checkpoints(cfg):
