@@ -24,7 +24,7 @@ def _simulate(args: argparse.Namespace) -> int:
 
     return run_simulate(config_path=args.config, controller=args.controller, duration_s=args.duration,
                         out=args.out, force=args.force, progress=not args.no_progress and sys.stderr.isatty(),
-                        init_from=args.init_from, figures=not args.no_figures)
+                        init_from=args.init_from, figures=not args.no_figures, arm=args.arm)
 
 
 def _launch(args: argparse.Namespace) -> int:
@@ -39,14 +39,15 @@ def _launch(args: argparse.Namespace) -> int:
                       bag_compression=args.bag_compression, live_port=args.live, live_host=args.live_host,
                       live_hz=args.live_hz, real_time_factor=args.rtf, deadline_fraction=args.deadline_fraction,
                       rt_priority=args.rt_priority, sched_batch=args.sched_batch, namespace=args.namespace,
-                      clock_hz=args.clock_hz, figures=not args.no_figures)
+                      clock_hz=args.clock_hz, figures=not args.no_figures, arm=args.arm)
 
 
 def _study(args: argparse.Namespace) -> int:
     from .commands.study import run_study_command
 
     return run_study_command(args.scenarios, args.controllers, args.seeds, args.duration, args.out, args.force,
-                             args.config, args.workers, progress=not args.no_progress and sys.stderr.isatty())
+                             args.config, args.workers, progress=not args.no_progress and sys.stderr.isatty(),
+                             arm=args.arm)
 
 
 def _analyse(args: argparse.Namespace) -> int:
@@ -65,8 +66,16 @@ def _replay(args: argparse.Namespace) -> int:
                       live_hz=args.live_hz, config_path=args.config, namespace=args.namespace)
 
 
+def add_arm_argument(p: argparse.ArgumentParser) -> None:
+    """``--arm NAME|PATH``: the same flag on every command that runs an arm."""
+    p.add_argument("--arm", default=None, metavar="NAME|PATH",
+                   help="the arm: a preset of urdf/ (pa10, iiwa, panda) or the path of an arm file (arm.yaml) or a "
+                        "bare URDF (default: the config's arm, pa10; docs/arms.md)")
+
+
 def _add_run_args(p: argparse.ArgumentParser, controllers: tuple[str, ...], help_controller: str) -> None:
     p.add_argument("--config", type=Path, default=None, help=f"YAML config (default: {default_config_path()})")
+    add_arm_argument(p)
     p.add_argument("--controller", choices=controllers, default="dnbs", help=help_controller)
     p.add_argument("--duration", type=float, default=None, metavar="SECONDS",
                    help="simulated time [s] (default: simulation.duration_s of the config, 20 s)")
@@ -100,7 +109,7 @@ def build_parser() -> argparse.ArgumentParser:
                           "its checkpoints/ directory); reported as such")
     sim.set_defaults(func=_simulate)
 
-    la = sub.add_parser("launch", help="the ROS 2 node graph (plant, 7 joint controllers, reference)")
+    la = sub.add_parser("launch", help="the ROS 2 node graph (plant, one controller per joint, reference)")
     la.add_argument("--mode", choices=("lockstep", "realtime"), default="lockstep",
                     help="lockstep: the plant steps once every joint has answered (deterministic, as fast as the "
                          "graph goes); realtime: the plant steps on a wall-clock schedule with deadlines "
@@ -161,6 +170,7 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("--duration", type=float, default=20.0, metavar="SECONDS", help="simulated time per run")
     st.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
     st.add_argument("--config", type=Path, default=None, help="YAML config the scenarios start from")
+    add_arm_argument(st)
     st.add_argument("--workers", type=int, default=None, help="worker processes (default: one per core)")
     st.add_argument("--force", action="store_true", help="replace an existing output directory")
     st.add_argument("--no-progress", action="store_true", help="no progress bar")

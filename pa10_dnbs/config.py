@@ -13,13 +13,8 @@ from typing import Any
 
 import yaml
 
-from . import JOINT_NAMES
 
-N_JOINTS = len(JOINT_NAMES)
-
-
-class ConfigError(ValueError):
-    """A configuration value is missing, unknown, or invalid; the message names the key."""
+from .config_error import ConfigError  # noqa: E402  (re-exported: the CLI and nodes catch it from here)
 
 
 @dataclass(frozen=True)
@@ -34,7 +29,7 @@ class Num:
 
 @dataclass(frozen=True)
 class Joints:
-    """Seven numbers (one per joint) with the bounds of ``num``; a single number is broadcast."""
+    """One number per actuated joint of the arm, with the bounds of ``num``; a single number is broadcast."""
 
     num: Num
 
@@ -93,6 +88,7 @@ def _link_faults() -> dict:
 
 
 SCHEMA: dict[str, Any] = {
+    "arm": Text(),  # a preset's name (urdf/<name>/) or the path of an arm file or URDF; resolved to its file
     "simulation": {
         "dt_s": Num(0.0, high=0.1),
         "duration_s": POS,
@@ -105,10 +101,10 @@ SCHEMA: dict[str, Any] = {
         "amplitude_rad": Joints(NONNEG),
         "envelope_rate_per_s3": Joints(POS),
         "frequency_rad_s": Joints(NONNEG),
+        "centre_rad": Joints(ANY),
         "preview_steps": Num(0, strict=False, integer=True, high=100),
     },
     "plant": {
-        "urdf": Text(),
         "gravity_mps2": NONNEG,
         "rotor_inertia_kgm2": Joints(NONNEG),
         "viscous_nms_per_rad": Joints(NONNEG),
@@ -167,7 +163,8 @@ def _number(key: str, value: Any, spec: Num) -> float | int:
     return int(value) if spec.integer else float(value)
 
 
-def _check(key: str, value: Any, spec: Any) -> Any:
+def _check(key: str, value: Any, spec: Any, n: int) -> Any:
+    """``value`` checked against ``spec`` (``n``: the arm's number of joints, the length of every Joints list)."""
     if isinstance(spec, dict):
         if not isinstance(value, dict):
             raise ConfigError(f"{key or '<root>'}: expected a mapping, got {type(value).__name__}")
@@ -178,15 +175,15 @@ def _check(key: str, value: Any, spec: Any) -> Any:
         missing = sorted(set(spec) - set(value))
         if missing:
             raise ConfigError(f"{key + '.' if key else ''}{missing[0]}: missing key")
-        return {k: _check(f"{key}.{k}" if key else k, value[k], spec[k]) for k in spec}
+        return {k: _check(f"{key}.{k}" if key else k, value[k], spec[k], n) for k in spec}
     if isinstance(spec, Num):
         return _number(key, value, spec)
     if isinstance(spec, Joints):
         if isinstance(value, list):
-            if len(value) != N_JOINTS:
-                raise ConfigError(f"{key}: expected {N_JOINTS} values (one per joint), got {len(value)}")
+            if len(value) != n:
+                raise ConfigError(f"{key}: expected {n} values (one per joint of the arm), got {len(value)}")
             return tuple(_number(f"{key}[{i}]", v, spec.num) for i, v in enumerate(value))
-        return (_number(key, value, spec.num),) * N_JOINTS
+        return (_number(key, value, spec.num),) * n
     if isinstance(spec, tuple):
         if not isinstance(value, list) or len(value) != len(spec):
             raise ConfigError(f"{key}: expected a list of {len(spec)} numbers, got {value!r}")
@@ -211,19 +208,13 @@ def _check(key: str, value: Any, spec: Any) -> Any:
     raise TypeError(f"bad schema entry at {key}")  # pragma: no cover
 
 
-def validate(raw: Any, base_dir: Path) -> dict:
-    """Validate a parsed YAML document; relative file paths resolve against ``base_dir``."""
-    cfg = _check("", raw, SCHEMA)
+def validate(raw: Any, n_joints: int) -> dict:
+    """Validate a parsed, merged config document for an arm of ``n_joints`` joints."""
+    cfg = _check("", raw, SCHEMA, n_joints)
     sim = cfg["simulation"]
     if sim["window_s"][1] > sim["duration_s"] + 1e-12:
         raise ConfigError(f"simulation.window_s: ends at {sim['window_s'][1]:g} s, after "
                           f"simulation.duration_s = {sim['duration_s']:g} s")
-    urdf = Path(cfg["plant"]["urdf"])
-    if not urdf.is_absolute():
-        urdf = (base_dir / urdf).resolve()
-    if not urdf.is_file():
-        raise ConfigError(f"plant.urdf: file not found: {urdf}")
-    cfg["plant"]["urdf"] = str(urdf)
     return cfg
 
 
@@ -240,9 +231,9 @@ def _read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict:
         raise ConfigError(f"{path}: not valid YAML: {exc}") from None
     if not isinstance(raw, dict):
         return raw
-    plant = raw.get("plant")
-    if isinstance(plant, dict) and isinstance(plant.get("urdf"), str) and plant["urdf"]:
-        plant["urdf"] = str((path.parent / plant["urdf"]).resolve())  # relative to the file that names it
+    arm = raw.get("arm")
+    if isinstance(arm, str) and ("/" in arm or arm.endswith((".yaml", ".yml", ".urdf"))):
+        raw["arm"] = str((path.parent / arm).resolve())  # a path is relative to the file that names it
     if "extends" not in raw:
         return raw
     base = raw.pop("extends")
@@ -262,12 +253,56 @@ def _merge(base: dict, over: dict) -> dict:
     return out
 
 
-def load_config(path: str | Path) -> dict:
-    """Read and validate a YAML config file (and the one it ``extends``). Raises ConfigError (naming the key
-    or file)."""
-    path = Path(path)
-    raw = _read_yaml(path)
-    return validate(raw, base_dir=path.resolve().parent)
+def load_config(path: str | Path, arm: str | Path | None = None) -> dict:
+    """Read and validate a YAML config file (and the one it ``extends``) for an arm. Raises ConfigError (naming
+    the key or file).
+
+    ``arm``: a preset's name or the path of an arm file or URDF (``--arm``); None: the config's ``arm`` key.
+    Layers, each over the one before: what the rule of docs/arms.md derives from the arm's model (computed
+    only for the keys nobody else gives), the arm's facts (``plant``: torque limits, rotor inertia, friction)
+    and its ``settings``, then the config files. The result's ``arm`` is the arm file's absolute path.
+    """
+    from .arm import DEFAULT_ARM, load_arm  # the arm package reads config_error only: no cycle
+
+    raw = _read_yaml(Path(path))
+    if not isinstance(raw, dict):
+        raise ConfigError(f"{path}: expected a mapping of config sections")
+    the_arm = load_arm(arm if arm is not None else raw.get("arm", DEFAULT_ARM))
+    raw = dict(raw, arm=str(the_arm.file))
+    facts = {"plant": {"torque_limit_nm": the_arm.torque_limit_nm.tolist(),
+                       "rotor_inertia_kgm2": the_arm.rotor_inertia_kgm2.tolist(),
+                       "viscous_nms_per_rad": the_arm.viscous_nms_per_rad.tolist(),
+                       "coulomb_nm": the_arm.coulomb_nm.tolist()}}
+    merged = _merge(_merge(facts, the_arm.settings), raw)
+    from .arm.settings_rule import GAIN_KEYS, REFERENCE_KEYS, derived_gains, derived_reference
+
+    if any(_get(merged, key) is None for key in REFERENCE_KEYS):
+        merged = _merge(derived_reference(the_arm), merged)
+    if any(_get(merged, key) is None for key in GAIN_KEYS):
+        checked = _check("", _merge(_placeholders(GAIN_KEYS, the_arm.n_joints), merged), SCHEMA, the_arm.n_joints)
+        merged = _merge(derived_gains(the_arm, checked), merged)
+    return validate(merged, the_arm.n_joints)
+
+
+def _get(tree: dict, dotted: str):
+    """``tree``'s value at a dotted key, or None where any part is missing."""
+    for part in dotted.split("."):
+        if not isinstance(tree, dict) or part not in tree:
+            return None
+        tree = tree[part]
+    return tree
+
+
+def _placeholders(keys: tuple[str, ...], n: int) -> dict:
+    """Ones at ``keys`` (so the rest of a config can be checked before the rule gives their values)."""
+    out: dict = {}
+    for key in keys:
+        *parents, leaf = key.split(".")
+        node = out
+        for part in parents:
+            node = node.setdefault(part, {})
+        node[leaf] = [1.0] * n  # > 0 passes every bound of these keys
+    return out
 
 
 def default_config_path() -> Path:

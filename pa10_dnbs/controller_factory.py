@@ -1,6 +1,6 @@
 """Build joint controllers (DNBS or PID) and the reference from a validated config dict.
 
-Shared by the in-process simulation (one bank of all seven joints) and the
+Shared by the in-process simulation (one bank of all the arm's joints) and the
 ROS joint-controller node (a bank of its one joint), so both run the same
 objects with the same seeds.
 """
@@ -8,12 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import JOINT_NAMES
+from .arm import arm_of
 from .core.dnbs_controller import DNBSControllers, DNBSParams, NetworkParams, Remedies
 from .core.pid_controller import PIDControllers, PIDParams
 from .core.reference import Reference
 from .core.state_guard import StateGuard
-from .kinematics.urdf_chain import UrdfChain
 from .loop.guarded_controllers import GuardedControllers
 
 CONTROLLER_KINDS = ("dnbs", "pid")
@@ -43,7 +42,7 @@ def remedies_from_config(rem: dict) -> Remedies:
 
 
 def dnbs_params(cfg: dict) -> DNBSParams:
-    """All seven joints' DNBS parameters (``.select(rows)`` gives a subset)."""
+    """Every joint's DNBS parameters (``.select(rows)`` gives a subset)."""
     d = cfg["dnbs"]
     return DNBSParams(alpha_net=_network(d["alpha_net"], "output_scale_rad_s", "error_scale_rad"),
                       torque_net=_network(d["torque_net"], "output_scale_nm", "error_scale_rad_s"),
@@ -59,7 +58,7 @@ def pid_params(cfg: dict) -> PIDParams:
 
 
 def build_controllers(cfg: dict, kind: str, joints=None):
-    """Controllers of joint indices ``joints`` (0..6; all seven when None), one per row, in that order.
+    """Controllers of joint indices ``joints`` (0..n-1; all of the arm's when None), one per row, in that order.
 
     ``dnbs.kernel: c`` steps a DNBS bank with the compiled kernel (the same bits; KernelBuildError when it
     cannot be built here). DNBS weights of joint j are seeded by (simulation.seed, j), whatever the bank it sits in.
@@ -79,16 +78,16 @@ def build_reference(cfg: dict) -> Reference:
     """Eq. 27 reference from ``cfg['reference']``."""
     r = cfg["reference"]
     return Reference(r["amplitude_rad"], r["envelope_rate_per_s3"], r["frequency_rad_s"],
-                     dt_s=cfg["simulation"]["dt_s"], preview_steps=r["preview_steps"])
+                     dt_s=cfg["simulation"]["dt_s"], preview_steps=r["preview_steps"], centre_rad=r["centre_rad"])
 
 
 def build_state_guard(cfg: dict, joints=None) -> StateGuard:
-    """The state guard of joint indices ``joints`` (all when None): URDF limits and ``cfg['guards']``."""
-    rows = list(range(len(JOINT_NAMES))) if joints is None else [int(j) for j in joints]
-    chain = UrdfChain.from_file(cfg["plant"]["urdf"])
+    """The state guard of joint indices ``joints`` (all when None): the arm's URDF limits and ``cfg['guards']``."""
+    arm = arm_of(cfg)
+    rows = list(range(arm.n_joints)) if joints is None else [int(j) for j in joints]
     g = cfg["guards"]
-    return StateGuard(lower_rad=np.array([chain.joint(JOINT_NAMES[j]).lower for j in rows]),
-                      upper_rad=np.array([chain.joint(JOINT_NAMES[j]).upper for j in rows]),
+    return StateGuard(lower_rad=np.array([arm.lower_rad[j] for j in rows]),
+                      upper_rad=np.array([arm.upper_rad[j] for j in rows]),
                       margin_rad=g["position_margin_rad"],
                       max_speed_rad_s=np.array([g["max_speed_rad_s"][j] for j in rows]))
 

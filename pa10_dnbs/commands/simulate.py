@@ -4,10 +4,9 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from .. import JOINT_NAMES
+from ..arm import arm_of
 from ..config import ConfigError, default_config_path, load_config
 from ..core.checkpoint import load_joint_checkpoints, save_checkpoint
-from ..kinematics.urdf_chain import UrdfChain
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..sim.closed_loop import simulate
@@ -16,14 +15,17 @@ CHOICES = {"dnbs": ("dnbs",), "pid": ("pid",), "ctc": ("ctc",), "both": ("dnbs",
 
 
 def run_simulate(config_path: Path | None, controller: str, duration_s: float | None, out: Path,
-                 force: bool, progress: bool, init_from: Path | None = None, figures: bool = True) -> int:
+                 force: bool, progress: bool, init_from: Path | None = None, figures: bool = True,
+                 arm: str | None = None) -> int:
     """Run one or more controllers; write everything into ``out`` atomically. Returns the exit code.
 
+    ``arm``: a preset's name or an arm file or URDF (``--arm``); None: the config's ``arm``.
     ``init_from``: a warm start of the DNBS controllers from the checkpoints of an earlier run (a run's
     output directory, or a directory of ``<joint>.npz``); the report says so.
     """
     config_path = Path(config_path) if config_path else default_config_path()
-    cfg = load_config(config_path)
+    cfg = load_config(config_path, arm=arm)
+    the_arm = arm_of(cfg)
     if duration_s is None:
         duration_s = cfg["simulation"]["duration_s"]
     if not (math.isfinite(duration_s) and duration_s > 0):
@@ -38,7 +40,7 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
         if "dnbs" not in kinds:
             raise ConfigError("--init-from: only the DNBS controllers have learned state to start from")
         try:
-            init_states = load_joint_checkpoints(init_from, JOINT_NAMES)
+            init_states = load_joint_checkpoints(init_from, the_arm.joint_names)
         except ValueError as exc:
             raise ConfigError(f"--init-from: {exc}") from None
     check_output_dir(out, force)
@@ -50,7 +52,8 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
         extra = {"warm_start_from": str(Path(init_from).resolve())} if init_states is not None and kind == "dnbs" else {}
         metrics.append(metrics_dict(run, settings, source="in-process", config_file=str(config_path.resolve()),
                                     seed=cfg["simulation"]["seed"], limit_hits=run.extra["limit_hits"], **extra))
-    notes = [f"config: `{config_path}`", "source: in-process simulation (no ROS)"]
+    notes = [f"config: `{config_path}`", f"arm: {the_arm.name} ({the_arm.description}), `{the_arm.file}`",
+             "source: in-process simulation (no ROS)"]
     if init_states is not None:
         notes.append(f"DNBS warm-started from the checkpoints in `{init_from}` (not a cold start)")
     if "ctc" in kinds:
@@ -60,12 +63,12 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
         notes.append(f"run shorter than the configured window {cfg['simulation']['window_s']}: "
                      f"metrics over the second half instead")
     with atomic_output_dir(out, force) as tmp:
-        write_report(tmp, runs, metrics, title="PA10-7CE closed-loop run", notes=notes,
-                     chain=UrdfChain.from_file(cfg["plant"]["urdf"]), figures=figures)
+        write_report(tmp, runs, metrics, title=f"{the_arm.description}: closed-loop run", notes=notes,
+                     chain=the_arm.chain, figures=figures)
         for run in runs:
             if run.controller == "dnbs":
                 _save_checkpoints(tmp / "checkpoints" if len(runs) == 1 else tmp / "dnbs" / "checkpoints",
-                                  run.extra["controllers"], n_steps - 1)
+                                  run.extra["controllers"], n_steps - 1, the_arm.joint_names)
     for m in metrics:
         settle = m["worst_settling_time_s"]
         print(f"{m['controller']}: worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over {m['window_s']} s; "
@@ -78,8 +81,8 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
     return 0 if ok else 1
 
 
-def _save_checkpoints(directory: Path, controllers, last_step: int) -> None:
+def _save_checkpoints(directory: Path, controllers, last_step: int, joint_names: tuple[str, ...]) -> None:
     """One ``<joint>.npz`` per joint, as the graph's controllers write them (``--init-from`` reads either)."""
     directory.mkdir(parents=True, exist_ok=True)
     for row, joint in enumerate(controllers.joints):
-        save_checkpoint(directory / f"{JOINT_NAMES[joint]}.npz", controllers.state_dict(row), last_step)
+        save_checkpoint(directory / f"{joint_names[joint]}.npz", controllers.state_dict(row), last_step)

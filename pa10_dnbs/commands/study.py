@@ -24,7 +24,8 @@ def _names(flag: str, given: str, valid) -> list[str]:
 
 
 def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: float, out: Path, force: bool,
-                      config_path: Path | None, workers: int | None, progress: bool) -> int:
+                      config_path: Path | None, workers: int | None, progress: bool, arm: str | None = None) -> int:
+    """Run the study on ``arm`` (a preset or an arm file; None: the config's) and write its outputs in ``out``."""
     scen = _names("--scenarios", scenarios, list(SCENARIOS))
     ctrl = _names("--controllers", controllers, CONTROLLERS)
     if seeds < 1:
@@ -34,7 +35,7 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
     if workers is not None and workers < 1:
         raise ConfigError(f"--workers: must be >= 1, got {workers}")
     config_path = Path(config_path) if config_path else default_config_path()
-    cfg = load_config(config_path)
+    cfg = load_config(config_path, arm=arm)
     check_output_dir(out, force)
     n = len(scen) * len(ctrl) * seeds
     dt = cfg["simulation"]["dt_s"]
@@ -50,9 +51,11 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
     bar.close()
     command = (f"pa10-dnbs study --scenarios {','.join(scen)} --controllers {','.join(ctrl)} --seeds {seeds} "
                f"--duration {duration_s:g} --out {shlex.quote(str(out))}"
-               + (f" --config {shlex.quote(str(config_path))}" if config_path != default_config_path() else ""))
+               + (f" --config {shlex.quote(str(config_path))}" if config_path != default_config_path() else "")
+               + (f" --arm {shlex.quote(str(arm))}" if arm is not None else ""))
     with atomic_output_dir(out, force) as tmp:
-        (tmp / "study.json").write_text(json.dumps({"config_file": str(config_path.resolve()), "duration_s": duration_s,
+        (tmp / "study.json").write_text(json.dumps({"config_file": str(config_path.resolve()), "arm": cfg["arm"],
+                                                    "duration_s": duration_s,
                                                     "rows": rows}, indent=2) + "\n")
         (tmp / "study.md").write_text(study_markdown(rows, command, duration_s,
                                                      {k: v.description for k, v in SCENARIOS.items()}))

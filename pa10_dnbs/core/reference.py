@@ -1,6 +1,7 @@
 """Desired joint trajectories of the paper, eq. 27 with Table 1.
 
-x_d(k) = c (1 - exp(-d (kT)^3)) sin(w kT), with kT in seconds. The printed
+x_d(k) = x_c + c (1 - exp(-d (kT)^3)) sin(w kT), with kT in seconds; the centre x_c is 0 in the paper
+(Table 1) and lies inside the joint's limits on other arms (docs/arms.md). The printed
 exponent ``e^{d k T^3}`` is read as ``exp(-d (kT)^3)`` (see
 docs/design.md): with T = 1 ms the literal reading never moves or diverges.
 """
@@ -38,15 +39,20 @@ class Reference:
         Sampling time T [s].
     preview_steps : int
         How far ahead ``position_ahead_rad`` looks (the paper's k+2).
+    centre_rad : array_like, shape (N,), optional
+        x_c [rad], the position the joint oscillates about (None or all zero: the paper's eq. 27 as printed).
     """
 
     def __init__(self, amplitude_rad, envelope_rate_per_s3, frequency_rad_s,
-                 dt_s: float, preview_steps: int = 2):
+                 dt_s: float, preview_steps: int = 2, centre_rad=None):
         self.c = np.asarray(amplitude_rad, dtype=float)
         self.d = np.asarray(envelope_rate_per_s3, dtype=float)
         self.w = np.asarray(frequency_rad_s, dtype=float)
-        if not (self.c.shape == self.d.shape == self.w.shape) or self.c.ndim != 1:
+        centre = np.zeros_like(self.c) if centre_rad is None else np.asarray(centre_rad, dtype=float)
+        if not (self.c.shape == self.d.shape == self.w.shape == centre.shape) or self.c.ndim != 1:
             raise ValueError("reference parameters must be 1-D arrays of equal length")
+        self.centre = centre
+        self._offset = bool(np.any(centre != 0.0))  # without one, the paper's expression exactly (same bits)
         self.dt_s = float(dt_s)
         self.preview_steps = int(preview_steps)
 
@@ -57,7 +63,8 @@ class Reference:
     def position(self, k) -> np.ndarray:
         """x_d at step(s) k [rad]: shape (N,) for scalar k, (len(k), N) for an array."""
         t = np.asarray(k, dtype=float)[..., None] * self.dt_s
-        return self.c * (1.0 - np.exp(-self.d * t**3)) * np.sin(self.w * t)
+        x = self.c * (1.0 - np.exp(-self.d * t**3)) * np.sin(self.w * t)
+        return x + self.centre if self._offset else x
 
     def velocity(self, k) -> np.ndarray:
         """Analytic dx_d/dt at step(s) k [rad/s], same shapes as :meth:`position`."""

@@ -28,6 +28,7 @@ class UrdfJoint:
     lower: float = -math.inf  # <limit lower> [rad or m]; +/-inf when absent (continuous)
     upper: float = math.inf
     velocity: float = math.inf  # <limit velocity> [rad/s or m/s]
+    effort: float = math.nan    # <limit effort> [N m or N]; NaN when absent
 
 
 @dataclass(frozen=True)
@@ -94,11 +95,15 @@ class UrdfChain:
             axis = _floats(axis_el.get("xyz") if axis_el is not None else None, "1 0 0")
             norm = np.linalg.norm(axis)
             if norm == 0.0:
-                raise ValueError(f"joint {el.get('name')}: zero axis")
+                if el.get("type") != "fixed":
+                    raise ValueError(f"joint {el.get('name')}: zero axis")
+                axis, norm = np.array([1.0, 0.0, 0.0]), 1.0  # a fixed joint's axis is never used
             limit = el.find("limit")
             bounds = {}
             if limit is not None and el.get("type") != "continuous":
                 bounds = {k: float(limit.get(k)) for k in ("lower", "upper", "velocity") if limit.get(k) is not None}
+            if limit is not None and limit.get("effort") is not None:
+                bounds["effort"] = float(limit.get("effort"))
             joints.append(UrdfJoint(name=el.get("name"), kind=el.get("type"), parent=el.find("parent").get("link"),
                                     child=el.find("child").get("link"), origin_xyz=xyz,
                                     origin_rot=rpy_matrix(*rpy), axis=axis / norm, **bounds))

@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .pybullet_plant import PlantParams, PyBulletPA10Plant
+from ..arm import Arm, arm_of
+from .pybullet_plant import PlantParams, PyBulletArmPlant
 from .quiet_stdout import quiet_c_stdout
 
 
@@ -16,8 +17,10 @@ def open_client(gui: bool = False):
         return BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
 
 
-def plant_from_config(cfg: dict, client: BulletClient) -> PyBulletPA10Plant:
-    """Plant with ``cfg['plant']`` parameters, reset to the configured initial state."""
+def plant_from_config(cfg: dict, client, arm: Arm | None = None) -> PyBulletArmPlant:
+    """The arm's plant with ``cfg['plant']`` parameters, reset to the configured initial state (``arm``: the
+    config's own when None)."""
+    arm = arm_of(cfg) if arm is None else arm
     p = cfg["plant"]
     params = PlantParams(
         dt_s=cfg["simulation"]["dt_s"],
@@ -30,13 +33,18 @@ def plant_from_config(cfg: dict, client: BulletClient) -> PyBulletPA10Plant:
         payload_kg=p["payload_kg"],
         link_mass_scale=p["link_mass_scale"],
     )
-    plant = PyBulletPA10Plant(client, p["urdf"], params)
+    plant = PyBulletArmPlant(client, arm, params)
     q0, qd0 = initial_state(cfg)
     plant.reset(q0, qd0)
     return plant
 
 
 def initial_state(cfg: dict) -> tuple[np.ndarray, np.ndarray]:
-    """x1(0) = x_d(0) + offset (x_d(0) = 0 for eq. 27), x2(0) = configured velocity; (7,) each."""
+    """x1(0) = x_d(0) + offset (x_d(0) = the reference's centre for eq. 27: 0 on the PA10), x2(0) = the
+    configured velocity; (n,) each."""
     sim = cfg["simulation"]
-    return np.array(sim["initial_position_offset_rad"], float), np.array(sim["initial_velocity_rad_s"], float)
+    q0 = np.array(sim["initial_position_offset_rad"], float)
+    centre = np.array(cfg["reference"]["centre_rad"], float)
+    if np.any(centre != 0.0):
+        q0 = centre + q0
+    return q0, np.array(sim["initial_velocity_rad_s"], float)

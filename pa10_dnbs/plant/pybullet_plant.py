@@ -1,4 +1,4 @@
-"""PA10-7C(E) plant: torque in, joint state out, dynamics from PyBullet.
+"""The arm's plant: torque in, joint state out, dynamics from PyBullet (any serial arm of revolute joints).
 
 PyBullet supplies the rigid-body terms only (``calculateMassMatrix`` and
 ``calculateInverseDynamics``). The plant adds what URDF cannot carry: the
@@ -18,16 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import pybullet
 
-N_JOINTS = 7
-
-#: Reflected (joint-side) rotor inertia, kg m^2, source D (motor inertia x 50^2).
-ROTOR_INERTIA_KGM2 = (0.75, 0.75, 0.2125, 0.2125, 0.00575, 0.00575, 0.00575)
-#: Default viscous friction, N m s/rad: source E's simulation values (not identified).
-VISCOUS_NMS_PER_RAD = (10.0, 10.0, 5.0, 5.0, 2.0, 2.0, 2.0)
-#: Default Coulomb friction, N m: none identified, so zero.
-COULOMB_NM = (0.0,) * N_JOINTS
-#: Maximum joint torques, N m, paper Table 2.
-TORQUE_LIMIT_NM = (232.0, 232.0, 100.0, 100.0, 14.5, 14.5, 14.5)
+from ..arm import Arm
 
 _VECTOR_FIELDS = (
     # name, lower bound, bound is strict
@@ -40,7 +31,8 @@ _VECTOR_FIELDS = (
 
 @dataclass(frozen=True)
 class PlantParams:
-    """Plant parameters (SI units); validated on construction.
+    """Plant parameters (SI units); validated on construction. A per-joint field left None is the arm's fact
+    (urdf/<arm>/arm.yaml); given, it has one value per actuated joint (its length is checked by the plant).
 
     Attributes
     ----------
@@ -48,18 +40,18 @@ class PlantParams:
         Integration step, s (> 0).
     gravity_mps2 : float
         Gravity magnitude along -z, m/s^2 (>= 0; 0 disables gravity).
-    rotor_inertia_kgm2 : tuple of 7 float
+    rotor_inertia_kgm2 : tuple of n float or None
         Reflected rotor inertia added to diag(M), kg m^2 (>= 0).
-    viscous_nms_per_rad : tuple of 7 float
+    viscous_nms_per_rad : tuple of n float or None
         Viscous friction Fv, N m s/rad (>= 0).
-    coulomb_nm : tuple of 7 float
+    coulomb_nm : tuple of n float or None
         Coulomb friction Fc, N m (>= 0).
     coulomb_smoothing_rad_s : float
         eps in Fc tanh(qd / eps), rad/s (> 0).
-    torque_limit_nm : tuple of 7 float
+    torque_limit_nm : tuple of n float or None
         Symmetric torque saturation, N m (> 0).
     payload_kg : float
-        Point mass at the tool flange, kg (>= 0; the PA10's rated payload is 10 kg).
+        Point mass at the arm's flange link, kg (>= 0; the PA10's rated payload is 10 kg).
     link_mass_scale : float
         Factor on every link's mass and inertia tensor (> 0; 1 is the URDF as written): a model error
         the controllers were not tuned for. The rotor inertias are not scaled.
@@ -67,11 +59,11 @@ class PlantParams:
 
     dt_s: float = 1e-3
     gravity_mps2: float = 9.81
-    rotor_inertia_kgm2: tuple[float, ...] = ROTOR_INERTIA_KGM2
-    viscous_nms_per_rad: tuple[float, ...] = VISCOUS_NMS_PER_RAD
-    coulomb_nm: tuple[float, ...] = COULOMB_NM
+    rotor_inertia_kgm2: tuple[float, ...] | None = None
+    viscous_nms_per_rad: tuple[float, ...] | None = None
+    coulomb_nm: tuple[float, ...] | None = None
     coulomb_smoothing_rad_s: float = 1e-2
-    torque_limit_nm: tuple[float, ...] = TORQUE_LIMIT_NM
+    torque_limit_nm: tuple[float, ...] | None = None
     payload_kg: float = 0.0
     link_mass_scale: float = 1.0
 
@@ -83,12 +75,14 @@ class PlantParams:
         _check_scalar("coulomb_smoothing_rad_s", self.coulomb_smoothing_rad_s, strict=True)
         for name, _, strict in _VECTOR_FIELDS:
             value = getattr(self, name)
+            if value is None:
+                continue
             try:
                 arr = np.asarray(value, dtype=float)
             except (TypeError, ValueError) as exc:
-                raise ValueError(f"{name}: expected {N_JOINTS} numbers, got {value!r}") from exc
-            if arr.shape != (N_JOINTS,):
-                raise ValueError(f"{name}: expected {N_JOINTS} values, got shape {arr.shape}")
+                raise ValueError(f"{name}: expected one number per joint, got {value!r}") from exc
+            if arr.ndim != 1 or arr.size == 0:
+                raise ValueError(f"{name}: expected one value per joint, got shape {arr.shape}")
             if not np.all(np.isfinite(arr)):
                 raise ValueError(f"{name}: values must be finite, got {value!r}")
             if np.any(arr <= 0.0) if strict else np.any(arr < 0.0):
@@ -108,10 +102,10 @@ def _check_scalar(name: str, value: float, strict: bool) -> None:
         raise ValueError(f"{name}: must be {'> 0' if strict else '>= 0'}, got {value!r}")
 
 
-def _as_joint_vector(name: str, value) -> np.ndarray:
+def _as_joint_vector(name: str, value, n: int) -> np.ndarray:
     arr = np.asarray(value, dtype=float)
-    if arr.shape != (N_JOINTS,):
-        raise ValueError(f"{name}: expected shape ({N_JOINTS},), got {arr.shape}")
+    if arr.shape != (n,):
+        raise ValueError(f"{name}: expected shape ({n},), got {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name}: values must be finite")
     return arr
@@ -134,17 +128,17 @@ def _implicit_coulomb_speed(v_free: np.ndarray, k: np.ndarray, inv_eps: float) -
     return v
 
 
-class PyBulletPA10Plant:
-    """Seven-joint torque-driven arm with rotor inertia, friction and limits.
+class PyBulletArmPlant:
+    """A torque-driven serial arm of n actuated revolute joints with rotor inertia, friction and limits.
 
     Parameters
     ----------
     client : pybullet_utils.bullet_client.BulletClient
         A connected client (DIRECT for simulation), owned by the caller.
-    urdf_path : str or os.PathLike
-        Arm description with exactly 7 revolute joints and a fixed base.
+    arm : Arm
+        The arm (pa10_dnbs.arm): URDF (loaded with a fixed base), actuated joints, locked joints, flange.
     params : PlantParams
-        Step, gravity, rotor inertia, friction and torque limits.
+        Step, gravity, rotor inertia, friction and torque limits (None fields: the arm's facts).
 
     Notes
     -----
@@ -160,7 +154,9 @@ class PyBulletPA10Plant:
     Coulomb friction the step is explicit in qd.
 
     where M and h (Coriolis, centrifugal and gravity) come from PyBullet.
-    PyBullet's gravity belongs to the client, so the plant sets it to its own
+    Movable joints the arm does not actuate (``arm.locked_joints``, e.g. gripper fingers) are held at their
+    locked positions: M and h are the actuated block and rows of PyBullet's, which is exact for a joint held
+    still. PyBullet's gravity belongs to the client, so the plant sets it to its own
     value before every inverse-dynamics call (plants with different gravity
     may share a client). ``stepSimulation`` is never called.
     A joint that leaves [lower, upper] is clamped to the limit, its velocity
@@ -168,40 +164,46 @@ class PyBulletPA10Plant:
     one (one count per step spent clamped).
     """
 
-    def __init__(self, client, urdf_path, params: PlantParams) -> None:
+    def __init__(self, client, arm: Arm, params: PlantParams) -> None:
         if not isinstance(params, PlantParams):
             raise TypeError(f"params: expected PlantParams, got {type(params).__name__}")
-        urdf_path = os.fspath(urdf_path)
+        urdf_path = os.fspath(arm.urdf)
         if not os.path.isfile(urdf_path):
             raise FileNotFoundError(f"URDF file not found: {urdf_path}")
+        n = self._n = arm.n_joints
+        params = _with_arm_facts(params, arm)
         self._client = client
         self._params = params
+        self._arm = arm
         self._body = client.loadURDF(
             urdf_path,
             useFixedBase=True,
             flags=pybullet.URDF_USE_INERTIA_FROM_FILE,
         )
-        joint_indices, names, lower, upper = [], [], [], []
-        for j in range(client.getNumJoints(self._body)):
-            info = client.getJointInfo(self._body, j)
-            if info[2] == pybullet.JOINT_REVOLUTE:
-                joint_indices.append(j)
-                names.append(info[1].decode("utf-8"))
-                lower.append(info[8])
-                upper.append(info[9])
-            elif info[2] != pybullet.JOINT_FIXED:
-                raise ValueError(f"{urdf_path}: joint {info[1]!r} is neither revolute nor fixed")
-        if len(joint_indices) != N_JOINTS:
-            raise ValueError(f"{urdf_path}: expected {N_JOINTS} revolute joints, found {len(joint_indices)}")
-        if joint_indices != list(range(N_JOINTS)):
-            raise ValueError(f"{urdf_path}: the revolute joints must come before any fixed joint")
-        self._joint_indices = tuple(joint_indices)
-        self._joint_names = tuple(names)
-        self._lower = np.array(lower, dtype=float)
-        self._upper = np.array(upper, dtype=float)
-        if not np.all(self._lower < self._upper):
-            raise ValueError(f"{urdf_path}: every revolute joint needs lower < upper limits")
         self._n_links = client.getNumJoints(self._body)
+        index_of, dofs = {}, []
+        for j in range(self._n_links):
+            info = client.getJointInfo(self._body, j)
+            index_of[info[1].decode("utf-8")] = j
+            if info[2] != pybullet.JOINT_FIXED:
+                dofs.append(j)
+        self._joint_indices = tuple(index_of[name] for name in arm.joint_names)
+        self._joint_names = arm.joint_names
+        self._lower = np.array(arm.lower_rad, dtype=float)
+        self._upper = np.array(arm.upper_rad, dtype=float)
+        # PyBullet's dynamics take every movable joint (its DOFs, in joint order); the actuated ones are a
+        # subset when the arm locks some (None: they are all of them, in order: no gathering needed)
+        if list(self._joint_indices) == dofs:
+            self._dof_rows = None
+        else:
+            self._dof_rows = np.array([dofs.index(j) for j in self._joint_indices])
+            self._dof_block = np.ix_(self._dof_rows, self._dof_rows)
+            self._q_full = np.zeros(len(dofs))
+            for name, q_locked in zip(arm.locked_joints, arm.locked_position_rad):
+                self._q_full[dofs.index(index_of[name])] = q_locked
+            self._qd_full = np.zeros(len(dofs))
+            for name, q_locked in zip(arm.locked_joints, arm.locked_position_rad):
+                client.resetJointState(self._body, index_of[name], q_locked, 0.0)
         # Mass changes must come before PyBullet's first dynamics call, which caches the multibody tree.
         self._apply_mass_changes(client, params)
         # Link masses for the potential energy (every non-base link, incl. massless frames).
@@ -210,7 +212,7 @@ class PyBulletPA10Plant:
         )
         # No built-in motors: the plant applies torques itself.
         client.setJointMotorControlArray(
-            self._body, list(self._joint_indices), pybullet.VELOCITY_CONTROL, forces=[0.0] * N_JOINTS
+            self._body, dofs, pybullet.VELOCITY_CONTROL, forces=[0.0] * len(dofs)
         )
 
         # Cached bound calls (BulletClient builds a partial on every attribute access).
@@ -219,7 +221,7 @@ class PyBulletPA10Plant:
         self._set_gravity = client.setGravity
         self._gravity_z = -float(params.gravity_mps2)
         self._set_gravity(0.0, 0.0, self._gravity_z)
-        self._zero_acc = [0.0] * N_JOINTS
+        self._zero_acc = [0.0] * len(dofs)
 
         self._rotor = np.array(params.rotor_inertia_kgm2, dtype=float)
         self._fv = np.array(params.viscous_nms_per_rad, dtype=float)
@@ -229,17 +231,17 @@ class PyBulletPA10Plant:
         self._tau_max = np.array(params.torque_limit_nm, dtype=float)
         self._neg_tau_max = -self._tau_max
         self._dt = params.dt_s
-        self._diag = np.diag_indices(N_JOINTS)
+        self._diag = np.diag_indices(n)
 
-        self._q = np.zeros(N_JOINTS)
-        self._qd = np.zeros(N_JOINTS)
-        self._applied = np.zeros(N_JOINTS)
-        self._tau_scratch = np.zeros(N_JOINTS)
-        self._limit_hits = np.zeros(N_JOINTS, dtype=np.int64)
-        self._below = np.zeros(N_JOINTS, dtype=bool)
-        self._above = np.zeros(N_JOINTS, dtype=bool)
+        self._q = np.zeros(n)
+        self._qd = np.zeros(n)
+        self._applied = np.zeros(n)
+        self._tau_scratch = np.zeros(n)
+        self._limit_hits = np.zeros(n, dtype=np.int64)
+        self._below = np.zeros(n, dtype=bool)
+        self._above = np.zeros(n, dtype=bool)
         self._step_count = 0
-        self.reset(np.zeros(N_JOINTS), np.zeros(N_JOINTS))
+        self.reset(np.clip(np.zeros(n), self._lower, self._upper), np.zeros(n))
 
     def _apply_mass_changes(self, client, params: PlantParams) -> None:
         """Scale every link's mass and inertia by ``link_mass_scale``; put ``payload_kg`` at the flange."""
@@ -251,11 +253,18 @@ class PyBulletPA10Plant:
                                           localInertiaDiagonal=[x * params.link_mass_scale for x in info[2]])
         if params.payload_kg > 0.0:
             names = [client.getJointInfo(self._body, j)[12].decode("utf-8") for j in range(self._n_links)]
-            if "flange" not in names:
-                raise ValueError("payload_kg: the URDF has no link named 'flange' to carry the payload")
-            # a point mass at the flange frame's origin (a tiny inertia keeps the link's inertia valid)
-            client.changeDynamics(self._body, names.index("flange"), mass=params.payload_kg,
-                                  localInertiaDiagonal=[1e-9] * 3)
+            flange = self._arm.flange_link
+            if flange not in names:
+                raise ValueError(f"payload_kg: the URDF has no link named {flange!r} (the arm's flange_link) to "
+                                 f"carry the payload")
+            # a point mass at the flange frame's origin (a tiny inertia keeps the link's inertia valid); on a
+            # link that has a mass of its own, the payload is added to it at the link's CoM
+            info = client.getDynamicsInfo(self._body, names.index(flange))
+            if info[0] > 0.0:
+                client.changeDynamics(self._body, names.index(flange), mass=info[0] + params.payload_kg)
+            else:
+                client.changeDynamics(self._body, names.index(flange), mass=params.payload_kg,
+                                      localInertiaDiagonal=[1e-9] * 3)
 
     # ------------------------------------------------------------------ info
     @property
@@ -269,18 +278,28 @@ class PyBulletPA10Plant:
         return self._body
 
     @property
+    def arm(self) -> Arm:
+        """The arm the plant was built for."""
+        return self._arm
+
+    @property
+    def n_joints(self) -> int:
+        """Number of actuated joints n."""
+        return self._n
+
+    @property
     def joint_names(self) -> tuple[str, ...]:
-        """Revolute joint names in URDF order."""
+        """Actuated joint names in chain order."""
         return self._joint_names
 
     @property
     def lower_limit_rad(self) -> np.ndarray:
-        """(7,) lower joint limits from the URDF, rad."""
+        """(n,) lower joint limits from the URDF, rad."""
         return self._lower.copy()
 
     @property
     def upper_limit_rad(self) -> np.ndarray:
-        """(7,) upper joint limits from the URDF, rad."""
+        """(n,) upper joint limits from the URDF, rad."""
         return self._upper.copy()
 
     @property
@@ -290,9 +309,9 @@ class PyBulletPA10Plant:
 
     # ------------------------------------------------------------- stepping
     def reset(self, q0, qd0) -> None:
-        """Set the state (q0 rad, qd0 rad/s, each (7,)) and clear the counters."""
-        q0 = _as_joint_vector("q0", q0)
-        qd0 = _as_joint_vector("qd0", qd0)
+        """Set the state (q0 rad, qd0 rad/s, each (n,)) and clear the counters."""
+        q0 = _as_joint_vector("q0", q0, self._n)
+        qd0 = _as_joint_vector("qd0", qd0, self._n)
         if np.any(q0 < self._lower) or np.any(q0 > self._upper):
             raise ValueError(f"q0: outside the joint limits [{self._lower}, {self._upper}]")
         self._q[:] = q0
@@ -302,13 +321,13 @@ class PyBulletPA10Plant:
         self._step_count = 0
 
     def step(self, torque_nm) -> None:
-        """Saturate ``torque_nm`` (7,) N m to the limits and advance one dt.
+        """Saturate ``torque_nm`` (n,) N m to the limits and advance one dt.
 
         Infinite entries saturate to the limit; NaN raises ValueError.
         """
         tau = np.asarray(torque_nm, dtype=float)
-        if tau.shape != (N_JOINTS,):
-            raise ValueError(f"torque_nm: expected shape ({N_JOINTS},), got {tau.shape}")
+        if tau.shape != (self._n,):
+            raise ValueError(f"torque_nm: expected shape ({self._n},), got {tau.shape}")
         applied = self._tau_scratch
         np.minimum(np.maximum(tau, self._neg_tau_max, out=applied), self._tau_max, out=applied)
         if not math.isfinite(applied @ applied):  # only NaN survives the saturation
@@ -333,12 +352,12 @@ class PyBulletPA10Plant:
 
     @property
     def state(self) -> tuple[np.ndarray, np.ndarray]:
-        """(q rad, qd rad/s), each a (7,) copy."""
+        """(q rad, qd rad/s), each a (n,) copy."""
         return self._q.copy(), self._qd.copy()
 
     @property
     def applied_torque_nm(self) -> np.ndarray:
-        """(7,) torque applied in the last step (after saturation), N m."""
+        """(n,) torque applied in the last step (after saturation), N m."""
         return self._applied.copy()
 
     @property
@@ -348,17 +367,12 @@ class PyBulletPA10Plant:
 
     @property
     def limit_hits(self) -> np.ndarray:
-        """(7,) number of steps in which each joint was clamped to a limit."""
+        """(n,) number of steps in which each joint was clamped to a limit."""
         return self._limit_hits.copy()
 
     # ------------------------------------------------------------- dynamics
     def _qdd(self, q: np.ndarray, qd: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        q_list = q.tolist()
-        qd_list = qd.tolist()
-        m = np.array(self._calc_mass_matrix(self._body, q_list), dtype=float)
-        m[self._diag] += self._rotor
-        self._set_gravity(0.0, 0.0, self._gravity_z)
-        bias = np.array(self._calc_inverse_dynamics(self._body, q_list, qd_list, self._zero_acc), dtype=float)
+        m, bias = self._m_and_bias(q, qd)
         rhs = tau - bias - self._fv * qd
         if not self._has_coulomb:
             return np.linalg.solve(m, rhs)
@@ -370,39 +384,53 @@ class PyBulletPA10Plant:
                                * self._inv_eps)
         return m_inv @ (rhs - f)
 
-    def mass_matrix(self, q) -> np.ndarray:
-        """(7, 7) joint-space inertia M(q) + diag(rotor inertia), kg m^2."""
-        q = _as_joint_vector("q", q)
-        m = np.array(self._calc_mass_matrix(self._body, q.tolist()))
+    def _m_and_bias(self, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(M(q) + J (n, n), h(q, qd) (n,)) of the actuated joints, the locked ones held still."""
+        if self._dof_rows is None:
+            q_list = q.tolist()
+            m = np.array(self._calc_mass_matrix(self._body, q_list), dtype=float)
+            m[self._diag] += self._rotor
+            self._set_gravity(0.0, 0.0, self._gravity_z)
+            bias = np.array(self._calc_inverse_dynamics(self._body, q_list, qd.tolist(), self._zero_acc), dtype=float)
+            return m, bias
+        self._q_full[self._dof_rows] = q
+        self._qd_full[self._dof_rows] = qd
+        q_list = self._q_full.tolist()
+        m = np.array(self._calc_mass_matrix(self._body, q_list), dtype=float)[self._dof_block]
         m[self._diag] += self._rotor
-        return m
+        self._set_gravity(0.0, 0.0, self._gravity_z)
+        bias = np.array(self._calc_inverse_dynamics(self._body, q_list, self._qd_full.tolist(), self._zero_acc),
+                        dtype=float)[self._dof_rows]
+        return m, bias
+
+    def mass_matrix(self, q) -> np.ndarray:
+        """(n, n) joint-space inertia M(q) + diag(rotor inertia), kg m^2."""
+        q = _as_joint_vector("q", q, self._n)
+        return self._m_and_bias(q, np.zeros(self._n))[0]
 
     def bias_torque(self, q, qd) -> np.ndarray:
-        """(7,) Coriolis + centrifugal + gravity torque, N m (inverse dynamics at qdd = 0)."""
-        q = _as_joint_vector("q", q)
-        qd = _as_joint_vector("qd", qd)
-        self._set_gravity(0.0, 0.0, self._gravity_z)
-        return np.array(
-            self._calc_inverse_dynamics(self._body, q.tolist(), qd.tolist(), self._zero_acc)
-        )
+        """(n,) Coriolis + centrifugal + gravity torque, N m (inverse dynamics at qdd = 0)."""
+        q = _as_joint_vector("q", q, self._n)
+        qd = _as_joint_vector("qd", qd, self._n)
+        return self._m_and_bias(q, qd)[1]
 
     def friction_torque(self, qd) -> np.ndarray:
-        """(7,) friction torque Fv qd + Fc tanh(qd / eps), N m."""
-        qd = _as_joint_vector("qd", qd)
+        """(n,) friction torque Fv qd + Fc tanh(qd / eps), N m."""
+        qd = _as_joint_vector("qd", qd, self._n)
         return self._fv * qd + self._fc * np.tanh(qd * self._inv_eps)
 
     def step_friction_torque(self, qd, qdd) -> np.ndarray:
-        """(7,) the friction torque a step from speed qd with acceleration qdd meets, N m: viscous at qd (explicit),
+        """(n,) the friction torque a step from speed qd with acceleration qdd meets, N m: viscous at qd (explicit),
         Coulomb at the end-of-step speed qd + dt qdd (implicit), as :meth:`step` applies them."""
-        qd = _as_joint_vector("qd", qd)
-        qdd = _as_joint_vector("qdd", qdd)
+        qd = _as_joint_vector("qd", qd, self._n)
+        qdd = _as_joint_vector("qdd", qdd, self._n)
         return self._fv * qd + self._fc * np.tanh((qd + self._dt * qdd) * self._inv_eps)
 
     def forward_acceleration(self, q, qd, tau) -> np.ndarray:
-        """(7,) qdd = (M + J)^-1 (tau - bias - friction), rad/s^2; tau is not saturated."""
-        q = _as_joint_vector("q", q)
-        qd = _as_joint_vector("qd", qd)
-        tau = _as_joint_vector("tau", tau)
+        """(n,) qdd = (M + J)^-1 (tau - bias - friction), rad/s^2; tau is not saturated."""
+        q = _as_joint_vector("q", q, self._n)
+        qd = _as_joint_vector("qd", qd, self._n)
+        tau = _as_joint_vector("tau", tau, self._n)
         m = self.mass_matrix(q)
         rhs = tau - self.bias_torque(q, qd) - self.friction_torque(qd)
         return np.linalg.solve(m, rhs)
@@ -416,8 +444,8 @@ class PyBulletPA10Plant:
         PyBullet's joint state is set to (q, qd) for the forward kinematics and
         put back to the plant state afterwards.
         """
-        q = _as_joint_vector("q", q)
-        qd = _as_joint_vector("qd", qd)
+        q = _as_joint_vector("q", q, self._n)
+        qd = _as_joint_vector("qd", qd, self._n)
         kinetic = 0.5 * float(qd @ self.mass_matrix(q) @ qd)
         self._write_joint_state(q, qd)
         get_link_state = self._client.getLinkState
@@ -436,3 +464,21 @@ class PyBulletPA10Plant:
         reset_joint_state = self._client.resetJointState
         for j, qj, qdj in zip(self._joint_indices, q.tolist(), qd.tolist()):
             reset_joint_state(self._body, j, qj, qdj)
+
+
+def _with_arm_facts(params: PlantParams, arm: Arm) -> PlantParams:
+    """``params`` with every per-joint field that is None taken from the arm, each checked to have n values."""
+    import dataclasses
+
+    facts = {"rotor_inertia_kgm2": arm.rotor_inertia_kgm2, "viscous_nms_per_rad": arm.viscous_nms_per_rad,
+             "coulomb_nm": arm.coulomb_nm, "torque_limit_nm": arm.torque_limit_nm}
+    filled = {k: tuple(float(v) for v in facts[k]) for k in facts if getattr(params, k) is None}
+    params = dataclasses.replace(params, **filled) if filled else params
+    for name in facts:
+        if len(getattr(params, name)) != arm.n_joints:
+            raise ValueError(f"{name}: expected {arm.n_joints} values (one per joint of {arm.name}), "
+                             f"got {len(getattr(params, name))}")
+    return params
+
+
+PyBulletPA10Plant = PyBulletArmPlant  # the name before any arm could be brought

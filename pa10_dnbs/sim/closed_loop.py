@@ -1,6 +1,6 @@
-"""Run the plant and the seven joint controllers in one process, step by step (no ROS).
+"""Run the plant and the arm's joint controllers in one process, step by step (no ROS).
 
-The controllers are the nodes' own: one bank of seven rows behind the same
+The controllers are the nodes' own: one bank of n rows (one per joint) behind the same
 state guard (``build_guarded_controllers``), so an in-process run equals the
 lockstep node graph bit for bit, guards included.
 """
@@ -11,7 +11,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import JOINT_NAMES
 from ..controller_factory import build_guarded_controllers, build_reference, build_state_guard
 from ..core.reference import ReferenceSample
 from ..plant.from_config import open_client, plant_from_config
@@ -57,7 +56,7 @@ def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = Fal
         if init_states is not None:
             for row, state in enumerate(init_states):
                 guarded.controllers.load_state_dict(row, state, resume_steps=False)
-        nj = len(JOINT_NAMES)
+        nj = plant.n_joints
         pos = np.empty((n, nj))
         vel = np.empty((n, nj))
         tau = np.empty((n, nj))
@@ -90,7 +89,7 @@ def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = Fal
         if bar is not None:
             bar.update(n)
             bar.close()
-        return RunData(controller=controller, dt_s=dt, joint_names=JOINT_NAMES,
+        return RunData(controller=controller, dt_s=dt, joint_names=plant.joint_names,
                        torque_limit_nm=np.array(cfg["plant"]["torque_limit_nm"]),
                        position_rad=pos, velocity_rad_s=vel, reference_rad=ref, torque_nm=tau,
                        wall_time_s=wall, extra={"limit_hits": plant.limit_hits.tolist(),
@@ -100,7 +99,7 @@ def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = Fal
 
 
 def _controllers(cfg: dict, controller: str, plant) -> GuardedControllers:
-    """The seven joints' controllers behind their state guards (the nodes' own code), or computed torque."""
+    """The joints' controllers behind their state guards (the nodes' own code), or computed torque."""
     if controller == "ctc":
         c = cfg["ctc"]
         ctc = ComputedTorqueController(plant, c["kp_per_s2"], c["kd_per_s"], cfg["plant"]["torque_limit_nm"])

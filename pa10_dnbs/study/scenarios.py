@@ -11,7 +11,7 @@ from typing import Callable
 
 from ..sim.closed_loop import Disturbances
 
-COULOMB_FRACTION = 0.05  # Coulomb friction of every joint: 5 % of its Table 2 limit (none is published for the PA10)
+COULOMB_FRACTION = 0.05  # Coulomb friction of every joint: 5 % of its torque limit (none is published for the PA10)
 
 
 @dataclass(frozen=True)
@@ -42,14 +42,14 @@ def _fast_reference(cfg: dict) -> None:
 
 SCENARIOS = {s.name: s for s in (
     Scenario("nominal", "the default config"),
-    Scenario("payload_2kg", "2 kg point mass at the flange", _payload(2.0)),
+    Scenario("payload_2kg", "2 kg point mass at the flange link", _payload(2.0)),
     Scenario("payload_5kg", "5 kg point mass at the flange (rated payload 10 kg)", _payload(5.0)),
     Scenario("links_heavier_30pct", "every link's mass and inertia +30 % (rotors unchanged)", _links_heavier),
     Scenario("encoder_noise", "white noise on what the controllers see: 1e-4 rad on x1, 1e-3 rad/s on x2",
              disturbances=lambda seed: Disturbances(1e-4, 1e-3, 0, seed)),
     Scenario("delay_1_tick", "every torque applied one step (1 ms) late",
              disturbances=lambda seed: Disturbances(torque_delay_steps=1)),
-    Scenario("coulomb", f"Coulomb friction {COULOMB_FRACTION:.0%} of the Table 2 limit on every joint", _coulomb),
+    Scenario("coulomb", f"Coulomb friction {COULOMB_FRACTION:.0%} of the torque limit on every joint", _coulomb),
     Scenario("fast_reference", "Table 1 frequencies x1.5", _fast_reference),
 )}
 

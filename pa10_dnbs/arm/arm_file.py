@@ -1,0 +1,185 @@
+"""Read and validate an arm: ``--arm NAME`` (a folder of ``urdf/``), an arm file (``*.yaml``) or a bare URDF.
+
+Every fault is an :class:`ArmError` (a ConfigError: the CLI prints its one line and exits 2) naming the
+file and the key or joint: a URDF that does not parse, a joint named in the file that is not in the URDF,
+a prismatic or floating joint among the actuated ones, a missing or zero effort limit with no override, a
+moving link without inertia, a list of the wrong length, a fact without its source.
+"""
+from __future__ import annotations
+
+import functools
+import math
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from ..config_error import ConfigError
+from ..kinematics.urdf_chain import UrdfChain
+from ..paths import share_path
+from .arm import Arm
+from .chain_select import actuated_joints
+
+DEFAULT_ARM = "pa10"
+FACTS = ("torque_limit_nm", "rotor_inertia_kgm2", "viscous_nms_per_rad", "coulomb_nm")
+KEYS = {"name", "description", "urdf", "tip_link", "joints", "exclude_joints", "flange_link", "sources",
+        "settings", *FACTS}
+
+
+class ArmError(ConfigError):
+    """An arm file or URDF is unusable; the message names the file and what is wrong."""
+
+
+def preset_names() -> list[str]:
+    """The arms shipped in ``urdf/`` (folders with an arm.yaml)."""
+    root = share_path("urdf")
+    return sorted(p.parent.name for p in root.glob("*/arm.yaml"))
+
+
+def arm_file_path(spec: str | Path) -> Path:
+    """The file ``spec`` names: a preset's ``urdf/<name>/arm.yaml``, or the path itself (resolved)."""
+    text = str(spec)
+    if not text:
+        raise ArmError("--arm: empty (a preset name or the path of an arm file or URDF)")
+    if "/" not in text and not text.endswith((".yaml", ".yml", ".urdf")):
+        path = share_path("urdf", text, "arm.yaml")
+        if not path.is_file():
+            raise ArmError(f"--arm: no arm called {text!r} (presets: {', '.join(preset_names())}; or give the path "
+                           f"of an arm file or URDF)")
+        return path.resolve()
+    path = Path(text).expanduser().resolve()
+    if not path.is_file():
+        raise ArmError(f"--arm: file not found: {path}")
+    return path
+
+
+def load_arm(spec: str | Path = DEFAULT_ARM) -> Arm:
+    """The arm ``spec`` names, read and validated once per file (later calls return the same object)."""
+    return _load(str(arm_file_path(spec)))
+
+
+@functools.lru_cache(maxsize=16)
+def _load(path_text: str) -> Arm:
+    path = Path(path_text)
+    if path.suffix == ".urdf":
+        return _build(path, {"name": path.stem, "urdf": path.name,
+                             "sources": {"urdf": str(path)}}, bare=True)
+    try:
+        raw = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ArmError(f"{path}: not valid YAML: {str(exc).splitlines()[0]}") from None
+    if not isinstance(raw, dict):
+        raise ArmError(f"{path}: expected a mapping of arm facts")
+    return _build(path, raw, bare=False)
+
+
+def _build(path: Path, raw: dict, bare: bool) -> Arm:
+    unknown = sorted(set(raw) - KEYS)
+    if unknown:
+        raise ArmError(f"{path}: {unknown[0]}: unknown key (allowed: {', '.join(sorted(KEYS))})")
+    for key in ("name", "urdf"):
+        if not isinstance(raw.get(key), str) or not raw[key]:
+            raise ArmError(f"{path}: {key}: expected a non-empty string")
+    urdf = (path.parent / raw["urdf"]).resolve() if not bare else path
+    if not urdf.is_file():
+        raise ArmError(f"{path}: urdf: file not found: {urdf}")
+    try:
+        xml = urdf.read_text()
+        chain = UrdfChain(xml)
+        links = _links(xml)
+    except (ET.ParseError, ValueError, AttributeError, TypeError) as exc:
+        raise ArmError(f"{urdf}: the URDF does not parse: {exc}") from None
+    names = _names(path, raw, "joints")
+    exclude = _names(path, raw, "exclude_joints") or ()
+    try:
+        actuated, locked = actuated_joints(chain, exclude=exclude, tip_link=raw.get("tip_link"), names=names)
+    except ValueError as exc:
+        raise ArmError(f"{path}: {exc}") from None
+    joint_names = tuple(j.name for j in actuated)
+    n = len(joint_names)
+    for j in actuated:
+        _check_inertia(urdf, links.get(j.child), j.child, j.name)
+    lower = np.array([j.lower for j in actuated], dtype=float)
+    upper = np.array([j.upper for j in actuated], dtype=float)
+    bad = [j.name for j in actuated if j.kind == "revolute" and not (math.isfinite(j.lower)
+                                                                     and math.isfinite(j.upper) and j.lower < j.upper)]
+    if bad:
+        raise ArmError(f"{urdf}: joint {bad[0]!r}: a revolute joint needs <limit lower upper> with lower < upper")
+
+    sources = raw.get("sources") or {}
+    if not isinstance(sources, dict):
+        raise ArmError(f"{path}: sources: expected a mapping of fact -> where its numbers came from")
+    if not bare:
+        for key in ("urdf",) + FACTS:
+            if key in raw and not (isinstance(sources.get(key), str) and sources[key].strip()):
+                raise ArmError(f"{path}: sources.{key}: missing (every fact needs its source)")
+    if "torque_limit_nm" in raw:
+        torque = _vector(path, "torque_limit_nm", raw["torque_limit_nm"], n, strict=True)
+    else:
+        efforts = [j.effort for j in actuated]
+        missing = [j.name for j, e in zip(actuated, efforts) if not (math.isfinite(e) and e > 0.0)]
+        if missing:
+            raise ArmError(f"{urdf}: joint {missing[0]!r} has no effort limit > 0: give torque_limit_nm in the arm file")
+        torque = np.array(efforts, dtype=float)
+        sources.setdefault("torque_limit_nm", "the URDF's <limit effort>")
+    facts = {key: _vector(path, key, raw.get(key, 0.0), n, strict=False) for key in FACTS[1:]}
+    for key in FACTS[1:]:
+        sources.setdefault(key, "not given: zero")
+    flange = raw.get("flange_link") or actuated[-1].child
+    if flange not in links:
+        raise ArmError(f"{path}: flange_link: no link {flange!r} in the URDF")
+    settings = raw.get("settings") or {}
+    if not isinstance(settings, dict):
+        raise ArmError(f"{path}: settings: expected a mapping (config keys of this arm)")
+    locked_at = tuple(float(min(max(0.0, j.lower), j.upper)) for j in locked)
+    name = raw["name"] if not bare else path.stem
+    return Arm(name=name, description=str(raw.get("description", name)), file=path, urdf=urdf,
+               joint_names=joint_names, locked_joints=tuple(j.name for j in locked), locked_position_rad=locked_at,
+               lower_rad=lower, upper_rad=upper, torque_limit_nm=torque, flange_link=flange,
+               rotor_inertia_kgm2=facts["rotor_inertia_kgm2"], viscous_nms_per_rad=facts["viscous_nms_per_rad"],
+               coulomb_nm=facts["coulomb_nm"], sources=dict(sources), settings=settings, chain=chain)
+
+
+def _names(path: Path, raw: dict, key: str) -> tuple[str, ...] | None:
+    value = raw.get(key)
+    if value is None:
+        return None
+    if not isinstance(value, list) or not all(isinstance(v, str) and v for v in value):
+        raise ArmError(f"{path}: {key}: expected a list of joint names")
+    return tuple(value)
+
+
+def _vector(path: Path, key: str, value, n: int, strict: bool) -> np.ndarray:
+    """``value`` as (n,) floats: a list of n numbers or one number for every joint; > 0 (strict) or >= 0."""
+    items = value if isinstance(value, list) else [value] * n
+    if len(items) != n:
+        raise ArmError(f"{path}: {key}: expected {n} values (one per actuated joint), got {len(items)}")
+    out = []
+    for i, v in enumerate(items):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise ArmError(f"{path}: {key}[{i}]: expected a finite number, got {v!r}")
+        if (v <= 0.0) if strict else (v < 0.0):
+            raise ArmError(f"{path}: {key}[{i}]: must be {'> 0' if strict else '>= 0'}, got {v!r}")
+        out.append(float(v))
+    return np.array(out)
+
+
+def _links(xml: str) -> dict[str, ET.Element | None]:
+    """Link name -> its <inertial> element (None when it has none)."""
+    return {el.get("name"): el.find("inertial") for el in ET.fromstring(xml).findall("link")}
+
+
+def _check_inertia(urdf: Path, inertial, link: str, joint: str) -> None:
+    """The link an actuated joint moves needs a mass > 0 and a positive definite inertia tensor."""
+    if inertial is None:
+        raise ArmError(f"{urdf}: link {link!r} (moved by {joint!r}) has no <inertial>")
+    mass_el, inertia_el = inertial.find("mass"), inertial.find("inertia")
+    try:
+        mass = float(mass_el.get("value"))
+        i = {k: float(inertia_el.get(k, 0.0)) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
+    except (AttributeError, TypeError, ValueError):
+        raise ArmError(f"{urdf}: link {link!r}: <inertial> needs <mass value> and <inertia>") from None
+    tensor = np.array([[i["ixx"], i["ixy"], i["ixz"]], [i["ixy"], i["iyy"], i["iyz"]], [i["ixz"], i["iyz"], i["izz"]]])
+    if not (mass > 0.0 and np.all(np.isfinite(tensor)) and np.all(np.linalg.eigvalsh(tensor) > 0.0)):
+        raise ArmError(f"{urdf}: link {link!r} (moved by {joint!r}): mass {mass:g} kg and inertia must be > 0")

@@ -1,0 +1,43 @@
+"""The config values an arm gets where neither its file nor the user's config gives them (docs/arms.md).
+
+Two rules, run in this order by ``load_config``: the reference (reference_rule.py, from the URDF limits
+alone) and the gains (gain_rule.py, from the arm's mass matrix along that reference). Only the keys nobody
+gave are taken from them; the PA10's arm file gives all, so nothing is derived for it.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .arm import Arm
+from .gain_rule import SWEEP_STEP_S, gain_rule, inertia_sweep, report_rule
+from .reference_rule import reference_rule
+
+REFERENCE_KEYS = tuple(f"reference.{k}" for k in ("amplitude_rad", "envelope_rate_per_s3", "frequency_rad_s",
+                                                   "centre_rad"))
+GAIN_KEYS = ("dnbs.torque_net.output_scale_nm", "dnbs.torque_net.error_scale_rad_s",
+             "dnbs.remedies.robust_term.alpha_gain_per_s", "dnbs.remedies.robust_term.torque_gain_nms_per_rad",
+             "pid.kp", "pid.ki", "pid.kd")
+DERIVED_KEYS = REFERENCE_KEYS + GAIN_KEYS
+
+
+def derived_reference(arm: Arm) -> dict:
+    """The ``reference`` fragment of the reference rule."""
+    return {"reference": reference_rule(arm.lower_rad, arm.upper_rad)}
+
+
+def derived_gains(arm: Arm, cfg: dict, report: bool = True) -> dict:
+    """The gain rule's fragment for a config whose reference and simulation sections are checked: the inertia
+    sweep runs along that reference, every 20 ms over simulation.duration_s. ``report``: print the derivation
+    (one line per joint) and any warning on stderr."""
+    from ..core.reference import Reference
+
+    r, sim = cfg["reference"], cfg["simulation"]
+    dt = sim["dt_s"]
+    ref = Reference(r["amplitude_rad"], r["envelope_rate_per_s3"], r["frequency_rad_s"], dt_s=dt,
+                    centre_rad=r["centre_rad"])
+    steps = np.arange(0, int(round(sim["duration_s"] / dt)) + 1, max(1, int(round(SWEEP_STEP_S / dt))))
+    sweep = inertia_sweep(arm, ref.position(steps))
+    fragment = gain_rule(arm, sweep, dt)
+    if report:
+        report_rule(arm, sweep, fragment, dt)
+    return fragment
