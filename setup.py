@@ -14,7 +14,9 @@ setup(
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
         (f"share/{PACKAGE}/config", glob("config/*.yaml") + glob("config/*.json")),
-        (f"share/{PACKAGE}/urdf", glob("urdf/*.urdf") + glob("urdf/*.md")),
+        (f"share/{PACKAGE}/urdf", glob("urdf/*.md")),
+        *((f"share/{PACKAGE}/{d}", glob(f"{d}/*.urdf") + glob(f"{d}/*.yaml") + glob(f"{d}/*.md"))
+          for d in sorted(p.rstrip("/") for p in glob("urdf/*/"))),
     ],
     install_requires=["setuptools"],
     zip_safe=True,

@@ -129,8 +129,9 @@ def build_parser() -> argparse.ArgumentParser:
                          "plant's messages wake do not preempt it while it publishes; opt-in: a small gain "
                          "within this machine's noise; a granted --rt-priority replaces it (docs/timing.md)")
     _add_run_args(la, ("dnbs", "pid"), "the joint controllers: dnbs or pid (ctc is centralized: in-process only)")
-    la.add_argument("--namespace", default="/pa10", metavar="NS",
-                    help="the arm's ROS namespace (default /pa10): every node runs in it, its topics are NS/s1/state, "
+    la.add_argument("--namespace", default=None, metavar="NS",
+                    help="the arm's ROS namespace (default /<arm name>, /pa10 for the PA10): every node runs in it, its "
+                         "topics are NS/<joint>/state, "
                          "NS/joint_states, ...; /clock, /tf, /tf_static, /diagnostics stay global")
     la.add_argument("--clock-hz", type=float, default=100.0, metavar="HZ",
                     help="/clock rate in Hz of simulated time (default 100, as `ros2 bag play --clock`); every node "

@@ -274,7 +274,7 @@ def load_config(path: str | Path, arm: str | Path | None = None) -> dict:
                        "viscous_nms_per_rad": the_arm.viscous_nms_per_rad.tolist(),
                        "coulomb_nm": the_arm.coulomb_nm.tolist()}}
     merged = _merge(_merge(facts, the_arm.settings), raw)
-    from .arm.settings_rule import GAIN_KEYS, REFERENCE_KEYS, derived_gains, derived_reference
+    from .derived_settings import GAIN_KEYS, REFERENCE_KEYS, derived_gains, derived_reference
 
     if any(_get(merged, key) is None for key in REFERENCE_KEYS):
         merged = _merge(derived_reference(the_arm), merged)

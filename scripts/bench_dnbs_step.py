@@ -26,7 +26,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from pa10_dnbs import JOINT_NAMES  # noqa: E402
+from pa10_dnbs.arm import arm_of  # noqa: E402
 from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
 from pa10_dnbs.controller_factory import build_guarded_controllers, build_reference  # noqa: E402
 from pa10_dnbs.core.reference import ReferenceSample  # noqa: E402
@@ -88,7 +88,7 @@ def _dnbs_pass(cfg, run, rows, kernel: str = "numpy"):
 
 def _pid_pass(cfg, run) -> float:
     guarded = build_guarded_controllers(cfg, "pid")
-    refs = _references(cfg, run.n_steps, list(range(len(JOINT_NAMES))))
+    refs = _references(cfg, run.n_steps, list(range(arm_of(cfg).n_joints)))
     t = time.perf_counter()
     for k in range(run.n_steps):
         guarded.step(run.position_rad[k], run.velocity_rad_s[k], refs[k])
@@ -124,7 +124,8 @@ def main() -> int:
     us = lambda s: s / n * 1e6  # noqa: E731
     plant = min(us(_plant_pass(cfg, run)) for _ in range(args.repeat))
     pid = min(us(_pid_pass(cfg, run)) for _ in range(args.repeat))
-    nj = len(JOINT_NAMES)
+    joint_names = arm_of(cfg).joint_names
+    nj = len(joint_names)
     one_rows = (0, nj - 1)  # the first and the last joint, each alone as in its node
     print(f"  plant (PyBullet step, state, torques)   {plant:6.1f} us")
     print(f"  PID bank of 7, guarded                  {pid:6.1f} us")
@@ -132,14 +133,14 @@ def main() -> int:
     for kernel in args.kernels.split(","):
         banks = {}
         for label, rows in ((f"bank of {nj}", list(range(nj))),
-                            *((f"bank of 1 ({JOINT_NAMES[j]})", [j]) for j in one_rows)):
+                            *((f"bank of 1 ({joint_names[j]})", [j]) for j in one_rows)):
             passes = [_dnbs_pass(cfg, run, rows, kernel)[0] for _ in range(args.repeat)]
             best = min(passes, key=lambda p: p["step"])
             banks[label] = {k: us(v) for k, v in best.items()}
         print(f"  DNBS ({kernel}), guarded".ljust(39) + "".join(f"{label:>17s}" for label in banks))
         for part in banks[f"bank of {nj}"]:
             print(f"    {part:35s}" + "".join(f"{banks[label][part]:14.1f} us" for label in banks))
-        steps[kernel] = banks[f"bank of {nj}"]["step"], banks[f"bank of 1 ({JOINT_NAMES[0]})"]["step"]
+        steps[kernel] = banks[f"bank of {nj}"]["step"], banks[f"bank of 1 ({joint_names[0]})"]["step"]
     for kernel, (dnbs7, one) in steps.items():
         _ratios(kernel, plant, pid, dnbs7, one, nj, args.target)
     print(f"load average at the end {_load()}")

@@ -32,7 +32,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from pa10_dnbs import JOINT_NAMES  # noqa: E402
+from pa10_dnbs.arm import arm_of  # noqa: E402
 from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
 from pa10_dnbs.launch.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
 from pa10_dnbs.launch.realtime_advice import ON_TIME_TARGET  # noqa: E402
@@ -66,7 +66,7 @@ def _run(mode: str, factor: float, args) -> tuple[dict, dict[str, float]]:
         opt = GraphOptions(config_path=args.config, mode="lockstep" if mode == "record" else mode,
                            controller=args.controller, duration_s=args.duration, reliability=args.reliability,
                            real_time_factor=factor, rt_priority=args.rt_priority,
-                           sched_batch=args.sched_batch,
+                           sched_batch=args.sched_batch, joint_names=args.joint_names,
                            record_bag=Path(tmp) / "bag" if mode == "record" else None)
         res = run_graph(opt, Path(tmp), say=lambda s: None)
         cpu = {}
@@ -113,7 +113,7 @@ def main() -> int:
                          "on the compiled kernel)")
     args = ap.parse_args()
     args.config = args.config.resolve()
-    load_config(args.config)  # a bad config fails here, with the key named, not in every run
+    args.joint_names = arm_of(load_config(args.config)).joint_names  # a bad config fails here, not in every run
     check_priority(args.rt_priority)
     args.rt_priority, refused = granted_priority(args.rt_priority)
     if refused:
@@ -143,7 +143,7 @@ def main() -> int:
             print(line, flush=True)
 
     print("\nCPU per tick [us] (median of runs; inside each process, start-up excluded)")
-    names = ["plant"] + [f"joint_controller_{j}" for j in JOINT_NAMES] + ["reference", "wire_monitor"]
+    names = ["plant"] + [f"joint_controller_{j}" for j in args.joint_names] + ["reference", "wire_monitor"]
     names += ["recorder"] if args.record else []
     header = f"  {'process':22s}" + "".join(f"{(m if m != 'realtime' else f'R={r:g}'):>10s}" for m, r in cases)
     print(header)
@@ -170,7 +170,7 @@ def main() -> int:
                   + ", ".join("failed" if s is None else f"{100 * s['on_time_fraction']:.2f}" for s in every)
                   + f"), late starts {med([s['late_start_ticks'] for s in rs]):.0f}, achieved factor "
                   f"{med([s['real_time_factor'] for s in rs]):.3f}")
-            for j, name in enumerate(JOINT_NAMES):
+            for j, name in enumerate(args.joint_names):
                 print(f"      {name}: p50 {med([s['joints'][j]['latency_median_us'] for s in rs]):6.0f} us, "
                       f"p99 {med([s['joints'][j]['latency_p99_us'] for s in rs]):6.0f} us, missed "
                       f"{med([s['joints'][j]['missed_ticks'] for s in rs]):.0f}")

@@ -34,7 +34,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from pa10_dnbs.config import default_config_path  # noqa: E402
+from pa10_dnbs.arm import arm_of  # noqa: E402
+from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
 from pa10_dnbs.launch.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
 
 
@@ -98,7 +99,8 @@ def one_run(mode: str, duration: float, reliability: str | None) -> tuple[dict, 
         client = LiveClient() if mode == "live" else None
         r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         try:
-            res = run_graph(GraphOptions(config_path=default_config_path(), mode="lockstep",
+            joints = arm_of(load_config(default_config_path())).joint_names
+            res = run_graph(GraphOptions(config_path=default_config_path(), mode="lockstep", joint_names=joints,
                                          duration_s=duration, reliability=reliability,
                                          record_bag=bag, bag_compression="none" if mode == "record-none" else "zstd",
                                          live_port=0 if client else None),

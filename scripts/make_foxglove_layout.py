@@ -15,9 +15,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from pa10_dnbs import JOINT_NAMES  # noqa: E402
+from pa10_dnbs.arm import arm_of  # noqa: E402
 from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
-from pa10_dnbs.kinematics.urdf_chain import UrdfChain  # noqa: E402
 from pa10_dnbs.live.layout import layout_json  # noqa: E402
 from pa10_dnbs.wire.topics import DEFAULT_NS, arm_topics  # noqa: E402
 
@@ -29,7 +28,8 @@ def main() -> int:
     ap.add_argument("--out", type=Path, default=ROOT / "config" / "foxglove_layout.json")
     args = ap.parse_args()
     cfg = load_config(args.config)
-    text = layout_json(JOINT_NAMES, cfg["plant"]["torque_limit_nm"], UrdfChain.from_file(cfg["plant"]["urdf"]).root_link,
+    arm = arm_of(cfg)
+    text = layout_json(arm.joint_names, cfg["plant"]["torque_limit_nm"], arm.chain.root_link,
                        arm_topics(args.namespace))
     args.out.write_text(text)
     print(f"wrote {args.out}")

@@ -18,7 +18,9 @@ def main() -> int:
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     import rclpy
 
-    from pa10_dnbs import JOINT_NAMES
+    from pa10_dnbs.arm import load_arm
+
+    JOINT_NAMES = load_arm("pa10").joint_names
 
     joints = sys.argv[3].split(",") if len(sys.argv) > 3 and sys.argv[3] else list(JOINT_NAMES)
     settle_s = float(sys.argv[4]) if len(sys.argv) > 4 else 1.0

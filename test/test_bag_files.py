@@ -10,7 +10,9 @@ import yaml
 from cli_runner import run_cli
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
 
-from pa10_dnbs import JOINT_NAMES
+from pa10_dnbs.arm import load_arm
+
+JOINT_NAMES = load_arm("pa10").joint_names
 from pa10_dnbs.bag.bag_reader import Bag
 from pa10_dnbs.bag.bag_writer import BagExistsError, BagWriter
 from pa10_dnbs.wire import joint_state_cdr
@@ -149,7 +151,7 @@ def test_inconsistent_metadata(tmp_path):
 
 def test_bag_missing_the_needed_topics(tmp_path):
     bag = _write_bag(tmp_path / "b", topic="/other")
-    _assert_clear_error(_analyse(bag, tmp_path), "needs topics", "/pa10/joint_states", "/pa10/s1/reference")
+    _assert_clear_error(_analyse(bag, tmp_path), "needs topics", "/pa10/joint_states")  # it names the joints
 
 
 def test_analysis_finds_the_arm_under_any_namespace_and_in_old_bags(tmp_path):
@@ -168,7 +170,7 @@ def test_analysis_finds_the_arm_under_any_namespace_and_in_old_bags(tmp_path):
     w.add_topic("/arm3/joint_states", "sensor_msgs/msg/JointState", [QOS])
     w.write("/arm3/joint_states", 0, joint_state_cdr.encode(0, 0, list(JOINT_NAMES), [0.0] * 7, [0.0] * 7, [0.0] * 7))
     w.close()
-    _assert_clear_error(_analyse(tmp_path / "mixed", tmp_path), "needs topics", "/pa10/s1/reference")
+    _assert_clear_error(_analyse(tmp_path / "mixed", tmp_path), "needs topics", "/pa10/joint_states")
 
 
 def test_replay_rejects_unknown_topics_before_joining_ros(tmp_path):

@@ -18,7 +18,8 @@ from rosbags.highlevel import AnyReader
 
 from conftest import LOCKSTEP_DURATION_S
 from graph_harness import REPO, Launcher, Proc
-from pa10_dnbs import JOINT_NAMES
+from pa10_dnbs.arm import load_arm
+JOINT_NAMES = load_arm("pa10").joint_names
 from pa10_dnbs.bag.bag_reader import Bag
 from pa10_dnbs.kinematics.urdf_chain import UrdfChain
 from pa10_dnbs.sim.closed_loop import simulate
@@ -104,12 +105,12 @@ def test_robot_description_and_tf_for_foxglove(bag, _default_cfg):
         assert conns["/pa10/robot_description"].ext.offered_qos_profiles[0].durability.name == "TRANSIENT_LOCAL"
         msgs = {t: [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages(connections=[conns[t]])]
                 for t in ("/pa10/robot_description", "/tf_static", "/tf", "/pa10/joint_states")}
-    assert msgs["/pa10/robot_description"][0].data == open(_default_cfg["plant"]["urdf"]).read()
+    assert msgs["/pa10/robot_description"][0].data == load_arm("pa10").urdf_text()
     static = msgs["/tf_static"][0].transforms
     assert [(t.header.frame_id, t.child_frame_id) for t in static] == [("link7", "flange")]
     tf = msgs["/tf"]
     assert len(tf) == N_STEPS // 10 + 1  # 100 Hz of simulated time
-    chain = UrdfChain.from_file(_default_cfg["plant"]["urdf"])
+    chain = load_arm("pa10").chain
     states = {(m.header.stamp.sec, m.header.stamp.nanosec): m for m in msgs["/pa10/joint_states"]}
     for m in (tf[0], tf[len(tf) // 2], tf[-1]):
         stamp = (m.transforms[0].header.stamp.sec, m.transforms[0].header.stamp.nanosec)

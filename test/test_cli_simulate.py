@@ -58,7 +58,6 @@ def test_no_figures_writes_data_and_report_without_png(tmp_path):
 
 def _bad_config(tmp_path, edit):
     d = yaml.safe_load(default_config_path().read_text())
-    d["plant"]["urdf"] = str((default_config_path().parent / d["plant"]["urdf"]).resolve())
     edit(d)
     p = tmp_path / "bad.yaml"
     p.write_text(yaml.safe_dump(d))
@@ -70,7 +69,7 @@ def _bad_config(tmp_path, edit):
     (lambda d: d["pid"].__setitem__("kd", "high"), "pid.kd"),
     (lambda d: d["simulation"].__setitem__("dt_s", -0.001), "simulation.dt_s"),
     (lambda d: d["dnbs"]["alpha_net"].__setitem__("q", float("inf")), "dnbs.alpha_net.q"),
-    (lambda d: d["plant"].__setitem__("urdf", "/no/such/pa10.urdf"), "/no/such/pa10.urdf"),
+    (lambda d: d.__setitem__("arm", "/no/such/arm.yaml"), "/no/such/arm.yaml"),
 ])
 def test_bad_config_exits_2_names_key_writes_nothing(tmp_path, edit, named):
     out = tmp_path / "out"

@@ -16,9 +16,7 @@ def _write(tmp_path, raw):
 
 @pytest.fixture
 def raw():
-    d = yaml.safe_load(default_config_path().read_text())
-    d["plant"]["urdf"] = str((default_config_path().parent / d["plant"]["urdf"]).resolve())
-    return d
+    return yaml.safe_load(default_config_path().read_text())
 
 
 def test_default_config_is_valid():
@@ -65,10 +63,13 @@ def test_unknown_and_missing_keys(tmp_path, raw):
         load_config(_write(tmp_path, d))
 
 
-def test_missing_urdf_and_missing_file(tmp_path, raw):
+def test_missing_arm_and_missing_file(tmp_path, raw):
     d = copy.deepcopy(raw)
-    d["plant"]["urdf"] = "nowhere/robot.urdf"
-    with pytest.raises(ConfigError, match=r"plant\.urdf: file not found: .*nowhere/robot\.urdf"):
+    d["arm"] = "nowhere/arm.yaml"
+    with pytest.raises(ConfigError, match=r"arm: file not found: .*nowhere/arm\.yaml"):
+        load_config(_write(tmp_path, d))
+    d["arm"] = "no_such_arm"
+    with pytest.raises(ConfigError, match=r"arm: no arm called 'no_such_arm' \(presets: .*pa10"):
         load_config(_write(tmp_path, d))
     with pytest.raises(ConfigError, match="config file not found"):
         load_config(tmp_path / "absent.yaml")
@@ -92,7 +93,7 @@ def test_extends_merges_over_the_base_and_resolves_paths_where_they_are_written(
     assert cfg["dnbs"]["remedies"]["robust_term"]["enabled"] is False
     assert cfg["dnbs"]["remedies"]["robust_term"]["alpha_gain_per_s"] == base["dnbs"]["remedies"]["robust_term"][
         "alpha_gain_per_s"]
-    assert cfg["plant"]["urdf"] == base["plant"]["urdf"]  # relative to default.yaml, not to mine.yaml
+    assert cfg["arm"] == base["arm"]
 
 
 def test_extends_errors(tmp_path):

@@ -33,8 +33,9 @@ def test_launcher_does_not_load_rclpy():
 
 # Layers from the ground up: a module may import its own layer and the ones below, never one above.
 LAYERS = [
-    {"__init__", "paths", "atomic_file", "run_data", "core", "wire", "kinematics", "faults"},  # numpy-only data and maths
-    {"config", "plant", "loop", "accel"},                                      # config, physics, loop logic, compiled step
+    {"__init__", "paths", "atomic_file", "run_data", "core", "wire", "kinematics", "faults",  # numpy-only data and maths
+     "config_error"},
+    {"arm", "config", "derived_settings", "plant", "loop", "accel"},  # arms, config, physics, loop logic, compiled step
     {"controller_factory"},
     {"sim", "bag", "report", "live"},                                          # in-process runs, bags, outputs, live view
     {"study"},                                                                 # robustness study over sim runs

@@ -9,7 +9,10 @@ import pytest
 from pa10_dnbs.config import ConfigError
 from pa10_dnbs.faults.delay_line import DelayLine
 from pa10_dnbs.faults.link_faults import FaultInjector, LinkFaults
+from pa10_dnbs.arm import load_arm
 from pa10_dnbs.launch.fault_flags import add_fault_arguments, apply_fault_flags, faults_active
+
+JOINT_NAMES = load_arm("pa10").joint_names
 
 
 def _fates(faults, seed, n):
@@ -63,7 +66,7 @@ def _args(*argv):
 def test_flags_override_the_chosen_joints(cfg):
     assert not faults_active(cfg)
     out = apply_fault_flags(cfg, _args("--fault-joints", "s2,w1", "--drop-efforts", "0.01", "--corrupt-states",
-                                       "inf:0.5", "--kill", "e1@5", "--fault-seed", "7"))
+                                       "inf:0.5", "--kill", "e1@5", "--fault-seed", "7"), JOINT_NAMES)
     f = out["faults"]
     assert f["effort"]["drop_fraction"] == (0.0, 0.01, 0.0, 0.0, 0.0, 0.01, 0.0)
     assert f["state"]["corrupt_kind"] == "inf" and f["state"]["corrupt_fraction"][1] == 0.5
@@ -77,4 +80,4 @@ def test_flags_override_the_chosen_joints(cfg):
     (("--delay-efforts", "-1"), "--delay-efforts"), (("--kill", "e1@-2"), "--kill")])
 def test_bad_flags_name_themselves(cfg, argv, flag):
     with pytest.raises(ConfigError, match=flag):
-        apply_fault_flags(cfg, _args(*argv))
+        apply_fault_flags(cfg, _args(*argv), JOINT_NAMES)

@@ -9,7 +9,8 @@ import pytest
 from rosbags.typesys import Stores, get_typestore
 
 from graph_harness import Launcher
-from pa10_dnbs import JOINT_NAMES
+from pa10_dnbs.arm import load_arm
+JOINT_NAMES = load_arm("pa10").joint_names
 from pa10_dnbs.bag.bag_reader import Bag
 from pa10_dnbs.sim.closed_loop import simulate
 from pa10_dnbs.run_data import RunData

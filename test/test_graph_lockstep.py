@@ -61,7 +61,9 @@ def test_warm_start_over_ros_equals_the_in_process_warm_start(lockstep_run, _def
     equals simulate(init_states=...) bit for bit, and metrics.json says it was a warm start."""
     from graph_harness import Launcher
 
-    from pa10_dnbs import JOINT_NAMES
+    from pa10_dnbs.arm import load_arm
+
+    JOINT_NAMES = load_arm("pa10").joint_names
     from pa10_dnbs.core.checkpoint import load_joint_checkpoints
 
     la = Launcher("--duration", 1.0, "--init-from", lockstep_run["out"], "--out", tmp_path / "warm", domain_id=domain)

@@ -11,7 +11,8 @@ import pytest
 from rosbags.typesys import Stores, get_typestore
 
 from foxglove_client import FoxgloveClient
-from pa10_dnbs import JOINT_NAMES
+from pa10_dnbs.arm import load_arm
+JOINT_NAMES = load_arm("pa10").joint_names
 from pa10_dnbs.config import ConfigError
 from pa10_dnbs.kinematics.urdf_chain import UrdfChain
 from pa10_dnbs.live import tracking
@@ -28,7 +29,7 @@ from pa10_dnbs.wire.steps import StepClock
 STORE = get_typestore(Stores.ROS2_JAZZY)
 T = STORE.types
 LIMITS = [232.0, 232.0, 100.0, 100.0, 14.5, 14.5, 14.5]
-URDF = Path(__file__).resolve().parent.parent / "urdf" / "pa10_7ce.urdf"
+URDF = Path(__file__).resolve().parent.parent / "urdf" / "pa10" / "pa10_7ce.urdf"
 
 
 def reference_cdr(joint: str, first_step: int, positions) -> bytes:
@@ -142,7 +143,7 @@ def _pump_ticking(client, view, until, seconds=10.0) -> bool:
 @pytest.fixture
 def live():
     server = LiveServer(live_channels(), port=0)
-    view = LiveView(server, LIMITS, 1e-3, display_hz=64.0)  # 1/64 s: exact in binary, like the fake clock below
+    view = LiveView(server, LIMITS, 1e-3, display_hz=64.0, joint_names=JOINT_NAMES)  # 1/64 s: exact in binary, like the fake clock below
     yield server, view
     server.stop()
 
@@ -253,7 +254,7 @@ def _leaves(tree):
 def test_layout_file_is_current_and_uses_only_served_channels(_default_cfg):
     from pa10_dnbs.live.layout import layout_json
 
-    path = URDF.parent.parent / "config" / "foxglove_layout.json"
+    path = Path(__file__).resolve().parents[1] / "config" / "foxglove_layout.json"
     chain = UrdfChain(URDF.read_text())
     assert path.read_text() == layout_json(JOINT_NAMES, _default_cfg["plant"]["torque_limit_nm"], chain.root_link), \
         "config/foxglove_layout.json is stale: run scripts/make_foxglove_layout.py"

@@ -26,7 +26,7 @@ def test_an_observer_that_misses_the_run_fails_it_and_the_fifo_case_says_why(tmp
     monkeypatch.setattr(supervision, "OBSERVER_CATCH_UP_S", 0.3)
     procs = _children(tmp_path)
     try:
-        opt = GraphOptions(config_path=share_path("config", "default.yaml"), mode="realtime", duration_s=0.01,
+        opt = GraphOptions(config_path=share_path("config", "default.yaml"), mode="realtime", joint_names=("s1", "s2", "s3", "e1", "e2", "w1", "w2"), duration_s=0.01,
                            rt_priority=rt_priority)
         failure = supervision.watch(procs, opt, lambda line: None, supervision.StopRequest())
     finally:

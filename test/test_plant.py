@@ -9,9 +9,12 @@ import pybullet
 import pytest
 from pybullet_utils.bullet_client import BulletClient
 
-from pa10_dnbs.plant import PlantParams, PyBulletPA10Plant
+from pa10_dnbs.arm import ArmError, load_arm
+from pa10_dnbs.plant import PlantParams, PyBulletArmPlant
 
-URDF = Path(__file__).resolve().parents[1] / "urdf" / "pa10_7ce.urdf"
+PA10 = load_arm("pa10")
+
+URDF = Path(__file__).resolve().parents[1] / "urdf" / "pa10" / "pa10_7ce.urdf"
 
 # Numbers typed in from the facts sheet (sources A-D, paper Table 2), not read from the code.
 JOINT_NAMES = ("s1", "s2", "s3", "e1", "e2", "w1", "w2")
@@ -46,7 +49,7 @@ def client():
 @pytest.fixture
 def make_plant(client):
     def _make(**kwargs):
-        return PyBulletPA10Plant(client, URDF, PlantParams(**kwargs))
+        return PyBulletArmPlant(client, PA10, PlantParams(**kwargs))
     return _make
 
 
@@ -150,11 +153,15 @@ def test_positive_pitch_tilts_arm_towards_plus_x(client, make_plant):
 
 
 # -------------------------------------------------------------- dynamics
-def test_defaults_are_table2_and_source_d():
-    params = PlantParams()
+def test_defaults_are_table2_and_source_d(make_plant):
+    """The PA10's facts live in its arm file (urdf/pa10/arm.yaml); a plant takes them where its params leave
+    them out."""
+    np.testing.assert_array_equal(PA10.torque_limit_nm, TABLE2_NM)
+    np.testing.assert_array_equal(PA10.rotor_inertia_kgm2, ROTOR_KGM2)
+    params = make_plant().params
     np.testing.assert_array_equal(params.torque_limit_nm, TABLE2_NM)
     np.testing.assert_array_equal(params.rotor_inertia_kgm2, ROTOR_KGM2)
-    assert params.dt_s == 1e-3
+    assert PlantParams().dt_s == 1e-3
 
 
 def test_mass_matrix_spd_and_includes_rotor_inertia(client, make_plant):
@@ -375,7 +382,7 @@ def test_deterministic_across_clients_and_resets(client):
     params = PlantParams(coulomb_nm=(1.0,) * 7)
     other = BulletClient(connection_mode=pybullet.DIRECT)
     try:
-        plants = [PyBulletPA10Plant(client, URDF, params), PyBulletPA10Plant(other, URDF, params)]
+        plants = [PyBulletArmPlant(client, PA10, params), PyBulletArmPlant(other, PA10, params)]
         for p in plants:
             p.reset(Q_MOVING, QD_MOVING)
         for tau in torques:
@@ -405,14 +412,12 @@ def test_deterministic_across_clients_and_resets(client):
         ("dt_s", math.nan),
         ("gravity_mps2", -9.81),
         ("gravity_mps2", math.inf),
-        ("rotor_inertia_kgm2", (0.75,) * 6),
         ("rotor_inertia_kgm2", (-0.1,) + (0.1,) * 6),
         ("viscous_nms_per_rad", (1.0,) * 6 + (math.nan,)),
         ("viscous_nms_per_rad", "fast"),
         ("coulomb_nm", (-1.0,) * 7),
         ("coulomb_smoothing_rad_s", 0.0),
         ("torque_limit_nm", (232.0,) * 6 + (0.0,)),
-        ("torque_limit_nm", (232.0,) * 8),
     ],
 )
 def test_bad_params_raise_naming_the_field(field, value):
@@ -420,10 +425,16 @@ def test_bad_params_raise_naming_the_field(field, value):
         PlantParams(**{field: value})
 
 
-def test_missing_urdf_raises(client, tmp_path):
-    missing = tmp_path / "no_such_arm.urdf"
-    with pytest.raises(FileNotFoundError, match="no_such_arm.urdf"):
-        PyBulletPA10Plant(client, missing, PlantParams())
+@pytest.mark.parametrize("field, value", [("rotor_inertia_kgm2", (0.75,) * 6), ("torque_limit_nm", (232.0,) * 8)])
+def test_params_of_the_wrong_length_for_the_arm_raise(make_plant, field, value):
+    with pytest.raises(ValueError, match=rf"{field}: expected 7 values \(one per joint of pa10\)"):
+        make_plant(**{field: value})
+
+
+def test_missing_urdf_raises(tmp_path):
+    (tmp_path / "arm.yaml").write_text("name: x\nurdf: no_such_arm.urdf\n")
+    with pytest.raises(ArmError, match="urdf: file not found: .*no_such_arm.urdf"):
+        load_arm(tmp_path / "arm.yaml")
 
 
 def test_steep_coulomb_friction_on_a_light_wrist_does_not_ring(make_plant):

@@ -4,8 +4,11 @@ import subprocess
 import sys
 from pathlib import Path
 
+from pa10_dnbs.arm import load_arm
 from pa10_dnbs.launch.graph_options import GraphOptions
 from pa10_dnbs.launch.node_specs import node_commands
+
+JOINT_NAMES = load_arm("pa10").joint_names
 
 CHILD = """
 import os, threading, time
@@ -35,12 +38,12 @@ def _param(argv, name):
 
 
 def test_every_node_but_the_plant_is_asked_for_batch(tmp_path):
-    opt = GraphOptions(config_path=Path("config/default.yaml"), live_port=0, sched_batch=True)
+    opt = GraphOptions(config_path=Path("config/default.yaml"), joint_names=JOINT_NAMES, live_port=0, sched_batch=True)
     cmds = dict(node_commands(opt, tmp_path / "stats.json", tmp_path / "wire.npz"))
     assert {"plant", "reference", "wire_monitor", "live_view", "joint_controller_s1"} <= set(cmds)
     for name, argv in cmds.items():
         assert _param(argv, "sched_batch") == (None if name == "plant" else "true"), name
-    off = dict(node_commands(GraphOptions(config_path=Path("config/default.yaml"),  # the default: off
+    off = dict(node_commands(GraphOptions(config_path=Path("config/default.yaml"), joint_names=JOINT_NAMES,  # the default: off
                                           record_bag=tmp_path / "bag"), tmp_path / "s.json", tmp_path / "w.npz"))
     assert "recorder" in off
     for name, argv in off.items():
@@ -50,7 +53,7 @@ def test_every_node_but_the_plant_is_asked_for_batch(tmp_path):
 def test_every_node_of_the_graph_gets_the_rt_priority(tmp_path):
     """One scheduling class for the whole graph: with the loop alone under SCHED_FIFO an observer starved."""
     for record in (None, tmp_path / "bag"):
-        opt = GraphOptions(config_path=Path("config/default.yaml"), live_port=0, rt_priority=50, record_bag=record)
+        opt = GraphOptions(config_path=Path("config/default.yaml"), joint_names=JOINT_NAMES, live_port=0, rt_priority=50, record_bag=record)
         cmds = dict(node_commands(opt, tmp_path / "stats.json", tmp_path / "wire.npz"))
         assert {"plant", "reference", "live_view", "joint_controller_w2"} <= set(cmds)
         assert ("recorder" if record else "wire_monitor") in cmds

@@ -1,7 +1,9 @@
 """Topic names for a namespace (wire/topics.py): validation, resolution, the arm of a bag, replay renaming."""
 import pytest
 
-from pa10_dnbs import JOINT_NAMES
+from pa10_dnbs.arm import load_arm
+
+JOINT_NAMES = load_arm("pa10").joint_names
 from pa10_dnbs.wire.topics import (ArmTopics, arm_topics, check_namespace, find_arm, legacy_topics, renamed,
                                    resolve)
 

@@ -10,7 +10,7 @@ from pybullet_utils.bullet_client import BulletClient
 
 from pa10_dnbs.kinematics.urdf_chain import UrdfChain, axis_angle_matrix, matrix_quaternion, rpy_matrix
 
-URDF = Path(__file__).resolve().parents[1] / "urdf" / "pa10_7ce.urdf"
+URDF = Path(__file__).resolve().parents[1] / "urdf" / "pa10" / "pa10_7ce.urdf"
 JOINTS = ("s1", "s2", "s3", "e1", "e2", "w1", "w2")
 
 

@@ -41,16 +41,16 @@ def arm_file_path(spec: str | Path) -> Path:
     """The file ``spec`` names: a preset's ``urdf/<name>/arm.yaml``, or the path itself (resolved)."""
     text = str(spec)
     if not text:
-        raise ArmError("--arm: empty (a preset name or the path of an arm file or URDF)")
+        raise ArmError("arm: empty (a preset name or the path of an arm file or URDF)")
     if "/" not in text and not text.endswith((".yaml", ".yml", ".urdf")):
         path = share_path("urdf", text, "arm.yaml")
         if not path.is_file():
-            raise ArmError(f"--arm: no arm called {text!r} (presets: {', '.join(preset_names())}; or give the path "
+            raise ArmError(f"arm: no arm called {text!r} (presets: {', '.join(preset_names())}; or give the path "
                            f"of an arm file or URDF)")
         return path.resolve()
     path = Path(text).expanduser().resolve()
     if not path.is_file():
-        raise ArmError(f"--arm: file not found: {path}")
+        raise ArmError(f"arm: file not found: {path}")
     return path
 
 

@@ -12,7 +12,7 @@ the heaviest, J_heavy = 1 / min_q (M + J_r)^-1_jj:
 - DNBS: U = the torque limit; E2 = torque limit / k_u (the e2 at which the linear term alone saturates);
 - PID: Kd = k_u, Kp = k_a k_u, Ki = Kp k_a / 4 (the outer pair critically damped).
 
-The model enters here only: at run time every controller still sees its own joint alone. The rule warns
+The model enters here only (plant/inertia_sweep.py reads M(q) once, before the run): at run time every controller still sees its own joint alone. The rule warns
 (one line, naming the joint) where J_heavy / J_light > INERTIA_RATIO_WARN (one fixed gain is either slow at
 the heavy pose or unstable at the light one), where the coupled figure exceeds COUPLED_WARN, and where the
 plant's explicit viscous friction is near its own limit (T Fv / J_light > 1).
@@ -42,23 +42,6 @@ class InertiaSweep:
     heavy_kgm2: np.ndarray
     poses: np.ndarray            # (m, n) the sampled reference positions [rad]
     inverse_mass: tuple          # of (n, n) (M(q) + J_r)^-1 [1/(kg m^2)], for the coupled figure
-
-
-def inertia_sweep(arm: Arm, positions_rad: np.ndarray) -> InertiaSweep:
-    """J_light and J_heavy of every joint over the poses ``positions_rad`` (m, n), from the arm's plant
-    (M(q) with rotor inertia, the locked joints held)."""
-    from ..plant.from_config import open_client
-    from ..plant.pybullet_plant import PlantParams, PyBulletArmPlant
-
-    client = open_client()
-    try:
-        plant = PyBulletArmPlant(client, arm, PlantParams())
-        poses = np.clip(positions_rad, arm.lower_rad, arm.upper_rad)
-        inv_diag = np.array([np.diag(np.linalg.inv(plant.mass_matrix(q))) for q in poses])
-        minv = [np.linalg.inv(plant.mass_matrix(q)) for q in poses[:: max(1, len(poses) // 200)]]
-    finally:
-        client.disconnect()
-    return InertiaSweep(1.0 / inv_diag.max(axis=0), 1.0 / inv_diag.min(axis=0), poses, tuple(minv))
 
 
 def coupled_figure(sweep: InertiaSweep, k_u: np.ndarray, dt_s: float) -> float:

@@ -17,7 +17,6 @@ from pathlib import Path
 
 from rosbags.typesys import Stores, get_typestore
 
-from .. import JOINT_NAMES
 from ..wire.reference_buffer import ReferenceBuffer
 from ..wire.wire_record import WireRecord
 from ..wire import joint_state_cdr
@@ -43,7 +42,22 @@ def run_info(bag: Bag) -> dict:
 
 def bag_arm(bag: Bag) -> ArmTopics:
     """The arm whose topics the bag holds (the default /pa10 layout when none fits, so errors name those)."""
-    return find_arm(bag.topics, JOINT_NAMES[0]) or ArmTopics()
+    return find_arm(bag.topics) or ArmTopics()
+
+
+def bag_joint_names(bag: Bag, arm: ArmTopics | None = None) -> tuple[str, ...]:
+    """The arm's joints, chain order, as its first readable joint_states message names them (ROS's own record
+    of which joints a robot has); BagError when the bag has none."""
+    arm = arm or bag_arm(bag)
+    bag.require_topics([arm.joint_states], "analysis")
+    for _, _, _, data in bag.messages([arm.joint_states]):
+        try:
+            names = joint_state_cdr.decode(data)[2]
+        except (ValueError, struct.error, UnicodeDecodeError):
+            continue
+        if names:
+            return tuple(names)
+    raise BagError(f"{bag.path}: no {arm.joint_states} message names the arm's joints")
 
 
 def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None, progress=None) -> WireRecord:
@@ -53,13 +67,15 @@ def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None, progress=No
     PROGRESS_EVERY states, and at the end) with the step reached and the worst |x_d - x| [rad] so far.
     """
     arm = bag_arm(bag)
-    needed = [arm.joint_states] + [arm.reference(j) for j in JOINT_NAMES]
+    joints = bag_joint_names(bag, arm)
+    nj = len(joints)
+    needed = [arm.joint_states] + [arm.reference(j) for j in joints]
     bag.require_topics(needed, "analysis")
     clock = StepClock(dt_s)
     store = get_typestore(Stores.ROS2_JAZZY)
     batches = []  # (joint, first step, offsets, positions), in the bag's order per joint
     ref_malformed = 0
-    for j, name in enumerate(JOINT_NAMES):
+    for j, name in enumerate(joints):
         for _, msgtype, _, data in bag.messages([arm.reference(name)]):
             try:
                 msg = store.deserialize_cdr(data, msgtype)
@@ -71,7 +87,7 @@ def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None, progress=No
             batches.append((j, k0, offsets, [float(p.positions[0]) for p in msg.points]))
     watch = None
     if progress is not None:  # x_d by step, to show the worst |e| while the states are read
-        watch = ReferenceBuffer(len(JOINT_NAMES), clock)
+        watch = ReferenceBuffer(nj, clock)
         for b in batches:
             watch.add(*b)
     states = []
@@ -82,7 +98,7 @@ def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None, progress=No
         except (ValueError, struct.error, UnicodeDecodeError):
             malformed += 1
             continue
-        if len(pos) != len(JOINT_NAMES) or len(vel) != len(JOINT_NAMES) or len(eff) != len(JOINT_NAMES):
+        if len(pos) != nj or len(vel) != nj or len(eff) != nj:
             malformed += 1
             continue
         k = clock.step_of_sec_nanosec(sec, nanosec)
@@ -96,7 +112,7 @@ def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None, progress=No
     n = n_steps if n_steps is not None else max(k for k, *_ in states)
     if watch is not None:
         progress(n, watch.worst_abs_error)
-    rec = WireRecord(n, dt_s, len(JOINT_NAMES))
+    rec = WireRecord(n, dt_s, nj)
     rec.malformed = malformed + ref_malformed
     for k, pos, vel, eff in states:
         rec.add_joint_states(k, pos, vel, eff)
@@ -106,7 +122,7 @@ def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None, progress=No
 
 
 def robot_chain(bag: Bag, cfg: dict) -> UrdfChain | None:
-    """The arm's kinematics for the 3D figure: the bag's robot_description, else the config's URDF file."""
+    """The arm's kinematics for the 3D figure: the bag's robot_description, else the config's arm's URDF."""
     topic = bag_arm(bag).robot_description
     if topic in bag.topics:
         for _, msgtype, _, data in bag.messages([topic]):
@@ -114,5 +130,9 @@ def robot_chain(bag: Bag, cfg: dict) -> UrdfChain | None:
                 return UrdfChain(get_typestore(Stores.ROS2_JAZZY).deserialize_cdr(data, msgtype).data)
             except Exception:
                 raise BagError(f"{bag.path}: {topic} does not hold a readable URDF") from None
-    urdf = Path(cfg["plant"].get("urdf", ""))
-    return UrdfChain.from_file(urdf) if urdf.is_file() else None
+    try:
+        from ..arm import arm_of
+
+        return arm_of(cfg).chain
+    except (KeyError, TypeError, ValueError):  # a config from elsewhere: no arm file here
+        return None

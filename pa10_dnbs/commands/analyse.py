@@ -4,8 +4,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from .. import JOINT_NAMES
-from ..bag.analysis import bag_arm, robot_chain, run_info, wire_record_from_bag
+from ..bag.analysis import bag_arm, bag_joint_names, robot_chain, run_info, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
 from ..config import default_config_path, load_config
 from ..report.metrics_file import metrics_dict, metrics_settings
@@ -62,7 +61,11 @@ def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None
         if missing:
             raise BagError(f"{bag.path}: the bag does not hold the whole run: {missing}")
         controller = info.get("controller", "unknown")
-        run = rec.run_data(controller, JOINT_NAMES, cfg["plant"]["torque_limit_nm"], math.nan)
+        joints = bag_joint_names(bag)
+        if len(cfg["plant"]["torque_limit_nm"]) != len(joints):
+            raise BagError(f"{bag.path}: the bag's arm has {len(joints)} joints ({', '.join(joints)}), the config's "
+                           f"{len(cfg['plant']['torque_limit_nm'])}: pass the run's --config")
+        run = rec.run_data(controller, joints, cfg["plant"]["torque_limit_nm"], math.nan)
         metrics = metrics_dict(run, metrics_settings(cfg, rec.n * dt), source="bag", bag=str(bag.path.resolve()), mode=info.get("mode"),
                                seed=cfg["simulation"].get("seed"), malformed_messages=rec.malformed)
         notes = [f"bag: `{bag.path}` ({bag.message_count} messages on {len(bag.topics)} topics)",
@@ -70,7 +73,7 @@ def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None
                  f"source: rebuilt from the bag's {bag_arm(bag).joint_states} and reference topics ({info.get('mode', '?')} run)"]
         chain = robot_chain(bag, cfg)
         with atomic_output_dir(out, force) as tmp:
-            write_report(tmp, [run], [metrics], title="PA10-7CE run from a bag", notes=notes, chain=chain,
+            write_report(tmp, [run], [metrics], title="Run from a bag", notes=notes, chain=chain,
                          figures=figures)
     print(f"{controller}: worst-joint RMS error {metrics['worst_rms_error_rad']:.3e} rad over {metrics['window_s']} s "
           f"({rec.n} steps from {bag.path})")

@@ -8,14 +8,13 @@ from pathlib import Path
 
 import yaml
 
-from .. import JOINT_NAMES
 from ..accel.build import library_path
-from ..bag.analysis import bag_arm, wire_record_from_bag
+from ..arm import arm_of
+from ..bag.analysis import bag_arm, bag_joint_names, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
 from ..bag.bag_writer import COMPRESSIONS, check_bag_path
 from ..config import ConfigError, default_config_path, load_config
 from ..core.checkpoint import checkpoint_dir, load_joint_checkpoints
-from ..kinematics.urdf_chain import UrdfChain
 from ..launch.fault_flags import apply_fault_flags, faults_active, plain
 from ..launch.fault_report import fault_note, fault_report
 from ..launch.graph_run import GraphFailure, GraphOptions, loop_reliability, parse_netns, run_graph
@@ -27,7 +26,7 @@ from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..wire.wire_record import load_wire_run
 from ..wire.steps import StepClock
 from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, ClockSchedule, check_clock_hz
-from ..wire.topics import CLOCK, DEFAULT_NS, ArmTopics, check_namespace
+from ..wire.topics import CLOCK, ArmTopics, check_namespace, default_namespace
 
 
 
@@ -37,8 +36,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                netns: list[str] | None = None, init_from: Path | None = None, bag_compression: str = "zstd",
                live_port: int | None = None, live_host: str = "127.0.0.1", live_hz: float = 50.0,
                real_time_factor: float = 1.0, deadline_fraction: float = 0.9, rt_priority: int = DEFAULT_RT_PRIORITY,
-               sched_batch: bool = False, namespace: str = DEFAULT_NS,
-               clock_hz: float = DEFAULT_CLOCK_HZ, figures: bool = True) -> int:
+               sched_batch: bool = False, namespace: str | None = None,
+               clock_hz: float = DEFAULT_CLOCK_HZ, figures: bool = True, arm: str | None = None) -> int:
     """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code.
 
     ``fault_args``: the parsed fault flags (launch/fault_flags.py) applied to the config; the config the
@@ -51,13 +50,18 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     priority of every node where the OS grants it (0: off; refused: one line, and the default policy);
     ``sched_batch``: every node but the plant under SCHED_BATCH.
     ``reliability`` None: the mode's default QoS.
-    ``namespace``: the arm's ROS namespace (every node runs in it; /clock, /tf, /diagnostics stay global).
+    ``namespace``: the arm's ROS namespace (every node runs in it; /clock, /tf, /diagnostics stay global); None:
+    ``/<the arm's name>``. ``arm``: a preset's name or an arm file or URDF (``--arm``); None: the config's.
     ``clock_hz``: /clock rate [Hz of simulated time], > 0 (the reference node is paced by /clock).
     """
     config_path = Path(config_path).resolve() if config_path else default_config_path()
-    cfg = load_config(config_path)
+    cfg = load_config(config_path, arm=arm)
+    the_arm = arm_of(cfg)
+    joint_names = the_arm.joint_names
+    if namespace is None:
+        namespace = default_namespace(the_arm.name)
     if fault_args is not None:
-        cfg = apply_fault_flags(cfg, fault_args)
+        cfg = apply_fault_flags(cfg, fault_args, joint_names)
     try:
         check_namespace(namespace)
     except ValueError as exc:
@@ -101,7 +105,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         if controller != "dnbs":
             raise ConfigError("--init-from: only the DNBS controllers have learned state to start from")
         try:
-            load_joint_checkpoints(init_from, JOINT_NAMES)  # all there and readable, before anything starts
+            load_joint_checkpoints(init_from, joint_names)  # all there and readable, before anything starts
         except ValueError as exc:
             raise ConfigError(f"--init-from: {exc}") from None
         init_from = checkpoint_dir(init_from).resolve()
@@ -121,7 +125,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                        bag_compression=bag_compression, live_port=live_port, live_host=live_host, live_hz=live_hz,
                        real_time_factor=real_time_factor, deadline_fraction=deadline_fraction,
                        rt_priority=rt_priority, sched_batch=sched_batch, namespace=namespace,
-                       clock_hz=clock_hz)
+                       clock_hz=clock_hz, joint_names=joint_names)
     reliability = loop_reliability(opt)
     settings = metrics_settings(cfg, n_steps * dt)
     window = settings["window_s"]
@@ -133,7 +137,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
             result = run_graph(dataclasses.replace(opt, config_path=used), tmp, say=lambda s: print(s, flush=True))
             stats = result.stats
             if record is None:
-                run, missing = load_wire_run(result.wire_file, controller, JOINT_NAMES,
+                run, missing = load_wire_run(result.wire_file, controller, joint_names,
                                              cfg["plant"]["torque_limit_nm"], stats["wall_time_s"])
                 source = f"the wire monitor's record of {ArmTopics(namespace).joint_states} and the reference topics"
             else:
@@ -150,7 +154,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                 node_exit_codes=result.exit_codes, bag=str(record) if record else None,
                 faults=fault_report(cfg, stats, result),
                 **({"warm_start_from": str(init_from)} if init_from is not None else {}))
-            notes = [f"config: `{config_path}`",
+            notes = [f"config: `{config_path}`", f"arm: {the_arm.name} ({the_arm.description}), `{the_arm.file}`",
                      f"source: ROS 2 node graph, {mode} mode, {reliability} QoS, domain {result.domain_id}; "
                      f"time series rebuilt from {source}",
                      _timing_note(stats)]
@@ -164,8 +168,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
             if tuple(window) != tuple(cfg["simulation"]["window_s"]):
                 notes.append(f"run shorter than the configured window {list(cfg['simulation']['window_s'])}: "
                              "metrics over the second half instead")
-            write_report(tmp, [run], [metrics], title=f"PA10-7CE node graph run ({mode})", notes=notes,
-                         chain=UrdfChain.from_file(cfg["plant"]["urdf"]), figures=figures)
+            write_report(tmp, [run], [metrics], title=f"{the_arm.description}: node graph run ({mode})", notes=notes,
+                         chain=the_arm.chain, figures=figures)
     except GraphFailure as exc:
         print(f"pa10-dnbs launch: FAILED: {exc}", file=sys.stderr, flush=True)
         if record is not None and (record / "metadata.yaml").is_file():
@@ -201,9 +205,10 @@ def _bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, cfg: dict
         with Bag(bag_path) as bag:
             rec = wire_record_from_bag(bag, dt, n_steps)
             arm = bag_arm(bag)
+            joint_names = bag_joint_names(bag, arm)
             steps = {}
             if lockstep_stats is not None:
-                per_step = [CLOCK, arm.joint_states] + [t for j in JOINT_NAMES for t in (arm.state(j), arm.effort(j))]
+                per_step = [CLOCK, arm.joint_states] + [t for j in joint_names for t in (arm.state(j), arm.effort(j))]
                 steps = {t: set() for t in per_step}
                 for topic, _, _, data in bag.messages([t for t in per_step if t in bag.topics]):
                     if len(data) >= 12:
@@ -219,13 +224,13 @@ def _bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, cfg: dict
         if topic == CLOCK:
             expected = ClockSchedule.steps(clock_hz, dt, n_steps)
         elif topic.endswith("/effort"):
-            joint = JOINT_NAMES.index(topic.split("/")[-2])
+            joint = joint_names.index(topic.split("/")[-2])
             filled = {k for a, b in lockstep_stats["joints"][joint]["timeout_ranges"] for k in range(a, b + 1)}
             expected = everything - filled - {n_steps}  # the answer to the last state may come after the end
         lost = expected - seen
         if lost:
             problems.append(f"{topic} lacks {len(lost)} steps (first {min(lost)})")
-    run = rec.run_data(controller, JOINT_NAMES, cfg["plant"]["torque_limit_nm"], wall_time_s)
+    run = rec.run_data(controller, joint_names, cfg["plant"]["torque_limit_nm"], wall_time_s)
     return run, "; ".join(problems) or None
 
 

@@ -6,7 +6,7 @@ import functools
 import math
 from pathlib import Path
 
-from ..bag.analysis import run_info
+from ..bag.analysis import bag_joint_names, run_info
 from ..bag.bag_reader import Bag, BagError
 from ..config import ConfigError, default_config_path, load_config
 from ..live.options import check_live_options
@@ -14,7 +14,6 @@ from ..live.schemas import live_channels
 from ..live.server import LiveServer, LiveServerError
 from ..live.view import LiveView
 from ..wire.topics import ArmTopics, check_namespace, find_arm
-from .. import JOINT_NAMES
 
 
 def run_replay(bag_path: Path, rate: float, topics: list[str] | None, start_offset_s: float, loop: bool,
@@ -60,14 +59,16 @@ def run_replay(bag_path: Path, rate: float, topics: list[str] | None, start_offs
         if live_port is None:
             return run_node(functools.partial(PlayerNode, bag, opt), args=[])
         cfg = _live_config(bag, config_path)
-        arm = ArmTopics(namespace) if namespace else (find_arm(bag.topics, JOINT_NAMES[0]) or ArmTopics())
+        arm = find_arm(bag.topics) or ArmTopics()
+        joints = bag_joint_names(bag, arm)
+        arm = ArmTopics(namespace) if namespace else arm
         try:
             server = LiveServer(live_channels(arm), host=live_host, port=live_port)
         except LiveServerError as exc:
             raise ConfigError(f"--live: {exc}") from None
         try:
             view = LiveView(server, cfg["plant"]["torque_limit_nm"], cfg["simulation"]["dt_s"], display_hz=live_hz,
-                            arm=arm)
+                            joint_names=joints, arm=arm)
             print(f"LIVE {server.url} (Foxglove: Open connection, Foxglove WebSocket)", flush=True)
             return run_node(functools.partial(PlayerNode, bag, opt, live=view), args=[])
         finally:

@@ -8,7 +8,6 @@ from __future__ import annotations
 import argparse
 import copy
 
-from .. import JOINT_NAMES
 from ..config import ConfigError
 from ..faults.link_faults import CORRUPT_KINDS
 
@@ -53,19 +52,19 @@ def _set(section: dict, key: str, joints: list[int], value) -> None:
     section[key] = tuple(values)
 
 
-def apply_fault_flags(cfg: dict, args: argparse.Namespace) -> dict:
-    """A copy of ``cfg`` with the fault flags of ``args`` applied."""
+def apply_fault_flags(cfg: dict, args: argparse.Namespace, joint_names: tuple[str, ...]) -> dict:
+    """A copy of ``cfg`` with the fault flags of ``args`` applied (``joint_names``: the arm's, chain order)."""
     cfg = copy.deepcopy(cfg)
     faults = cfg["faults"]
     if args.fault_joints:
         names = [n.strip() for n in args.fault_joints.split(",") if n.strip()]
-        bad = [n for n in names if n not in JOINT_NAMES]
+        bad = [n for n in names if n not in joint_names]
         if bad or not names:
             raise ConfigError(f"--fault-joints: unknown joint {bad[0] if bad else '(none)'!r} "
-                              f"(joints: {', '.join(JOINT_NAMES)})")
-        joints = [JOINT_NAMES.index(n) for n in names]
+                              f"(joints: {', '.join(joint_names)})")
+        joints = [joint_names.index(n) for n in names]
     else:
-        joints = list(range(len(JOINT_NAMES)))
+        joints = list(range(len(joint_names)))
     for dest, (direction, key) in LINK_FLAGS.items():
         value = getattr(args, dest)
         if value is None:
@@ -93,10 +92,10 @@ def apply_fault_flags(cfg: dict, args: argparse.Namespace) -> dict:
             t_s = float(t)
         except ValueError:
             t_s = float("nan")
-        if not sep or joint not in JOINT_NAMES or not t_s >= 0.0:
-            raise ConfigError(f"--kill: expected JOINT@SECONDS with a joint of {', '.join(JOINT_NAMES)} "
+        if not sep or joint not in joint_names or not t_s >= 0.0:
+            raise ConfigError(f"--kill: expected JOINT@SECONDS with a joint of {', '.join(joint_names)} "
                               f"and SECONDS >= 0, got {spec!r}")
-        _set(faults, "kill_controller_at_s", [JOINT_NAMES.index(joint)], t_s)
+        _set(faults, "kill_controller_at_s", [joint_names.index(joint)], t_s)
     if args.fault_seed is not None:
         if args.fault_seed < 0:
             raise ConfigError(f"--fault-seed: expected an integer >= 0, got {args.fault_seed}")

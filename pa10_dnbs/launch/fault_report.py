@@ -1,7 +1,6 @@
 """What the faults did, for metrics.json and the report: injected, detected, restarts."""
 from __future__ import annotations
 
-from .. import JOINT_NAMES
 from ..loop.plant_counters import FAULT_KEYS, REPORT_KEYS
 from .fault_flags import plain
 
@@ -10,8 +9,8 @@ from .fault_flags import plain
 def fault_report(cfg: dict, plant_stats: dict, result) -> dict:
     """{'configured': the faults section, 'joints': per joint plant + controller counters, 'restarts': [...]}."""
     joints = []
-    for i, name in enumerate(JOINT_NAMES):
-        pj = plant_stats["joints"][i]
+    for pj in plant_stats["joints"]:
+        name = pj["name"]
         ctrl = result.controllers.get(name)
         joints.append({"name": name, "plant": {k: pj.get(k) for k in REPORT_KEYS}, "controller": ctrl})
     return {"configured": plain(cfg["faults"]), "guards": plain(cfg["guards"]), "joints": joints,

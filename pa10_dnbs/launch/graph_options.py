@@ -44,6 +44,7 @@ class GraphOptions:
     live_hz: float = 50.0            # live view frames per second of wall time, at most
     namespace: str = DEFAULT_NS      # the arm's ROS namespace: every node runs in it (topics relative to it)
     clock_hz: float = DEFAULT_CLOCK_HZ  # /clock rate [Hz of simulated time]; every node but the plant uses it
+    joint_names: tuple[str, ...] = ()   # the arm's actuated joints, chain order: one controller process each
 
 
 @dataclass

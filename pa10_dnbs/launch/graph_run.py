@@ -18,7 +18,6 @@ import signal
 import time
 from pathlib import Path
 
-from .. import JOINT_NAMES
 from .domain_ids import lease_domain
 from .graph_options import GraphFailure, GraphOptions, GraphResult, loop_reliability
 from .netns import in_netns, node_env, parse_netns
@@ -102,7 +101,7 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
         raise GraphFailure(failure, interrupted=failure.startswith("interrupted"))
     stats = json.loads(stats_file.read_text())
     controllers = {}
-    for j in JOINT_NAMES:
+    for j in opt.joint_names:
         f = workdir / f"controller_{j}.json"
         controllers[j] = json.loads(f.read_text()) if f.is_file() else None
     return GraphResult(stats=stats, exit_codes=codes, domain_id=domain, wall_total_s=time.monotonic() - t_start,

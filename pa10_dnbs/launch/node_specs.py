@@ -11,7 +11,6 @@ import math
 import sys
 from pathlib import Path
 
-from .. import JOINT_NAMES
 from ..wire.topics import CLOCK, DEFAULT_NS, DIAGNOSTICS, ArmTopics
 from .graph_options import GraphOptions, loop_reliability
 
@@ -34,12 +33,13 @@ def _ros_args(node: str, params: dict, ns: str = DEFAULT_NS) -> list[str]:
     return args
 
 
-def graph_topics(ns: str = DEFAULT_NS) -> list[str]:
-    """Every topic of the graph of the arm in ``ns`` as recorder specs ('/name:pkg/msg/Type', resolved)."""
+def graph_topics(joint_names, ns: str = DEFAULT_NS) -> list[str]:
+    """Every topic of the graph of the arm with ``joint_names`` in ``ns`` as recorder specs ('/name:pkg/msg/Type',
+    resolved)."""
     arm = ArmTopics(ns)
     specs = [f"{CLOCK}:rosgraph_msgs/msg/Clock", f"{arm.joint_states}:sensor_msgs/msg/JointState",
              f"{arm.robot_description}:std_msgs/msg/String", f"{DIAGNOSTICS}:diagnostic_msgs/msg/DiagnosticArray"]
-    for j in JOINT_NAMES:
+    for j in joint_names:
         specs += [f"{arm.state(j)}:sensor_msgs/msg/JointState", f"{arm.effort(j)}:sensor_msgs/msg/JointState",
                   f"{arm.reference(j)}:trajectory_msgs/msg/JointTrajectory"]
     return specs
@@ -97,7 +97,7 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
                   f"namespace={opt.namespace}"]
         cmds = [("recorder", py + ["pa10_dnbs.ros.recorder_node"] + ros("recorder", {
             "config_file": cfg, "bag": str(opt.record_bag), "force": str(opt.force_bag).lower(),
-            "topics": _yaml_list(graph_topics(opt.namespace)), "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns,
+            "topics": _yaml_list(graph_topics(opt.joint_names, opt.namespace)), "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns,
             "compression": opt.bag_compression}))]
     if opt.live_port is not None:  # display only: started after the observer, never waited for by the plant
         cmds.append((LIVE_VIEW, py + ["pa10_dnbs.ros.live_observer_node"] + ros(LIVE_VIEW, {
@@ -108,7 +108,9 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
     cmds.append(("reference", py + ["pa10_dnbs.ros.reference_node"] + ros(
         "reference", {"config_file": cfg, "duration_s": opt.duration_s, "batch_steps": batch,
                       "lookahead_steps": reference_lookahead(opt)})))
-    for j in JOINT_NAMES:
+    if not opt.joint_names:
+        raise ValueError("GraphOptions.joint_names: the arm's joints are needed to start one controller each")
+    for j in opt.joint_names:
         cmds.append((f"joint_controller_{j}", controller_command(opt, stats_file.parent, j)))
     cmds.append(("plant", py + ["pa10_dnbs.ros.plant_node"] + _ros_args("plant", {
         "config_file": cfg, "mode": opt.mode, "duration_s": opt.duration_s, "reliability": loop_reliability(opt),

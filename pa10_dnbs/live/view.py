@@ -17,7 +17,6 @@ from __future__ import annotations
 import struct
 import xml.etree.ElementTree as ET
 
-from .. import JOINT_NAMES
 from ..bag.tf_messages import tf_message_cdr
 from ..kinematics.urdf_chain import UrdfChain
 from ..wire import joint_state_cdr
@@ -42,11 +41,11 @@ def string_cdr(data: bytes) -> str:
 
 
 class LiveView:
-    def __init__(self, sink, torque_limit_nm, dt_s: float, display_hz: float = DEFAULT_DISPLAY_HZ,
-                 joint_names=JOINT_NAMES, arm: ArmTopics = ArmTopics()):
+    def __init__(self, sink, torque_limit_nm, dt_s: float, display_hz: float = DEFAULT_DISPLAY_HZ, *,
+                 joint_names, arm: ArmTopics = ArmTopics()):
         """``sink``: a LiveServer (log, wanted, resend_latched, broadcast_time); ``display_hz``: frames per
-        second of wall time at most; ``torque_limit_nm``: Table 2 limits, in ``joint_names`` order; ``arm``: the
-        topic names read and served."""
+        second of wall time at most; ``torque_limit_nm``: the arm's torque limits, in ``joint_names`` order (the
+        arm's joints, chain order); ``arm``: the topic names read and served."""
         if not display_hz > 0:
             raise ValueError(f"display_hz must be > 0, got {display_hz}")
         self.sink = sink

@@ -8,7 +8,6 @@ with quiet_c_stdout():
 from pa10_dnbs.plant.pybullet_plant import (  # noqa: E402
     PlantParams,
     PyBulletArmPlant,
-    PyBulletPA10Plant,
 )
 
-__all__ = ["PlantParams", "PyBulletArmPlant", "PyBulletPA10Plant"]
+__all__ = ["PlantParams", "PyBulletArmPlant"]

@@ -6,7 +6,7 @@ reflected rotor inertia on the diagonal of the mass matrix, joint friction,
 torque saturation and joint-limit clamping, and integrates with
 semi-implicit (symplectic) Euler at a fixed step. ``stepSimulation`` is never
 called, so PyBullet's own joint state is only a display copy (see
-:meth:`PyBulletPA10Plant.sync_visual`).
+:meth:`PyBulletArmPlant.sync_visual`).
 """
 
 from __future__ import annotations
@@ -481,4 +481,4 @@ def _with_arm_facts(params: PlantParams, arm: Arm) -> PlantParams:
     return params
 
 
-PyBulletPA10Plant = PyBulletArmPlant  # the name before any arm could be brought
+

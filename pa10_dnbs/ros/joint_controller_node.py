@@ -32,6 +32,7 @@ from typing import NoReturn
 
 import functools
 import os
+import re
 import signal
 import struct
 import sys
@@ -41,7 +42,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
-from .. import JOINT_NAMES
+from ..arm import arm_of
 from ..atomic_file import write_json
 from ..controller_factory import CONTROLLER_KINDS, build_guarded_controllers
 from ..core.checkpoint import checkpoint_due, checkpoint_phase, load_checkpoint, save_checkpoint
@@ -85,22 +86,24 @@ class JointControllerNode(Node):
     def __init__(self, args=None):
         """``args``: the command line (default sys.argv); its ``-p joint:=J`` names the node joint_controller_J."""
         joint = cli_parameter(sys.argv if args is None else args, "joint")
-        super().__init__(f"joint_controller_{joint}" if joint in JOINT_NAMES else "joint_controller")
+        super().__init__(f"joint_controller_{joint}" if joint and re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", joint)
+                         else "joint_controller")
         p = declare(self, PARAMS)
         if p["effort_subscribers"] < 1 or p["match_timeout_s"] <= 0:
             raise ParameterError("effort_subscribers must be >= 1 and match_timeout_s > 0 s")
-        check_choice("joint", p["joint"], JOINT_NAMES)
         try:
             check_priority(p["rt_priority"])
         except ValueError as exc:
             raise ParameterError(f"parameter {exc}") from None
         check_choice("controller", p["controller"], CONTROLLER_KINDS)
         cfg = load_node_config(p["config_file"])
+        arm = arm_of(cfg)
+        check_choice("joint", p["joint"], arm.joint_names)
         self.p = p
         self.joint = p["joint"]
-        index = JOINT_NAMES.index(self.joint)
+        index = arm.index(self.joint)
         self.clock_ = StepClock(cfg["simulation"]["dt_s"])
-        # a bank of this one joint behind its state guard, as the in-process simulation runs all seven
+        # a bank of this one joint behind its state guard, as the in-process simulation runs all the arm's
         self.loop_ = JointLoop(build_guarded_controllers(cfg, p["controller"], [index]),
                                cfg["reference"]["preview_steps"])
         controller = self.loop_.controller
@@ -109,7 +112,7 @@ class JointControllerNode(Node):
         if self.checkpoint is not None and not hasattr(controller, "state_dict"):
             raise ParameterError(f"checkpoint_file: the {p['controller']} controller has no learned state to save")
         self.checkpoint_every = max(1, int(round(cfg["checkpoint"]["period_s"] / cfg["simulation"]["dt_s"])))
-        self.checkpoint_phase = checkpoint_phase(index, len(JOINT_NAMES), self.checkpoint_every)
+        self.checkpoint_phase = checkpoint_phase(index, arm.n_joints, self.checkpoint_every)
         self.resumed_from = None
         if p["init_file"] and not (p["resume"] and self.checkpoint is not None and self.checkpoint.is_file()):
             # a warm start from an earlier run: its weights and covariances, this run's own step count

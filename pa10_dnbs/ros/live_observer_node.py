@@ -26,7 +26,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from trajectory_msgs.msg import JointTrajectory
 
-from .. import JOINT_NAMES
+from ..arm import arm_of
 from ..live.schemas import live_channels
 from ..live.server import LiveServer, LiveServerError
 from ..live.view import LiveView
@@ -71,7 +71,7 @@ class LiveObserverNode(Node):
         except LiveServerError as exc:
             raise ParameterError(str(exc)) from None
         self.view = LiveView(self.server, cfg["plant"]["torque_limit_nm"], cfg["simulation"]["dt_s"],
-                             display_hz=p["display_hz"], arm=arm)
+                             display_hz=p["display_hz"], joint_names=arm_of(cfg).joint_names, arm=arm)
         self.arm = arm
         feed = self.view.on_message
         # a node of its own, never added to the executor (and free of the launcher's name remapping)
@@ -84,7 +84,7 @@ class LiveObserverNode(Node):
                                  raw=True)
         self.create_subscription(DiagnosticArray, DIAGNOSTICS, lambda d: feed(DIAGNOSTICS, d), diagnostics_qos(),
                                  raw=True)
-        for j in JOINT_NAMES:
+        for j in arm_of(cfg).joint_names:
             t = arm.reference(j)
             self.create_subscription(JointTrajectory, t, lambda d, t=t: feed(t, d), reference_qos(),
                                      raw=True)

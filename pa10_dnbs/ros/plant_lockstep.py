@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import time
 
-from .. import JOINT_NAMES
 from ..loop.lockstep_policy import LockstepPolicy
 
 SLICE_S = 0.2          # longest single wait: the stop request is checked at least this often
@@ -50,7 +49,7 @@ def run_lockstep(node, executor, stop) -> None:
         if action == "timeout":
             missing = gate.missing
             node.get_logger().warning(
-                f"step {gate.step}: no effort from {', '.join(JOINT_NAMES[j] for j in missing)} after "
+                f"step {gate.step}: no effort from {', '.join(node.plant.joint_names[j] for j in missing)} after "
                 f"{node.p['effort_timeout_s']:g} s; applying {node.p['on_missing_effort']}")
             node.step(gate.take_lockstep(timed_out=True))
             publish(gate.step)

@@ -33,7 +33,7 @@ from typing import NoReturn
 from rclpy.node import Node
 from rclpy.task import Future
 
-from .. import JOINT_NAMES
+from ..arm.summary import arm_line
 from ..atomic_file import write_json
 from ..loop.cpu_meter import CpuMeter
 from ..loop.effort_gate import EffortGate
@@ -115,7 +115,9 @@ class PlantNode(Node):
         self.clock_ = StepClock(self.dt)
         self._client = open_client()
         self.plant = plant_from_config(cfg, self._client)
-        self.gate = EffortGate(len(JOINT_NAMES), p["on_missing_effort"])
+        n = self.plant.n_joints
+        self.get_logger().info(arm_line(self.plant.arm))
+        self.gate = EffortGate(n, p["on_missing_effort"])
         self.gate.bin_steps = max(1, int(round(60.0 / self.dt)))  # realtime on-time fraction per simulated minute
         # realtime: latest value only (depth 1), a late reader skips stale states. lockstep: a deep
         # history, so a recorder that falls behind for a while still gets every message.
@@ -123,9 +125,9 @@ class PlantNode(Node):
                               state_depth=1 if realtime else record_qos().depth,
                               effort_depth=1 if realtime else p["effort_queue_depth"], clock_hz=p["clock_hz"],
                               last_step=self.n_steps)
-        self.timing = PlantTiming(self.n_steps, len(JOINT_NAMES))
+        self.timing = PlantTiming(self.n_steps, n)
         self.cpu = CpuMeter()
-        self.resends = [0] * len(JOINT_NAMES)
+        self.resends = [0] * n
         self.schedule = None  # realtime: the TickSchedule
         self.finished = False
         self._observed = None  # (k, q, qd, applied) of a state whose joint_states and /clock are still to go out

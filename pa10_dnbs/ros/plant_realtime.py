@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import time
 
-from .. import JOINT_NAMES
 from ..loop.miss_warnings import MissWarnings
 from ..loop.tick_schedule import TickSchedule
 
@@ -33,7 +32,7 @@ def run_realtime(node, executor, stop) -> None:
     """Run ``node`` (a PlantNode) in realtime until its last step or ``stop``."""
     p = node.p
     sched = node.schedule = TickSchedule(node.dt / p["real_time_factor"], p["deadline_fraction"], p["late_tolerance"])
-    warnings = MissWarnings(JOINT_NAMES, p["warn_period_s"])
+    warnings = MissWarnings(node.plant.joint_names, p["warn_period_s"])
     clock = time.monotonic
     log = node.get_logger()
     next_housekeeping = clock() + HOUSEKEEPING_S

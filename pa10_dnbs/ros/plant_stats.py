@@ -12,7 +12,6 @@ from __future__ import annotations
 import math
 import time
 
-from .. import JOINT_NAMES
 from ..loop.plant_counters import FAULT_KEYS, plant_counters
 from ..loop.plant_timing import step_ranges
 from .diagnostics import status, status_name
@@ -30,7 +29,7 @@ def joint_counters(node, i: int) -> dict:
 
 def diagnostics_report(node) -> list:
     return [status(status_name(node, "plant", name), node.get_name(), joint_counters(node, i), FAULT_KEYS)
-            for i, name in enumerate(JOINT_NAMES)]
+            for i, name in enumerate(node.plant.joint_names)]
 
 
 def plant_stats(node) -> dict:
@@ -38,7 +37,7 @@ def plant_stats(node) -> dict:
     k = gate.step
     wall = (node.wall_end if node.finished else time.perf_counter()) - node.wall_start
     joints = []
-    for i, name in enumerate(JOINT_NAMES):
+    for i, name in enumerate(node.plant.joint_names):
         link = wire.state_links[i]
         joints.append({
             "name": name,

@@ -19,7 +19,6 @@ from __future__ import annotations
 import math
 import struct
 import time
-from pathlib import Path
 
 import numpy as np
 from rclpy.duration import Duration
@@ -27,9 +26,8 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 
-from .. import JOINT_NAMES
+from ..arm import arm_of
 from ..faults.faulty_link import links_from_config
-from ..kinematics.urdf_chain import UrdfChain
 from ..loop.endpoint_match import Need
 from ..wire import joint_state_cdr
 from ..wire.clock_schedule import ClockSchedule
@@ -48,27 +46,28 @@ class PlantWire:
         rate [Hz of simulated time] (0: no /clock); ``last_step``: the run's last state (it carries a /clock)."""
         self.node = node
         self.clock = clock
-        n = len(JOINT_NAMES)
+        arm = arm_of(cfg)
+        self.joint_names = names = arm.joint_names
+        n = len(names)
         self.state_qos = loop_qos(reliability, depth=state_depth)
         self.effort_qos = loop_qos(reliability, depth=effort_depth)
-        self._state_pubs = [node.create_publisher(JointState, state_topic(j), self.state_qos) for j in JOINT_NAMES]
+        self._state_pubs = [node.create_publisher(JointState, state_topic(j), self.state_qos) for j in names]
         self._clock_pub = None
         if clock_hz > 0:
             self._clock_pub = node.create_publisher(Clock, CLOCK, record_qos())
             self._clock_schedule = ClockSchedule(clock_hz, clock.dt_ns / 1e9, last_step)
         self._js_pub = node.create_publisher(JointState, JOINT_STATES, record_qos())
-        self._effort_subs = [PolledSubscription(node, JointState, effort_topic(j), self.effort_qos) for j in JOINT_NAMES]
+        self._effort_subs = [PolledSubscription(node, JointState, effort_topic(j), self.effort_qos) for j in names]
         self._wait_set = SubscriptionWaitSet(node, self._effort_subs)
         # the URDF, latched, as robot_state_publisher offers it (Foxglove and the recorder read it)
         self._description_pub = node.create_publisher(String, ROBOT_DESCRIPTION, description_qos())
-        self._description_pub.publish(String(data=Path(cfg["plant"]["urdf"]).read_text()))
-        chain = UrdfChain.from_file(cfg["plant"]["urdf"])
-        self.state_links = [links_from_config(cfg, "state", i, self._state_pubs[i].publish, chain.joint(j).upper)
-                            for i, j in enumerate(JOINT_NAMES)]
+        self._description_pub.publish(String(data=arm.urdf_text()))
+        self.state_links = [links_from_config(cfg, "state", i, self._state_pubs[i].publish, arm.upper_rad[i])
+                            for i in range(n)]
         self.torque_limit = np.array(cfg["plant"]["torque_limit_nm"], dtype=float)
         self._limits = self.torque_limit.tolist()
-        self._state_layouts = [joint_state_cdr.OneJointLayout(j, ("position", "velocity")) for j in JOINT_NAMES]
-        self._effort_layouts = [joint_state_cdr.OneJointLayout(j, ("effort",)) for j in JOINT_NAMES]
+        self._state_layouts = [joint_state_cdr.OneJointLayout(j, ("position", "velocity")) for j in names]
+        self._effort_layouts = [joint_state_cdr.OneJointLayout(j, ("effort",)) for j in names]
         self.waits = 0                 # wait set waits (each a possible wake-up)
         self.wakeups_with_efforts = 0  # ... that returned with efforts queued
         self.malformed = np.zeros(n, dtype=np.int64)
@@ -84,7 +83,7 @@ class PlantWire:
         ql, qdl = q.tolist(), qd.tolist()
         sec, nanosec = self.clock.sec_nanosec(k)
         t_ns = time.time_ns()
-        for j in (range(len(JOINT_NAMES)) if joints is None else joints):
+        for j in (range(len(self.joint_names)) if joints is None else joints):
             link = self.state_links[j]
             if link is None:
                 self._state_pubs[j].publish(self._state_layouts[j].encode(sec, nanosec, ql[j], qdl[j]))
@@ -97,12 +96,12 @@ class PlantWire:
         return t_ns
 
     def publish_observed(self, k: int, q: list, qd: list, applied: list) -> None:
-        """What observers read of state ``k`` (lists of 7: [rad], [rad/s], the torque applied over step k - 1
+        """What observers read of state ``k`` (lists of n: [rad], [rad/s], the torque applied over step k - 1
         [N m]): joint_states and, when due, /clock."""
         sec, nanosec = self.clock.sec_nanosec(k)
         if self._clock_pub is not None and self._clock_schedule.due(k):
             self._clock_pub.publish(CLOCK_CDR.pack(0x0100, 0, sec, nanosec))  # raw CDR: no message conversion
-        self._js_pub.publish(joint_state_cdr.encode(sec, nanosec, JOINT_NAMES, q, qd, applied))
+        self._js_pub.publish(joint_state_cdr.encode(sec, nanosec, self.joint_names, q, qd, applied))
 
     # ------------------------------------------------------------- in
     def wait(self, timeout_s: float) -> list[int]:
@@ -144,7 +143,7 @@ class PlantWire:
                 for sub in self._effort_subs]
         # the plant's own subscription and one per recorder
         out += [Need(node.resolve_topic_name(effort_topic(j)), "subscribers", 1 + recorders,
-                     lambda t=effort_topic(j): node.count_subscribers(t)) for j in JOINT_NAMES if recorders]
+                     lambda t=effort_topic(j): node.count_subscribers(t)) for j in self.joint_names if recorders]
         if self._clock_pub is not None:
             out.append(Need(CLOCK, "subscribers", clock_subscribers, self._clock_pub.get_subscription_count))
         out.append(Need(self._js_pub.topic_name, "subscribers", joint_states_subscribers,

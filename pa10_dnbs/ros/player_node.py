@@ -27,7 +27,6 @@ from rosgraph_msgs.msg import Clock
 
 from ..bag.bag_reader import Bag
 from ..loop.endpoint_match import MatchWait, Need
-from .. import JOINT_NAMES
 from ..wire.topics import CLOCK, find_arm, renamed
 from ..wire.steps import NS_PER_S
 from .bag_qos import from_bag_qos
@@ -54,7 +53,7 @@ class PlayerNode(Node):
         """``live``: a LiveView to feed (replay --live), or None."""
         super().__init__("player")
         self.bag, self.opt, self.live = bag, opt, live
-        src = find_arm(bag.topics, JOINT_NAMES[0])
+        src = find_arm(bag.topics)
         self.out_name = {t: renamed(t, src, opt.namespace) for t in bag.topics}  # bag topic -> published name
         topics = opt.topics or sorted(bag.topics)
         if opt.clock_hz > 0:

@@ -30,11 +30,10 @@ from typing import NoReturn
 
 from rclpy.node import Node
 
-from .. import JOINT_NAMES
+from ..arm import arm_of
 from ..bag.custom_data import CUSTOM_CONFIG, CUSTOM_PREFIX
 from ..bag.bag_writer import COMPRESSIONS, BagWriter
 from ..bag.tf_messages import tf_message_cdr
-from ..kinematics.urdf_chain import UrdfChain
 from ..wire import joint_state_cdr
 from ..wire.reference_buffer import ReferenceBuffer
 from ..wire.steps import StepClock, cdr_stamp_ns, to_ns
@@ -117,15 +116,17 @@ class RecorderNode(Node):
         self.received = 0
         self._subs = {}
         self._announced = False
-        self.chain = UrdfChain.from_file(cfg["plant"]["urdf"]) if p["tf_rate_hz"] > 0 else None
+        model = arm_of(cfg)
+        self.joint_names = model.joint_names
+        self.chain = model.chain if p["tf_rate_hz"] > 0 else None
         self._tf_period_ns = int(round(1e9 / p["tf_rate_hz"])) if self.chain else 0
         self._next_tf_ns = 0
         self._next_progress_ns = 0
         self.dt_ns = int(round(cfg["simulation"]["dt_s"] * 1e9))
         check_choice("compression", p["compression"], COMPRESSIONS)
         # x_d from the reference batches, for the worst |e| on PROGRESS lines (sampled at tf_rate_hz)
-        self.refs = ReferenceBuffer(len(JOINT_NAMES), StepClock(cfg["simulation"]["dt_s"]))
-        self._ref_joint = {self.arm.reference(j): i for i, j in enumerate(JOINT_NAMES)}
+        self.refs = ReferenceBuffer(len(self.joint_names), StepClock(cfg["simulation"]["dt_s"]))
+        self._ref_joint = {self.arm.reference(j): i for i, j in enumerate(self.joint_names)}
         self.writer = BagWriter(Path(p["bag"]), force=p["force"], custom_data=custom, compression=p["compression"])
         self.cpu = CpuMeter()
         self.inbox = Inbox(self, p["poll_period_s"])
@@ -209,10 +210,10 @@ class RecorderNode(Node):
             self.writer.add_topic(TF_STATIC, "tf2_msgs/msg/TFMessage", [bag_qos(True, True, 1)])
             self.writer.write(TF_STATIC, t_ns, tf_message_cdr(self.chain.fixed_transforms(), sec, nanosec))
             self.writer.add_topic(TF, "tf2_msgs/msg/TFMessage", [bag_qos(True, False, 100)])
-        positions = dict(zip(names or JOINT_NAMES, pos))
+        positions = dict(zip(names or self.joint_names, pos))
         self.writer.write(TF, t_ns, tf_message_cdr(self.chain.moving_transforms(positions), sec, nanosec))
         step = stamp_ns // self.dt_ns
-        self.refs.error(step, [positions.get(j, float("nan")) for j in JOINT_NAMES])
+        self.refs.error(step, [positions.get(j, float("nan")) for j in self.joint_names])
         self.refs.forget_before(step)
 
     # ------------------------------------------------------------- run / stop

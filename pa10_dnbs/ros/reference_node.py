@@ -22,7 +22,7 @@ from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from trajectory_msgs.msg import JointTrajectory
 
-from .. import JOINT_NAMES
+from ..arm import arm_of
 from ..controller_factory import build_reference
 from ..wire.trajectory_cdr import encode_one_joint
 from .diagnostics import DiagnosticsReporter, status, status_name
@@ -70,7 +70,9 @@ class ReferenceNode(Node):
         dt = cfg["simulation"]["dt_s"]
         # a run of known length: nothing past its last step + lookahead (so a bag's count is fixed)
         self.last_step = int(round(p["duration_s"] / dt)) + self.lookahead if p["duration_s"] > 0 else None
-        self._pubs = [self.create_publisher(JointTrajectory, reference_topic(j), reference_qos()) for j in JOINT_NAMES]
+        self.joint_names = arm_of(cfg).joint_names
+        self._pubs = [self.create_publisher(JointTrajectory, reference_topic(j), reference_qos())
+                      for j in self.joint_names]
         self.cpu = CpuMeter()
         self.inbox = Inbox(self, p["poll_period_s"])
         self.inbox.subscribe(Clock, CLOCK, record_qos(CLOCK_DEPTH), self._on_clock)
@@ -114,7 +116,7 @@ class ReferenceNode(Node):
             pos = self.reference.position(steps)  # (batch, 7)
             vel = self.reference.velocity(steps)
             sec, nanosec = self.clock_.sec_nanosec(k0)
-            for j, (name, pub) in enumerate(zip(JOINT_NAMES, self._pubs)):
+            for j, (name, pub) in enumerate(zip(self.joint_names, self._pubs)):
                 # raw CDR (wire/trajectory_cdr.py): rclpy's message objects cost ~20x more per batch
                 pub.publish(encode_one_joint(sec, nanosec, name, pos[:, j].tolist(), vel[:, j].tolist(),
                                              self.clock_.dt_ns))

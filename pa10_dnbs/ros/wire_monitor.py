@@ -20,7 +20,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
-from .. import JOINT_NAMES
+from ..arm import arm_of
 from ..wire.wire_record import WireRecord
 from ..wire import joint_state_cdr, trajectory_cdr
 from ..loop.scheduling import apply_batch, apply_fifo
@@ -52,14 +52,15 @@ class WireMonitorNode(Node):
         cfg = load_node_config(p["config_file"])
         dt_s = cfg["simulation"]["dt_s"]
         duration = p["duration_s"] if p["duration_s"] > 0 else cfg["simulation"]["duration_s"]
-        self.record = WireRecord(int(round(duration / dt_s)), dt_s, len(JOINT_NAMES))
+        names = arm_of(cfg).joint_names
+        self.record = WireRecord(int(round(duration / dt_s)), dt_s, len(names))
         self.out_file = p["out_file"]
         self.clock = StepClock(dt_s)
         self._announced = False
         self.cpu = CpuMeter()
         self.inbox = Inbox(self, p["poll_period_s"])
         self.inbox.subscribe(JointState, JOINT_STATES, record_qos(), self._on_joint_states)
-        for j, name in enumerate(JOINT_NAMES):
+        for j, name in enumerate(names):
             self.inbox.subscribe(JointTrajectory, reference_topic(name), reference_qos(),
                                  lambda data, j=j: self._on_reference(j, data))
         self._last_step = -1

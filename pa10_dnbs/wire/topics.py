@@ -96,6 +96,12 @@ class ArmTopics:
         return topic[len(prefix):] if topic.startswith(prefix) else topic
 
 
+def default_namespace(arm_name: str) -> str:
+    """``/<arm name>`` (its characters outside [A-Za-z0-9_] as _): the namespace of an arm's graph by default."""
+    name = re.sub(r"[^A-Za-z0-9_]", "_", arm_name) or "arm"
+    return "/" + (name if name[0].isalpha() else "arm_" + name)
+
+
 def arm_topics(ns: str = DEFAULT_NS) -> ArmTopics:
     return ArmTopics(check_namespace(ns))
 
@@ -106,20 +112,28 @@ def legacy_topics() -> ArmTopics:
     return ArmTopics(DEFAULT_NS, joint_states="/" + JOINT_STATES, robot_description="/" + ROBOT_DESCRIPTION)
 
 
-def find_arm(topics, joint: str) -> ArmTopics | None:
+def find_arm(topics, joint: str | None = None) -> ArmTopics | None:
     """The arm layout of a set of topic names (a bag's): the namespace whose ``<ns>/joint_states`` and
-    ``<ns>/<joint>/reference`` are both there, else the legacy layout if it fits, else None. Several arms:
-    the default namespace first, then the first in sorted order."""
+    ``<ns>/<joint>/reference`` are both there (with ``joint`` None: any joint's reference), else the legacy
+    layout if it fits, else None. Several arms: the default namespace first, then the first in sorted order."""
     names = set(topics)
     suffix = "/" + JOINT_STATES
+
+    def has_reference(arm: ArmTopics) -> bool:
+        if joint is not None:
+            return arm.reference(joint) in names
+        prefix, tail = arm.ns + "/", "/" + reference_topic("x").split("/")[-1]
+        return any(t.startswith(prefix) and t.endswith(tail) and t.count("/") == prefix.count("/") + 1
+                   for t in names)
+
     found = sorted(t[: -len(suffix)] for t in names if t.endswith(suffix) and len(t) > len(suffix))
     found.sort(key=lambda ns: ns != DEFAULT_NS)
     for ns in found:
         arm = ArmTopics(ns)
-        if arm.reference(joint) in names:
+        if has_reference(arm):
             return arm
     legacy = legacy_topics()
-    if legacy.joint_states in names and legacy.reference(joint) in names:
+    if legacy.joint_states in names and has_reference(legacy):
         return legacy
     return None
 

@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 
 from .arm import Arm
-from .gain_rule import SWEEP_STEP_S, gain_rule, inertia_sweep, report_rule
-from .reference_rule import reference_rule
+from .arm.gain_rule import SWEEP_STEP_S, gain_rule, report_rule
+from .arm.reference_rule import reference_rule
 
 REFERENCE_KEYS = tuple(f"reference.{k}" for k in ("amplitude_rad", "envelope_rate_per_s3", "frequency_rad_s",
                                                    "centre_rad"))
@@ -29,7 +29,8 @@ def derived_gains(arm: Arm, cfg: dict, report: bool = True) -> dict:
     """The gain rule's fragment for a config whose reference and simulation sections are checked: the inertia
     sweep runs along that reference, every 20 ms over simulation.duration_s. ``report``: print the derivation
     (one line per joint) and any warning on stderr."""
-    from ..core.reference import Reference
+    from .core.reference import Reference
+    from .plant.inertia_sweep import inertia_sweep
 
     r, sim = cfg["reference"], cfg["simulation"]
     dt = sim["dt_s"]
