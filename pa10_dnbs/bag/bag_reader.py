@@ -3,7 +3,9 @@
 Checks, in order: the path exists; it is a bag directory (``metadata.yaml``)
 or an ``.mcap`` file inside one; metadata.yaml parses; each storage file ends
 with the MCAP footer magic (a recording cut off before it closed does not);
-the MCAP summary's message count equals metadata.yaml's; rosbags opens it.
+every CRC in it matches (summary, each chunk, data section: mcap_check.py; a
+damaged chunk is named with the topics it held); the MCAP summary's message
+count equals metadata.yaml's; rosbags opens it.
 Reading messages later converts decoding failures into BagError as well.
 """
 from __future__ import annotations
@@ -43,6 +45,7 @@ class Bag:
             raise BagError(f"{self.path}: storage is {info.get('storage_identifier')!r}, expected mcap")
         for f in files:
             _check_mcap_file(f)
+        self.crc_reports = [_check_crcs(f) for f in files]
         expected = int(info.get("message_count", -1))
         in_files = sum(_summary_message_count(f) for f in files)
         if expected != in_files:
@@ -73,6 +76,10 @@ class Bag:
         lacking = [t for t in topics if t not in self.topics or self.topics[t].count == 0]
         if lacking:
             raise BagError(f"{self.path}: {why} needs topics the bag does not have: {', '.join(lacking)}")
+
+    def crc_note(self) -> str:
+        """What the CRC check found, e.g. 'CRCs valid: 14 of 14 chunks, data section, summary'."""
+        return "; ".join(r.describe() for r in self.crc_reports)
 
     def qos_profiles(self, topic: str):
         """The offered QoS profiles recorded for ``topic`` (rosbags Qos tuples)."""
@@ -130,6 +137,15 @@ def _check_mcap_file(f: Path) -> None:
     if size < 2 * len(MCAP_MAGIC) or tail != MCAP_MAGIC:
         raise BagError(f"{f}: truncated MCAP file (no footer magic at the end): the recording was cut off "
                        "before the bag was closed")
+
+
+def _check_crcs(f: Path):
+    from .mcap_check import McapCrcError, check_mcap_crcs
+
+    try:
+        return check_mcap_crcs(f)
+    except McapCrcError as exc:
+        raise BagError(f"{f}: {exc}") from None
 
 
 def _summary_message_count(f: Path) -> int:

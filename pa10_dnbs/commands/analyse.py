@@ -68,7 +68,7 @@ def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None
         run = rec.run_data(controller, joints, cfg["plant"]["torque_limit_nm"], math.nan)
         metrics = metrics_dict(run, metrics_settings(cfg, rec.n * dt), source="bag", bag=str(bag.path.resolve()), mode=info.get("mode"),
                                seed=cfg["simulation"].get("seed"), malformed_messages=rec.malformed)
-        notes = [f"bag: `{bag.path}` ({bag.message_count} messages on {len(bag.topics)} topics)",
+        notes = [f"bag: `{bag.path}` ({bag.message_count} messages on {len(bag.topics)} topics; {bag.crc_note()})",
                  f"config: {cfg_note}",
                  f"source: rebuilt from the bag's {bag_arm(bag).joint_states} and reference topics ({info.get('mode', '?')} run)"]
         chain = robot_chain(bag, cfg)
