@@ -20,10 +20,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime  # noqa: E402
 
 from pa10_dnbs.arm import load_arm  # noqa: E402
-
-JOINT_NAMES = load_arm("pa10").joint_names  # the main job's arm
 from pa10_dnbs.bag.bag_writer import BagWriter  # noqa: E402
 from pa10_dnbs.wire import joint_state_cdr  # noqa: E402
+
+JOINT_NAMES = load_arm("pa10").joint_names  # the main job's arm
 
 ZERO = QosTime(0, 0)
 QOS = [Qos(QosHistory.KEEP_LAST, 10, QosReliability.RELIABLE, QosDurability.VOLATILE, ZERO, ZERO,
