@@ -129,7 +129,7 @@ SCHEMA: dict[str, Any] = {
             "covariance_bound": _switch(p_max=POS),
         },
     },
-    "pid": {"kp": Joints(NONNEG), "ki": Joints(NONNEG), "kd": Joints(NONNEG)},
+    "pid": {"kp": Joints(NONNEG), "ki": Joints(NONNEG), "kd": Joints(NONNEG), "anti_windup": Flag()},
     "ctc": {"kp_per_s2": Joints(NONNEG), "kd_per_s": Joints(NONNEG)},
     "guards": {
         "position_margin_rad": NONNEG,

@@ -54,7 +54,8 @@ def dnbs_params(cfg: dict) -> DNBSParams:
 def pid_params(cfg: dict) -> PIDParams:
     pid = cfg["pid"]
     return PIDParams(kp=np.array(pid["kp"], float), ki=np.array(pid["ki"], float), kd=np.array(pid["kd"], float),
-                     torque_limit_nm=np.array(cfg["plant"]["torque_limit_nm"], float), dt_s=cfg["simulation"]["dt_s"])
+                     torque_limit_nm=np.array(cfg["plant"]["torque_limit_nm"], float), dt_s=cfg["simulation"]["dt_s"],
+                     anti_windup=pid["anti_windup"])
 
 
 def build_controllers(cfg: dict, kind: str, joints=None):

@@ -29,3 +29,19 @@ def test_an_inactive_row_does_not_integrate(cfg):
     pid.step(np.zeros(2), np.zeros(2), ReferenceSample(np.full(2, 0.1), np.zeros(2), np.full(2, 0.1)),
              active=np.array([1.0, 0.0]))
     assert pid.integral[0] == pytest.approx(0.1e-3) and pid.integral[1] == 0.0
+
+
+def test_anti_windup_holds_the_integral_of_a_saturated_row_only(cfg):
+    """Conditional integration: a row pushed into its limit keeps its integral; the other row integrates as the
+    plain PID does, and after the error reverses the wound-up PID stays saturated far longer."""
+    ref = ReferenceSample(np.array([10.0, 0.001]), np.zeros(2), np.array([10.0, 0.001]))
+    guarded = build_controllers(cfg, "pid", [4, 5])
+    cfg["pid"]["anti_windup"] = False
+    plain = build_controllers(cfg, "pid", [4, 5])
+    for _ in range(500):
+        assert np.array_equal(guarded.step(np.zeros(2), np.zeros(2), ref), plain.step(np.zeros(2), np.zeros(2), ref))
+    assert guarded.integral[0] == 0.0 and plain.integral[0] == pytest.approx(10.0 * 0.5)
+    assert guarded.integral[1] == plain.integral[1] == pytest.approx(0.001 * 0.5)
+    back = ReferenceSample(np.array([-0.05, 0.0]), np.zeros(2), np.array([-0.05, 0.0]))
+    assert guarded.step(np.zeros(2), np.zeros(2), back)[0] < 0.0   # answers the reversed error at once
+    assert plain.step(np.zeros(2), np.zeros(2), back)[0] == 14.5     # still wound up at the limit

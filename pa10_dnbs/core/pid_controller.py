@@ -1,7 +1,11 @@
 """Decentralized PID baseline with velocity feed-forward, one per joint, computed as rows of arrays.
 
 u = Kp e + Ki int(e) dt + Kd (xd_dot - x2),  e = x_d - x1, saturated at the
-Table 2 limit. Row i uses only joint i's measurements and reference.
+joint's torque limit. Row i uses only joint i's measurements and reference.
+
+Anti-windup by conditional integration (as control_toolbox's PID clamps its integral, and as the DNBS
+controller's own anti-windup does): a row whose torque is saturated does not integrate an error that pushes
+it further into the limit. Unsaturated rows compute exactly what the plain PID does.
 """
 from __future__ import annotations
 
@@ -14,17 +18,20 @@ from .reference import ReferenceSample
 
 @dataclass(frozen=True)
 class PIDParams:
-    """Per joint (arrays (n,)): kp [N m/rad], ki [N m/(rad s)], kd [N m s/rad], torque_limit_nm [N m]; dt_s [s]."""
+    """Per joint (arrays (n,)): kp [N m/rad], ki [N m/(rad s)], kd [N m s/rad], torque_limit_nm [N m]; dt_s [s];
+    anti_windup: conditional integration on (module docstring)."""
 
     kp: np.ndarray
     ki: np.ndarray
     kd: np.ndarray
     torque_limit_nm: np.ndarray
     dt_s: float
+    anti_windup: bool = True
 
     def select(self, rows) -> "PIDParams":
         rows = np.asarray(rows)
-        return PIDParams(self.kp[rows], self.ki[rows], self.kd[rows], self.torque_limit_nm[rows], self.dt_s)
+        return PIDParams(self.kp[rows], self.ki[rows], self.kd[rows], self.torque_limit_nm[rows], self.dt_s,
+                         self.anti_windup)
 
 
 class PIDControllers:
@@ -43,6 +50,13 @@ class PIDControllers:
         is 0.0 does not integrate (its state was not trusted)."""
         p = self.params
         e = ref.position_rad - x1
-        self.integral += e * p.dt_s if active is None else e * (p.dt_s * active)
-        u = p.kp * e + p.ki * self.integral + p.kd * (ref.velocity_rad_s - x2)
+        integral = self.integral + (e * p.dt_s if active is None else e * (p.dt_s * active))
+        damping = p.kd * (ref.velocity_rad_s - x2)
+        u = p.kp * e + p.ki * integral + damping
+        if p.anti_windup:
+            winding = ((u > p.torque_limit_nm) & (e > 0.0)) | ((u < -p.torque_limit_nm) & (e < 0.0))
+            if winding.any():  # those rows keep their integral: the torque is already at the limit
+                integral = np.where(winding, self.integral, integral)
+                u = p.kp * e + p.ki * integral + damping
+        self.integral = integral
         return np.minimum(np.maximum(u, -p.torque_limit_nm), p.torque_limit_nm)
