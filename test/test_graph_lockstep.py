@@ -118,3 +118,41 @@ def test_the_nodes_on_the_compiled_kernel_give_the_numpy_bits(_default_cfg, tmp_
     for field in ("torque_nm", "position_rad", "velocity_rad_s"):
         a, b = getattr(local, field), getattr(wire, field)
         assert np.array_equal(a, b), f"{field}: first (step, joint) that differs {np.argwhere(a != b)[:3].tolist()}"
+
+
+def test_the_iiwa_graph_is_its_in_process_run_named_after_its_joints(tmp_path, domain):
+    """``--arm iiwa``: one controller process per iiwa joint, named after it, in the /iiwa namespace; the
+    recorded lockstep run equals the in-process run bit for bit, and ``analyse`` rebuilds it from the bag."""
+    from graph_harness import Launcher
+
+    from pa10_dnbs.arm import load_arm
+    from pa10_dnbs.bag.bag_reader import Bag
+    from pa10_dnbs.config import default_config_path, load_config
+
+    iiwa = load_arm("iiwa")
+    out, bag = tmp_path / "run", tmp_path / "bag"
+    la = Launcher("--arm", "iiwa", "--duration", 1.0, "--out", out, "--record", bag, domain_id=domain)
+    try:
+        rc = la.wait(timeout=300)
+    finally:
+        la.kill()
+    assert rc == 0, la.output
+    logs = sorted(p.name for p in (out / "logs").glob("joint_controller_*.log"))
+    assert logs == sorted(f"joint_controller_{j}.log" for j in iiwa.joint_names) and len(logs) == 7
+    with Bag(bag) as b:
+        assert {f"/iiwa/{j}/{kind}" for j in iiwa.joint_names for kind in ("state", "effort", "reference")} <= set(
+            b.topics)
+    m = json.loads((out / "metrics.json").read_text())
+    assert all(j["effort_timeouts"] == 0 for j in m["timing"]["joints"]), m["timing"]["joints"]
+    wire = RunData.load_npz(out / "timeseries.npz")
+    local = simulate(load_config(default_config_path(), arm="iiwa"), "dnbs", 1.0)
+    assert tuple(wire.joint_names) == iiwa.joint_names
+    for field in ("position_rad", "velocity_rad_s", "reference_rad", "torque_nm"):
+        a, b = getattr(local, field), getattr(wire, field)
+        assert np.array_equal(a, b), f"{field}: first (step, joint) that differs {np.argwhere(a != b)[:3].tolist()}"
+    from cli_runner import run_cli
+
+    r = run_cli("analyse", bag, "--out", tmp_path / "again")
+    assert r.returncode == 0, r.stderr
+    again = RunData.load_npz(tmp_path / "again" / "timeseries.npz")
+    assert np.array_equal(again.position_rad, wire.position_rad) and tuple(again.joint_names) == iiwa.joint_names

@@ -84,8 +84,10 @@ def rule_warnings(arm: Arm, sweep: InertiaSweep, k_u: np.ndarray, dt_s: float) -
     return out
 
 
-def report_rule(arm: Arm, sweep: InertiaSweep, fragment: dict, dt_s: float, stream=sys.stderr) -> None:
-    """Print what the rule derived, one line per joint, and its warnings (so that a placeholder shows)."""
+def report_rule(arm: Arm, sweep: InertiaSweep, fragment: dict, dt_s: float, stream=None) -> None:
+    """Print what the rule derived, one line per joint, and its warnings (so that a placeholder shows), on
+    ``stream`` (stderr when None)."""
+    stream = sys.stderr if stream is None else stream
     rt = fragment["dnbs"]["remedies"]["robust_term"]
     k_u = np.array(rt["torque_gain_nms_per_rad"])
     print(f"arm {arm.name}: {arm.n_joints} joints from {arm.file}; gains by the rule of docs/arms.md "
