@@ -18,21 +18,30 @@ def _stride(n: int) -> int:
     return max(1, n // _MAX_POINTS)
 
 
-def _grid(title: str):
-    fig, axes = plt.subplots(4, 2, figsize=(11, 11), sharex=True)
-    fig.subplots_adjust(left=0.08, right=0.98, top=0.95, bottom=0.05, hspace=0.12, wspace=0.25)
+def _grid(title: str, n: int):
+    """Two columns of panels, one per joint (n of them), row by row; the unused panel hidden."""
+    rows = max(1, -(-n // 2))
+    fig, axes = plt.subplots(rows, 2, figsize=(11, 2.75 * rows), sharex=True, squeeze=False)
+    fig.subplots_adjust(left=0.08, right=0.98, top=1 - 0.2 / rows, bottom=0.2 / rows, hspace=0.12, wspace=0.25)
     fig.suptitle(title)
     axes = axes.ravel()
-    axes[-1].axis("off")
-    axes[-3].xaxis.set_tick_params(labelbottom=True)  # the panel above the empty one keeps its time axis
+    for ax in axes[n:]:
+        ax.axis("off")
+    for ax in _bottom(axes, n):
+        ax.xaxis.set_tick_params(labelbottom=True)  # the panel above an empty one keeps its time axis
     return fig, axes
+
+
+def _bottom(axes, n: int) -> list:
+    """The lowest used panel of each column."""
+    return [axes[j] for j in range(n) if j + 2 >= n]
 
 
 def tracking_figure(run: RunData, path: Path) -> None:
     """Reference (solid) and actual (dashed) angle per joint, as Figs. 4-10."""
     s = _stride(run.n_steps)
     t = run.time_s[::s]
-    fig, axes = _grid(f"Trajectory tracking ({run.controller.upper()})")
+    fig, axes = _grid(f"Trajectory tracking ({run.controller.upper()})", len(run.joint_names))
     for j, name in enumerate(run.joint_names):
         ax = axes[j]
         ax.plot(t, run.reference_rad[::s, j], "-", color="k", lw=1.2, label="reference $x_{d}$")
@@ -40,7 +49,7 @@ def tracking_figure(run: RunData, path: Path) -> None:
         ax.set_ylabel(f"{name} [rad]")
         ax.grid(alpha=0.3)
     axes[0].legend(loc="upper left", fontsize=8)
-    for ax in axes[5:7]:
+    for ax in _bottom(axes, len(run.joint_names)):
         ax.set_xlabel("time [s]")
     fig.savefig(path, dpi=90)
     plt.close(fig)
@@ -52,7 +61,7 @@ def error_figure(runs: list[RunData], path: Path, window_s: tuple[float, float] 
 
     ``settling_s``: per run, per joint, the settling time [s] (None: never), drawn as a dotted line.
     """
-    fig, axes = _grid("Tracking errors " + " vs ".join(r.controller.upper() for r in runs))
+    fig, axes = _grid("Tracking errors " + " vs ".join(r.controller.upper() for r in runs), len(runs[0].joint_names))
     for i, run in enumerate(runs):
         s = _stride(run.n_steps)
         for j, name in enumerate(run.joint_names):
@@ -71,17 +80,17 @@ def error_figure(runs: list[RunData], path: Path, window_s: tuple[float, float] 
             if lim and np.isfinite(lim):
                 ax.set_ylim(-lim, lim)  # zoom on the metrics window; the transient runs off the top
     axes[0].legend(loc="upper right", fontsize=8)
-    for ax in axes[5:7]:
+    for ax in _bottom(axes, len(runs[0].joint_names)):
         ax.set_xlabel("time [s]")
     fig.savefig(path, dpi=90)
     plt.close(fig)
 
 
 def torque_figure(run: RunData, path: Path) -> None:
-    """Applied torque per joint with its Table 2 limits (dotted)."""
+    """Applied torque per joint with its limits (dotted; the PA10's are the paper's Table 2)."""
     s = _stride(run.n_steps)
     t = run.time_s[::s]
-    fig, axes = _grid(f"Applied torques ({run.controller.upper()}) and Table 2 limits")
+    fig, axes = _grid(f"Applied torques ({run.controller.upper()}) and torque limits", len(run.joint_names))
     for j, name in enumerate(run.joint_names):
         ax = axes[j]
         ax.plot(t, run.torque_nm[::s, j], lw=1.0, color="tab:blue")
@@ -91,7 +100,7 @@ def torque_figure(run: RunData, path: Path) -> None:
         ax.set_ylim(-1.15 * lim, 1.15 * lim)
         ax.set_ylabel(f"{name} [N m]")
         ax.grid(alpha=0.3)
-    for ax in axes[5:7]:
+    for ax in _bottom(axes, len(run.joint_names)):
         ax.set_xlabel("time [s]")
     fig.savefig(path, dpi=90)
     plt.close(fig)
@@ -103,10 +112,11 @@ def startup_figure(run: RunData, path: Path, settle_band_rad: float, settling_s:
     t_show = min(run.n_steps * run.dt_s, max(1.0, 1.5 * max(done)) if len(done) == len(settling_s) else 5.0)
     n = max(2, int(round(t_show / run.dt_s)))
     t = run.time_s[:n]
-    fig, axes = plt.subplots(7, 2, figsize=(11, 13), sharex=True)  # a fixed layout: 40 % cheaper than constrained
-    fig.subplots_adjust(left=0.08, right=0.98, top=0.96, bottom=0.04, hspace=0.12, wspace=0.25)
+    nj = len(run.joint_names)
+    fig, axes = plt.subplots(nj, 2, figsize=(11, 13 * nj / 7), sharex=True, squeeze=False)  # fixed layout: cheaper
+    fig.subplots_adjust(left=0.08, right=0.98, top=1 - 0.28 / nj, bottom=0.28 / nj, hspace=0.12, wspace=0.25)
     fig.suptitle(f"Start-up ({run.controller.upper()}): error with the {settle_band_rad:g} rad band, torque with "
-                 "the Table 2 limits")
+                 "its limits")
     for j, name in enumerate(run.joint_names):
         ax, at = axes[j, 0], axes[j, 1]
         ax.plot(t, run.error_rad[:n, j], lw=1.0, color="tab:blue")

@@ -55,7 +55,7 @@ def report_markdown(metrics: list[dict], figures: list[tuple[str, str]], title: 
         rtf = m.get("real_time_factor")
         lines.append(f"- **{m['controller'].upper()}**: worst-joint RMS {m['worst_rms_error_rad']:.3e} rad; settled "
                      f"(|e| < {m['settle_band_rad']:g} rad) after {_settle(m['worst_settling_time_s'])} s; "
-                     f"all values finite: {m['all_finite']}; torques within Table 2: {m['torques_within_limits']}; "
+                     f"all values finite: {m['all_finite']}; torques within the limits: {m['torques_within_limits']}; "
                      f"wall time {m['wall_time_s']:.2f} s" + (f" ({rtf:.1f}x real time)" if rtf else ""))
     lines += [""] + [f"- {n}" for n in notes]
     lines += ["", f"## Tracking over [{m0['window_s'][0]:g}, {m0['window_s'][1]:g}) s", "", metrics_table(metrics)]

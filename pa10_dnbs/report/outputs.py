@@ -74,8 +74,8 @@ def write_run(directory: Path, run: RunData, metrics: dict, chain: UrdfChain | N
     settling = [j["settling_time_s"] for j in metrics["joints"]]
     figs = [(f"{tag}: reference (solid) and actual (dashed) angles, Figs. 4-10", "tracking.png"),
             (f"{tag}: tracking errors, Fig. 11 (metrics window shaded, settling time dotted)", "errors.png"),
-            (f"{tag}: start-up, errors with the settling band and torques with the Table 2 limits", "startup.png"),
-            (f"{tag}: applied torques and Table 2 limits", "torques.png")]
+            (f"{tag}: start-up, errors with the settling band and torques with their limits", "startup.png"),
+            (f"{tag}: applied torques and their limits", "torques.png")]
     tracking_figure(run, directory / "tracking.png")
     error_figure([run], directory / "errors.png", tuple(metrics["window_s"]), [settling])
     startup_figure(run, directory / "startup.png", metrics["settle_band_rad"], settling)
