@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """Write config/foxglove_layout.json, the Foxglove layout of the live view (pa10_dnbs/live/layout.py), from the
-joint names, the Table 2 limits of the default config and the URDF's root link.
+arm's joint names, its torque limits and its URDF's root link.
 
-    python scripts/make_foxglove_layout.py [--config FILE] [--namespace /pa10] [--out config/foxglove_layout.json]
+    .venv/bin/python scripts/make_foxglove_layout.py [--config FILE] [--arm iiwa] [--namespace NS] [--out FILE]
 
-``--namespace``: the arm's namespace the layout shows (the launcher's --namespace; default /pa10).
+``--arm``: the arm (default: the config's, the PA10, whose layout is config/foxglove_layout.json);
+``--namespace``: the arm's namespace the layout shows (the launcher's --namespace; default /<arm name>).
 """
 from __future__ import annotations
 
@@ -18,19 +19,22 @@ sys.path.insert(0, str(ROOT))
 from pa10_dnbs.arm import arm_of  # noqa: E402
 from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
 from pa10_dnbs.live.layout import layout_json  # noqa: E402
-from pa10_dnbs.wire.topics import DEFAULT_NS, arm_topics  # noqa: E402
+from pa10_dnbs.arm import DEFAULT_ARM  # noqa: E402
+from pa10_dnbs.wire.topics import arm_topics, default_namespace  # noqa: E402
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--config", type=Path, default=default_config_path())
-    ap.add_argument("--namespace", default=DEFAULT_NS)
+    ap.add_argument("--arm", default=None, help="an arm preset or arm file (default: the config's, pa10)")
+    ap.add_argument("--namespace", default=None, help="the arm's namespace (default /<arm name>, /pa10)")
     ap.add_argument("--out", type=Path, default=ROOT / "config" / "foxglove_layout.json")
     args = ap.parse_args()
-    cfg = load_config(args.config)
+    cfg = load_config(args.config, arm=args.arm)
     arm = arm_of(cfg)
     text = layout_json(arm.joint_names, cfg["plant"]["torque_limit_nm"], arm.chain.root_link,
-                       arm_topics(args.namespace))
+                       arm_topics(args.namespace or default_namespace(arm.name)),
+                       "PA10-7CE" if arm.name == DEFAULT_ARM else arm.description)
     args.out.write_text(text)
     print(f"wrote {args.out}")
     return 0

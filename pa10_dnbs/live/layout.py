@@ -33,7 +33,8 @@ def _plot(title: str, paths: list[dict], y_min=None, y_max=None) -> dict:
     return cfg
 
 
-def layout(joint_names, torque_limit_nm, root_frame: str = "base_link", arm: ArmTopics = ArmTopics()) -> dict:
+def layout(joint_names, torque_limit_nm, root_frame: str = "base_link", arm: ArmTopics = ArmTopics(),
+           title: str = "PA10-7CE") -> dict:
     """The layout of ``arm``'s topics as a JSON-ready dict."""
     errors = [_series(arm.tracking, "error_rad", j, name, COLOURS[j % len(COLOURS)]) for j, name in enumerate(joint_names)]
     torques = [_series(arm.tracking, "torque_over_limit", j, f"{name} (limit {lim:g} N m)", COLOURS[j % len(COLOURS)])
@@ -41,7 +42,7 @@ def layout(joint_names, torque_limit_nm, root_frame: str = "base_link", arm: Arm
     torques += [_series(arm.tracking, "torque_fraction_limits", i, f"Table 2 limit ({sign})", LIMIT_COLOUR)
                 for i, sign in enumerate(("-", "+"))]
     three_d = {
-        "foxglovePanelTitle": f"PA10-7CE (URDF from {arm.robot_description}, posed by /tf)",
+        "foxglovePanelTitle": f"{title} (URDF from {arm.robot_description}, posed by /tf)",
         "cameraState": {"perspective": True, "distance": 3.5, "phi": 60, "thetaOffset": 45,
                         "targetOffset": [0, 0, 0.8], "target": [0, 0, 0], "targetOrientation": [0, 0, 0, 1],
                         "fovy": 45, "near": 0.01, "far": 500},
@@ -79,5 +80,7 @@ def layout(joint_names, torque_limit_nm, root_frame: str = "base_link", arm: Arm
             "layout": tree}
 
 
-def layout_json(joint_names, torque_limit_nm, root_frame: str = "base_link", arm: ArmTopics = ArmTopics()) -> str:
-    return json.dumps(layout(joint_names, torque_limit_nm, root_frame, arm), indent=2) + "\n"
+def layout_json(joint_names, torque_limit_nm, root_frame: str = "base_link", arm: ArmTopics = ArmTopics(),
+                title: str = "PA10-7CE") -> str:
+    """The layout as the JSON file Foxglove imports (``title``: the arm's, on the 3D panel)."""
+    return json.dumps(layout(joint_names, torque_limit_nm, root_frame, arm, title), indent=2) + "\n"
