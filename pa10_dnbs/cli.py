@@ -50,6 +50,12 @@ def _study(args: argparse.Namespace) -> int:
                              arm=args.arm)
 
 
+def _arm(args: argparse.Namespace) -> int:
+    from .commands.arm_info import run_arm_info
+
+    return run_arm_info(args.config, args.arm)
+
+
 def _analyse(args: argparse.Namespace) -> int:
     from .commands.analyse import run_analyse
 
@@ -176,6 +182,11 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("--force", action="store_true", help="replace an existing output directory")
     st.add_argument("--no-progress", action="store_true", help="no progress bar")
     st.set_defaults(func=_study)
+
+    ar = sub.add_parser("arm", help="an arm's facts, sources, effective inertias and gains (docs/arms.md)")
+    ar.add_argument("--config", type=Path, default=None, help="YAML config (default: the shipped default)")
+    add_arm_argument(ar)
+    ar.set_defaults(func=_arm)
 
     an = sub.add_parser("analyse", help="metrics, figures and report of a recorded run, from its bag alone")
     an.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 bag directory (metadata.yaml + .mcap)")

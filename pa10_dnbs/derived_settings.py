@@ -25,10 +25,9 @@ def derived_reference(arm: Arm) -> dict:
     return {"reference": reference_rule(arm.lower_rad, arm.upper_rad)}
 
 
-def derived_gains(arm: Arm, cfg: dict, report: bool = True) -> dict:
-    """The gain rule's fragment for a config whose reference and simulation sections are checked: the inertia
-    sweep runs along that reference, every 20 ms over simulation.duration_s. ``report``: print the derivation
-    (one line per joint) and any warning on stderr."""
+def inertia_sweep_along(arm: Arm, cfg: dict):
+    """The arm's effective inertias along the config's reference (checked), every 20 ms over
+    simulation.duration_s (an InertiaSweep)."""
     from .core.reference import Reference
     from .plant.inertia_sweep import inertia_sweep
 
@@ -37,7 +36,15 @@ def derived_gains(arm: Arm, cfg: dict, report: bool = True) -> dict:
     ref = Reference(r["amplitude_rad"], r["envelope_rate_per_s3"], r["frequency_rad_s"], dt_s=dt,
                     centre_rad=r["centre_rad"])
     steps = np.arange(0, int(round(sim["duration_s"] / dt)) + 1, max(1, int(round(SWEEP_STEP_S / dt))))
-    sweep = inertia_sweep(arm, ref.position(steps))
+    return inertia_sweep(arm, ref.position(steps))
+
+
+def derived_gains(arm: Arm, cfg: dict, report: bool = True, sweep=None) -> dict:
+    """The gain rule's fragment for a config whose reference and simulation sections are checked (``sweep``:
+    :func:`inertia_sweep_along`'s, computed when None). ``report``: print the derivation (one line per joint)
+    and any warning on stderr."""
+    dt = cfg["simulation"]["dt_s"]
+    sweep = inertia_sweep_along(arm, cfg) if sweep is None else sweep
     fragment = gain_rule(arm, sweep, dt)
     if report:
         report_rule(arm, sweep, fragment, dt)
