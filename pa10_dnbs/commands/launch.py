@@ -9,7 +9,7 @@ from pathlib import Path
 import yaml
 
 from .. import JOINT_NAMES
-from ..accel.build import library_path
+from ..accel.choice import resolve_kernel
 from ..bag.analysis import bag_arm, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
 from ..bag.bag_writer import COMPRESSIONS, check_bag_path
@@ -81,8 +81,9 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         check_priority(rt_priority)
     except ValueError:
         raise ConfigError(f"--rt-priority: must be 0 (off) or 1..99, got {rt_priority}") from None
-    if controller == "dnbs" and cfg["dnbs"]["kernel"] == "c":
-        library_path()  # built once here, before the seven controllers start (KernelBuildError if it cannot be)
+    if controller == "dnbs":  # auto resolved (and c built) once here, before the seven controllers start; the
+        # nodes read the resolved kernel from config_used.yaml (KernelBuildError if c cannot be built)
+        cfg = resolve_kernel(cfg, say=lambda line: print(f"launch: {line}", flush=True))
     dt = cfg["simulation"]["dt_s"]
     try:
         check_clock_hz(clock_hz, dt)
