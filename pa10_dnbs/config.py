@@ -116,7 +116,7 @@ SCHEMA: dict[str, Any] = {
     },
     "dnbs": {
         "e2_sign": Text(("stable", "printed")),
-        "kernel": Text(("numpy", "c")),
+        "kernel": Text(("auto", "numpy", "c")),
         "alpha_net": _net_schema("output_scale_rad_s", "error_scale_rad", 2),
         "torque_net": _net_schema("output_scale_nm", "error_scale_rad_s", 3),
         "remedies": {

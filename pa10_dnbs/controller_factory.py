@@ -62,12 +62,17 @@ def build_controllers(cfg: dict, kind: str, joints=None):
     """Controllers of joint indices ``joints`` (0..n-1; all of the arm's when None), one per row, in that order.
 
     ``dnbs.kernel: c`` steps a DNBS bank with the compiled kernel (the same bits; KernelBuildError when it
-    cannot be built here). DNBS weights of joint j are seeded by (simulation.seed, j), whatever the bank it sits in.
+    cannot be built here); ``auto``: the compiled kernel where it builds, else numpy (accel/choice.py; commands
+    resolve it first and say which). DNBS weights of joint j are seeded by (simulation.seed, j), whatever
+    the bank it sits in.
     """
     rows = list(range(len(cfg["plant"]["torque_limit_nm"]))) if joints is None else [int(j) for j in joints]
     if kind == "dnbs":
-        bank = DNBSControllers
-        if cfg["dnbs"]["kernel"] == "c":  # the same step compiled (pa10_dnbs/accel): imported only when asked for
+        bank, kernel = DNBSControllers, cfg["dnbs"]["kernel"]
+        if kernel == "auto":
+            from .accel.choice import auto_kernel
+            kernel = auto_kernel().kernel
+        if kernel == "c":  # the same step compiled (pa10_dnbs/accel): imported only when asked for
             from .accel.compiled_dnbs import CompiledDNBSControllers as bank
         return bank(dnbs_params(cfg).select(rows), seed=cfg["simulation"]["seed"], joints=rows)
     if kind == "pid":

@@ -2,7 +2,8 @@
 """Benchmark: the in-process closed loop (DNBS and PID, 20 s): speed, and the DNBS targets.
 
 Prints, from --repeat interleaved runs of each controller (DNBS once per kernel of ``--kernels``: numpy,
-the reference, and c, the same step compiled; ``dnbs.kernel`` in config/default.yaml):
+the reference; c, the same step compiled; auto, the default of config/default.yaml: c where it builds,
+else numpy, the line it prints says which):
 - the loop's wall time per 1 ms step (plant + 7 controllers, behind their state guards) and the real-time
   factor, best and median;
 - each DNBS run's cost relative to the PID run (ratio of the medians, and of the best runs), and whether
@@ -11,7 +12,7 @@ the reference, and c, the same step compiled; ``dnbs.kernel`` in config/default.
   settling into the 1e-2 rad band, max |e|, torque variation, steps at the limit after 0.2 s, RMS [10, 20) s.
 Figures only; asserts nothing (the machines are shared and noisy: the load average is printed).
 
-    python scripts/bench_sim.py [--duration 20] [--repeat 5] [--kernels numpy,c]
+    python scripts/bench_sim.py [--duration 20] [--repeat 5] [--kernels numpy,auto]
 """
 from __future__ import annotations
 
@@ -25,6 +26,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import numpy as np  # noqa: E402
 
+from pa10_dnbs.accel.choice import auto_kernel  # noqa: E402
 from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
 from pa10_dnbs.report.metrics_file import metrics_dict, metrics_settings  # noqa: E402
 from pa10_dnbs.sim.closed_loop import simulate  # noqa: E402
@@ -43,12 +45,14 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=20.0, help="simulated seconds")
     ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--kernels", default="numpy,c", help="comma-separated DNBS kernels to run: numpy, c")
+    ap.add_argument("--kernels", default="numpy,auto", help="comma-separated DNBS kernels to run: numpy, c, auto")
     args = ap.parse_args()
     cfg = load_config(default_config_path())
     kernels = [k.strip() for k in args.kernels.split(",") if k.strip()]
     print(f"in-process closed loop, {args.duration:g} s simulated, T = {cfg['simulation']['dt_s'] * 1e3:g} ms, "
           f"{args.repeat} interleaved runs per controller; load average {_load()}")
+    if "auto" in kernels:
+        print(auto_kernel().line)
     runs = {f"dnbs/{k}": ("dnbs", k) for k in kernels} | {"pid": ("pid", None)}
     per_step = {label: [] for label in runs}
     last = {}

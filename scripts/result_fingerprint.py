@@ -15,8 +15,9 @@ fingerprint differs from the file's. Typical use around a change that must not m
     .venv/bin/python scripts/result_fingerprint.py --save /tmp/before.json     # on the old commit
     .venv/bin/python scripts/result_fingerprint.py --compare /tmp/before.json  # on the new one
 
-``--kernel c`` runs every scenario on the compiled DNBS step (``dnbs.kernel: c``): compared with the
-numpy fingerprints, it shows that the kernel gives the reference's bits.
+``--kernel`` sets the DNBS step (``dnbs.kernel``) of every scenario; the default, ``auto`` as in
+config/default.yaml, is the compiled step where it builds (the line it prints says which). ``--kernel c``
+compared with ``--kernel numpy`` fingerprints shows that the kernel gives the reference's bits.
 
 Fingerprints depend on numpy's build and the CPU's SIMD paths (tanh): compare on one machine.
 """
@@ -33,6 +34,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from pa10_dnbs.accel.choice import KERNELS, auto_kernel  # noqa: E402
 from pa10_dnbs.config import load_config  # noqa: E402
 from pa10_dnbs.controller_factory import dnbs_params  # noqa: E402
 from pa10_dnbs.core.dnbs_controller import DNBSControllers, Remedies  # noqa: E402
@@ -63,7 +65,7 @@ def run_arrays(run) -> list[np.ndarray]:
 
 
 def closed_loop(config: Path, duration_s: float, disturbances: Disturbances | None = None,
-                kernel: str = "numpy") -> list[np.ndarray]:
+                kernel: str = "auto") -> list[np.ndarray]:
     cfg = load_config(config)
     cfg["dnbs"]["kernel"] = kernel
     return run_arrays(simulate(cfg, "dnbs", duration_s, disturbances=disturbances))
@@ -73,6 +75,8 @@ def banks(params, steps: int = 400, seed: int = 1, kernel: str = "numpy") -> lis
     """A bank of seven and seven banks of one, stepped on the same seeded random inputs."""
     rng = np.random.default_rng(seed)
     bank = DNBSControllers
+    if kernel == "auto":
+        kernel = auto_kernel().kernel
     if kernel == "c":
         from pa10_dnbs.accel.compiled_dnbs import CompiledDNBSControllers as bank
     seven = bank(params, 7, range(7))
@@ -98,7 +102,7 @@ def banks(params, steps: int = 400, seed: int = 1, kernel: str = "numpy") -> lis
     return [np.array(rows7), np.array(rows1), seven.ekf.w, seven.ekf.P, resets]
 
 
-def fingerprints(kernel: str = "numpy") -> dict[str, str]:
+def fingerprints(kernel: str = "auto") -> dict[str, str]:
     default = share_path("config", "default.yaml")
     p = dnbs_params(load_config(default))
     scenarios = {
@@ -117,8 +121,10 @@ def main() -> int:
     group = ap.add_mutually_exclusive_group()
     group.add_argument("--save", type=Path, help="write the fingerprints to this JSON file")
     group.add_argument("--compare", type=Path, help="compare with a file written by --save; exit 1 on a difference")
-    ap.add_argument("--kernel", choices=("numpy", "c"), default="numpy", help="the DNBS step's kernel (dnbs.kernel)")
+    ap.add_argument("--kernel", choices=KERNELS, default="auto", help="the DNBS step's kernel (dnbs.kernel)")
     args = ap.parse_args()
+    if args.kernel == "auto":
+        print(auto_kernel().line)
     prints = fingerprints(args.kernel)
     for name, h in prints.items():
         print(f"{name:10s} {h}")

@@ -5,6 +5,7 @@ and asserts equal bits (torques, alpha, weights, covariances, counters), not clo
 implementation of the reference, not an approximation of it.
 """
 import copy
+import os
 import subprocess
 import sys
 
@@ -13,16 +14,20 @@ import pytest
 
 from pa10_dnbs.accel import compiled_dnbs
 from pa10_dnbs.accel.build import KernelBuildError
+from pa10_dnbs.accel.choice import auto_kernel, resolve_kernel
 from pa10_dnbs.accel.compiled_dnbs import CompiledDNBSControllers
 from pa10_dnbs.config import default_config_path
 from pa10_dnbs.controller_factory import build_controllers, build_guarded_controllers, build_reference
+from pa10_dnbs.core.dnbs_controller import DNBSControllers
+from pa10_dnbs.run_data import RunData
 from pa10_dnbs.sim.closed_loop import simulate
 
 
 def _kernels(cfg):
-    c = copy.deepcopy(cfg)
-    c["dnbs"]["kernel"] = "c"
-    return cfg, c
+    """(cfg on the numpy reference, cfg on the compiled kernel): explicit both, as the default is auto."""
+    ref, c = copy.deepcopy(cfg), copy.deepcopy(cfg)
+    ref["dnbs"]["kernel"], c["dnbs"]["kernel"] = "numpy", "c"
+    return ref, c
 
 
 def _every_remedy(cfg):
@@ -50,6 +55,7 @@ def _same_state(a, b) -> bool:
 def test_a_closed_loop_on_the_kernel_is_the_numpy_loop_bit_for_bit(cfg):
     numpy_cfg, c_cfg = _kernels(cfg)
     a, b = simulate(numpy_cfg, "dnbs", 2.0), simulate(c_cfg, "dnbs", 2.0)
+    assert type(a.extra["controllers"]) is DNBSControllers
     assert isinstance(b.extra["controllers"], CompiledDNBSControllers)
     for field in ("position_rad", "velocity_rad_s", "torque_nm"):
         assert np.array_equal(getattr(a, field), getattr(b, field)), field
@@ -131,3 +137,62 @@ def test_without_a_compiler_the_error_names_the_key_and_the_cli_exits_2(cfg, tmp
     assert done.returncode == 2, done.stderr
     assert "dnbs.kernel: c" in done.stderr and "no-such-compiler-pa10" in done.stderr
     assert not out.exists()
+
+
+@pytest.fixture
+def new_process(tmp_path, monkeypatch):
+    """As in a new process with an empty kernel cache: nothing loaded, ``auto`` not resolved yet."""
+    monkeypatch.setenv("PA10_DNBS_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setattr(compiled_dnbs, "_LIB", None)
+    auto_kernel.cache_clear()
+    yield tmp_path / "cache"
+    auto_kernel.cache_clear()
+
+
+def test_auto_without_a_compiler_runs_numpy_says_so_in_one_line_and_gives_the_same_bits(cfg, new_process,
+                                                                                        tmp_path, monkeypatch):
+    compiled = simulate(_kernels(cfg)[1], "dnbs", 0.3)  # built and loaded before the compiler goes away
+    built = sorted(new_process.iterdir())
+    monkeypatch.setattr(compiled_dnbs, "_LIB", None)
+    monkeypatch.setenv("CC", "no-such-compiler-pa10")
+    said = []
+    resolved = resolve_kernel(cfg, say=said.append)
+    assert cfg["dnbs"]["kernel"] == "auto" and resolved["dnbs"]["kernel"] == "numpy"
+    assert len(said) == 1 and "\n" not in said[0]
+    assert said[0].startswith("dnbs.kernel: auto -> numpy") and "no-such-compiler-pa10" in said[0]
+    assert type(build_controllers(cfg, "dnbs")) is DNBSControllers  # auto, unresolved: the same answer
+    fallback = simulate(resolved, "dnbs", 0.3)
+    assert type(fallback.extra["controllers"]) is DNBSControllers
+    for field in ("position_rad", "velocity_rad_s", "torque_nm"):
+        assert np.array_equal(getattr(fallback, field), getattr(compiled, field)), field
+    # the CLI on the default config (auto): exit 0, the one line, the same bits
+    out = tmp_path / "run"
+    done = subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "simulate", "--duration", "0.3", "--out", str(out),
+                           "--no-progress", "--no-figures"], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    lines = [line for line in done.stdout.splitlines() if "dnbs.kernel" in line]
+    assert len(lines) == 1 and lines[0].startswith("dnbs.kernel: auto -> numpy"), done.stdout
+    assert sorted(new_process.iterdir()) == built  # nothing more built
+    assert np.array_equal(RunData.load_npz(out / "timeseries.npz").torque_nm, compiled.torque_nm)
+
+
+def test_auto_picks_the_compiled_step_where_it_builds(cfg, new_process):
+    said = []
+    resolved = resolve_kernel(cfg, say=said.append)
+    assert resolved["dnbs"]["kernel"] == "c"
+    assert len(said) == 1 and said[0].startswith("dnbs.kernel: auto -> c") and str(new_process) in said[0]
+    assert len(list(new_process.glob("libdnbs_kernel-*.so"))) == 1  # built into this (empty) cache
+    assert isinstance(build_controllers(cfg, "dnbs"), CompiledDNBSControllers)
+    assert resolve_kernel(resolved) is resolved  # c and numpy are left as they are
+
+
+def test_auto_builds_nothing_for_pid_and_numpy_builds_nothing(cfg, new_process, tmp_path):
+    ref, _ = _kernels(cfg)
+    assert resolve_kernel(ref, say=pytest.fail) is ref
+    out = tmp_path / "pid"
+    done = subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "simulate", "--controller", "pid", "--duration",
+                           "0.05", "--out", str(out), "--no-progress", "--no-figures"],
+                          capture_output=True, text=True, timeout=120, env={**os.environ, "CC": "no-such-compiler-pa10"})
+    assert done.returncode == 0, done.stderr
+    assert "dnbs.kernel" not in done.stdout
+    assert not new_process.exists()

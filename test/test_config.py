@@ -25,6 +25,14 @@ def test_default_config_is_valid():
     assert len(cfg["dnbs"]["torque_net"]["eta"]) == 7
 
 
+@pytest.mark.parametrize("kernel", ["auto", "numpy", "c"])
+def test_every_dnbs_kernel_setting_loads_and_auto_is_the_default(tmp_path, raw, kernel):
+    assert load_config(default_config_path())["dnbs"]["kernel"] == "auto"
+    d = copy.deepcopy(raw)
+    d["dnbs"]["kernel"] = kernel
+    assert load_config(_write(tmp_path, d))["dnbs"]["kernel"] == kernel
+
+
 @pytest.mark.parametrize("path,value,match", [
     (("dnbs", "torque_net", "eta"), -1.0, r"dnbs\.torque_net\.eta: must be > 0"),
     (("dnbs", "alpha_net", "p0"), 0, r"dnbs\.alpha_net\.p0: must be > 0"),
@@ -35,6 +43,8 @@ def test_default_config_is_valid():
     (("dnbs", "remedies", "anti_windup", "enabled"), "yes", r"dnbs\.remedies\.anti_windup\.enabled: expected true"),
     (("dnbs", "torque_net", "eta"), 3.0, r"dnbs\.torque_net\.eta: must be <= 1"),
     (("dnbs", "e2_sign"), "minus", r"dnbs\.e2_sign: must be one of stable, printed"),
+    (("dnbs", "kernel"), "fast", r"dnbs\.kernel: must be one of auto, numpy, c"),
+    (("dnbs", "kernel"), "C", r"dnbs\.kernel: must be one of auto, numpy, c"),
     (("metrics", "settle_band_rad"), 0.0, r"metrics\.settle_band_rad: must be > 0"),
     (("plant", "payload_kg"), -1.0, r"plant\.payload_kg: must be >= 0"),
     (("pid", "kp"), [1, 2, 3], r"pid\.kp: expected 7 values"),
@@ -110,6 +120,7 @@ def test_extends_errors(tmp_path):
 def test_shipped_presets_are_valid():
     from pa10_dnbs.paths import share_path
 
+    assert load_config(share_path("config", "compiled.yaml"))["dnbs"]["kernel"] == "c"
     paper = load_config(share_path("config", "paper.yaml"))
     on = [name for name, r in paper["dnbs"]["remedies"].items() if r["enabled"]]
     assert on == ["anti_windup"]  # the paper's law as the project first ran it

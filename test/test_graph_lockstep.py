@@ -7,6 +7,7 @@ import json
 
 import numpy as np
 import pytest
+import yaml
 
 from graph_harness import assert_no_leftovers, exit_codes
 from pa10_dnbs.sim.closed_loop import simulate
@@ -27,6 +28,15 @@ def test_every_node_reported_ready_and_ran(lockstep_run):
     assert not (logs / "wire_monitor.log").exists()
     for n in names:
         assert "READY" in (logs / f"{n}.log").read_text(), n
+    # dnbs.kernel: auto (the default) is resolved once, by the launcher, which says so in one line; every
+    # joint controller runs what it wrote into config_used.yaml
+    kernel = yaml.safe_load((lockstep_run["out"] / "config_used.yaml").read_text())["dnbs"]["kernel"]
+    assert kernel in ("c", "numpy")
+    assert lockstep_run["output"].count("dnbs.kernel: auto -> ") == 1
+    assert f"launch: dnbs.kernel: auto -> {kernel}" in lockstep_run["output"]
+    bank = {"c": "CompiledDNBSControllers", "numpy": "DNBSControllers"}[kernel]
+    for n in names[3:]:
+        assert f": {bank}" in (logs / f"{n}.log").read_text(), n
 
 
 def test_converges_over_ros_with_torques_in_table2(lockstep_run):
@@ -114,7 +124,8 @@ def test_the_nodes_on_the_compiled_kernel_give_the_numpy_bits(_default_cfg, tmp_
     logs = sorted((out / "logs").glob("joint_controller_*.log"))
     assert len(logs) == 7 and all("CompiledDNBSControllers" in log.read_text() for log in logs)
     wire = RunData.load_npz(out / "timeseries.npz")
-    local = simulate(_default_cfg, "dnbs", 1.0)
+    local = simulate({**_default_cfg, "dnbs": {**_default_cfg["dnbs"], "kernel": "numpy"}}, "dnbs", 1.0)
+    assert type(local.extra["controllers"]).__name__ == "DNBSControllers"
     for field in ("torque_nm", "position_rad", "velocity_rad_s"):
         a, b = getattr(local, field), getattr(wire, field)
         assert np.array_equal(a, b), f"{field}: first (step, joint) that differs {np.argwhere(a != b)[:3].tolist()}"

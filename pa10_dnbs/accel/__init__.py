@@ -1,4 +1,5 @@
-"""Optional compiled kernel of the DNBS step (``dnbs.kernel: c``), bit-identical to the numpy reference.
+"""The compiled kernel of the DNBS step, bit-identical to the numpy reference: ``dnbs.kernel: auto`` (the
+default: where it builds, else numpy; choice.py) or ``c`` (it, or exit 2).
 
 The numeric core (``pa10_dnbs/core``) stays numpy only and is the reference: the compiled bank
 subclasses ``DNBSControllers`` and replaces only the arithmetic of ``answer`` and ``learn`` with one C

@@ -10,6 +10,7 @@ controllers) never load a half-written library.
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import shutil
@@ -23,7 +24,14 @@ FLAGS = ("-O3", "-ffp-contract=off", "-fno-fast-math", "-fPIC", "-shared")
 
 
 class KernelBuildError(RuntimeError):
-    """The compiled kernel cannot be built or loaded here; the message says why and what to do."""
+    """The compiled kernel cannot be built or loaded here; the message says why and what to do.
+
+    ``reason``: why, in a few words on one line (``dnbs.kernel: auto`` says it when it falls back to numpy).
+    """
+
+    def __init__(self, message: str, reason: str):
+        super().__init__(message)
+        self.reason = reason
 
 
 def cache_dir() -> Path:
@@ -39,7 +47,7 @@ def _compiler() -> str:
     path = shutil.which(cc)
     if path is None:
         raise KernelBuildError(f"dnbs.kernel: c needs a C compiler, and {cc!r} is not on PATH (set CC, install gcc, "
-                               f"or use dnbs.kernel: numpy)")
+                               f"or use dnbs.kernel: numpy)", reason=f"no C compiler: {cc!r} is not on PATH")
     return path
 
 
@@ -50,16 +58,22 @@ def library_path() -> Path:
     target = cache_dir() / f"libdnbs_kernel-{key}.so"
     if target.is_file():
         return target
-    target.parent.mkdir(parents=True, exist_ok=True)
     tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
     try:
+        target.parent.mkdir(parents=True, exist_ok=True)
         done = subprocess.run([cc, *FLAGS, "-o", str(tmp), str(SOURCE), "-lm"], capture_output=True, text=True,
                               timeout=120)
         if done.returncode != 0:
-            raise KernelBuildError(f"dnbs.kernel: c: compiling {SOURCE.name} failed:\n{done.stderr.strip()}")
+            first = next((line for line in done.stderr.splitlines() if "error" in line), f"exit {done.returncode}")
+            raise KernelBuildError(f"dnbs.kernel: c: compiling {SOURCE.name} failed:\n{done.stderr.strip()}",
+                                   reason=f"compiling {SOURCE.name} failed: {first.strip()}")
         os.replace(tmp, target)
+    except (OSError, subprocess.TimeoutExpired) as exc:  # an unwritable cache, a compiler that hangs
+        raise KernelBuildError(f"dnbs.kernel: c: cannot build {target}: {exc} (set PA10_DNBS_CACHE to a writable "
+                               f"directory, or use dnbs.kernel: numpy)", reason=f"cannot build {target}: {exc}") from None
     finally:
-        tmp.unlink(missing_ok=True)
+        with contextlib.suppress(OSError):
+            tmp.unlink(missing_ok=True)
     return target
 
 

@@ -39,7 +39,8 @@ def _library() -> ctypes.CDLL:
         try:
             lib = ctypes.CDLL(str(path))
         except OSError as exc:
-            raise KernelBuildError(f"dnbs.kernel: c: cannot load {path}: {exc}") from None
+            raise KernelBuildError(f"dnbs.kernel: c: cannot load {path}: {exc}",
+                                   reason=f"cannot load {path.name}: {exc}") from None
         lib.dnbs_new.restype, lib.dnbs_new.argtypes = _P, [ctypes.POINTER(_Config)]
         lib.dnbs_free.restype, lib.dnbs_free.argtypes = None, [_P]
         for name in ("dnbs_tanh_in", "dnbs_tanh_alpha"):

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import yaml
 
-from ..accel.build import library_path
+from ..accel.choice import resolve_kernel
 from ..arm import arm_of
 from ..bag.analysis import bag_arm, bag_joint_names, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
@@ -85,8 +85,6 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         check_priority(rt_priority)
     except ValueError:
         raise ConfigError(f"--rt-priority: must be 0 (off) or 1..99, got {rt_priority}") from None
-    if controller == "dnbs" and cfg["dnbs"]["kernel"] == "c":
-        library_path()  # built once here, before the seven controllers start (KernelBuildError if it cannot be)
     dt = cfg["simulation"]["dt_s"]
     try:
         check_clock_hz(clock_hz, dt)
@@ -118,6 +116,9 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         if record == Path(out).resolve() or Path(out).resolve() in record.parents:
             raise ConfigError(f"--record: the bag {record} must not be inside the output directory {out}")
         check_bag_path(record, force)
+    if controller == "dnbs":  # auto resolved (and c built) once here, before the seven controllers start; the
+        # nodes read the resolved kernel from config_used.yaml (KernelBuildError if c cannot be built)
+        cfg = resolve_kernel(cfg, say=lambda line: print(f"launch: {line}", flush=True))
     opt = GraphOptions(config_path=config_path, mode=mode, controller=controller, duration_s=n_steps * dt,
                        domain_id=domain_id, reliability=reliability, effort_timeout_s=effort_timeout_s,
                        on_missing_effort=on_missing_effort, progress=progress, dt_s=dt, record_bag=record,

@@ -4,6 +4,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from ..accel.choice import resolve_kernel
 from ..arm import arm_of
 from ..config import ConfigError, default_config_path, load_config
 from ..core.checkpoint import load_joint_checkpoints, save_checkpoint
@@ -44,6 +45,8 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
         except ValueError as exc:
             raise ConfigError(f"--init-from: {exc}") from None
     check_output_dir(out, force)
+    if "dnbs" in kinds:
+        cfg = resolve_kernel(cfg, say=print)  # dnbs.kernel: auto -> c or numpy, said in one line
     settings = metrics_settings(cfg, duration_s)
     runs, metrics = [], []
     for kind in kinds:

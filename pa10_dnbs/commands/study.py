@@ -6,6 +6,7 @@ import math
 import shlex
 from pathlib import Path
 
+from ..accel.choice import resolve_kernel
 from ..config import ConfigError, default_config_path, load_config
 from ..report.outputs import atomic_output_dir, check_output_dir
 from ..report.progress import ProgressBar
@@ -37,6 +38,8 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
     config_path = Path(config_path) if config_path else default_config_path()
     cfg = load_config(config_path, arm=arm)
     check_output_dir(out, force)
+    if "dnbs" in ctrl:
+        cfg = resolve_kernel(cfg, say=print)  # once here, not in each worker
     n = len(scen) * len(ctrl) * seeds
     dt = cfg["simulation"]["dt_s"]
     steps_per_run = int(round(duration_s / dt))

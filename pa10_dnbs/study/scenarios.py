@@ -43,7 +43,7 @@ def _fast_reference(cfg: dict) -> None:
 SCENARIOS = {s.name: s for s in (
     Scenario("nominal", "the default config"),
     Scenario("payload_2kg", "2 kg point mass at the flange link", _payload(2.0)),
-    Scenario("payload_5kg", "5 kg point mass at the flange (rated payload 10 kg)", _payload(5.0)),
+    Scenario("payload_5kg", "5 kg point mass at the flange link", _payload(5.0)),
     Scenario("links_heavier_30pct", "every link's mass and inertia +30 % (rotors unchanged)", _links_heavier),
     Scenario("encoder_noise", "white noise on what the controllers see: 1e-4 rad on x1, 1e-3 rad/s on x2",
              disturbances=lambda seed: Disturbances(1e-4, 1e-3, 0, seed)),
