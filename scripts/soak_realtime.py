@@ -79,7 +79,8 @@ def main() -> int:
         print(f"launch failed with exit code {proc.returncode}")
         return 1
     stats = json.loads((args.out / "plant_stats.json").read_text())
-    print(f"realtime soak: {duration:g} s simulated at --rtf {args.rtf:g}, plant real-time factor {stats['real_time_factor']:.2f}")
+    print(f"realtime soak: {duration:g} s simulated at --rtf {args.rtf:g}, "
+          f"plant real-time factor {stats['real_time_factor']:.2f}")
     for i, f in enumerate(stats["on_time_fraction_per_bin"]):
         print(f"  minute {i + 1:2d}: missed ticks {100 * (1 - f):5.1f} %")
     print("memory (VmRSS, MB): start (20 s after the plant starts) -> end")

@@ -21,7 +21,8 @@ def test_nothing_needed_is_met_at_once():
 
 def test_a_need_names_who_it_waits_for():
     """The plant's start-timeout message names the node (and the parameter) it waits for."""
-    n = Need("/pa10/s1/state", "subscribers", 2, lambda: 1, "joint_controller_s1 (state_subscribers:=1) and the recorder")
+    n = Need("/pa10/s1/state", "subscribers", 2, lambda: 1,
+             "joint_controller_s1 (state_subscribers:=1) and the recorder")
     assert n.missing() == ("/pa10/s1/state (1 of 2 subscribers: joint_controller_s1 (state_subscribers:=1) "
                            "and the recorder)")
     assert Need("/clock", "subscribers", 1, lambda: 1, "the reference node").missing() is None

@@ -137,7 +137,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                 if record is None:
                     run, missing = load_wire_run(result.wire_file, controller, JOINT_NAMES,
                                                  cfg["plant"]["torque_limit_nm"], stats["wall_time_s"])
-                    source = f"the wire monitor's record of {ArmTopics(namespace).joint_states} and the reference topics"
+                    source = (f"the wire monitor's record of {ArmTopics(namespace).joint_states} "
+                              "and the reference topics")
                 else:
                     run, missing = _bag_run(record, dt, n_steps, controller, cfg, stats["wall_time_s"],
                                             lockstep_stats=stats if mode == "lockstep" else None, clock_hz=clock_hz)
