@@ -88,6 +88,9 @@ def main() -> int:
     ap.add_argument("--long-s", type=float, default=100.0, help="length of the noisy run [s]")
     ap.add_argument("--only", default=None, help="comma-separated variant numbers (0 = default) to run")
     a = ap.parse_args()
+    if not a.long_s >= 20.0:
+        print(f"ablation: --long-s must be >= 20 s (its RMS is over the last 20 s), got {a.long_s:g}", file=sys.stderr)
+        return 2
     rows = range(len(VARIANTS)) if a.only is None else [int(x) for x in a.only.split(",")]
     jobs = [(i, sc, d, w) for i in rows for sc, d, w in (
         ("nominal", 20.0, (10.0, 20.0)), ("payload_5kg", 20.0, (10.0, 20.0)),

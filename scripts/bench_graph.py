@@ -105,7 +105,8 @@ def main() -> int:
                     help=f"as launch's (default {DEFAULT_RT_PRIORITY} where the OS allows SCHED_FIFO; "
                          "0: the default policy)")
     ap.add_argument("--sched-batch", action="store_true",
-                    help="every node but the plant under SCHED_BATCH (default: every node at the default policy)")
+                    help="every node but the plant under SCHED_BATCH, the plant at the default policy (implies "
+                         "--rt-priority 0: a granted SCHED_FIFO would replace SCHED_BATCH)")
     ap.add_argument("--controller", default="dnbs", choices=["dnbs", "pid"],
                     help="what the seven controller processes run (default dnbs; pid: the wire's own cost)")
     ap.add_argument("--config", type=Path, default=default_config_path(),
@@ -115,10 +116,16 @@ def main() -> int:
     args.config = args.config.resolve()
     args.joint_names = arm_of(load_config(args.config)).joint_names  # a bad config fails here, not in every run
     check_priority(args.rt_priority)
+    if args.sched_batch and args.rt_priority:
+        print("--sched-batch: every node but the plant under SCHED_BATCH, so no SCHED_FIFO (--rt-priority 0)",
+              flush=True)
+        args.rt_priority = 0
     args.rt_priority, refused = granted_priority(args.rt_priority)
     if refused:
         print(refused, flush=True)
     policy = f"SCHED_FIFO {args.rt_priority}" if args.rt_priority else "the default policy"
+    if args.sched_batch:
+        policy = "SCHED_BATCH (the plant: the default policy)"
     print(f"node graph, {args.controller.upper()} ({args.config.name}), {args.duration:g} s simulated per run, "
           f"{args.repeat} runs each, every node under {policy}; load average before: {load()}", flush=True)
     cases = (([("lockstep", 1.0)] if not args.no_lockstep else []) + ([("record", 1.0)] if args.record else [])

@@ -32,7 +32,7 @@ def _write_bag(path, n=200, topic="/joint_states"):
     return path
 
 
-def _write_run_bag(path, n=300, compression="zstd", ns=None):
+def _write_run_bag(path, n=300, compression="zstd", ns=None, custom_data=None):
     """A complete little run: joint_states (7 joints) and one reference batch per joint, as the graph sends them.
 
     ``ns`` None: the old layout (/joint_states at the root, /pa10/<joint>/reference); else every topic in ``ns``.
@@ -41,7 +41,7 @@ def _write_run_bag(path, n=300, compression="zstd", ns=None):
 
     store = get_typestore(Stores.ROS2_JAZZY)
     T = store.types
-    w = BagWriter(path, compression=compression)
+    w = BagWriter(path, compression=compression, custom_data=custom_data)
     js = "/joint_states" if ns is None else f"{ns}/joint_states"
     prefix = "/pa10" if ns is None else ns
     w.add_topic(js, "sensor_msgs/msg/JointState", [QOS])
@@ -100,6 +100,26 @@ def test_a_complete_run_bag_analyses(tmp_path):
     r = _analyse(_write_run_bag(tmp_path / "b", ns="/pa10"), tmp_path)
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "out" / "metrics.json").is_file()
+
+
+def test_a_stopped_runs_bag_analyses_its_recorded_part(tmp_path):
+    """A bag whose run was stopped (Ctrl-C: 301 of the 1001 states of a 1 s run): analysed up to its last state,
+    saying where it ends; a record with a gap is not taken for a stopped run."""
+    bag = _write_run_bag(tmp_path / "b", n=300, ns="/pa10", custom_data={"pa10_dnbs.duration_s": "1.0"})
+    r = _analyse(bag, tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "the bag ends at step 300 (0.3 s) of the 1000-step run (1 s)" in r.stdout
+    assert "analysed the recorded part, [0, 0.3] s" in (tmp_path / "out" / "report.md").read_text()
+    from pa10_dnbs.commands.analyse import _recorded_prefix_end
+    from pa10_dnbs.wire.wire_record import WireRecord
+
+    rec = WireRecord(200, 1e-3, 7)
+    rec.got_state[:] = True
+    rec.got_state[50:60] = False
+    assert _recorded_prefix_end(rec) is None  # a gap: not a stopped run
+    rec.got_state[50:] = False
+    assert _recorded_prefix_end(rec) == 49
+
 
 
 def test_missing_path_and_not_a_bag(tmp_path):
@@ -279,3 +299,26 @@ def test_launch_rejects_bad_live_and_compression_options_before_starting(tmp_pat
     r = run_cli("launch", "--duration", "1", "--out", tmp_path / "run", "--record", tmp_path / "bag",
                 "--bag-compression", "lz4")
     assert r.returncode == 2 and "--bag-compression" in r.stderr and not (tmp_path / "bag").exists()
+
+
+def test_the_player_counts_what_it_publishes_to_nobody():
+    """A message published while its topic has no matched subscriber is counted, and the player's last line says
+    that nothing received it (the re-drive a newcomer tries without a plant listening)."""
+    from types import SimpleNamespace
+
+    from pa10_dnbs.ros.player_node import HEARD_RECHECK_S, PlayerNode, unheard_warning
+
+    subs = {"/pa10/s1/effort": 0, "/pa10/s2/effort": 1}
+    player = SimpleNamespace(unheard={}, _heard_at={},
+                             pubs={t: SimpleNamespace(get_subscription_count=lambda t=t: subs[t]) for t in subs})
+    for i in range(3):
+        for t in subs:
+            PlayerNode._count_unheard(player, t, now=i * HEARD_RECHECK_S / 2)
+    assert player.unheard == {"/pa10/s1/effort": 3}
+    subs["/pa10/s2/effort"] = 0  # its subscriber went away: noticed once the recheck period has passed
+    PlayerNode._count_unheard(player, "/pa10/s2/effort", now=2 * HEARD_RECHECK_S)
+    assert player.unheard == {"/pa10/s1/effort": 3, "/pa10/s2/effort": 1}
+    line = unheard_warning(player.unheard, 6)
+    assert line.startswith("WARNING replay: 4 of 6 messages went out with no subscriber matched on "
+                           "/pa10/s1/effort, /pa10/s2/effort: nothing received them")
+    assert "--wait-for-subscribers" in line

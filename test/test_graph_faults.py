@@ -1,8 +1,10 @@
 """The graph under faults: corrupted messages, a killed controller with and without restart,
 lost efforts in realtime (a smoke run), and plant and controllers on two hosts (network namespaces)."""
 import json
+import os
 import shutil
 import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -171,26 +173,27 @@ def test_realtime_run_reports_misses_latency_and_counts_lost_efforts(tmp_path, d
     assert any(j["latency_median_us"] is not None for j in timing["joints"]), timing["joints"]
 
 
-NS = ("pa10t_a", "pa10t_b")
+NETNS_HOSTS = Path(__file__).resolve().parent.parent / "scripts" / "netns_hosts.sh"
 
 
 @pytest.fixture
 def two_hosts():
-    """Two network namespaces joined by a veth pair (10.77.1.1/24 <-> 10.77.1.2/24): two 'hosts'."""
+    """Two network namespaces joined by a veth link (10.77.1.1/24 <-> 10.77.1.2/24, ``veth0`` in each): two
+    'hosts', made and removed by scripts/netns_hosts.sh as a user would (named after this process, so that two
+    suites on one host never share them)."""
     if shutil.which("ip") is None:
         pytest.skip("iproute2 is not installed")
-    cmds = [f"netns add {NS[0]}", f"netns add {NS[1]}", "link add pa10ta type veth peer name pa10tb",
-            f"link set pa10ta netns {NS[0]}", f"link set pa10tb netns {NS[1]}",
-            f"-n {NS[0]} addr add 10.77.1.1/24 dev pa10ta", f"-n {NS[1]} addr add 10.77.1.2/24 dev pa10tb",
-            f"-n {NS[0]} link set pa10ta up", f"-n {NS[1]} link set pa10tb up",
-            f"-n {NS[0]} link set lo up", f"-n {NS[1]} link set lo up"]
+    if os.geteuid() != 0:
+        pytest.skip("network namespaces need root")
+    ns = (f"pa10t_a_{os.getpid()}", f"pa10t_b_{os.getpid()}")
     try:
-        for c in cmds:
-            subprocess.run(["ip", *c.split()], check=True, capture_output=True, text=True)
-        yield NS
+        up = subprocess.run(["bash", NETNS_HOSTS, "up", *ns, "10.77.1"], capture_output=True, text=True)
+        assert up.returncode == 0, up.stderr
+        yield ns
     finally:
-        for ns in NS:
-            subprocess.run(["ip", "netns", "del", ns], capture_output=True)
+        down = subprocess.run(["bash", NETNS_HOSTS, "down", *ns], capture_output=True, text=True)
+        assert down.returncode == 0, down.stderr
+    assert not any(Path(f"/var/run/netns/{n}").exists() for n in ns)
 
 
 def _veth_packets(ns: str, dev: str) -> int:
@@ -202,12 +205,12 @@ def _veth_packets(ns: str, dev: str) -> int:
 
 def test_two_hosts_give_the_single_host_trajectory_bit_for_bit(tmp_path, two_hosts, _default_cfg, domain):
     a, b = two_hosts
-    before = _veth_packets(a, "pa10ta")
+    before = _veth_packets(a, "veth0")
     rc, output, out = _launch(tmp_path, "run", "--duration", 1, "--netns", f"plant={a}", "--netns", f"reference={a}",
                               "--netns", f"observer={a}", "--netns", f"controllers={b}", domain_id=domain)
     assert rc == 0, output
     # every state and effort crossed the link: at least 2 x 7 x 1000 packets
-    assert _veth_packets(a, "pa10ta") - before > 2 * 7 * 1000
+    assert _veth_packets(a, "veth0") - before > 2 * 7 * 1000
     wire = RunData.load_npz(out / "timeseries.npz")
     local = simulate(_default_cfg, "dnbs", 1.0)
     for field in ("position_rad", "velocity_rad_s", "reference_rad", "torque_nm"):

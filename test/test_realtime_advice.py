@@ -1,5 +1,7 @@
 """The launcher's advice after a realtime run that missed deadlines (launch/realtime_advice.py)."""
-from pa10_dnbs.launch.realtime_advice import ON_TIME_TARGET, realtime_hint
+from pa10_dnbs.config import default_config_path, load_config
+from pa10_dnbs.launch.fault_flags import apply_fault_flags
+from pa10_dnbs.launch.realtime_advice import ON_TIME_TARGET, injected_misses, realtime_hint
 
 
 def test_the_target_is_the_benchmarks_99_percent():
@@ -16,3 +18,17 @@ def test_hint_names_a_lower_factor_and_priority_when_not_applied():
 def test_hint_leaves_out_priority_that_is_already_in_force():
     line = realtime_hint(1.0, priority_applied=True)
     assert "a lower --rtf (e.g. 0.5)" in line and "--rt-priority" not in line
+
+
+def test_injected_effort_drops_are_named_not_blamed_on_the_cpu():
+    """A realtime run with --drop-efforts misses ticks by design: the hint says so instead of 'a lower --rtf'."""
+    from pa10_dnbs.cli import build_parser
+
+    cfg = load_config(default_config_path())
+    assert injected_misses(cfg) == []
+    args = build_parser().parse_args(["launch", "--mode", "realtime", "--drop-efforts", "0.05", "--out", "x"])
+    faulty = apply_fault_flags(cfg, args)
+    assert injected_misses(faulty) == ["efforts dropped"]
+    line = realtime_hint(0.5, priority_applied=True, injected=injected_misses(faulty))
+    assert "efforts dropped" in line and "by design" in line
+    assert "lower --rtf" not in line and "CPU each tick" not in line

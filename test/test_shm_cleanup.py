@@ -49,3 +49,22 @@ def test_file_mapped_by_another_process_is_kept(shm_file):
         child.stdin.close()
         child.wait(timeout=10)
     assert remove_stale({name}) == [name]
+
+
+def test_snapshot_then_since_removes_only_the_new_unused_files(shm_file, tmp_path):
+    """The hand-start clean-up of docs/graph.md: a file in the snapshot stays, one created after it goes."""
+    from pa10_dnbs.launch.shm_cleanup import main
+
+    old_name, old_path = shm_file
+    snap = tmp_path / "before.txt"
+    assert main(["--snapshot", str(snap)]) == 0 and old_name in snap.read_text().split()
+    new_path = os.path.join(SHM_DIR, f"lttng-ust-wait-test-new-{os.getpid()}")
+    with open(new_path, "wb") as fh:
+        fh.write(b"\0" * mmap.PAGESIZE)
+    try:
+        assert main(["--since", str(snap)]) == 0
+        assert not os.path.exists(new_path) and os.path.exists(old_path)
+    finally:
+        if os.path.exists(new_path):
+            os.unlink(new_path)
+    assert main(["--since", str(tmp_path / "missing.txt")]) == 2

@@ -27,6 +27,16 @@ def _run_config(info: dict, config_path: Path | None, bag: Bag) -> tuple[dict, s
     return cfg, f"stored in the bag (recorded from {info.get('config_file', '?')})"
 
 
+def _recorded_prefix_end(rec) -> int | None:
+    """The last step of a bag whose joint states stop early without a gap before (a run stopped with Ctrl-C,
+    whose bag is closed and readable), else None: states 0..end received, none after, at least 2 steps."""
+    got = rec.got_state
+    end = int(got.argmin()) - 1 if not got.all() else rec.n
+    if end < 2 or got[end + 1:].any():
+        return None
+    return end
+
+
 def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None = None, progress: bool = False,
                 figures: bool = True) -> int:
     """Rebuild the run from the bag and write the report into ``out``. Raises BagError on a bad bag.
@@ -57,7 +67,13 @@ def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None
         if rec.malformed:
             raise BagError(f"{bag.path}: corrupt bag: {rec.malformed} messages on joint_states or the reference "
                            "topics could not be decoded")
+        truncated = None
         missing = rec.missing()
+        if missing and (end := _recorded_prefix_end(rec)) is not None:  # a stopped run: analyse what was recorded
+            truncated = (f"the bag ends at step {end} ({end * dt:g} s) of the {rec.n}-step run ({rec.n * dt:g} s): "
+                         f"the run was stopped; analysed the recorded part, [0, {end * dt:g}] s")
+            rec = wire_record_from_bag(bag, dt, end)
+            missing = rec.missing()
         if missing:
             raise BagError(f"{bag.path}: the bag does not hold the whole run: {missing}")
         controller = info.get("controller", "unknown")
@@ -71,10 +87,14 @@ def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None
         notes = [f"bag: `{bag.path}` ({bag.message_count} messages on {len(bag.topics)} topics; {bag.crc_note()})",
                  f"config: {cfg_note}",
                  f"source: rebuilt from the bag's {bag_arm(bag).joint_states} and reference topics ({info.get('mode', '?')} run)"]
+        if truncated:
+            notes.append(truncated)
         chain = robot_chain(bag, cfg)
         with atomic_output_dir(out, force) as tmp:
             write_report(tmp, [run], [metrics], title="Run from a bag", notes=notes, chain=chain,
                          figures=figures)
+    if truncated:
+        print(f"analyse: {truncated}")
     print(f"{controller}: worst-joint RMS error {metrics['worst_rms_error_rad']:.3e} rad over {metrics['window_s']} s "
           f"({rec.n} steps from {bag.path})")
     print(f"wrote {out}/report.md")

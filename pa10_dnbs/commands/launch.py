@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import shutil
 import sys
 from pathlib import Path
 
@@ -18,7 +19,7 @@ from ..core.checkpoint import checkpoint_dir, load_joint_checkpoints
 from ..launch.fault_flags import apply_fault_flags, faults_active, plain
 from ..launch.fault_report import fault_note, fault_report
 from ..launch.graph_run import GraphFailure, GraphOptions, loop_reliability, parse_netns, run_graph
-from ..launch.realtime_advice import ON_TIME_TARGET, realtime_hint
+from ..launch.realtime_advice import ON_TIME_TARGET, injected_misses, realtime_hint
 from ..live.options import check_live_options
 from ..loop.scheduling import DEFAULT_RT_PRIORITY, check_priority, granted_priority
 from ..report.metrics_file import metrics_dict, metrics_settings
@@ -133,44 +134,49 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
 
     try:
         with atomic_output_dir(out, force) as tmp:
-            used = tmp / "config_used.yaml"
-            used.write_text(yaml.safe_dump(plain(cfg), sort_keys=False))
-            result = run_graph(dataclasses.replace(opt, config_path=used), tmp, say=lambda s: print(s, flush=True))
-            stats = result.stats
-            if record is None:
-                run, missing = load_wire_run(result.wire_file, controller, joint_names,
-                                             cfg["plant"]["torque_limit_nm"], stats["wall_time_s"])
-                source = f"the wire monitor's record of {ArmTopics(namespace).joint_states} and the reference topics"
-            else:
-                run, missing = _bag_run(record, dt, n_steps, controller, cfg, stats["wall_time_s"],
-                                        lockstep_stats=stats if mode == "lockstep" else None, clock_hz=clock_hz)
-                source = f"the bag's {ArmTopics(namespace).joint_states} and reference topics ({record})"
-            if missing:
-                raise GraphFailure(f"the record of the run is incomplete: {missing}")
-            metrics = metrics_dict(
-                run, settings, source="ros-graph", mode=mode, config_file=str(config_path),
-                seed=cfg["simulation"]["seed"], reliability=reliability, domain_id=result.domain_id,
-                wall_time_total_s=result.wall_total_s, limit_hits=stats["limit_hits"],
-                timing=timing_summary(stats, result.controllers, sched_batch),
-                node_exit_codes=result.exit_codes, bag=str(record) if record else None,
-                faults=fault_report(cfg, stats, result),
-                **({"warm_start_from": str(init_from)} if init_from is not None else {}))
-            notes = [f"config: `{config_path}`", f"arm: {the_arm.name} ({the_arm.description}), `{the_arm.file}`",
-                     f"source: ROS 2 node graph, {mode} mode, {reliability} QoS, domain {result.domain_id}; "
-                     f"time series rebuilt from {source}",
-                     _timing_note(stats)]
-            if init_from is not None:
-                notes.append(f"DNBS warm-started from the checkpoints in `{init_from}` (not a cold start)")
-            if faults_active(cfg) or result.restarts:
-                notes.append(fault_note(metrics["faults"]))
-            elif mode == "lockstep" and (nondeterministic := _unforced_timeouts(stats, effort_timeout_s)):
-                notes.append(nondeterministic)
-                print(f"pa10-dnbs launch: warning: {nondeterministic}", file=sys.stderr, flush=True)
-            if tuple(window) != tuple(cfg["simulation"]["window_s"]):
-                notes.append(f"run shorter than the configured window {list(cfg['simulation']['window_s'])}: "
-                             "metrics over the second half instead")
-            write_report(tmp, [run], [metrics], title=f"{the_arm.description}: node graph run ({mode})", notes=notes,
-                         chain=the_arm.chain, figures=figures)
+            try:
+                used = tmp / "config_used.yaml"
+                used.write_text(yaml.safe_dump(plain(cfg), sort_keys=False))
+                result = run_graph(dataclasses.replace(opt, config_path=used), tmp, say=lambda s: print(s, flush=True))
+                stats = result.stats
+                if record is None:
+                    run, missing = load_wire_run(result.wire_file, controller, joint_names,
+                                                 cfg["plant"]["torque_limit_nm"], stats["wall_time_s"])
+                    source = (f"the wire monitor's record of {ArmTopics(namespace).joint_states} "
+                              "and the reference topics")
+                else:
+                    run, missing = _bag_run(record, dt, n_steps, controller, cfg, stats["wall_time_s"],
+                                            lockstep_stats=stats if mode == "lockstep" else None, clock_hz=clock_hz)
+                    source = f"the bag's {ArmTopics(namespace).joint_states} and reference topics ({record})"
+                if missing:
+                    raise GraphFailure(f"the record of the run is incomplete: {missing}")
+                metrics = metrics_dict(
+                    run, settings, source="ros-graph", mode=mode, config_file=str(config_path),
+                    seed=cfg["simulation"]["seed"], reliability=reliability, domain_id=result.domain_id,
+                    wall_time_total_s=result.wall_total_s, limit_hits=stats["limit_hits"],
+                    timing=timing_summary(stats, result.controllers, sched_batch),
+                    node_exit_codes=result.exit_codes, bag=str(record) if record else None,
+                    faults=fault_report(cfg, stats, result),
+                    **({"warm_start_from": str(init_from)} if init_from is not None else {}))
+                notes = [f"config: `{config_path}`",
+                         f"arm: {the_arm.name} ({the_arm.description}), `{the_arm.file}`",
+                         f"source: ROS 2 node graph, {mode} mode, {reliability} QoS, domain {result.domain_id}; "
+                         f"time series rebuilt from {source}",
+                         _timing_note(stats)]
+                if init_from is not None:
+                    notes.append(f"DNBS warm-started from the checkpoints in `{init_from}` (not a cold start)")
+                if faults_active(cfg) or result.restarts:
+                    notes.append(fault_note(metrics["faults"]))
+                elif mode == "lockstep" and (nondeterministic := _unforced_timeouts(stats, effort_timeout_s)):
+                    notes.append(nondeterministic)
+                    print(f"pa10-dnbs launch: warning: {nondeterministic}", file=sys.stderr, flush=True)
+                if tuple(window) != tuple(cfg["simulation"]["window_s"]):
+                    notes.append(f"run shorter than the configured window {list(cfg['simulation']['window_s'])}: "
+                                 "metrics over the second half instead")
+                write_report(tmp, [run], [metrics], title=f"{the_arm.description}: node graph run ({mode})",
+                             notes=notes, chain=the_arm.chain, figures=figures)
+            except GraphFailure as exc:
+                raise _keep_logs(exc, tmp, Path(out)) from None
     except GraphFailure as exc:
         print(f"pa10-dnbs launch: FAILED: {exc}", file=sys.stderr, flush=True)
         if record is not None and (record / "metadata.yaml").is_file():
@@ -184,13 +190,27 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         print(f"realtime --rtf {t['target_real_time_factor']:g}: every effort before the deadline on "
               f"{100 * t['on_time_fraction']:.2f} % of ticks, late tick starts {t['late_start_ticks']}")
         if t["on_time_fraction"] < ON_TIME_TARGET:
-            print(realtime_hint(t["target_real_time_factor"], t["rt_priority_applied"]))
+            print(realtime_hint(t["target_real_time_factor"], t["rt_priority_applied"], injected_misses(cfg)))
     if record is not None:
         size = sum(f.stat().st_size for f in record.iterdir())
         print(f"recorded {record} ({size / 1e6:.1f} MB, {size / 1e6 / (n_steps * dt):.2f} MB per simulated second, "
               f"compression {bag_compression})")
     print(f"wrote {out}/report.md")
     return 0 if m["all_finite"] and m["torques_within_limits"] else 1
+
+
+def _keep_logs(exc: GraphFailure, tmp: Path, out: Path) -> GraphFailure:
+    """A failed run's output folder (``tmp``) is removed, so its ``logs/`` move to ``<out>.failed/logs`` (replacing
+    an earlier failure's) and the message names them there; an interrupted run (Ctrl-C) keeps nothing."""
+    logs = tmp / "logs"
+    if exc.interrupted or not logs.is_dir():
+        return exc
+    kept = out.parent / f"{out.name}.failed"
+    shutil.rmtree(kept, ignore_errors=True)
+    kept.mkdir(parents=True)
+    shutil.move(str(logs), str(kept / "logs"))
+    message = str(exc).replace(str(logs), str(kept / "logs"))
+    return GraphFailure(f"{message}\nthe nodes' logs and command lines are kept in {kept / 'logs'}")
 
 
 def _bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, cfg: dict, wall_time_s: float,

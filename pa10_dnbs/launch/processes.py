@@ -1,18 +1,32 @@
 """Child processes of the launcher: start, watch their output, stop them politely.
 
 Each child's stdout and stderr go to one log file; a reader thread also
-remembers the READY / RUNNING lines the nodes print. Stopping escalates:
+remembers the READY / RUNNING lines the nodes print. Each child's command line
+(with the environment that places it on the run's domain) is appended to
+``commands.sh`` beside the logs, so a node can be started again by hand as the
+launcher started it (docs/graph.md). Stopping escalates:
 SIGINT, then SIGUSR1 (a node writes its threads' stacks to its log) and SIGTERM after
 ``grace_int_s``, then SIGKILL after ``grace_term_s``.
 """
 from __future__ import annotations
 
 import os
+import shlex
 import signal
 import subprocess
 import threading
 import time
 from pathlib import Path
+
+
+COMMANDS_FILE = "commands.sh"
+ENV_SHOWN = ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE")  # what places a child on the run's graph
+
+
+def command_line(argv: list[str], env: dict) -> str:
+    """``argv`` as one shell line, prefixed with the ``ENV_SHOWN`` variables of ``env``."""
+    prefix = [f"{k}={shlex.quote(env[k])}" for k in ENV_SHOWN if k in env]
+    return " ".join(prefix + [shlex.join(argv)])
 
 
 class ManagedProcess:
@@ -24,6 +38,8 @@ class ManagedProcess:
         self.progress = 0
         self.progress_lines = 0
         self.worst_abs_error: float | None = None  # from PROGRESS lines that carry it
+        with open(log_path.parent / COMMANDS_FILE, "a") as fh:
+            fh.write(f"# {name} (log: {log_path.name})\n{command_line(argv, env)} &\n")
         self._log = open(log_path, "w", buffering=1)
         self.proc = subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                      stdin=subprocess.DEVNULL, text=True, errors="replace", bufsize=1)

@@ -81,3 +81,33 @@ def remove_stale(created_during_run: set[str], ignore_pids: frozenset[int] = fro
         except OSError:
             pass
     return removed
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m pa10_dnbs.launch.shm_cleanup --snapshot FILE`` before a hand-started session writes the names
+    present; ``--since FILE`` after it removes the files that appeared since and that no live process maps."""
+    import argparse
+    import sys
+
+    ap = argparse.ArgumentParser(prog="python -m pa10_dnbs.launch.shm_cleanup", description=main.__doc__)
+    group = ap.add_mutually_exclusive_group(required=True)
+    group.add_argument("--snapshot", metavar="FILE", help="write the Fast DDS / LTTng-UST names in /dev/shm now")
+    group.add_argument("--since", metavar="FILE", help="remove the unused files that are not in this snapshot")
+    args = ap.parse_args(argv)
+    if args.snapshot:
+        with open(args.snapshot, "w") as fh:
+            fh.write("".join(f"{name}\n" for name in sorted(shm_files())))
+        return 0
+    try:
+        with open(args.since) as fh:
+            before = set(fh.read().split())
+    except OSError as exc:
+        print(f"shm_cleanup: --since: cannot read the snapshot: {exc}", file=sys.stderr)
+        return 2
+    removed = remove_stale(shm_files() - before)
+    print(f"shm_cleanup: removed {len(removed)} files from {SHM_DIR}" + (f": {' '.join(removed)}" if removed else ""))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

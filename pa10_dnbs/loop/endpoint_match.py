@@ -11,17 +11,20 @@ from typing import Callable
 @dataclass(frozen=True)
 class Need:
     """``want`` endpoints of kind ``kind`` ('subscribers', 'publishers') on ``topic``; ``count()`` says how many
-    have matched so far."""
+    have matched so far; ``who`` names the endpoints expected (nodes, and the parameter that set ``want``)."""
 
     topic: str
     kind: str
     want: int
     count: Callable[[], int]
+    who: str = ""
 
     def missing(self) -> str | None:
-        """'<topic> (n of want <kind>)' while fewer than ``want`` have matched, else None."""
+        """'<topic> (n of want <kind>[: who])' while fewer than ``want`` have matched, else None."""
         have = self.count()
-        return None if have >= self.want else f"{self.topic} ({have} of {self.want} {self.kind})"
+        if have >= self.want:
+            return None
+        return f"{self.topic} ({have} of {self.want} {self.kind}{': ' + self.who if self.who else ''})"
 
 
 class MatchWait:

@@ -20,7 +20,7 @@ real-time runtime; the launcher asks once (``granted_priority``) and, where it i
 runs the graph at the default policy. A policy a thread gets later replaces this one.
 The whole graph shares the class: with the loop (plant, controllers) alone under SCHED_FIFO, an
 observer at the default policy starved whenever the loop needed the whole machine (a recorded lockstep
-run lost most of its bag, 3 of 3 runs; docs/timing.md, "SCHED_FIFO for the whole
+run lost most of its bag, 3 of 3 runs; docs/benchmarks_log.md, "SCHED_FIFO for the whole
 graph, by default").
 
 Observers (recorder, wire monitor, live view) are never put below the loop: SCHED_IDLE, or nice 10,

@@ -175,9 +175,10 @@ class PlantNode(Node):
 
     def wait_for_graph(self, executor, stop: Future) -> bool:
         """Spin until every endpoint has matched, then ``settle_s``; False when stopped first."""
-        rec = self.p["recorders"]  # each recorder subscribes to every topic, efforts included
-        wait = MatchWait(self.wire.needs(self.p["state_subscribers"] + rec, self.p["clock_subscribers"] + rec,
-                                         self.p["min_joint_states_subscribers"] + rec, rec), self.p["start_timeout_s"])
+        # each recorder subscribes to every topic, efforts included
+        wait = MatchWait(self.wire.needs(self.p["state_subscribers"], self.p["clock_subscribers"],
+                                         self.p["min_joint_states_subscribers"], self.p["recorders"]),
+                         self.p["start_timeout_s"])
         while not stop.done():
             status = wait.poll()
             if status == "met":
@@ -186,7 +187,8 @@ class PlantNode(Node):
                     executor.spin_once(timeout_sec=0.02)
                 return not stop.done()
             if status == "timeout":
-                raise RuntimeError("graph incomplete after start_timeout_s: " + "; ".join(wait.lacking))
+                raise RuntimeError("graph incomplete after start_timeout_s: waiting for " + "; ".join(wait.lacking)
+                                   + " (a node that never started or exited early: see its output)")
             executor.spin_once(timeout_sec=0.05)
         return False
 

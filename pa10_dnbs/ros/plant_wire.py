@@ -135,19 +135,27 @@ class PlantWire:
     # ------------------------------------------------------------- graph
     def needs(self, state_subscribers: int, clock_subscribers: int, joint_states_subscribers: int,
               recorders: int) -> list[Need]:
-        """The endpoints the graph must have matched before the first state goes out (``MatchWait``)."""
+        """The endpoints the graph must have matched before the first state goes out (``MatchWait``); each
+        names the nodes it waits for and the plant parameter that asked for them. The subscriber counts are
+        the parameters' (``state_subscribers`` ...), without the ``recorders``, which come on top of each."""
         node = self.node
-        out = [Need(pub.topic_name, "subscribers", state_subscribers, pub.get_subscription_count)
-               for pub in self._state_pubs]
-        out += [Need(node.resolve_topic_name(sub.topic), "publishers", 1, sub.get_publisher_count)
-                for sub in self._effort_subs]
+        out = [Need(pub.topic_name, "subscribers", state_subscribers + recorders, pub.get_subscription_count,
+                    _who(f"joint_controller_{j}", state_subscribers, "state_subscribers", recorders))
+               for j, pub in zip(self.joint_names, self._state_pubs)]
+        out += [Need(node.resolve_topic_name(sub.topic), "publishers", 1, sub.get_publisher_count,
+                     f"joint_controller_{j} (or a player of its efforts)")
+                for j, sub in zip(self.joint_names, self._effort_subs)]
         # the plant's own subscription and one per recorder
         out += [Need(node.resolve_topic_name(effort_topic(j)), "subscribers", 1 + recorders,
-                     lambda t=effort_topic(j): node.count_subscribers(t)) for j in self.joint_names if recorders]
+                     lambda t=effort_topic(j): node.count_subscribers(t), _who("", 0, "", recorders))
+                for j in self.joint_names if recorders]
         if self._clock_pub is not None:
-            out.append(Need(CLOCK, "subscribers", clock_subscribers, self._clock_pub.get_subscription_count))
-        out.append(Need(self._js_pub.topic_name, "subscribers", joint_states_subscribers,
-                        self._js_pub.get_subscription_count))
+            out.append(Need(CLOCK, "subscribers", clock_subscribers + recorders, self._clock_pub.get_subscription_count,
+                            _who("the reference node", clock_subscribers, "clock_subscribers", recorders)))
+        out.append(Need(self._js_pub.topic_name, "subscribers", joint_states_subscribers + recorders,
+                        self._js_pub.get_subscription_count,
+                        _who("an observer (the wire monitor)", joint_states_subscribers,
+                             "min_joint_states_subscribers", recorders)))
         return out
 
     def flush(self, timeout_s: float = 2.0) -> bool:
@@ -166,3 +174,13 @@ class PlantWire:
                 link.close()
         self.flush()
         self._wait_set.destroy()
+
+
+def _who(reader: str, n: int, param: str, recorders: int) -> str:
+    """Who a plant's subscriber count waits for: ``n`` x ``reader`` (set by ``param``) and the recorders."""
+    parts = []
+    if n:
+        parts.append(f"{reader if n == 1 else f'{n} readers'} ({param}:={n})")
+    if recorders:
+        parts.append(f"{'the recorder' if recorders == 1 else f'{recorders} recorders'} (recorders:={recorders})")
+    return " and ".join(parts)

@@ -17,6 +17,7 @@ start offset), so the client sees the run at its recorded timing.
 """
 from __future__ import annotations
 
+import sys
 import time
 from dataclasses import dataclass, field
 
@@ -34,6 +35,7 @@ from .msg_types import message_class
 from .runtime import announce_ready
 
 WAIT_SLICE_S = 0.02
+HEARD_RECHECK_S = 0.1  # a topic seen with a subscriber is checked again after this [s of wall time]
 
 
 @dataclass
@@ -71,6 +73,8 @@ class PlayerNode(Node):
                                                  from_bag_qos(bag.qos_profiles(t), opt.queue_depth))
         self._clock_pub = self.create_publisher(Clock, CLOCK, QoSProfile(depth=10)) if opt.clock_hz > 0 else None
         self.published = 0
+        self.unheard: dict[str, int] = {}  # topic -> messages published while it had no matched subscriber
+        self._heard_at: dict[str, float] = {}  # topic -> when a subscriber was last seen [s, perf_counter]
         self.exit_code = 0
         # topics read for the live view only (not published, or not played: /tf has no Python message package)
         shown = set(live.topics()) if live else set()
@@ -134,6 +138,7 @@ class PlayerNode(Node):
                 wake = target if clock_period is None else min(target, next_clock)
                 time.sleep(min(max(wake - now, 0.0), WAIT_SLICE_S))
             if topic in self.pubs:
+                self._count_unheard(topic, now)
                 self.pubs[topic].publish(bytes(data))
                 self.published += 1
             if self.live is not None:
@@ -141,6 +146,16 @@ class PlayerNode(Node):
         if self.live is not None:  # the last state of the pass
             self.live.tick(time.perf_counter() + self.live.decimator.period_s)
         return True
+
+    def _count_unheard(self, topic: str, now: float) -> None:
+        """Count a message about to go out on ``topic`` with no subscriber matched (checked at most every
+        ``HEARD_RECHECK_S`` while one is)."""
+        if now - self._heard_at.get(topic, -1e9) < HEARD_RECHECK_S:
+            return
+        if self.pubs[topic].get_subscription_count() > 0:
+            self._heard_at[topic] = now
+        else:
+            self.unheard[topic] = self.unheard.get(topic, 0) + 1
 
     def loop(self, executor, stop) -> None:
         if self.opt.wait_for_subscribers_s > 0 and not self._wait_for_subscribers(stop):
@@ -159,3 +174,13 @@ class PlayerNode(Node):
     def close(self) -> None:
         print(f"PLAYED {self.published} messages" + (f"; skipped {', '.join(self.skipped)}" if self.skipped else ""),
               flush=True)
+        if self.unheard:
+            print(unheard_warning(self.unheard, self.published), file=sys.stderr, flush=True)
+
+
+def unheard_warning(unheard: dict[str, int], published: int) -> str:
+    """The player's line when messages went out with nobody subscribed: nothing received them."""
+    n = sum(unheard.values())
+    return (f"WARNING replay: {n} of {published} messages went out with no subscriber matched on "
+            f"{', '.join(sorted(unheard))}: nothing received them; start the subscribers first and use "
+            "--wait-for-subscribers S (docs/bags.md, re-drive)")
