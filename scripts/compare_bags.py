@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Compare the stamped messages of two bags byte for byte: the check of a re-drive (docs/bags.md).
 
-For each topic (default: the arm's joint_states and its seven per-joint state topics, found in the first
+For each topic (default: the arm's joint_states and its per-joint state topics, found in the first
 bag), the messages are keyed by their header stamp [ns]; the line per topic says how many stamps both bags
 hold, how many payloads differ, and the stamps only one bag has. Exit 0 when every topic is the same in both
 (no difference, no stamp missing on either side), 1 otherwise, 2 for a bag that cannot be read.
@@ -15,8 +15,7 @@ import struct
 import sys
 from pathlib import Path
 
-from pa10_dnbs import JOINT_NAMES
-from pa10_dnbs.bag.analysis import bag_arm
+from pa10_dnbs.bag.analysis import bag_arm, bag_joint_names
 from pa10_dnbs.bag.bag_reader import Bag, BagError
 
 STAMP = struct.Struct("<iI")  # std_msgs/Header stamp after the 4-byte CDR encapsulation: sec, nanosec
@@ -42,7 +41,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with Bag(args.bag_a) as a, Bag(args.bag_b) as b:
             arm = bag_arm(a)
-            topics = args.topics or [arm.joint_states] + [arm.state(j) for j in JOINT_NAMES]
+            topics = args.topics or [arm.joint_states] + [arm.state(j) for j in bag_joint_names(a, arm)]
             for bag in (a, b):
                 bag.require_topics(topics, "the comparison")
             for t in topics:
