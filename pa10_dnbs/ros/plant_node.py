@@ -199,8 +199,7 @@ class PlantNode(Node):
                     settle_end = time.perf_counter() + self.p["settle_s"]
                     while time.perf_counter() < settle_end and not stop.done():
                         executor.spin_once(timeout_sec=0.02)
-                else:
-                    self.ready.close()
+                else:  # the ready subscription stays: destroying it now would send every node a graph update
                     print(f"HANDSHAKE every node ready after {wait.waited_s:.3f} s: {', '.join(board.expected)}",
                           flush=True)
                 return not stop.done()

@@ -47,16 +47,10 @@ def announce_when_ready(node, check: Callable[[], str | None]) -> ReadyAnnouncer
 
 class ReadyListener:
     """The plant's reader of ``ready``: fills a ``ReadyBoard`` of ``expected`` node names (served by the
-    executor: the plant spins it while it waits)."""
+    executor: the plant spins it while it waits). Never destroyed: a destroyed endpoint is a graph update to
+    every node, and the run's first steps would go out in the middle of it."""
 
     def __init__(self, node, expected: list[str]):
         self.board = ReadyBoard(expected)
-        self._node = node
         self._sub = node.create_subscription(String, READY, lambda msg: self.board.offer(msg.data),
                                              ready_qos(READER_DEPTH))
-
-    def close(self) -> None:
-        """Stop listening (the run has started)."""
-        if self._sub is not None:
-            self._node.destroy_subscription(self._sub)
-            self._sub = None
