@@ -157,14 +157,16 @@ def one_run(i: int, args, keep: Path | None) -> dict:
     hung = sorted(p.stem for p in logs.glob("*.log") if HUNG_MARK in p.read_text(errors="replace")) \
         if logs.is_dir() else []
     timeouts = resends = 0
+    resent_at: list[int] = []
     stats_file = out / "plant_stats.json"
     if stats_file.is_file():
         joints = json.loads(stats_file.read_text())["joints"]
         timeouts = sum(j["effort_timeouts"] for j in joints)
         resends = sum(j.get("resent_states", 0) for j in joints)
+        resent_at = sorted({a for j in joints for a, _ in j.get("resent_step_ranges", [])})
     ready_s = None
     plant_log = logs / "plant.log"
-    row = {"run": i, "rc": rc, "wall_s": round(wall, 2), "effort_timeouts": timeouts, "resends": resends,
+    row = {"run": i, "rc": rc, "wall_s": round(wall, 2), "effort_timeouts": timeouts, "resends": resends, "resent_from_steps": resent_at,
            "stalled": bool(timeouts or resends), "deadline_exits": hung, "leftover_processes": left_procs,
            "leftover_shm": left_shm, "ready_s": ready_s}
     if plant_log.is_file():
@@ -185,6 +187,7 @@ def summary(rows: list[dict]) -> dict:
             "effort_timeouts": sum(r["effort_timeouts"] for r in rows),
             "runs_with_timeouts": sum(bool(r["effort_timeouts"]) for r in rows),
             "stalled_runs": sum(r["stalled"] for r in rows),
+            "runs_resending_state_0": sum(0 in r.get("resent_from_steps", []) for r in rows),
             "deadline_exits": sum(len(r["deadline_exits"]) for r in rows),
             "leftover_processes": sum(len(r["leftover_processes"]) for r in rows),
             "leftover_shm_files": sum(len(r["leftover_shm"]) for r in rows),
@@ -225,7 +228,8 @@ def main() -> int:
             rows.append(r)
             flags = [k for k in ("deadline_exits", "leftover_processes", "leftover_shm") if r[k]]
             print(f"run {i:3d}: rc {r['rc']}, {r['wall_s']:6.2f} s, timeouts {r['effort_timeouts']}, resends "
-                  f"{r['resends']}, ready {r['ready_s']} s" + "".join(f", {k} {r[k]}" for k in flags), flush=True)
+                  f"{r['resends']}{' from steps ' + str(r['resent_from_steps']) if r['resent_from_steps'] else ''}, "
+                  f"ready {r['ready_s']} s" + "".join(f", {k} {r[k]}" for k in flags), flush=True)
     except KeyboardInterrupt:
         print("interrupted; the table covers the runs done", flush=True)
     finally:
@@ -236,11 +240,11 @@ def main() -> int:
     load = os.getloadavg()
     print(f"\nsoak: {s['runs']} runs of {args.duration:g} s lockstep, {args.busy} busy loops, load after "
           f"{load[0]:.1f} {load[1]:.1f} {load[2]:.1f}")
-    print("| runs | failed | effort timeouts (runs) | stalled runs (resend or timeout) | deadline exits | "
+    print("| runs | failed | effort timeouts (runs) | stalled runs (resend or timeout; state 0 re-sent) | deadline exits | "
           "leftover processes | leftover shm files | wall per run, median [s] | start handshake, median / max [s] |")
     print("|---|---|---|---|---|---|---|---|---|")
     print(f"| {s['runs']} | {s['failed_runs']} | {s['effort_timeouts']} ({s['runs_with_timeouts']}) | "
-          f"{s['stalled_runs']} | {s['deadline_exits']} | {s['leftover_processes']} | {s['leftover_shm_files']} | "
+          f"{s['stalled_runs']} ({s['runs_resending_state_0']}) | {s['deadline_exits']} | {s['leftover_processes']} | {s['leftover_shm_files']} | "
           f"{s['wall_s_median']} | {s['handshake_s_median']} / {s['handshake_s_max']} |")
     args.json.write_text(json.dumps({"args": {"runs": args.runs, "duration_s": args.duration, "busy": args.busy,
                                               "config": str(args.config) if args.config else None,

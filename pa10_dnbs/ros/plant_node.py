@@ -133,6 +133,7 @@ class PlantNode(Node):
         self.timing = PlantTiming(self.n_steps, len(JOINT_NAMES))
         self.cpu = CpuMeter()
         self.resends = [0] * len(JOINT_NAMES)
+        self.resent_steps: list[list[int]] = [[] for _ in JOINT_NAMES]  # lockstep: the steps re-sent, per joint
         self.schedule = None  # realtime: the TickSchedule
         self.finished = False
         self._observed = None  # (k, q, qd, applied) of a state whose joint_states and /clock are still to go out
