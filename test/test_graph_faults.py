@@ -136,6 +136,11 @@ def test_lost_and_late_messages_in_lockstep_change_nothing(tmp_path, _default_cf
         assert ctrl["injected_effort_delayed"] > 0
         # one resend per lost message, whichever way it was going
         assert plant["resent_states"] == sent["dropped"] + ctrl["injected_effort_dropped"], (name, plant, ctrl)
+    # the plant's stats say which states were re-sent (a state re-sent twice counts once there)
+    stats = {j["name"]: j for j in json.loads((out / "plant_stats.json").read_text())["joints"]}
+    for name, j in stats.items():
+        steps = sum(b - a + 1 for a, b in j["resent_step_ranges"])
+        assert (0 < steps <= j["resent_states"]) if name in ("s2", "w1") else steps == 0, (name, j)
     wire = RunData.load_npz(out / "timeseries.npz")
     local = simulate(_default_cfg, "dnbs", 1.0)
     for field in ("position_rad", "velocity_rad_s", "reference_rad", "torque_nm"):

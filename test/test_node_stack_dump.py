@@ -49,37 +49,58 @@ def test_sigusr1_dumps_the_stacks_and_the_node_keeps_running(domain, tmp_path):
     assert out.is_file()  # it closed normally: its record is written
 
 
-HUNG_TEARDOWN = """
-import ctypes, os, signal, threading
+PROBE = """
+import ctypes, os, signal, sys, threading
 import rclpy
 from rclpy.node import Node
+from std_msgs.msg import String
 from pa10_dnbs.ros import runtime
 
 runtime.TEARDOWN_LIMIT_S = 1.5
-rclpy.try_shutdown = lambda: ctypes.PyDLL(None).sleep(60)  # hangs in C with the GIL held, as seen in CI
+hang = lambda *a, **k: ctypes.PyDLL(None).sleep(60)  # blocks in C with the GIL held, as the teardown did in CI
+for name in ("try_shutdown", "shutdown"):
+    setattr(rclpy, name, hang)
+for name in ("destroy_node", "destroy_publisher", "destroy_subscription", "destroy_service", "destroy_timer"):
+    setattr(Node, name, hang)
 
 
 class Probe(Node):
     def __init__(self):
-        super().__init__("hung_teardown_probe")
+        super().__init__("teardown_probe")
+        self.create_publisher(String, "probe", 1)
         threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT)).start()
 
     def close(self):
         print("CLOSED", flush=True)
+        if sys.argv[1] == "hang_in_close":
+            ctypes.PyDLL(None).sleep(60)
 
 
 runtime.exit_process(runtime.run_node(Probe, []))
 """
 
 
-def test_a_hung_rclpy_teardown_is_cut_short_with_the_nodes_own_code(domain):
-    """After close(), rclpy's teardown (here try_shutdown) blocks in C holding the GIL: the node still exits 0
-    at the limit, and its log holds the stacks of where it hung (the launcher reports it)."""
+def _probe(domain: int, mode: str) -> tuple[subprocess.CompletedProcess, float]:
     t0 = time.monotonic()
-    r = subprocess.run(["timeout", "-k", "5", str(TIMEOUT_S), sys.executable, "-c", HUNG_TEARDOWN], cwd=REPO,
+    r = subprocess.run(["timeout", "-k", "5", str(TIMEOUT_S), sys.executable, "-c", PROBE, mode], cwd=REPO,
                        env=ros_env(domain), capture_output=True, text=True)
-    wall = time.monotonic() - t0
+    return r, time.monotonic() - t0
+
+
+def test_after_close_a_node_leaves_without_any_rclpy_teardown(domain):
+    """Every rclpy teardown call (destroying endpoints, the node, the context) hangs here in C with the GIL held,
+    as one did under load (a graph update stuck on a shared-memory port's mutex): the node never makes one
+    after close(), so it exits 0 at once and its log holds no stacks."""
+    r, wall = _probe(domain, "plain")
     assert r.returncode == 0, r.stdout + r.stderr
-    assert wall < 30  # the 60 s hang was cut short
     assert "CLOSED" in r.stdout
-    assert "Timeout (" in r.stderr and "_rclpy_teardown" in r.stderr, r.stderr
+    assert wall < 20 and "Timeout (" not in r.stderr, r.stderr
+
+
+def test_a_hung_close_is_cut_short_with_exit_code_3_and_its_stacks(domain):
+    """close() blocks in C with the GIL held: the exit deadline ends the node after TEARDOWN_LIMIT_S with 3 (a
+    failure: its files may be incomplete), the stacks of where it hung in its log."""
+    r, wall = _probe(domain, "hang_in_close")
+    assert r.returncode == 3, r.stdout + r.stderr
+    assert wall < 30  # the 60 s hang was cut short
+    assert "Timeout (" in r.stderr and "in close" in r.stderr, r.stderr

@@ -20,7 +20,8 @@ def run_replay(bag_path: Path, rate: float, topics: list[str] | None, start_offs
                clock_hz: float, wait_for_subscribers_s: float, queue_depth: int, live_port: int | None = None,
                live_host: str = "127.0.0.1", live_hz: float = 50.0, config_path: Path | None = None,
                namespace: str | None = None) -> int:
-    """Validate the bag and the options before joining ROS, then play. Returns the exit code.
+    """Validate the bag and the options before joining ROS (a bad one: the error, raised), then play and end the
+    process with the player node's exit code (as every node, without an rclpy teardown: ros/runtime.py).
 
     ``namespace``: publish the arm's topics under this namespace instead of the recorded one (None: as recorded).
     ``live_port``: also serve the live view on ``live_host``:``live_port`` (0: a free port); its Table 2 limits
@@ -42,7 +43,7 @@ def run_replay(bag_path: Path, rate: float, topics: list[str] | None, start_offs
     if live_port is not None:
         check_live_options(live_host, live_port, live_hz)
     from ..ros.player_node import PlayerNode, PlayOptions
-    from ..ros.runtime import run_node
+    from ..ros.runtime import exit_process, run_node  # the player leaves as a node does: no rclpy teardown
 
     with Bag(bag_path) as bag:
         if topics:
@@ -57,7 +58,7 @@ def run_replay(bag_path: Path, rate: float, topics: list[str] | None, start_offs
                           clock_hz=clock_hz, wait_for_subscribers_s=wait_for_subscribers_s, queue_depth=queue_depth,
                           namespace=namespace)
         if live_port is None:
-            return run_node(functools.partial(PlayerNode, bag, opt), args=[])
+            exit_process(run_node(functools.partial(PlayerNode, bag, opt), args=[]))
         cfg = _live_config(bag, config_path)
         arm = find_arm(bag.topics) or ArmTopics()
         joints = bag_joint_names(bag, arm)
@@ -70,9 +71,10 @@ def run_replay(bag_path: Path, rate: float, topics: list[str] | None, start_offs
             view = LiveView(server, cfg["plant"]["torque_limit_nm"], cfg["simulation"]["dt_s"], display_hz=live_hz,
                             joint_names=joints, arm=arm)
             print(f"LIVE {server.url} (Foxglove: Open connection, Foxglove WebSocket)", flush=True)
-            return run_node(functools.partial(PlayerNode, bag, opt, live=view), args=[])
+            code = run_node(functools.partial(PlayerNode, bag, opt, live=view), args=[])
         finally:
             server.stop()
+        exit_process(code)
 
 
 def _live_config(bag: Bag, config_path: Path | None) -> dict:

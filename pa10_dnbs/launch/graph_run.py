@@ -26,7 +26,7 @@ from .processes import ManagedProcess, stop_all
 from .shm_cleanup import remove_stale, shm_files
 from .supervision import Restarter, StopRequest, catch_signals, wait_ready, watch
 
-# faulthandler's header when a node's rclpy teardown outlives its limit (ros/runtime.py, _rclpy_teardown)
+# faulthandler's header when a node's close() outlives its limit and the exit deadline ends it (ros/runtime.py)
 TEARDOWN_HUNG_MARK = "Timeout ("
 
 __all__ = ["GraphFailure", "GraphOptions", "GraphResult", "LIVE_VIEW", "graph_topics", "loop_reliability",
@@ -87,8 +87,8 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
     hung = [p.name for p in procs
             if p.log_path.is_file() and TEARDOWN_HUNG_MARK in p.log_path.read_text(errors="replace")]
     if hung:
-        say(f"launch: the rclpy teardown of {', '.join(hung)} hung after the node had closed its outputs and was cut "
-            "short, exit code kept (where it hung: the stacks in its log)")
+        say(f"launch: {', '.join(hung)} did not close within its limit and was cut short by its exit deadline "
+            "(where it hung: the stacks in its log)")
     bad = {n: c for n, c in codes.items() if c != 0 and n != LIVE_VIEW}
     if codes.get(LIVE_VIEW, 0) != 0:
         say(f"launch: the live view exited with code {codes[LIVE_VIEW]}; the run itself is not affected")

@@ -1,5 +1,9 @@
 """What to start: every node process of the graph as (name, argv), with its ROS arguments.
 
+The plant is started last and told every other node's name but the live view's (``ready_nodes``): it
+publishes step 0 only once each of them said ready on the ``ready`` topic (the start handshake,
+``ros/ready.py``).
+
 Every node runs in the arm's namespace (``-r __ns:=NS``) under its own name (``-r __node:=``), and every
 node but the plant with ``use_sim_time:=true`` (the plant publishes /clock) and ``sched_batch`` as
 ``GraphOptions.sched_batch`` says; every node with ``rt_priority`` = ``GraphOptions.rt_priority`` (one
@@ -107,12 +111,16 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
     batch = REALTIME_REFERENCE_BATCH if opt.mode == "realtime" else 100
     cmds.append(("reference", py + ["pa10_dnbs.ros.reference_node"] + ros(
         "reference", {"config_file": cfg, "duration_s": opt.duration_s, "batch_steps": batch,
-                      "lookahead_steps": reference_lookahead(opt)})))
+                      "lookahead_steps": reference_lookahead(opt),
+                      "reference_subscribers": 2})))  # the joint's controller and the observer
     if not opt.joint_names:
         raise ValueError("GraphOptions.joint_names: the arm's joints are needed to start one controller each")
     for j in opt.joint_names:
         cmds.append((f"joint_controller_{j}", controller_command(opt, stats_file.parent, j)))
+    # the start handshake: the plant publishes step 0 once every node but the live view (display only) said ready
+    ready = [name for name, _ in cmds if name != LIVE_VIEW]
     cmds.append(("plant", py + ["pa10_dnbs.ros.plant_node"] + _ros_args("plant", {
+        "ready_nodes": _yaml_list(ready), "settle_s": 0.0,
         "config_file": cfg, "mode": opt.mode, "duration_s": opt.duration_s, "reliability": loop_reliability(opt),
         "effort_timeout_s": opt.effort_timeout_s, "on_missing_effort": opt.on_missing_effort,
         "real_time_factor": opt.real_time_factor, "deadline_fraction": opt.deadline_fraction,

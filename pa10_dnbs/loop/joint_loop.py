@@ -53,6 +53,10 @@ class JointLoop:
         """(first, last) step of the buffered references."""
         return (min(self._ref_pos), max(self._ref_pos)) if self._ref_pos else None
 
+    def holds_references_for(self, step: int) -> bool:
+        """True when the references state ``step`` needs (x_d(step) and x_d(step + preview)) are buffered."""
+        return step in self._ref_pos and step + self.preview_steps in self._ref_pos
+
     def add_reference(self, first_step: int, positions, velocities) -> list[tuple[int, float]]:
         """Store points for steps first_step, first_step + 1, ...; answer states that were waiting."""
         for i, (p, v) in enumerate(zip(positions, velocities)):

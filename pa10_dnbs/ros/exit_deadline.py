@@ -1,9 +1,10 @@
 """An exit deadline that works while the main thread holds the GIL: after ``seconds``, ``_exit(code)``.
 
-rclpy's teardown (destroying endpoints, ``rclpy_logging_fini`` in
-``try_shutdown``) can block in C with the GIL held on a loaded machine. Then
+A node's ``close()`` (and, before the nodes stopped tearing rclpy down,
+destroying endpoints and ``rclpy_logging_fini``: a graph update stuck on a
+shared-memory port, ``runtime.py``) can block in C with the GIL held. Then
 no Python thread and no Python signal handler can run, and ``signal.alarm``
-can only kill the process (exit -14) even though its work is done. A POSIX
+can only kill the process (exit -14). A POSIX
 timer with SIGEV_THREAD makes glibc call libc's ``_exit(code)`` on a thread of
 its own: no Python, no GIL. Linux with glibc; elsewhere ``arm`` returns None
 and the caller falls back to ``signal.alarm``.

@@ -56,6 +56,7 @@ from ..loop.joint_loop import JointLoop
 from ..loop.scheduling import apply_batch, apply_fifo, check_priority, policy_name
 from .params import (CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, check_choice, cli_parameter,
                      declare, load_node_config)
+from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node
 from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
 from .wall_timer import wall_timer
@@ -148,7 +149,8 @@ class JointControllerNode(Node):
         self._held: list[tuple[int, float]] = []  # (step, torque N m) answers waiting for the subscribers
         self._matched = False
         self.held_answers = 0
-        self.create_subscription(JointState, state_topic(self.joint), self._on_state, qos, raw=True)
+        self._state_sub = self.create_subscription(JointState, state_topic(self.joint), self._on_state, qos,
+                                                   raw=True)
         self.malformed_references = 0
         # raw: the batch is read straight from CDR (wire/trajectory_cdr.py), no rclpy message per point
         self.create_subscription(JointTrajectory, reference_topic(self.joint), self._on_reference, reference_qos(),
@@ -162,6 +164,19 @@ class JointControllerNode(Node):
         if p["rt_priority"]:
             print(rt_message, flush=True)
         announce_ready(f"joint_controller {self.joint}")
+        announce_when_ready(self, self._ready_for_steps)
+
+    def _ready_for_steps(self) -> str | None:
+        """The start handshake (``ros/ready.py``): None once the state reader has matched the plant's writer, the
+        references that state 0 needs are here and the effort publisher has its subscribers; else what is
+        missing."""
+        if self._state_sub.get_publisher_count() < 1:
+            return f"its {self._state_sub.topic_name} reader has not matched the plant"
+        if not self.loop_.holds_references_for(0):
+            return "the references state 0 needs have not arrived"
+        if not self._matched:
+            return "; ".join(self._match.lacking) or "its effort publisher is not matched yet"
+        return None
 
     def _on_state(self, data: bytes) -> None:
         try:

@@ -107,8 +107,7 @@ class LiveObserverNode(Node):
         self.view.tick(time.monotonic())
 
     def close(self) -> None:
-        self.server.stop()
-        self._poll_node.destroy_subscription(self._states)
+        self.server.stop()  # its subscriptions and nodes go with the process (ros/runtime.py: no rclpy teardown)
         use = resource.getrusage(resource.RUSAGE_SELF)
         wall = time.monotonic() - self._t0
         print(f"LIVE_VIEW {self.view.frames} frames shown in {wall:.1f} s; {self.server.subscriptions} subscriptions; "

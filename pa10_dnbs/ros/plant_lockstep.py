@@ -57,6 +57,8 @@ def run_lockstep(node, executor, stop) -> None:
             missing = gate.missing
             for j in missing:
                 node.resends[j] += 1
+                if not node.resent_steps[j] or node.resent_steps[j][-1] != gate.step:
+                    node.resent_steps[j].append(gate.step)
             node.publish_state(gate.step, joints=missing)
         if now >= next_housekeeping:
             executor.spin_once(timeout_sec=0.0)

@@ -1,5 +1,9 @@
 """plant_node: the PyBullet PA10 plant on the wire.
 
+Before step 0, the start handshake (``wait_for_graph``, ``ros/ready.py``): its own endpoints matched, /clock
+at time 0 out, and every node of ``ready_nodes`` ready on the ``ready`` topic (one timeout, naming the nodes
+that are not).
+
 What it publishes and how it takes efforts: ``plant_wire.py``. How it
 paces the steps (``mode``):
 
@@ -48,6 +52,7 @@ from .plant_lockstep import run_lockstep
 from .plant_realtime import run_realtime
 from .plant_stats import diagnostics_report, plant_stats
 from .plant_wire import PlantWire
+from .ready import ReadyListener
 from .runtime import announce_ready
 from .wire import StepClock, record_qos
 
@@ -76,6 +81,8 @@ PARAMS = {
     "rt_priority": RT_PRIORITY,
     "warn_period_s": Param(1.0, "wall time between two warnings of the same kind [s]", 0.0),
     "handshake_steps": Param(3, "realtime: first steps that wait for every effort before the tick schedule starts [steps]", 1),
+    "ready_nodes": Param([""], "nodes that must say ready on the ready topic before step 0 (the start handshake); "
+                         "none: no handshake, settle_s instead"),
 }
 
 
@@ -128,11 +135,14 @@ class PlantNode(Node):
         self.timing = PlantTiming(self.n_steps, n)
         self.cpu = CpuMeter()
         self.resends = [0] * n
+        self.resent_steps: list[list[int]] = [[] for _ in range(n)]  # lockstep: the steps re-sent, per joint
         self.schedule = None  # realtime: the TickSchedule
         self.finished = False
         self._observed = None  # (k, q, qd, applied) of a state whose joint_states and /clock are still to go out
         self.exit_code = 0  # a signal before the end is a clean stop; "completed" in the stats says if it ran out
         self.wall_start = self.wall_end = math.nan
+        expected = [n for n in p["ready_nodes"] if n]
+        self.ready = ReadyListener(self, expected) if expected else None  # the start handshake
         self.diagnostics = DiagnosticsReporter(self, lambda: diagnostics_report(self),
                                                lambda: self.clock_.stamp(self.gate.step))
         self.rt_applied, self.rt_message = apply_fifo(p["rt_priority"])
@@ -174,22 +184,34 @@ class PlantNode(Node):
             self.wall_end = time.perf_counter()
 
     def wait_for_graph(self, executor, stop: Future) -> bool:
-        """Spin until every endpoint has matched, then ``settle_s``; False when stopped first."""
-        # each recorder subscribes to every topic, efforts included
+        """Spin until every endpoint has matched on the plant's side and every node in ``ready_nodes`` said it is
+        ready for the first steps (the start handshake, ``ros/ready.py``), or, with no ``ready_nodes``, until the
+        endpoints have matched and ``settle_s`` has passed; False when stopped first. /clock at time 0 goes out
+        first (latched): the reference node and the recorder are ready only once they have received it, which
+        proves the /clock match from both sides. One timeout, ``start_timeout_s``: then a RuntimeError naming
+        what is missing and every node that is not ready, with what it waits for."""
+        # each recorder subscribes to every topic, efforts included (the wire adds them to each count)
         wait = MatchWait(self.wire.needs(self.p["state_subscribers"], self.p["clock_subscribers"],
                                          self.p["min_joint_states_subscribers"], self.p["recorders"]),
                          self.p["start_timeout_s"])
+        self.wire.publish_start_clock()
+        board = self.ready.board if self.ready is not None else None
         while not stop.done():
-            status = wait.poll()
-            if status == "met":
-                settle_end = time.perf_counter() + self.p["settle_s"]
-                while time.perf_counter() < settle_end and not stop.done():
-                    executor.spin_once(timeout_sec=0.02)
+            matched = wait.poll() == "met"
+            if matched and (board is None or board.complete):
+                if board is None:
+                    settle_end = time.perf_counter() + self.p["settle_s"]
+                    while time.perf_counter() < settle_end and not stop.done():
+                        executor.spin_once(timeout_sec=0.02)
+                else:  # the ready subscription stays: destroying it now would send every node a graph update
+                    print(f"HANDSHAKE every node ready after {wait.waited_s:.3f} s: {', '.join(board.expected)}",
+                          flush=True)
                 return not stop.done()
-            if status == "timeout":
-                raise RuntimeError("graph incomplete after start_timeout_s: waiting for " + "; ".join(wait.lacking)
-                                   + " (a node that never started or exited early: see its output)")
-            executor.spin_once(timeout_sec=0.05)
+            if time.monotonic() >= wait.deadline:
+                lacking = wait.lacking + (board.lacking if board is not None else [])
+                raise RuntimeError(f"graph not ready after start_timeout_s = {self.p['start_timeout_s']:g} s: "
+                                   + "; ".join(lacking))
+            executor.spin_once(timeout_sec=0.02)
         return False
 
     def loop(self, executor, stop: Future) -> None:

@@ -47,6 +47,7 @@ def plant_stats(node) -> dict:
             "stale_efforts": int(gate.stale[i]),
             "ahead_efforts_dropped": int(gate.dropped_ahead[i]),
             "timeout_ranges": step_ranges(gate.timeout_steps[i]),
+            "resent_step_ranges": step_ranges(node.resent_steps[i], MAX_RANGES),  # lockstep: which states were re-sent
             "injected_state_faults": link.counters() if link is not None else None,
             **node.timing.joint_summary(i, k),
         })

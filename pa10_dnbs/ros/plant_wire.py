@@ -95,6 +95,12 @@ class PlantWire:
             self.publish_observed(k, ql, qdl, applied.tolist())
         return t_ns
 
+    def publish_start_clock(self) -> None:
+        """/clock at time 0 before the first state (latched, so every reader gets it whenever it matches): the
+        start handshake's proof that /clock reaches a node. State 0 then carries no second one."""
+        if self._clock_pub is not None and self._clock_schedule.due(0):
+            self._clock_pub.publish(CLOCK_CDR.pack(0x0100, 0, 0, 0))
+
     def publish_observed(self, k: int, q: list, qd: list, applied: list) -> None:
         """What observers read of state ``k`` (lists of n: [rad], [rad/s], the torque applied over step k - 1
         [N m]): joint_states and, when due, /clock."""

@@ -45,6 +45,7 @@ from ..loop.scheduling import apply_batch, apply_fifo
 from .params import (CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, check_choice, declare,
                      load_node_config)
 from .polled import Inbox
+from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node, spin_until
 from .wire import CLOCK, TF, TF_STATIC
 from .wall_timer import wall_timer
@@ -111,6 +112,7 @@ class RecorderNode(Node):
         if p["time_source"] == "clock":
             self.wanted.setdefault(CLOCK, "rosgraph_msgs/msg/Clock")
         self.now_ns = 0
+        self.clock_received = False
         self.end_ns = p["end_stamp_ns"]
         self.reached: dict[str, bool] = {}
         self.received = 0
@@ -137,6 +139,21 @@ class RecorderNode(Node):
         if p["rt_priority"]:  # after SCHED_BATCH: a granted priority replaces it
             print(apply_fifo(p["rt_priority"])[1], flush=True)
         announce_ready("recorder")
+        announce_when_ready(self, self._ready_for_steps)
+
+    def _ready_for_steps(self) -> str | None:
+        """The start handshake (``ros/ready.py``): None once every wanted topic has a subscription matched with a
+        publisher and, with ``time_source: clock``, a /clock has come in (the plant's at time 0); else what is
+        missing."""
+        unsubscribed = [t for t in self.wanted if not self._subs.get(t)]
+        if unsubscribed:
+            return f"no publisher discovered yet for {', '.join(unsubscribed)}"
+        unmatched = [t for t, sub in self._subs.items() if sub is not None and sub.get_publisher_count() < 1]
+        if unmatched:
+            return f"its readers of {', '.join(unmatched)} have not matched a publisher"
+        if self.p["time_source"] == "clock" and not self.clock_received:
+            return "no /clock received yet"
+        return None
 
     # ------------------------------------------------------------- discovery
     def _discover(self) -> None:
@@ -168,6 +185,7 @@ class RecorderNode(Node):
     # ------------------------------------------------------------- messages
     def _on_message(self, topic: str, stamped: bool, data: bytes) -> None:
         if topic == CLOCK and self.p["time_source"] == "clock" and len(data) >= 12:
+            self.clock_received = True
             self.now_ns = max(self.now_ns, cdr_stamp_ns(data))
         t_ns = self.now_ns if self.p["time_source"] == "clock" else time.time_ns()
         self.writer.write(topic, t_ns, data)

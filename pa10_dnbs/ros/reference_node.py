@@ -18,6 +18,7 @@ import struct
 from typing import NoReturn
 
 import numpy as np
+from rclpy.duration import Duration
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from trajectory_msgs.msg import JointTrajectory
@@ -30,12 +31,14 @@ from ..loop.scheduling import apply_batch, apply_fifo
 from .params import CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, declare, load_node_config
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
+from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node
 from .wire import CLOCK, StepClock, record_qos, reference_qos, reference_topic
 
 
 FAULT_KEYS = ("clock_backwards",)
 CLOCK_DEPTH = 1000  # /clock messages kept between two polls
+NOW = Duration(seconds=0)  # wait_for_all_acked: just look
 
 
 PARAMS = {
@@ -46,6 +49,8 @@ PARAMS = {
     "lookahead_steps": Param(150, "steps kept published beyond the latest /clock (> reference.preview_steps)", 1),
     "duration_s": Param(0.0, "the run's simulated time [s]: nothing past its end + lookahead; 0 = open-ended", 0.0),
     "poll_period_s": Param(0.01, "wall time between two drains of /clock [s]", 0.0),
+    "reference_subscribers": Param(1, "start handshake: subscribers of each reference topic that must hold the first "
+                                   "batches (its controller, the observers) before the node says ready", 0),
 }
 
 
@@ -61,6 +66,7 @@ class ReferenceNode(Node):
             raise ParameterError(f"parameter poll_period_s must be > 0 s, got {p['poll_period_s']}")
         self.reference = build_reference(cfg)
         self.clock_ = StepClock(cfg["simulation"]["dt_s"])
+        self.p = p
         self.batch = p["batch_steps"]
         self.lookahead = p["lookahead_steps"]
         self.published_until = 0  # steps [0, published_until) are out
@@ -84,6 +90,23 @@ class ReferenceNode(Node):
         if p["rt_priority"]:  # after SCHED_BATCH: a granted priority replaces it
             print(apply_fifo(p["rt_priority"])[1], flush=True)
         announce_ready("reference")
+        announce_when_ready(self, self._ready_for_steps)
+
+    def _ready_for_steps(self) -> str | None:
+        """The start handshake (``ros/ready.py``): None once a /clock has come in (the plant's /clock at time 0:
+        the /clock match works both ways) and every reference topic has ``reference_subscribers`` subscribers
+        that acknowledged every batch published so far (the first steps' references: ``lookahead_steps``, sent
+        at start); else what is missing."""
+        if self.clock_messages == 0:
+            return "no /clock received yet"
+        want = self.p["reference_subscribers"]
+        for pub in self._pubs:
+            have = pub.get_subscription_count()
+            if have < want:
+                return f"{pub.topic_name} has {have} of {want} subscribers"
+            if not pub.wait_for_all_acked(NOW):
+                return f"not every subscriber of {pub.topic_name} has acknowledged the first batches"
+        return None
 
     def _on_clock(self, data: bytes) -> None:
         """A /clock message (CDR bytes)."""

@@ -31,7 +31,8 @@ def record_qos(depth: int = 2000) -> QoSProfile:
     late match. DDS discovery is two-sided: the plant's writer can count a reader as matched (and send to it)
     before that reader has matched the writer back, and a volatile reader drops what came before (the
     reference node once saw no /clock for the first 200 steps and the graph stalled for 2 s). A transient-local
-    reader asks for the writer's history when its side of the match completes."""
+    reader asks for the writer's history when its side of the match completes. That alone did not close the race
+    (a lost first send waits for the next heartbeat): the start handshake (ros/ready.py) does."""
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
 

@@ -27,6 +27,7 @@ from ..loop.scheduling import apply_batch, apply_fifo
 from .params import CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, declare, load_node_config
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
+from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node, spin_until
 from .wire import JOINT_STATES, StepClock, record_qos, reference_qos, reference_topic
 
@@ -52,14 +53,15 @@ class WireMonitorNode(Node):
         cfg = load_node_config(p["config_file"])
         dt_s = cfg["simulation"]["dt_s"]
         duration = p["duration_s"] if p["duration_s"] > 0 else cfg["simulation"]["duration_s"]
-        names = arm_of(cfg).joint_names
+        self.joint_names = names = arm_of(cfg).joint_names
         self.record = WireRecord(int(round(duration / dt_s)), dt_s, len(names))
         self.out_file = p["out_file"]
         self.clock = StepClock(dt_s)
         self._announced = False
         self.cpu = CpuMeter()
         self.inbox = Inbox(self, p["poll_period_s"])
-        self.inbox.subscribe(JointState, JOINT_STATES, record_qos(), self._on_joint_states)
+        self._js_sub = self.inbox.subscribe(JointState, JOINT_STATES, record_qos(), self._on_joint_states)
+        self._refs_seen: set[int] = set()  # joints with a reference batch in
         for j, name in enumerate(names):
             self.inbox.subscribe(JointTrajectory, reference_topic(name), reference_qos(),
                                  lambda data, j=j: self._on_reference(j, data))
@@ -69,6 +71,15 @@ class WireMonitorNode(Node):
         if p["rt_priority"]:  # after SCHED_BATCH: a granted priority replaces it
             print(apply_fifo(p["rt_priority"])[1], flush=True)
         announce_ready("wire_monitor")
+        announce_when_ready(self, self._ready_for_steps)
+
+    def _ready_for_steps(self) -> str | None:
+        """The start handshake (``ros/ready.py``): None once the joint_states reader has matched the plant's
+        writer and a reference batch of every joint has come in; else what is missing."""
+        if self._js_sub.get_publisher_count() < 1:
+            return f"its {JOINT_STATES} reader has not matched the plant"
+        lacking = [n for j, n in enumerate(self.joint_names) if j not in self._refs_seen]
+        return f"no reference batch yet for {', '.join(lacking)}" if lacking else None
 
     def _on_joint_states(self, data: bytes) -> None:
         try:
@@ -93,6 +104,7 @@ class WireMonitorNode(Node):
         except (ValueError, IndexError, struct.error, UnicodeDecodeError):
             self.record.malformed += 1
             return
+        self._refs_seen.add(joint)
         self.record.add_reference(joint, self.clock.step_of_sec_nanosec(sec, nanosec),
                                   [self.clock.step_of_ns(t_ns) for _, _, t_ns in points], positions)
         self._check_complete()

@@ -1,0 +1,36 @@
+"""The start handshake on the wire: a plant whose nodes never all say ready gives up after start_timeout_s and
+names them, with what each waits for (the launched graph's handshake: test_graph_lockstep.py)."""
+import sys
+
+import pytest
+
+from graph_harness import Proc
+
+pytestmark = pytest.mark.graph  # starts ROS processes
+
+ROS = ["--ros-args", "-r", "__ns:=/pa10", "-p"]
+
+
+def test_the_plant_names_the_nodes_that_never_became_ready(domain):
+    """The reference node gets /clock (so the plant's /clock at time 0 reached it) but no controller holds its
+    batches; the controller the plant waits for never starts. The plant publishes no state and exits 1."""
+    ref = Proc([sys.executable, "-m", "pa10_dnbs.ros.reference_node", *ROS, "duration_s:=1.0", "-p",
+                "use_sim_time:=true", "-p", "reference_subscribers:=1"], domain_id=domain)
+    plant = None
+    try:
+        ref.wait_for("READY reference", 60)
+        plant = Proc([sys.executable, "-m", "pa10_dnbs.ros.plant_node", *ROS, "duration_s:=1.0", "-p",
+                      "state_subscribers:=0", "-p", "clock_subscribers:=1", "-p", "start_timeout_s:=8.0", "-p",
+                      "ready_nodes:=['reference','joint_controller_s1']"], domain_id=domain)
+        rc = plant.wait(120)
+    finally:
+        for p in (plant, ref):
+            if p is not None:
+                p.kill()
+    out = plant.output
+    assert rc == 1, out
+    assert "graph not ready after start_timeout_s = 8 s" in out, out
+    assert "reference (waiting: /pa10/s1/reference has 0 of 1 subscribers)" in out, out
+    assert "joint_controller_s1 (no status on the ready topic)" in out, out
+    assert "/pa10/s1/effort (0 of 1 publishers)" in out, out  # the plant's own side too
+    assert "RUNNING plant" not in out and "HANDSHAKE every node ready" not in out
