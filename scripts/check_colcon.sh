@@ -29,4 +29,10 @@ grep -q "share/pa10_dnbs/config/default.yaml" "$OUT/metrics.json" \
   || { cat "$WS/run_c.log"; exit 1; }
 grep -q "^dnbs.kernel: auto -> c" "$WS/run_c.log" && ls "$WS/cache"/libdnbs_kernel-*.so >/dev/null 2>&1 \
   || { echo "check_colcon: the installed package did not build its DNBS kernel:" >&2; cat "$WS/run_c.log" >&2; exit 1; }
-echo "check_colcon: colcon installed lib/pa10_dnbs/{pa10-dnbs, plant_node, ...}; the installed pa10-dnbs ran with $(grep -o '"config_file": "[^"]*"' "$OUT/metrics.json"), and its default dnbs.kernel: auto built the DNBS kernel"
+# every arm preset is installed with its files (share/pa10_dnbs/urdf/<arm>/): the installed package runs the iiwa
+(cd / && timeout 120 "$WS/install/pa10_dnbs/lib/pa10_dnbs/pa10-dnbs" simulate --arm iiwa --controller pid \
+    --duration 0.05 --out "$WS/run_iiwa" --no-progress --no-figures) >"$WS/run_iiwa.log" 2>&1 \
+  || { cat "$WS/run_iiwa.log"; exit 1; }
+grep -q "share/pa10_dnbs/urdf/iiwa/arm.yaml" "$WS/run_iiwa.log" \
+  || { echo "check_colcon: the installed package did not read its installed iiwa arm:" >&2; cat "$WS/run_iiwa.log" >&2; exit 1; }
+echo "check_colcon: colcon installed lib/pa10_dnbs/{pa10-dnbs, plant_node, ...}; the installed pa10-dnbs ran with $(grep -o '"config_file": "[^"]*"' "$OUT/metrics.json"), its default dnbs.kernel: auto built the DNBS kernel, and --arm iiwa ran from its installed arm file"
