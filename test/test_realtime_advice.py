@@ -1,4 +1,5 @@
 """The launcher's advice after a realtime run that missed deadlines (launch/realtime_advice.py)."""
+from pa10_dnbs.arm import load_arm
 from pa10_dnbs.config import default_config_path, load_config
 from pa10_dnbs.launch.fault_flags import apply_fault_flags
 from pa10_dnbs.launch.realtime_advice import ON_TIME_TARGET, injected_misses, realtime_hint
@@ -27,7 +28,7 @@ def test_injected_effort_drops_are_named_not_blamed_on_the_cpu():
     cfg = load_config(default_config_path())
     assert injected_misses(cfg) == []
     args = build_parser().parse_args(["launch", "--mode", "realtime", "--drop-efforts", "0.05", "--out", "x"])
-    faulty = apply_fault_flags(cfg, args)
+    faulty = apply_fault_flags(cfg, args, load_arm("pa10").joint_names)
     assert injected_misses(faulty) == ["efforts dropped"]
     line = realtime_hint(0.5, priority_applied=True, injected=injected_misses(faulty))
     assert "efforts dropped" in line and "by design" in line
