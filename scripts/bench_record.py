@@ -6,7 +6,7 @@ One JSON file per benchmark in ``benchmarks/`` (``--save-record FILE`` of the be
 - ``benchmark``: the benchmark's name (``bench_sim``, ``main_job``, ...);
 - ``date_utc``: when it started, ISO 8601 in UTC to the second; ``wall_s``: how long it ran [s];
 - ``command``: the command line as run (relative to the checkout), ``git_commit`` and ``git_dirty``
-  (tracked files other than benchmarks/ changed against that commit);
+  (tracked files other than benchmarks/ changed against that commit), both taken when it started;
 - ``machine``: ``nproc`` (usable CPUs), ``model_name`` (/proc/cpuinfo), ``python``;
 - ``load_before`` and ``load_after``: the 1, 5 and 15 minute load averages (/proc/loadavg), the figures
   mean little on a busy machine;
@@ -85,6 +85,7 @@ class Record:
         self.benchmark = benchmark
         self.command = command if command is not None else command_line()
         self.date_utc = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+        self.git_commit, self.git_dirty = git_state()  # of the code measured, so taken before it runs
         self.load_before = load_average()
         self.t0 = time.monotonic()
 
@@ -93,10 +94,9 @@ class Record:
         return cls(benchmark, command)
 
     def as_dict(self, figures: dict) -> dict:
-        commit, dirty = git_state()
         return {"benchmark": self.benchmark, "date_utc": self.date_utc,
                 "wall_s": round(time.monotonic() - self.t0, 1), "command": self.command,
-                "git_commit": commit, "git_dirty": dirty, "machine": machine(),
+                "git_commit": self.git_commit, "git_dirty": self.git_dirty, "machine": machine(),
                 "load_before": self.load_before, "load_after": load_average(), "figures": figures}
 
     def save(self, path: Path | str | None, figures: dict) -> dict:

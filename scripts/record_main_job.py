@@ -2,7 +2,7 @@
 """Run the main job (``bash scripts/run_main.sh``) once and record its figures (scripts/bench_record.py).
 
 The figures: the lockstep real-time factor and the total wall time of the launch (runs/main/metrics.json), the
-worst joint's RMS error, the scheduling policy the nodes got, and the bag's size (every file of
+worst joint's RMS error, the SCHED_FIFO priority the nodes got (0: the default policy), and the bag's size (every file of
 runs/main_bag/) in MB and MB per simulated second. The main job's output is printed as it comes. Extra
 arguments go to run_main.sh (i.e. to ``pa10-dnbs launch``). Exit code: the main job's (no record unless 0).
 
@@ -30,7 +30,8 @@ def figures(out: Path, bag: Path) -> dict:
     size = sum(f.stat().st_size for f in bag.iterdir() if f.is_file())
     timing = m.get("timing") or {}
     return {"duration_s": m["duration_s"], "mode": m.get("mode"), "real_time_factor": m["real_time_factor"],
-            "wall_time_total_s": m.get("wall_time_total_s"), "rt_priority_applied": timing.get("rt_priority_applied"),
+            "wall_time_total_s": m.get("wall_time_total_s"),
+            "rt_priority": timing.get("rt_priority") if timing.get("rt_priority_applied") else 0,
             "worst_rms_error_rad": m["worst_rms_error_rad"], "bag_mb": round(size / 1e6, 2),
             "bag_mb_per_simulated_s": round(size / 1e6 / m["duration_s"], 3)}
 
