@@ -107,7 +107,8 @@ def _bench_graph(rec: dict) -> list[tuple[str, str]]:
 def _tests(rec: dict) -> list[tuple[str, str]]:
     f = rec["figures"]
     args = f["pytest_args"]
-    tier = f"`-m {shlex.quote(args[args.index('-m') + 1])}`" if "-m" in args[:-1] else "the full suite"
+    marker = args[args.index("-m") + 1] if "-m" in args[:-1] else None
+    tier = {None: "the full suite", "not graph": 'the fast tier, `-m "not graph"`'}.get(marker, f'`-m "{marker}"`')
     failed = f", **{f['failed'] + f['errors']} failed**" if f["failed"] + f["errors"] else ""
     return [(f"tests ({tier})", f"{f['passed']} passed{failed}, {f['skipped']} skipped; pytest "
              f"{_minutes(f['pytest_s'])}")]
