@@ -6,6 +6,9 @@ bag: 20 s -> 20001 steps, about 304,000 messages. Reports the wall and CPU time 
 plus ``close()``: CPU per message [us] and per simulated second [ms], best of ``--repeat``.
 
     .venv/bin/python scripts/bench_bag_writer.py [--seconds 20] [--repeat 3] [--compression zstd|none]
+                                                 [--save-record FILE]
+
+``--save-record benchmarks/bench_bag_writer.json``: the figures as a record (scripts/bench_record.py).
 """
 from __future__ import annotations
 
@@ -16,6 +19,9 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import bench_record  # noqa: E402
 
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime  # noqa: E402
 
@@ -70,7 +76,9 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=20.0)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--compression", default="zstd", choices=("zstd", "none"))
+    bench_record.add_argument(ap)
     a = ap.parse_args()
+    record = bench_record.Record.start("bench_bag_writer")
     n_steps = int(round(a.seconds * 1000)) + 1
     runs = [run(n_steps, a.compression) for _ in range(a.repeat)]
     cpu, wall, n, size = min((r[1], r[0], r[2], r[3]) for r in runs)
@@ -78,6 +86,11 @@ def main() -> None:
           f"CPU {cpu:.2f} s, wall {wall:.2f} s (best CPU of {a.repeat}; all CPU "
           f"{', '.join(f'{r[1]:.2f}' for r in runs)}); {1e6 * cpu / n:.2f} us CPU per message, "
           f"{1e3 * cpu / a.seconds:.1f} ms CPU per simulated second")
+    record.save(a.save_record, {
+        "seconds": a.seconds, "repeat": a.repeat, "compression": a.compression, "messages": n,
+        "bag_mb": round(size / 1e6, 2), "cpu_s_best": round(cpu, 3), "wall_s_of_best": round(wall, 3),
+        "cpu_s_all": [round(r[1], 3) for r in runs], "cpu_us_per_message": round(1e6 * cpu / n, 3),
+        "cpu_ms_per_simulated_s": round(1e3 * cpu / a.seconds, 2)})
 
 
 if __name__ == "__main__":

@@ -19,6 +19,10 @@ Figures only; nothing is asserted.
 
     python scripts/bench_graph.py [--duration 10] [--repeat 2] [--factors 1.0 0.75 0.5 0.35] [--no-lockstep]
                                   [--controller dnbs|pid] [--rt-priority 0] [--config config/compiled.yaml]
+                                  [--save-record FILE]
+
+``--save-record benchmarks/bench_graph.json``: the figures as a record (scripts/bench_record.py; ``--record``
+is the recorder run, an older flag).
 """
 from __future__ import annotations
 
@@ -31,6 +35,9 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import bench_record  # noqa: E402
 
 from pa10_dnbs.arm import arm_of  # noqa: E402
 from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
@@ -112,7 +119,9 @@ def main() -> int:
     ap.add_argument("--config", type=Path, default=default_config_path(),
                     help="YAML config of the runs (default config/default.yaml; config/compiled.yaml: the DNBS step "
                          "on the compiled kernel)")
+    bench_record.add_argument(ap)
     args = ap.parse_args()
+    record = bench_record.Record.start("bench_graph")
     args.config = args.config.resolve()
     args.joint_names = arm_of(load_config(args.config)).joint_names  # a bad config fails here, not in every run
     check_priority(args.rt_priority)
@@ -155,6 +164,9 @@ def main() -> int:
     header = f"  {'process':22s}" + "".join(f"{(m if m != 'realtime' else f'R={r:g}'):>10s}" for m, r in cases)
     print(header)
     totals = {}
+    figures = {"controller": args.controller, "config": args.config.name, "policy": policy,
+               "duration_s": args.duration, "repeat": args.repeat, "factors": args.factors,
+               "cpu_us_per_tick_median": {}}
     for n in names:
         row = f"  {n:22s}"
         for c in cases:
@@ -165,6 +177,8 @@ def main() -> int:
     for c in cases:
         totals[c] = med([sum(cpu.values()) if cpu else None for _, cpu in runs[c]])
         row += f"{totals[c]:10.0f}"
+        figures["cpu_us_per_tick_median"][c[0] if c[0] != "realtime" else f"R={c[1]:g}"] = \
+            None if totals[c] != totals[c] else round(totals[c], 1)
     print(row)
 
     if args.factors:
@@ -172,6 +186,10 @@ def main() -> int:
         for r in args.factors:
             every = [s for s, _ in runs[("realtime", r)]]
             rs = [s for s in every if s is not None]
+            figures.setdefault("realtime", {})[f"{r:g}"] = {
+                "on_time_fraction_median": med([on_time(s) for s in every]),
+                "on_time_fraction_runs": [None if s is None else s["on_time_fraction"] for s in every],
+                "achieved_factor_median": med([s["real_time_factor"] for s in rs])}
             print(f"  R={r:g} (tick {1e3 * 1e-3 / r:.2f} ms, deadline {0.9e3 * 1e-3 / r:.2f} ms): on time "
                   f"{100 * med([on_time(s) for s in every]):.2f} % (runs: "
                   + ", ".join("failed" if s is None else f"{100 * s['on_time_fraction']:.2f}" for s in every)
@@ -182,6 +200,8 @@ def main() -> int:
                       f"p99 {med([s['joints'][j]['latency_p99_us'] for s in rs]):6.0f} us, missed "
                       f"{med([s['joints'][j]['missed_ticks'] for s in rs]):.0f}")
         ok = [r for r in args.factors if med([on_time(s) for s, _ in runs[("realtime", r)]]) >= ON_TIME_TARGET]
+        figures["on_time_target"] = ON_TIME_TARGET
+        figures["sustainable_factor"] = max(ok) if ok else None
         print(f"\nsustainable real-time factor (median run >= {100 * ON_TIME_TARGET:.0f} % of ticks on time): "
               + (f"{max(ok):g}" if ok else f"none of {', '.join(f'{r:g}' for r in args.factors)}"))
         busiest = max(args.factors)
@@ -192,6 +212,7 @@ def main() -> int:
     if not args.no_lockstep:
         factors = [None if s is None else s["real_time_factor"] for s, _ in runs[("lockstep", 1.0)]]
         print(f"lockstep real-time factor: median {med(factors):.3f} (runs: {runs_text(factors)})")
+        figures["lockstep_factor_median"], figures["lockstep_factor_runs"] = med(factors), factors
         cores = len(os.sched_getaffinity(0))
         ceiling = cores * 1000.0 / totals[("lockstep", 1.0)]  # 1 ms of simulated time per tick, in us of CPU
         print(f"lockstep ceiling on {cores} cores: {ceiling:.2f}x real time ({cores} ms of CPU per ms over "
@@ -200,7 +221,9 @@ def main() -> int:
     if args.record:
         factors = [None if s is None else s["real_time_factor"] for s, _ in runs[("record", 1.0)]]
         print(f"lockstep with the recorder: real-time factor median {med(factors):.3f} (runs: {runs_text(factors)})")
+        figures["record_factor_median"] = med(factors)
     print(f"load average after: {load()}")
+    record.save(args.save_record, {k: (None if isinstance(v, float) and v != v else v) for k, v in figures.items()})
     return 0
 
 

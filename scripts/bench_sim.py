@@ -12,7 +12,9 @@ else numpy, the line it prints says which):
   settling into the 1e-2 rad band, max |e|, torque variation, steps at the limit after 0.2 s, RMS [10, 20) s.
 Figures only; asserts nothing (the machines are shared and noisy: the load average is printed).
 
-    python scripts/bench_sim.py [--duration 20] [--repeat 5] [--kernels numpy,auto]
+    python scripts/bench_sim.py [--duration 20] [--repeat 5] [--kernels numpy,auto] [--save-record FILE]
+
+``--save-record benchmarks/bench_sim.json``: the figures as a record (scripts/bench_record.py).
 """
 from __future__ import annotations
 
@@ -23,6 +25,9 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import bench_record  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -46,7 +51,9 @@ def main() -> int:
     ap.add_argument("--duration", type=float, default=20.0, help="simulated seconds")
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--kernels", default="numpy,auto", help="comma-separated DNBS kernels to run: numpy, c, auto")
+    bench_record.add_argument(ap)
     args = ap.parse_args()
+    record = bench_record.Record.start("bench_sim")
     cfg = load_config(default_config_path())
     kernels = [k.strip() for k in args.kernels.split(",") if k.strip()]
     print(f"in-process closed loop, {args.duration:g} s simulated, T = {cfg['simulation']['dt_s'] * 1e3:g} ms, "
@@ -68,8 +75,16 @@ def main() -> int:
         print(f"{label:10s} {min(us):6.1f} us per step best, {statistics.median(us):6.1f} median "
               f"(real-time factor {1e3 / min(us):.1f}x best, {1e3 / statistics.median(us):.1f}x median)")
     p = per_step["pid"]
+    figures = {"duration_s": args.duration, "repeat": args.repeat, "kernels": kernels,
+               "us_per_step": {label: {"best": round(min(us), 2), "median": round(statistics.median(us), 2)}
+                               for label, us in per_step.items()},
+               "dnbs_over_pid_median": {}, "dnbs_over_pid_best": {}}
+    if "auto" in kernels:
+        figures["auto_kernel"] = auto_kernel().line
     for k in kernels:
         d = per_step[f"dnbs/{k}"]
+        figures["dnbs_over_pid_median"][k] = round(statistics.median(d) / statistics.median(p), 3)
+        figures["dnbs_over_pid_best"][k] = round(min(d) / min(p), 3)
         print(f"DNBS run ({k}) / PID run: {statistics.median(d) / statistics.median(p):.2f} (medians), "
               f"{min(d) / min(p):.2f} (best runs)")
     if len(kernels) > 1:
@@ -77,6 +92,7 @@ def main() -> int:
         same = all(np.array_equal(getattr(a, f), getattr(b, f)) for b in others
                    for f in ("position_rad", "velocity_rad_s", "torque_nm"))
         print(f"the kernels' last runs are bit-identical (positions, velocities, torques): {'yes' if same else 'NO'}")
+        figures["kernels_bit_identical"] = same
     m = metrics_dict(last[f"dnbs/{kernels[0]}"], metrics_settings(cfg, args.duration))
     print("DNBS, default config, cold start (worst joint):")
     for key, must, aim in TARGETS:
@@ -84,7 +100,9 @@ def main() -> int:
         ok = lambda t: v is not None and v <= t  # noqa: E731
         print(f"  {key:34s} {'never' if v is None else format(v, '.4g'):>10s}   must <= {must:g}: "
               f"{'yes' if ok(must) else 'NO'}   aim <= {aim:g}: {'yes' if ok(aim) else 'no'}")
+    figures["dnbs_targets"] = {key: m[key] for key, _, _ in TARGETS}
     print(f"load average at the end {_load()}")
+    record.save(args.save_record, figures)
     return 0
 
 

@@ -1,0 +1,200 @@
+#!/usr/bin/env python3
+"""Regenerate the README's figures block from the benchmark records in benchmarks/*.json.
+
+The block is the part of README.md between the lines ``<!-- figures: begin (scripts/readme_figures.py) -->``
+and ``<!-- figures: end -->``: a table with one row per recorded figure (the main job's lockstep real-time
+factor and bag size, the in-process DNBS / PID cost, the bag writer's CPU, the node graph's realtime on-time
+fraction, the test suite's count and time), each with the command that measured it, its date (UTC) and the
+machine's load before and after. The records are written by the benchmarks' ``--save-record FILE``
+(scripts/bench_record.py), which also hold the commit and the machine; nothing in the block is typed by hand.
+
+    .venv/bin/python scripts/readme_figures.py            # rewrite the block
+    .venv/bin/python scripts/readme_figures.py --check    # exit 1 if the block is not what the records give
+
+Exit codes: 0 done (or up to date), 1 ``--check`` found a difference, 2 bad input (no markers, a record
+without a key, a benchmark this script has no row for).
+"""
+from __future__ import annotations
+
+import argparse
+import difflib
+import json
+import shlex
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import bench_record  # noqa: E402
+
+BEGIN = "<!-- figures: begin (scripts/readme_figures.py) -->"
+END = "<!-- figures: end -->"
+HEADER = ["| figure | measured | by | when (UTC), load avg before -> after |", "|---|---|---|---|"]
+
+
+class BadInput(Exception):
+    """A README without the markers, or a record this script cannot read."""
+
+
+def short_command(command: str) -> str:
+    """The command without the interpreter, the scripts/ folder and ``--save-record FILE``."""
+    words = shlex.split(command)
+    out, skip = [], False
+    for w in words:
+        if skip:
+            skip = False
+            continue
+        if w == "--save-record":
+            skip = True
+            continue
+        if w.startswith("--save-record="):
+            continue
+        out.append(w)
+    if out and out[0].endswith("python"):
+        out = out[1:]
+    if out and out[0].startswith("scripts/") and out[0].endswith(".py"):
+        out[0] = out[0][len("scripts/"):]
+    return " ".join(shlex.quote(w) for w in out)
+
+
+def when(rec: dict) -> str:
+    """``2026-11-25 14:21, 3.4 -> 4.1 on 2 CPUs`` (1-minute load averages)."""
+    date = rec["date_utc"].replace("T", " ")[:16]
+    before, after = (f"{x[0]:.1f}" if x else "?" for x in (rec["load_before"], rec["load_after"]))
+    return f"{date}, {before} -> {after} on {rec['machine']['nproc']} CPUs"
+
+
+def _main_job(rec: dict) -> list[tuple[str, str]]:
+    f = rec["figures"]
+    policy = f"SCHED_FIFO {f['rt_priority']}" if f["rt_priority"] else "the default policy"
+    return [(f"main job, {f['duration_s']:g} s of lockstep DNBS, recorded",
+             f"**{f['real_time_factor']:.2f}x** real time ({policy}; {f['wall_time_total_s']:.0f} s in all); bag "
+             f"{f['bag_mb']:.1f} MB zstd, {f['bag_mb_per_simulated_s']:.2f} MB per simulated second")]
+
+
+def _bench_sim(rec: dict) -> list[tuple[str, str]]:
+    f = rec["figures"]
+    names = {"auto": "compiled (`auto`, the default)", "c": "compiled (`c`)", "numpy": "numpy"}
+    ratios = ", ".join(f"{names.get(k, k)} **{f['dnbs_over_pid_median'][k]:.2f}x**" if k != "numpy"
+                       else f"{names[k]} {f['dnbs_over_pid_median'][k]:.2f}x" for k in f["kernels"])
+    return [("in-process DNBS run against PID run (wall time, medians)",
+             f"{ratios} ({f['repeat']} x {f['duration_s']:g} s each)")]
+
+
+def _bench_bag_writer(rec: dict) -> list[tuple[str, str]]:
+    f = rec["figures"]
+    return [(f"bag writer CPU, the main job's messages ({f['compression']})",
+             f"{f['cpu_us_per_message']:.2f} us per message, {f['cpu_ms_per_simulated_s']:.0f} ms per simulated "
+             f"second ({f['messages']} messages, best of {f['repeat']})")]
+
+
+def _bench_graph(rec: dict) -> list[tuple[str, str]]:
+    f = rec["figures"]
+    runs = f"{f['repeat']} x {f['duration_s']:g} s runs, {f['policy']}, {f['controller'].upper()}, {f['config']}"
+    rows = []
+    if f.get("lockstep_factor_median") is not None:
+        rows.append(("node graph: lockstep real-time factor", f"{f['lockstep_factor_median']:.2f}x ({runs})"))
+    rt = f.get("realtime") or {}
+    if rt:
+        at, target = f.get("sustainable_factor"), f"{100 * f['on_time_target']:.0f} %"
+        tried = ", ".join(f"R = {r}: {100 * v['on_time_fraction_median']:.2f} %" for r, v in rt.items())
+        value = (f"highest factor tried with >= {target} on time: **{at:g}**" if at is not None
+                 else f"no factor tried had >= {target} on time")
+        rows.append(("node graph: realtime, ticks with every effort on time", f"{tried}; {value} ({runs})"))
+    return rows
+
+
+def _tests(rec: dict) -> list[tuple[str, str]]:
+    f = rec["figures"]
+    args = f["pytest_args"]
+    marker = args[args.index("-m") + 1] if "-m" in args[:-1] else None
+    tier = {None: "the full suite", "not graph": 'the fast tier, `-m "not graph"`'}.get(marker, f'`-m "{marker}"`')
+    failed = f", **{f['failed'] + f['errors']} failed**" if f["failed"] + f["errors"] else ""
+    return [(f"tests ({tier})", f"{f['passed']} passed{failed}, {f['skipped']} skipped; pytest "
+             f"{_minutes(f['pytest_s'])}")]
+
+
+def _minutes(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 100 else f"{int(seconds // 60)} min {seconds % 60:02.0f} s"
+
+
+ROWS = {"main_job": _main_job, "bench_sim": _bench_sim, "bench_graph": _bench_graph,
+        "bench_bag_writer": _bench_bag_writer, "tests": _tests}  # the table's order
+
+
+def read_records(folder: Path) -> list[dict]:
+    """Every record of ``folder``, in the table's order (then by file name)."""
+    recs = []
+    for path in sorted(folder.glob("*.json")):
+        try:
+            rec = bench_record.read(path)
+        except (ValueError, OSError) as exc:  # json.JSONDecodeError is a ValueError
+            raise BadInput(f"{path}: {exc}") from None
+        if rec["benchmark"] not in ROWS:
+            raise BadInput(f"{path}: no README row for benchmark '{rec['benchmark']}' (scripts/readme_figures.py ROWS)")
+        rec["_file"] = path.name
+        recs.append(rec)
+    order = list(ROWS)
+    return sorted(recs, key=lambda r: (order.index(r["benchmark"]), r["_file"]))
+
+
+def table(recs: list[dict]) -> list[str]:
+    """The block's lines between the markers."""
+    lines = list(HEADER)
+    for rec in recs:
+        try:
+            rows = ROWS[rec["benchmark"]](rec)
+        except (KeyError, TypeError, ValueError, IndexError) as exc:
+            raise BadInput(f"benchmarks/{rec['_file']}: cannot read its figures ({type(exc).__name__}: {exc})") \
+                from None
+        by = f"`{short_command(rec['figures'].get('ran') or rec['command'])}` ([record](benchmarks/{rec['_file']}))"
+        for figure, value in rows:
+            lines.append(f"| {figure} | {value} | {by} | {when(rec)} |")
+    if not recs:
+        lines.append("| (no records in benchmarks/) | | | |")
+    return lines
+
+
+def render(readme: str, block: list[str]) -> str:
+    """``readme`` with the lines between the markers replaced by ``block``."""
+    lines = readme.split("\n")
+    try:
+        i, j = lines.index(BEGIN), lines.index(END)
+    except ValueError:
+        raise BadInput(f"README.md has no figures block: the lines '{BEGIN}' and '{END}'") from None
+    if j < i:
+        raise BadInput(f"README.md: '{END}' comes before '{BEGIN}'")
+    return "\n".join(lines[:i + 1] + block + lines[j:])
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--check", action="store_true", help="exit 1 if the README's block differs from the records'")
+    ap.add_argument("--readme", type=Path, default=bench_record.ROOT / "README.md")
+    ap.add_argument("--records", type=Path, default=bench_record.RECORDS, help="the records' folder (benchmarks/)")
+    args = ap.parse_args(argv)
+    try:
+        old = args.readme.read_text()
+        new = render(old, table(read_records(args.records)))
+    except (BadInput, OSError) as exc:
+        print(f"readme_figures: {exc}", file=sys.stderr)
+        return 2
+    if args.check:
+        if new == old:
+            print(f"readme_figures: {args.readme.name}'s figures block matches {args.records.name}/")
+            return 0
+        diff = difflib.unified_diff(old.splitlines(), new.splitlines(), "README.md", "from the records", lineterm="")
+        print("\n".join(diff))
+        print(f"readme_figures: {args.readme.name}'s figures block is not what {args.records.name}/*.json gives: "
+              "run .venv/bin/python scripts/readme_figures.py (and commit the records with it)", file=sys.stderr)
+        return 1
+    if new != old:
+        args.readme.write_text(new)
+        print(f"readme_figures: rewrote the figures block of {args.readme}")
+    else:
+        print(f"readme_figures: {args.readme.name} already up to date")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

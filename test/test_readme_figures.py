@@ -1,0 +1,107 @@
+"""The README's figures block is what benchmarks/*.json give (scripts/readme_figures.py), and the records hold
+what scripts/bench_record.py promises: a hand edit of the block, or a new record committed without
+regenerating the block, fails here."""
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from script_module import load_script
+
+ROOT = Path(__file__).resolve().parent.parent
+figures = load_script("readme_figures")
+bench_record = load_script("bench_record")
+record_tests = load_script("record_tests")
+
+
+def test_readme_block_matches_the_records(capsys):
+    assert figures.main(["--check"]) == 0, capsys.readouterr()
+
+
+def test_every_committed_record_is_complete():
+    paths = sorted((ROOT / "benchmarks").glob("*.json"))
+    assert paths, "no records in benchmarks/"
+    for path in paths:
+        rec = bench_record.read(path)
+        assert rec["benchmark"] in figures.ROWS, path
+        assert len(rec["load_before"]) == 3 and len(rec["load_after"]) == 3, path
+        assert rec["machine"]["nproc"] >= 1 and rec["date_utc"].endswith("Z"), path
+        assert len(rec["git_commit"]) == 40, path
+
+
+@pytest.fixture
+def copy(tmp_path):
+    """A copy of README.md and benchmarks/ to edit."""
+    shutil.copy(ROOT / "README.md", tmp_path / "README.md")
+    shutil.copytree(ROOT / "benchmarks", tmp_path / "benchmarks")
+    return tmp_path
+
+
+def _check(folder: Path) -> int:
+    return figures.main(["--check", "--readme", str(folder / "README.md"), "--records", str(folder / "benchmarks")])
+
+
+def test_a_hand_edit_of_the_block_fails_the_check_until_regenerated(copy, capsys):
+    readme = copy / "README.md"
+    text = readme.read_text()
+    block = text[text.index(figures.BEGIN):text.index(figures.END)]
+    row = next(line for line in block.splitlines() if line.startswith("| ") and "benchmarks/" in line)
+    readme.write_text(text.replace(row, row.replace(" | ", " | 9.99x ", 1)))
+    assert _check(copy) == 1
+    assert "is not what" in capsys.readouterr().err
+    assert figures.main(["--readme", str(readme), "--records", str(copy / "benchmarks")]) == 0
+    assert readme.read_text() == text
+    assert _check(copy) == 0
+
+
+def test_a_new_record_fails_the_check_until_regenerated(copy):
+    path = next(p for p in sorted((copy / "benchmarks").glob("*.json")))
+    rec = json.loads(path.read_text())
+    rec["date_utc"] = "2030-01-02T03:04:05Z"
+    path.write_text(json.dumps(rec))
+    assert _check(copy) == 1
+    assert figures.main(["--readme", str(copy / "README.md"), "--records", str(copy / "benchmarks")]) == 0
+    assert "2030-01-02 03:04" in (copy / "README.md").read_text()
+    assert _check(copy) == 0
+
+
+def test_a_readme_without_markers_or_a_foreign_record_is_bad_input(copy, capsys):
+    (copy / "benchmarks" / "other.json").write_text(json.dumps(
+        bench_record.Record.start("bench_elsewhere", command="x").as_dict({})))
+    assert _check(copy) == 2
+    assert "no README row for benchmark 'bench_elsewhere'" in capsys.readouterr().err
+    (copy / "benchmarks" / "other.json").unlink()
+    (copy / "README.md").write_text("# no block\n")
+    assert _check(copy) == 2
+    assert "no figures block" in capsys.readouterr().err
+
+
+def test_a_record_holds_date_command_commit_machine_load_and_figures(tmp_path):
+    rec = bench_record.Record.start("bench_sim", command=None)
+    saved = rec.save(tmp_path / "r" / "x.json", {"ratio": 1.5})
+    read = bench_record.read(tmp_path / "r" / "x.json")
+    assert read == saved
+    assert set(bench_record.KEYS) <= set(read)
+    assert read["figures"] == {"ratio": 1.5}
+    assert read["command"].startswith(".venv/bin/python ")
+    assert read["machine"]["model_name"] and read["machine"]["nproc"] >= 1
+    (tmp_path / "bad.json").write_text(json.dumps({k: v for k, v in read.items() if k != "load_after"}))
+    with pytest.raises(ValueError, match="no 'load_after'"):
+        bench_record.read(tmp_path / "bad.json")
+
+
+def test_the_shown_command_drops_the_interpreter_and_the_record_file():
+    assert figures.short_command(".venv/bin/python scripts/bench_sim.py --duration 10 --save-record "
+                                 "benchmarks/bench_sim.json --repeat 3") == "bench_sim.py --duration 10 --repeat 3"
+    assert figures.short_command("bash scripts/run_tests.sh -m 'not graph'") == "bash scripts/run_tests.sh -m 'not graph'"
+
+
+def test_the_suite_figures_come_from_the_junit_report(tmp_path):
+    xml = tmp_path / "j.xml"
+    xml.write_text('<?xml version="1.0"?><testsuites><testsuite name="pytest" errors="1" failures="2" '
+                   'skipped="3" tests="40" time="61.25"></testsuite></testsuites>')
+    assert record_tests.junit_figures(xml) == {"tests": 40, "passed": 34, "failed": 2, "errors": 1, "skipped": 3,
+                                               "pytest_s": 61.2}
