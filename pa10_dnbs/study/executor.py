@@ -72,7 +72,7 @@ class Executor:
             token = uuid.uuid4().hex[:12]
             futures = {self._client.submit(fn, *args, pure=False, key=f"{fn.__name__}-{token}-{i}"): key
                        for i, (key, args) in enumerate(tasks.items())}
-            for fut in dask_completed(list(futures)):
+            for fut in dask_completed(list(futures), loop=self._client.loop):
                 finished(futures[fut], fut.result())
         elif self._pool is not None:
             futures = {self._pool.submit(fn, *args): key for key, args in tasks.items()}
