@@ -117,31 +117,57 @@ def test_the_same_command_gives_the_same_trials_on_one_worker_or_two(tmp_path):
 
 
 @pytest.mark.slow
-def test_ctrl_c_keeps_completed_trials_and_the_same_command_resumes(tmp_path, monkeypatch):
+@pytest.mark.parametrize("stop_at_run", [2, 4])   # in trial 0 (the start point), in trial 1
+def test_ctrl_c_keeps_completed_trials_and_the_same_command_resumes(tmp_path, monkeypatch, stop_at_run):
     from pa10_dnbs.tune import tuner
 
     calls = []
     real = tuner.tune_run
 
-    def interrupted_at_the_fourth_run(*args):
+    def interrupted(*args):
         calls.append(args[1:4])
-        if len(calls) == 4:
+        if len(calls) == stop_at_run:
             raise KeyboardInterrupt
         return real(*args)
 
-    monkeypatch.setattr(tuner, "tune_run", interrupted_at_the_fourth_run)
+    monkeypatch.setattr(tuner, "tune_run", interrupted)
     cmd = ("--controller", "pid", "--trials", 3, "--scenarios", "nominal", "--seeds", 2, "--jobs", 1,
            "--out", tmp_path / "t", *SHORT)
     r = _tune(*cmd)
     assert r.returncode == 130 and "the same command resumes" in r.stderr
     assert not (tmp_path / "t" / "tune.md").exists()
     study = optuna.load_study(study_name="pa10-pid", storage=f"sqlite:///{tmp_path / 't' / 'tune.db'}")
-    assert [t.state.name for t in study.trials] == ["COMPLETE", "FAIL"]   # trial 0 done, trial 1 cut short
-    first = study.trials[0]
+    kept = [t.state.name for t in study.trials]
+    assert kept == (["FAIL"] if stop_at_run == 2 else ["COMPLETE", "FAIL"])   # the trial cut short fails
     r = _tune(*cmd)
     assert r.returncode == 0, r.stderr
     trials = _trials(tmp_path / "t")
-    assert [t[1] for t in trials] == ["COMPLETE", "FAIL", "COMPLETE", "COMPLETE"]
-    assert trials[0][2:] == (first.params, first.value)
-    assert json.loads((tmp_path / "t" / "tune.json").read_text())["trials"] == 3
-    assert math.isfinite(json.loads((tmp_path / "t" / "tune.json").read_text())["best_objective"])
+    assert [t[1] for t in trials] == kept + ["COMPLETE"] * (4 - len(kept))
+    if stop_at_run == 4:
+        assert trials[0][2:] == (study.trials[0].params, study.trials[0].value)
+    start = [t for t in optuna.load_study(study_name="pa10-pid", storage=f"sqlite:///{tmp_path / 't' / 'tune.db'}")
+             .trials if t.user_attrs.get("start") and t.state.name == "COMPLETE"]
+    assert len(start) == 1 and start[0].params == {"bandwidth": 1.0, "damping": 1.0, "integral": 1.0}
+    info = json.loads((tmp_path / "t" / "tune.json").read_text())
+    assert info["trials"] == 3 and math.isfinite(info["best_objective"]) and info["start_objective"] is not None
+
+
+@pytest.mark.slow
+def test_equal_budget_writes_one_table_of_every_controller(tmp_path):
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parent.parent / "scripts" / "equal_budget.py"
+    spec = importlib.util.spec_from_file_location("equal_budget", path)
+    eq = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(eq)
+    rc = eq.main(["--controllers", "pid,ctc", "--out", str(tmp_path / "eq"), "--trials", "2", "--scenarios",
+                  "nominal", "--seeds", "1", "--held-out-seeds", "1", "--duration", "0.5", "--jobs", "1",
+                  "--no-progress"])
+    assert rc == 0
+    md = (tmp_path / "eq" / "comparison.md").read_text()
+    table = [line for line in md.splitlines() if line.startswith("| ")]
+    assert table[0] == "| scenario | PID shipped | PID tuned | CTC shipped | CTC tuned |"
+    assert len(table) == 1 + 8 + 2 and all(line.count("|") == 6 for line in table)
+    for c in ("pid", "ctc"):
+        assert json.loads((tmp_path / "eq" / c / "tune.json").read_text())["trials"] == 2

@@ -82,14 +82,20 @@ def open_study(storage, spec: TuneSpec, batch: int):
 
     study = optuna.create_study(storage=storage, study_name=spec.study_name, direction="minimize",
                                 load_if_exists=True)
+    from optuna.trial import TrialState
+
     stored = study.user_attrs.get(STUDY_ATTR)
     if stored is None and not study.trials:
         study.set_user_attr(STUDY_ATTR, spec.identity())
-        study.enqueue_trial({p.name: spec.start[p.name] for p in spec.params}, user_attrs={"start": True})
     elif stored != spec.identity():
         diff = sorted(k for k in spec.identity() if (stored or {}).get(k) != spec.identity()[k])
         raise ConfigError(f"--out/--storage: study {spec.study_name!r} there was run with other options ({', '.join(diff)}"
                           f"): give another --out or --storage, or the same options")
+    for t in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
+        study.tell(t.number, state=TrialState.FAIL)   # left by a tune that was killed: one coordinator per study
+    if not any(t.user_attrs.get("start") for t in study.get_trials(
+            deepcopy=False, states=(TrialState.COMPLETE, TrialState.WAITING))):
+        study.enqueue_trial({p.name: spec.start[p.name] for p in spec.params}, user_attrs={"start": True})
     study.sampler = optuna.samplers.TPESampler(seed=spec.seed + len(study.trials), multivariate=True,
                                                constant_liar=batch > 1)
     return study
