@@ -78,6 +78,14 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, monkeypatc
     assert not (tmp_path / "t").exists()
 
 
+def test_an_unreachable_scheduler_leaves_a_given_storage_untouched(tmp_path, monkeypatch):
+    monkeypatch.setattr("pa10_dnbs.study.executor.CONNECT_TIMEOUT_S", 1.0)
+    r = _tune("--controller", "dnbs", "--storage", f"sqlite:///{tmp_path / 's.db'}", "--scheduler",
+              "tcp://127.0.0.1:9", "--out", tmp_path / "t", *SHORT)
+    assert r.returncode == 2 and "--scheduler" in r.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.slow
 def test_a_short_tune_writes_settings_simulate_takes(tmp_path):
     out = tmp_path / "t"

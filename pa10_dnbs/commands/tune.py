@@ -65,10 +65,10 @@ def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, co
         raise ConfigError(f"--duration: {duration_s} s is shorter than two steps")
     spec = TuneSpec(the_arm.name, controller, param_list, train, list(range(seeds)), duration_s,
                     str(config_path.resolve()), seed, start_values(controller, base_cfg))
-    storage_obj = open_storage(storage) if storage is not None else None
     command = _command(controller, trials, out, arm, config_path, storage, seed, scenarios, seeds, held_out_seeds,
                        duration_s, params)
-    with Executor(jobs, scheduler) as ex:
+    with Executor(jobs, scheduler) as ex:   # an unreachable scheduler stops here, before any storage is touched
+        storage_obj = open_storage(storage) if storage is not None else None
         if storage is None:
             out.mkdir(parents=True, exist_ok=True)
             storage = f"sqlite:///{(out / 'tune.db').resolve()}"

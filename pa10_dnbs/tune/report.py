@@ -113,7 +113,7 @@ def tune_figures(study, directory: Path) -> list[str]:
         fig = ax.figure
         fig.set_size_inches(7, 4)
         fig.tight_layout()
-        fig.savefig(directory / name, dpi=90)
+        fig.savefig(directory / name, dpi=90, bbox_inches="tight")
         plt.close(fig)
         out.append(name)
     return out
