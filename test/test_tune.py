@@ -179,3 +179,20 @@ def test_equal_budget_writes_one_table_of_every_controller(tmp_path):
     assert len(table) == 1 + 8 + 2 and all(line.count("|") == 6 for line in table)
     for c in ("pid", "ctc"):
         assert json.loads((tmp_path / "eq" / c / "tune.json").read_text())["trials"] == 2
+
+
+def test_progress_draws_trials_best_and_elapsed_on_a_terminal_only(tmp_path):
+    import io
+
+    from pa10_dnbs.tune.tuner import TrialProgress
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    study = optuna.create_study(storage=f"sqlite:///{tmp_path / 'p.db'}", study_name="p")
+    study.add_trial(optuna.trial.create_trial(params={}, distributions={}, value=-3.5))
+    clock = iter([0.0, 75.0, 80.0])
+    quiet, shown = io.StringIO(), io.StringIO()
+    TrialProgress(study, 10, "tune pid", enabled=False, stream=quiet)(1, 2, 6)
+    bar = TrialProgress(study, 10, "tune pid", enabled=True, stream=shown, clock=lambda: next(clock))
+    bar(1, 2, 6)
+    assert quiet.getvalue() == ""
+    assert shown.getvalue() == "\r\x1b[Ktune pid: 1/10 trials  runs 2/6  best -3.500 (trial 0)  elapsed 0:01:15"

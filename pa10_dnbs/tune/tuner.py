@@ -171,10 +171,10 @@ class TrialProgress:
         self.stream = stream if stream is not None else sys.stderr
         self.clock, self.t0, self._last = clock, clock(), -1e9
 
-    def text(self, done: int, runs_done: int, runs: int) -> str:
+    def text(self, done: int, runs_done: int, runs: int, now: float | None = None) -> str:
         trials = completed(self.study)
         best = min((t for t in trials), key=lambda t: t.value, default=None)
-        el = int(self.clock() - self.t0)
+        el = int((self.clock() if now is None else now) - self.t0)
         parts = [f"{self.label}: {done}/{self.total} trials",
                  f"best {best.value:.3f} (trial {best.number})" if best is not None else "best -",
                  f"elapsed {el // 3600:d}:{el // 60 % 60:02d}:{el % 60:02d}"]
@@ -185,7 +185,7 @@ class TrialProgress:
     def __call__(self, done: int, runs_done: int, runs: int) -> None:
         now = self.clock()
         if self.enabled and (now - self._last >= 0.5 or runs == 0):
-            self.stream.write("\r\x1b[K" + self.text(done, runs_done, runs))
+            self.stream.write("\r\x1b[K" + self.text(done, runs_done, runs, now))
             self.stream.flush()
             self._last = now
 
