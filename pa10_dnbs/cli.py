@@ -46,8 +46,18 @@ def _study(args: argparse.Namespace) -> int:
     from .commands.study import run_study_command
 
     return run_study_command(args.scenarios, args.controllers, args.seeds, args.duration, args.out, args.force,
-                             args.config, args.workers, progress=not args.no_progress and sys.stderr.isatty(),
-                             arm=args.arm)
+                             args.config, args.jobs, progress=not args.no_progress and sys.stderr.isatty(),
+                             arm=args.arm, scheduler=args.scheduler)
+
+
+def _tune(args: argparse.Namespace) -> int:
+    from .commands.tune import run_tune
+
+    return run_tune(args.controller, args.trials, args.out, arm=args.arm, config_path=args.config,
+                    storage=args.storage, seed=args.seed, jobs=args.jobs, scheduler=args.scheduler,
+                    scenarios=args.scenarios, seeds=args.seeds, held_out_seeds=args.held_out_seeds,
+                    duration_s=args.duration, params=args.params,
+                    progress=not args.no_progress and sys.stderr.isatty())
 
 
 def _arm(args: argparse.Namespace) -> int:
@@ -77,6 +87,15 @@ def add_arm_argument(p: argparse.ArgumentParser) -> None:
     p.add_argument("--arm", default=None, metavar="NAME|PATH",
                    help="the arm: a preset of urdf/ (pa10, iiwa, panda) or the path of an arm file (arm.yaml) or a "
                         "bare URDF (default: the config's arm, pa10; docs/arms.md)")
+
+
+def add_parallel_arguments(p: argparse.ArgumentParser, what: str) -> None:
+    """``--jobs N`` (alias ``--workers``) and ``--scheduler ADDRESS``: where the runs execute (docs/tuning.md)."""
+    p.add_argument("--jobs", "--workers", dest="jobs", type=int, default=None, metavar="N",
+                   help=f"local worker processes for the {what} (default: one per core; 1: in this process)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help=f"run the {what} on a Dask distributed cluster (e.g. tcp://127.0.0.1:8786) instead of "
+                        "local processes; its workers need the same pa10_dnbs (docs/tuning.md)")
 
 
 def _add_run_args(p: argparse.ArgumentParser, controllers: tuple[str, ...], help_controller: str) -> None:
@@ -178,7 +197,7 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
     st.add_argument("--config", type=Path, default=None, help="YAML config the scenarios start from")
     add_arm_argument(st)
-    st.add_argument("--workers", type=int, default=None, help="worker processes (default: one per core)")
+    add_parallel_arguments(st, "runs")
     st.add_argument("--force", action="store_true", help="replace an existing output directory")
     st.add_argument("--no-progress", action="store_true", help="no progress bar")
     st.set_defaults(func=_study)
@@ -187,6 +206,31 @@ def build_parser() -> argparse.ArgumentParser:
     ar.add_argument("--config", type=Path, default=None, help="YAML config (default: the shipped default)")
     add_arm_argument(ar)
     ar.set_defaults(func=_arm)
+
+    tu = sub.add_parser("tune", help="search a controller's settings on an arm with Optuna (docs/tuning.md)")
+    tu.add_argument("--controller", required=True, metavar="NAME", help="dnbs, pid or ctc")
+    tu.add_argument("--trials", type=int, default=20, metavar="N",
+                    help="completed trials the study should hold (a resumed tune runs the rest; default 20)")
+    tu.add_argument("--out", type=Path, required=True, metavar="DIR",
+                    help="tuned.yaml, tune.md, tune.json, figures, and the study's SQLite storage tune.db")
+    add_arm_argument(tu)
+    tu.add_argument("--config", type=Path, default=None,
+                    help="YAML config the search starts from (default: the shipped default)")
+    tu.add_argument("--storage", default=None, metavar="URL",
+                    help="Optuna storage URL (default: sqlite:///DIR/tune.db), e.g. postgresql://host/db")
+    tu.add_argument("--seed", type=int, default=0, help="the sampler's seed (default 0)")
+    tu.add_argument("--params", default=None, metavar="LIST",
+                    help="search only these parameters of the controller's space (the rest stay at the start)")
+    tu.add_argument("--scenarios", default="nominal,payload_5kg,delay_1_tick", metavar="LIST",
+                    help="training scenarios (default nominal,payload_5kg,delay_1_tick)")
+    tu.add_argument("--seeds", type=int, default=2, metavar="N", help="training seeds 0..N-1 (default 2)")
+    tu.add_argument("--held-out-seeds", type=int, default=3, metavar="N",
+                    help="held-out seeds 100..100+N-1 on every scenario, for the best and the start (default 3; "
+                         "0: none)")
+    tu.add_argument("--duration", type=float, default=20.0, metavar="SECONDS", help="simulated time per run")
+    add_parallel_arguments(tu, "runs of the trials")
+    tu.add_argument("--no-progress", action="store_true", help="no progress line")
+    tu.set_defaults(func=_tune)
 
     an = sub.add_parser("analyse", help="metrics, figures and report of a recorded run, from its bag alone")
     an.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 bag directory (metadata.yaml + .mcap)")

@@ -38,7 +38,7 @@ LAYERS = [
     {"arm", "config", "derived_settings", "plant", "loop", "accel"},  # arms, config, physics, loop logic, compiled step
     {"controller_factory"},
     {"sim", "bag", "report", "live"},                                          # in-process runs, bags, outputs, live view
-    {"study"},                                                                 # robustness study over sim runs
+    {"study", "tune"},                                                         # robustness study, tuning: sim runs
     {"ros"},                                                                   # the nodes (rclpy)
     {"launch"},                                                                # starts and watches the nodes
     {"commands"},

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import shlex
 from pathlib import Path
 
@@ -11,6 +12,7 @@ from ..config import ConfigError, default_config_path, load_config
 from ..report.outputs import atomic_output_dir, check_output_dir
 from ..report.progress import ProgressBar
 from ..sim.closed_loop import CONTROLLERS
+from ..study.executor import Executor
 from ..study.runner import run_study
 from ..study.scenarios import SCENARIOS
 from ..study.summary import study_figure, study_markdown
@@ -25,8 +27,11 @@ def _names(flag: str, given: str, valid) -> list[str]:
 
 
 def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: float, out: Path, force: bool,
-                      config_path: Path | None, workers: int | None, progress: bool, arm: str | None = None) -> int:
-    """Run the study on ``arm`` (a preset or an arm file; None: the config's) and write its outputs in ``out``."""
+                      config_path: Path | None, workers: int | None, progress: bool, arm: str | None = None,
+                      scheduler: str | None = None) -> int:
+    """Run the study on ``arm`` (a preset or an arm file; None: the config's) and write its outputs in ``out``.
+
+    ``workers`` (``--jobs``): local processes; ``scheduler``: a Dask scheduler's address to run on instead."""
     scen = _names("--scenarios", scenarios, list(SCENARIOS))
     ctrl = _names("--controllers", controllers, CONTROLLERS)
     if seeds < 1:
@@ -34,7 +39,7 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
     if not (math.isfinite(duration_s) and duration_s > 0):
         raise ConfigError(f"--duration: must be a positive number of seconds, got {duration_s}")
     if workers is not None and workers < 1:
-        raise ConfigError(f"--workers: must be >= 1, got {workers}")
+        raise ConfigError(f"--jobs: must be >= 1, got {workers}")
     config_path = Path(config_path) if config_path else default_config_path()
     cfg = load_config(config_path, arm=arm)
     check_output_dir(out, force)
@@ -50,7 +55,8 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
         done.append(row)
         bar.update(len(done) * steps_per_run, row["worst_max_abs_error_run_rad"])
 
-    rows = run_study(cfg, scen, ctrl, seeds, duration_s, workers, on_done=finished)
+    with Executor(min(workers or os.cpu_count() or 1, n) if scheduler is None else None, scheduler) as ex:
+        rows = run_study(cfg, scen, ctrl, seeds, duration_s, on_done=finished, executor=ex)
     bar.close()
     command = (f"pa10-dnbs study --scenarios {','.join(scen)} --controllers {','.join(ctrl)} --seeds {seeds} "
                f"--duration {duration_s:g} --out {shlex.quote(str(out))}"

@@ -1,15 +1,16 @@
-"""Run every (scenario, controller, seed) of a study in worker processes; one row of figures per run."""
+"""Run every (scenario, controller, seed) of a study in worker processes or on a Dask cluster; one row of
+figures per run (study/executor.py)."""
 from __future__ import annotations
 
 import math
 import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from itertools import product
 
 import numpy as np
 
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..sim.closed_loop import simulate
+from .executor import Executor
 from .scenarios import scenario_config
 
 DIVERGED_RAD = 1.0  # a run with |e| above this (or a non-finite value) counts as diverged
@@ -36,25 +37,24 @@ def run_one(cfg: dict, scenario: str, controller: str, seed: int, duration_s: fl
 
 
 def run_study(cfg: dict, scenarios, controllers, seeds: int, duration_s: float, workers: int | None = None,
-              on_done=None) -> list[dict]:
-    """Rows of every combination, sorted by scenario, controller, seed; ``on_done(row)`` after each run.
+              on_done=None, scheduler: str | None = None, executor: Executor | None = None) -> list[dict]:
+    """Rows of every combination, sorted by scenario, controller, seed; ``on_done(row)`` once per run.
 
-    ``workers``: processes (default: one per core); 1 runs in this process.
+    ``workers``: local processes (default: one per core; 1 runs in this process); ``scheduler``: the address of
+    a Dask scheduler to run on instead; ``executor``: an open :class:`Executor` to use (then neither applies).
+    Results are keyed by (scenario, controller, seed): a run a cluster redid is one row.
     """
-    jobs = list(product(scenarios, controllers, range(seeds)))
-    workers = workers or os.cpu_count() or 1
-    rows = []
-    if workers == 1:
-        for sc, ctrl, seed in jobs:
-            rows.append(run_one(cfg, sc, ctrl, seed, duration_s))
-            if on_done:
-                on_done(rows[-1])
+    tasks = {(sc, ctrl, seed): (cfg, sc, ctrl, seed, duration_s)
+             for sc, ctrl, seed in product(scenarios, controllers, range(seeds))}
+
+    def done(key, row):
+        if on_done:
+            on_done(row)
+
+    if executor is not None:
+        results = executor.run(run_one, tasks, done)
     else:
-        with ProcessPoolExecutor(max_workers=min(workers, len(jobs))) as pool:
-            futures = [pool.submit(run_one, cfg, sc, ctrl, seed, duration_s) for sc, ctrl, seed in jobs]
-            for f in as_completed(futures):
-                rows.append(f.result())
-                if on_done:
-                    on_done(rows[-1])
-    order = {(s, c): i for i, (s, c) in enumerate(product(scenarios, controllers))}
-    return sorted(rows, key=lambda r: (order[(r["scenario"], r["controller"])], r["seed"]))
+        with Executor(min(workers or os.cpu_count() or 1, len(tasks)) if scheduler is None else None,
+                      scheduler) as ex:
+            results = ex.run(run_one, tasks, done)
+    return [results[k] for k in tasks]

@@ -1,0 +1,132 @@
+"""``pa10-dnbs tune``: search a controller's settings on an arm with Optuna (docs/tuning.md).
+
+Everything is checked before anything is written (bad input: exit 2, one line): the controller, the
+parameters, scenarios and numbers, the arm and config, the storage URL, the scheduler. Then DIR holds the
+study's storage (``tune.db``, unless ``--storage``), and, once the trials are done, tuned.yaml, tune.md,
+tune.json and the figures. Ctrl-C keeps every completed trial; the same command resumes.
+"""
+from __future__ import annotations
+
+import json
+import math
+import shlex
+import sys
+import time
+from pathlib import Path
+
+from ..arm import arm_of, preset_names
+from ..atomic_file import atomic_path
+from ..config import ConfigError, default_config_path, load_config
+from ..study.executor import Executor
+from ..study.scenarios import SCENARIOS
+from ..tune.report import held_out_table, tune_figures, tune_markdown, tuned_yaml
+from ..tune.space import select, start_values
+from ..tune.tuner import TrialProgress, TuneSpec, completed, held_out, open_storage, open_study, optimize
+
+DEFAULT_TRAINING = "nominal,payload_5kg,delay_1_tick"
+HELD_OUT_SEED0 = 100   # held-out seeds are 100, 101, ...: never a training seed (0 .. --seeds - 1)
+
+
+def _names(flag: str, given: str, valid) -> list[str]:
+    names = [n.strip() for n in given.split(",") if n.strip()]
+    bad = [n for n in names if n not in valid]
+    if bad or not names:
+        raise ConfigError(f"{flag}: unknown {', '.join(bad) if bad else '(empty list)'}; valid: {', '.join(valid)}")
+    return list(dict.fromkeys(names))
+
+
+def _write(path: Path, text: str) -> None:
+    with atomic_path(path) as tmp:
+        tmp.write_text(text)
+
+
+def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, config_path: Path | None = None,
+             storage: str | None = None, seed: int = 0, jobs: int | None = None, scheduler: str | None = None,
+             scenarios: str = DEFAULT_TRAINING, seeds: int = 2, held_out_seeds: int = 3, duration_s: float = 20.0,
+             params: str | None = None, progress: bool = False) -> int:
+    """Tune ``controller`` on ``arm``; returns the exit code."""
+    param_list = select(controller, None if params is None else [n.strip() for n in params.split(",") if n.strip()])
+    train = _names("--scenarios", scenarios, list(SCENARIOS))
+    for flag, v, low in (("--trials", trials, 1), ("--seeds", seeds, 1), ("--held-out-seeds", held_out_seeds, 0),
+                         ("--seed", seed, 0)):
+        if v < low:
+            raise ConfigError(f"{flag}: must be >= {low}, got {v}")
+    if not (math.isfinite(duration_s) and duration_s > 0):
+        raise ConfigError(f"--duration: must be a positive number of seconds, got {duration_s}")
+    if jobs is not None and jobs < 1:
+        raise ConfigError(f"--jobs: must be >= 1, got {jobs}")
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"--out: {out} exists and is not a directory")
+    config_path = Path(config_path) if config_path else default_config_path()
+    base_cfg = load_config(config_path, arm=arm)
+    the_arm = arm_of(base_cfg)
+    if int(round(duration_s / base_cfg["simulation"]["dt_s"])) < 2:
+        raise ConfigError(f"--duration: {duration_s} s is shorter than two steps")
+    spec = TuneSpec(the_arm.name, controller, param_list, train, list(range(seeds)), duration_s,
+                    str(config_path.resolve()), seed, start_values(controller, base_cfg))
+    command = _command(controller, trials, out, arm, config_path, storage, seed, scenarios, seeds, held_out_seeds,
+                       duration_s, params)
+    with Executor(jobs, scheduler) as ex:   # an unreachable scheduler stops here, before any storage is touched
+        storage_obj = open_storage(storage) if storage is not None else None
+        if storage is None:
+            out.mkdir(parents=True, exist_ok=True)
+            storage = f"sqlite:///{(out / 'tune.db').resolve()}"
+            storage_obj = open_storage(storage)
+        batch = max(1, ex.jobs // (len(train) * seeds))
+        study = open_study(storage_obj, spec, batch)
+        t0 = time.monotonic()
+        bar = TrialProgress(study, trials, f"tune {controller} on {the_arm.name}", progress)
+        try:
+            optimize(study, spec, base_cfg, trials, ex, bar)
+        except KeyboardInterrupt:
+            bar.close()
+            print(f"pa10-dnbs: interrupted; {len(completed(study))} completed trials kept in {storage}: the same "
+                  "command resumes", file=sys.stderr)
+            return 130
+        bar.close()
+        trials_done = completed(study)
+        best = min(trials_done, key=lambda t: t.value)
+        start = next((t for t in trials_done if t.user_attrs.get("start")), None)
+        held_scen, held_seeds = list(SCENARIOS), list(range(HELD_OUT_SEED0, HELD_OUT_SEED0 + held_out_seeds))
+        held = held_out(base_cfg, spec, best.params, held_scen, held_seeds, ex) if held_out_seeds else None
+        where = ex.where
+    wall = time.monotonic() - t0
+    out.mkdir(parents=True, exist_ok=True)
+    arm_value = the_arm.name if the_arm.name in preset_names() and arm_of({"arm": the_arm.name}).file == the_arm.file \
+        else str(the_arm.file)
+    _write(out / "tuned.yaml", tuned_yaml(spec, base_cfg, best.params, arm_value, config_path, [
+        f"{controller} on {the_arm.name} tuned by: {command}",
+        f"trial {best.number} of study {spec.study_name}, objective {best.value:.4f} (docs/tuning.md)",
+        f"run it: pa10-dnbs simulate --config {out / 'tuned.yaml'} --controller {controller} --out DIR"]))
+    figures = tune_figures(study, out)
+    _write(out / "tune.md", tune_markdown(spec, study, best, start, command, where, wall, held, held_scen, held_seeds,
+                                          storage, figures))
+    _write(out / "tune.json", json.dumps({
+        "arm": the_arm.name, "controller": controller, "study": spec.study_name, "storage": storage,
+        "options": spec.identity(), "trials": len(trials_done), "best_trial": best.number,
+        "best_objective": best.value, "best_params": dict(spec.fixed, **best.params), "start_params": spec.start,
+        "start_objective": start.value if start is not None else None,
+        "held_out_seeds": held_seeds if held else [], "held_out": held}, indent=2) + "\n")
+    print(f"{len(trials_done)} trials; best trial {best.number}: objective {best.value:.3f}"
+          + (f" (start {start.value:.3f})" if start is not None else "") + f"; wrote {out}/tuned.yaml, {out}/tune.md")
+    if held:
+        print("\n".join(held_out_table(held, held_scen)[-1:]))
+    return 0
+
+
+def _command(controller, trials, out, arm, config_path, storage, seed, scenarios, seeds, held_out_seeds, duration_s,
+             params) -> str:
+    parts = ["pa10-dnbs tune", f"--controller {controller}", f"--trials {trials}", f"--out {shlex.quote(str(out))}"]
+    if arm is not None:
+        parts.append(f"--arm {shlex.quote(str(arm))}")
+    if config_path != default_config_path():
+        parts.append(f"--config {shlex.quote(str(config_path))}")
+    if storage is not None:
+        parts.append(f"--storage {shlex.quote(storage)}")
+    for flag, v, default in (("--seed", seed, 0), ("--scenarios", scenarios, DEFAULT_TRAINING), ("--seeds", seeds, 2),
+                             ("--held-out-seeds", held_out_seeds, 3), ("--duration", duration_s, 20.0),
+                             ("--params", params, None)):
+        if v != default:
+            parts.append(f"{flag} {v:g}" if isinstance(v, float) else f"{flag} {v}")
+    return " ".join(parts)

@@ -1,0 +1,195 @@
+"""The search: an Optuna study in a storage, trials asked here and their runs executed by an Executor (this
+process, local processes or a Dask cluster), told back here. The storage is only ever touched by this process,
+so cluster workers need no database (docs/tuning.md).
+
+Determinism: the sampler is TPE seeded with ``seed`` (plus the number of trials already in the storage, so a
+resumed tune does not redraw the points it already tried). Trials are asked in batches of
+``max(1, workers // runs per trial)`` and told in trial order, so the same command with the same number of
+workers gives the same trials; with at most one trial per batch (the default: 3 scenarios x 2 seeds = 6 runs,
+fewer than 6 workers) the trials do not depend on the number of workers either.
+"""
+from __future__ import annotations
+
+import logging
+import time
+import warnings
+from dataclasses import dataclass, field
+
+from ..config_error import ConfigError
+from ..study.executor import Executor
+from .objective import objective, tune_run
+from .space import Param, apply, settings_fragment, start_values
+
+STUDY_ATTR = "pa10_dnbs_tune"   # the study's user attribute holding the options that define its objective
+
+
+@dataclass
+class TuneSpec:
+    """What one tune searches and scores: controller, its searched dimensions, the training runs."""
+
+    arm_name: str
+    controller: str
+    params: tuple[Param, ...]
+    scenarios: list[str]
+    seeds: list[int]
+    duration_s: float
+    config_file: str
+    seed: int = 0
+    start: dict = field(default_factory=dict)  # the start point of the full space (space.start_values)
+
+    @property
+    def fixed(self) -> dict:
+        """The dimensions not searched, at their start values."""
+        searched = {p.name for p in self.params}
+        return {k: v for k, v in self.start.items() if k not in searched}
+
+    @property
+    def study_name(self) -> str:
+        return f"{self.arm_name}-{self.controller}"
+
+    def identity(self) -> dict:
+        """The options a resumed study must share with the one in the storage."""
+        return {"arm": self.arm_name, "controller": self.controller, "params": [p.name for p in self.params],
+                "scenarios": self.scenarios, "seeds": self.seeds, "duration_s": self.duration_s,
+                "config_file": self.config_file, "seed": self.seed}
+
+
+def quiet_optuna() -> None:
+    import optuna
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)
+    logging.getLogger("alembic").setLevel(logging.WARNING)
+
+
+def open_storage(url: str):
+    """An Optuna RDB storage at ``url`` (sqlite:///file.db, postgresql://..., ...); ConfigError if it does not
+    open."""
+    import optuna
+
+    quiet_optuna()
+    try:
+        return optuna.storages.RDBStorage(url)
+    except Exception as exc:  # sqlalchemy's errors for bad URLs, missing drivers, unreachable servers
+        text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ConfigError(f"--storage: cannot open {url}: {text}") from None
+
+
+def open_study(storage, spec: TuneSpec, batch: int):
+    """The spec's study in ``storage``: created, or loaded if it exists with the same options (ConfigError if
+    not); the start point enqueued as its first trial."""
+    import optuna
+
+    study = optuna.create_study(storage=storage, study_name=spec.study_name, direction="minimize",
+                                load_if_exists=True)
+    from optuna.trial import TrialState
+
+    stored = study.user_attrs.get(STUDY_ATTR)
+    if stored is None and not study.trials:
+        study.set_user_attr(STUDY_ATTR, spec.identity())
+    elif stored != spec.identity():
+        diff = sorted(k for k in spec.identity() if (stored or {}).get(k) != spec.identity()[k])
+        raise ConfigError(f"--out/--storage: study {spec.study_name!r} there was run with other options ({', '.join(diff)}"
+                          f"): give another --out or --storage, or the same options")
+    for t in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
+        study.tell(t.number, state=TrialState.FAIL)   # left by a tune that was killed: one coordinator per study
+    if not any(t.user_attrs.get("start") for t in study.get_trials(
+            deepcopy=False, states=(TrialState.COMPLETE, TrialState.WAITING))):
+        study.enqueue_trial({p.name: spec.start[p.name] for p in spec.params}, user_attrs={"start": True})
+    study.sampler = optuna.samplers.TPESampler(seed=spec.seed + len(study.trials), multivariate=True,
+                                               constant_liar=batch > 1)
+    return study
+
+
+def completed(study) -> list:
+    from optuna.trial import TrialState
+
+    return study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))
+
+
+def trial_config(base_cfg: dict, spec: TuneSpec, values: dict) -> dict:
+    """The validated config of a trial's point (the dimensions not searched at their start values)."""
+    return apply(base_cfg, settings_fragment(spec.controller, base_cfg, dict(spec.fixed, **values)))
+
+
+def optimize(study, spec: TuneSpec, base_cfg: dict, n_trials: int, executor: Executor, progress=None) -> None:
+    """Run trials until the study holds ``n_trials`` completed ones. ``progress(done, best, runs_done, runs)``
+    after every run. Interrupted (Ctrl-C, an error): the trials of the batch are marked failed, the completed
+    ones stay in the storage, and the exception goes on."""
+    from optuna.trial import TrialState
+
+    runs_per_trial = len(spec.scenarios) * len(spec.seeds)
+    batch = max(1, executor.jobs // runs_per_trial)
+    while (done := len(completed(study))) < n_trials:
+        asked = [study.ask() for _ in range(min(batch, n_trials - done))]
+        tasks = {}
+        for t in asked:
+            values = {p.name: t.suggest_float(p.name, p.low, p.high, log=p.log) for p in spec.params}
+            cfg = trial_config(base_cfg, spec, values)
+            for sc in spec.scenarios:
+                for seed in spec.seeds:
+                    tasks[(t.number, sc, seed)] = (cfg, sc, spec.controller, seed, spec.duration_s)
+        n_runs = [0]
+
+        def on_run(key, row):
+            n_runs[0] += 1
+            if progress is not None:
+                progress(done, n_runs[0], len(tasks))
+        try:
+            rows = executor.run(tune_run, tasks, on_run)
+        except BaseException:
+            for t in asked:
+                study.tell(t, state=TrialState.FAIL)
+            raise
+        for t in asked:
+            trial_rows = [rows[k] for k in tasks if k[0] == t.number]
+            t.set_user_attr("rows", trial_rows)
+            study.tell(t, objective(trial_rows))
+    if progress is not None:
+        progress(len(completed(study)), 0, 0)
+
+
+def held_out(base_cfg: dict, spec: TuneSpec, best_values: dict, scenarios: list[str], seeds: list[int],
+             executor: Executor) -> dict[str, list[dict]]:
+    """Rows of the start settings and of ``best_values`` on every (scenario, seed): {'start': [...], 'tuned': [...]}."""
+    cfgs = {"start": trial_config(base_cfg, spec, start_values(spec.controller, base_cfg)),
+            "tuned": trial_config(base_cfg, spec, best_values)}
+    tasks = {(which, sc, seed): (cfg, sc, spec.controller, seed, spec.duration_s)
+             for which, cfg in cfgs.items() for sc in scenarios for seed in seeds}
+    rows = executor.run(tune_run, tasks)
+    return {which: [rows[k] for k in tasks if k[0] == which] for which in cfgs}
+
+
+class TrialProgress:
+    """One line on a terminal: trials done, best so far, the current batch's runs, elapsed wall time; nothing
+    when ``enabled`` is False (not a terminal)."""
+
+    def __init__(self, study, total: int, label: str, enabled: bool, stream=None, clock=time.monotonic):
+        import sys
+
+        self.study, self.total, self.label, self.enabled = study, total, label, enabled
+        self.stream = stream if stream is not None else sys.stderr
+        self.clock, self.t0, self._last = clock, clock(), -1e9
+
+    def text(self, done: int, runs_done: int, runs: int, now: float | None = None) -> str:
+        trials = completed(self.study)
+        best = min((t for t in trials), key=lambda t: t.value, default=None)
+        el = int((self.clock() if now is None else now) - self.t0)
+        parts = [f"{self.label}: {done}/{self.total} trials",
+                 f"best {best.value:.3f} (trial {best.number})" if best is not None else "best -",
+                 f"elapsed {el // 3600:d}:{el // 60 % 60:02d}:{el % 60:02d}"]
+        if runs:
+            parts.insert(1, f"runs {runs_done}/{runs}")
+        return "  ".join(parts)
+
+    def __call__(self, done: int, runs_done: int, runs: int) -> None:
+        now = self.clock()
+        if self.enabled and (now - self._last >= 0.5 or runs == 0):
+            self.stream.write("\r\x1b[K" + self.text(done, runs_done, runs, now))
+            self.stream.flush()
+            self._last = now
+
+    def close(self) -> None:
+        if self.enabled:
+            self.stream.write("\n")
+            self.stream.flush()
