@@ -39,7 +39,8 @@ NOT_LINKED = {".git", "runs", "bags", "build", "install", "log", ".pytest_cache"
 GRAPH = re.compile(r"pa10-dnbs\s+(launch|replay)\b|pa10_dnbs\.ros\.|run_main\.sh|soak_realtime|bench_graph|"
                    r"bench_observers|live_probe")
 # commands that take --duration: a docs test gives them CAP_S when the block gives none
-TAKES_DURATION = re.compile(r"(pa10-dnbs\s+(?:launch|simulate|study)|scripts/run_main\.sh)(?=\s|$)")
+TAKES_DURATION = re.compile(r"(pa10-dnbs\s+(?:launch|simulate|study|tune)|scripts/run_main\.sh|"
+                            r"scripts/equal_budget\.py)(?=\s|$)")
 
 
 def _cap(value: str, cap: float) -> str:
@@ -55,6 +56,8 @@ SHORTEN = [
     (re.compile(r"(end_stamp_ns:=)(\d+)"), lambda m: m[1] + str(min(int(m[2]), int(CAP_S * 1e9)))),
     (re.compile(r"(--seeds\s+)\d+"), lambda m: m[1] + "1"),
     (re.compile(r"(--repeat\s+)\d+"), lambda m: m[1] + "1"),
+    (re.compile(r"(--trials\s+)\d+"), lambda m: m[1] + "2"),
+    (re.compile(r"(--held-out-seeds\s+)\d+"), lambda m: m[1] + "1"),
     (re.compile(r"(--minutes\s+)(\d+(?:\.\d+)?)"), lambda m: m[1] + _cap(m[2], CAP_S / 60)),
     (re.compile(r"--live(?:\s+\d+)?(?=\s|$)"), lambda m: "--live 0"),  # any free port, never one in use
 ]
@@ -73,11 +76,23 @@ def _with_duration(line: str) -> str:
     return TAKES_DURATION.sub(lambda m: f"{m[1]} --duration {CAP_S:g}", line, count=1)
 
 
+TUNES = re.compile(r"(pa10-dnbs\s+tune|scripts/equal_budget\.py)(?=\s|$)")
+
+
+def _with_held_out(line: str) -> str:
+    """``line`` with ``--held-out-seeds 1`` after a tune that gives none (its default re-runs 3 seeds x 8
+    scenarios twice)."""
+    code = line.split(" #", 1)[0]
+    if "--held-out-seeds" in code or not TUNES.search(code):
+        return line
+    return TUNES.sub(lambda m: f"{m[1]} --held-out-seeds 1", line, count=1)
+
+
 def as_run(src: str, domain_id: int) -> str:
     """The block as a docs test runs it: continuations joined, durations shortened, the leased domain."""
     lines = []
     for line in _logical_lines(src):
-        line = _with_duration(line)
+        line = _with_held_out(_with_duration(line))
         for pattern, repl in SHORTEN:
             line = pattern.sub(repl, line)
         lines.append(re.sub(r"ROS_DOMAIN_ID=\d+", f"ROS_DOMAIN_ID={domain_id}", line))
@@ -256,7 +271,8 @@ def test_as_run_shortens_durations_and_uses_the_leased_domain():
            ".venv/bin/pa10-dnbs study --scenarios nominal --seeds 10 --duration 0.5 --out runs/study\n"
            "python -m pa10_dnbs.ros.reference_node --ros-args -p duration_s:=5.0 &\n"
            "bash scripts/run_main.sh     # the main job\n"
-           "python -m pa10_dnbs.ros.recorder_node --ros-args -p end_stamp_ns:=3000000000 -p live_hz:=50\n")
+           "python -m pa10_dnbs.ros.recorder_node --ros-args -p end_stamp_ns:=3000000000 -p live_hz:=50\n"
+           ".venv/bin/pa10-dnbs tune --controller pid --trials 20 --out runs/tune_pid\n")
     assert as_run(src, 7).splitlines() == [
         "export ROS_DOMAIN_ID=7",
         ".venv/bin/pa10-dnbs launch --duration 1 --out runs/r1 --live 0 --record bags/r1",
@@ -264,7 +280,8 @@ def test_as_run_shortens_durations_and_uses_the_leased_domain():
         ".venv/bin/pa10-dnbs study --scenarios nominal --seeds 1 --duration 0.5 --out runs/study",
         "python -m pa10_dnbs.ros.reference_node --ros-args -p duration_s:=1.0 &",
         "bash scripts/run_main.sh --duration 1     # the main job",
-        "python -m pa10_dnbs.ros.recorder_node --ros-args -p end_stamp_ns:=1000000000 -p live_hz:=50"]
+        "python -m pa10_dnbs.ros.recorder_node --ros-args -p end_stamp_ns:=1000000000 -p live_hz:=50",
+        ".venv/bin/pa10-dnbs tune --held-out-seeds 1 --duration 1 --controller pid --trials 2 --out runs/tune_pid"]
 
 
 def test_the_venv_check_is_the_bootstrap_stamp():
