@@ -13,8 +13,7 @@ from typing import Any
 
 import yaml
 
-
-from .config_error import ConfigError  # noqa: E402  (re-exported: the CLI and nodes catch it from here)
+from .config_error import ConfigError  # re-exported: the CLI and the nodes catch it from here
 
 
 @dataclass(frozen=True)
