@@ -71,11 +71,42 @@ class Cluster:
         return out
 
 
+SHM = Path("/dev/shm")
+
+
+def _semaphores() -> set[str]:
+    """The named POSIX semaphores of Python's multiprocessing in /dev/shm (a nanny's worker makes some)."""
+    return {p.name for p in SHM.glob("sem.mp-*")} if SHM.is_dir() else set()
+
+
+def _mapped() -> set[str]:
+    """Names of /dev/shm files some live process maps."""
+    out = set()
+    for maps in Path("/proc").glob("[0-9]*/maps"):
+        try:
+            out |= {line.rsplit("/dev/shm/", 1)[1].split()[0] for line in maps.read_text().splitlines()
+                    if "/dev/shm/" in line}
+        except (OSError, IndexError):
+            pass
+    return out
+
+
+def remove_orphan_semaphores(before: set[str]) -> list[str]:
+    """Remove the multiprocessing semaphores made since ``before`` that no live process maps (a SIGKILLed
+    worker cannot unlink its own); the names removed."""
+    gone = sorted((_semaphores() - before) - _mapped())
+    for name in gone:
+        (SHM / name).unlink(missing_ok=True)
+    return gone
+
+
 @contextmanager
 def local_cluster(directory: Path, n_workers: int = 2):
     """Yield a :class:`Cluster` of a scheduler and ``n_workers`` workers on 127.0.0.1 (random ports, no
-    dashboards); every process is stopped and reaped at the end."""
+    dashboards); every process is stopped and reaped at the end, and the semaphores its killed processes
+    left in /dev/shm are removed."""
     directory.mkdir(parents=True, exist_ok=True)
+    semaphores_before = _semaphores()
     sched_file = directory / "scheduler.json"
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(Path(__file__).parent),
                                                        os.environ.get("PYTHONPATH", "")]))
@@ -102,6 +133,7 @@ def local_cluster(directory: Path, n_workers: int = 2):
         for p in reversed(procs):
             _stop(p)
         log.close()
+        remove_orphan_semaphores(semaphores_before)
 
 
 def logged_sleep(key: str, log_path: str, seconds: float) -> str:
