@@ -15,15 +15,8 @@ from ..sim.closed_loop import CONTROLLERS
 from ..study.executor import Executor
 from ..study.runner import run_study
 from ..study.scenarios import SCENARIOS
+from .name_list import name_list
 from ..study.summary import study_figure, study_markdown
-
-
-def _names(flag: str, given: str, valid) -> list[str]:
-    names = [n.strip() for n in given.split(",") if n.strip()]
-    bad = [n for n in names if n not in valid]
-    if bad or not names:
-        raise ConfigError(f"{flag}: unknown {', '.join(bad) if bad else '(empty list)'}; valid: {', '.join(valid)}")
-    return list(dict.fromkeys(names))
 
 
 def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: float, out: Path, force: bool,
@@ -32,8 +25,8 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
     """Run the study on ``arm`` (a preset or an arm file; None: the config's) and write its outputs in ``out``.
 
     ``workers`` (``--jobs``): local processes; ``scheduler``: a Dask scheduler's address to run on instead."""
-    scen = _names("--scenarios", scenarios, list(SCENARIOS))
-    ctrl = _names("--controllers", controllers, CONTROLLERS)
+    scen = name_list("--scenarios", scenarios, list(SCENARIOS))
+    ctrl = name_list("--controllers", controllers, CONTROLLERS)
     if seeds < 1:
         raise ConfigError(f"--seeds: must be >= 1, got {seeds}")
     if not (math.isfinite(duration_s) and duration_s > 0):

@@ -19,20 +19,13 @@ from ..atomic_file import atomic_path
 from ..config import ConfigError, default_config_path, load_config
 from ..study.executor import Executor
 from ..study.scenarios import SCENARIOS
+from .name_list import name_list
 from ..tune.report import held_out_table, tune_figures, tune_markdown, tuned_yaml
 from ..tune.space import select, start_values
 from ..tune.tuner import TrialProgress, TuneSpec, completed, held_out, open_storage, open_study, optimize
 
 DEFAULT_TRAINING = "nominal,payload_5kg,delay_1_tick"
 HELD_OUT_SEED0 = 100   # held-out seeds are 100, 101, ...: never a training seed (0 .. --seeds - 1)
-
-
-def _names(flag: str, given: str, valid) -> list[str]:
-    names = [n.strip() for n in given.split(",") if n.strip()]
-    bad = [n for n in names if n not in valid]
-    if bad or not names:
-        raise ConfigError(f"{flag}: unknown {', '.join(bad) if bad else '(empty list)'}; valid: {', '.join(valid)}")
-    return list(dict.fromkeys(names))
 
 
 def _write(path: Path, text: str) -> None:
@@ -46,7 +39,7 @@ def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, co
              params: str | None = None, progress: bool = False) -> int:
     """Tune ``controller`` on ``arm``; returns the exit code."""
     param_list = select(controller, None if params is None else [n.strip() for n in params.split(",") if n.strip()])
-    train = _names("--scenarios", scenarios, list(SCENARIOS))
+    train = name_list("--scenarios", scenarios, list(SCENARIOS))
     for flag, v, low in (("--trials", trials, 1), ("--seeds", seeds, 1), ("--held-out-seeds", held_out_seeds, 0),
                          ("--seed", seed, 0)):
         if v < low:
