@@ -15,6 +15,7 @@ from .loop.scheduling import DEFAULT_RT_PRIORITY
 from .bag.bag_reader import BagError
 from .bag.bag_writer import BagExistsError
 from .report.outputs import OutputExistsError
+from .tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 
 LIVE_PORT = 8765  # Foxglove's default WebSocket port
 
@@ -221,9 +222,10 @@ def build_parser() -> argparse.ArgumentParser:
     tu.add_argument("--seed", type=int, default=0, help="the sampler's seed (default 0)")
     tu.add_argument("--params", default=None, metavar="LIST",
                     help="search only these parameters of the controller's space (the rest stay at the start)")
-    tu.add_argument("--scenarios", default="nominal,payload_5kg,delay_1_tick", metavar="LIST",
-                    help="training scenarios (default nominal,payload_5kg,delay_1_tick)")
-    tu.add_argument("--seeds", type=int, default=2, metavar="N", help="training seeds 0..N-1 (default 2)")
+    tu.add_argument("--scenarios", default=TRAINING_SCENARIOS, metavar="LIST",
+                    help=f"training scenarios (default {TRAINING_SCENARIOS})")
+    tu.add_argument("--seeds", type=int, default=TRAINING_SEEDS, metavar="N",
+                    help=f"training seeds 0..N-1 (default {TRAINING_SEEDS})")
     tu.add_argument("--held-out-seeds", type=int, default=3, metavar="N",
                     help="held-out seeds 100..100+N-1 on every scenario, for the best and the start (default 3; "
                          "0: none)")

@@ -21,10 +21,10 @@ from ..study.executor import Executor
 from ..study.scenarios import SCENARIOS
 from .name_list import name_list
 from ..tune.report import held_out_table, tune_figures, tune_markdown, tuned_yaml
+from ..tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 from ..tune.space import select, start_values
 from ..tune.tuner import TrialProgress, TuneSpec, completed, held_out, open_storage, open_study, optimize
 
-DEFAULT_TRAINING = "nominal,payload_5kg,delay_1_tick"
 HELD_OUT_SEED0 = 100   # held-out seeds are 100, 101, ...: never a training seed (0 .. --seeds - 1)
 
 
@@ -35,8 +35,8 @@ def _write(path: Path, text: str) -> None:
 
 def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, config_path: Path | None = None,
              storage: str | None = None, seed: int = 0, jobs: int | None = None, scheduler: str | None = None,
-             scenarios: str = DEFAULT_TRAINING, seeds: int = 2, held_out_seeds: int = 3, duration_s: float = 20.0,
-             params: str | None = None, progress: bool = False) -> int:
+             scenarios: str = TRAINING_SCENARIOS, seeds: int = TRAINING_SEEDS, held_out_seeds: int = 3,
+             duration_s: float = 20.0, params: str | None = None, progress: bool = False) -> int:
     """Tune ``controller`` on ``arm``; returns the exit code."""
     param_list = select(controller, None if params is None else [n.strip() for n in params.split(",") if n.strip()])
     train = name_list("--scenarios", scenarios, list(SCENARIOS))
@@ -117,8 +117,8 @@ def _command(controller, trials, out, arm, config_path, storage, seed, scenarios
         parts.append(f"--config {shlex.quote(str(config_path))}")
     if storage is not None:
         parts.append(f"--storage {shlex.quote(storage)}")
-    for flag, v, default in (("--seed", seed, 0), ("--scenarios", scenarios, DEFAULT_TRAINING), ("--seeds", seeds, 2),
-                             ("--held-out-seeds", held_out_seeds, 3), ("--duration", duration_s, 20.0),
+    for flag, v, default in (("--seed", seed, 0), ("--scenarios", scenarios, TRAINING_SCENARIOS),
+                             ("--seeds", seeds, TRAINING_SEEDS), ("--held-out-seeds", held_out_seeds, 3), ("--duration", duration_s, 20.0),
                              ("--params", params, None)):
         if v != default:
             parts.append(f"{flag} {v:g}" if isinstance(v, float) else f"{flag} {v}")
