@@ -3,6 +3,8 @@ files (a tuned.yaml that ``simulate --config`` runs), the same trials from the s
 after Ctrl-C."""
 import json
 import math
+import subprocess
+import sys
 
 import optuna
 import pytest
@@ -179,6 +181,19 @@ def test_equal_budget_writes_one_table_of_every_controller(tmp_path):
     assert len(table) == 1 + 8 + 2 and all(line.count("|") == 6 for line in table)
     for c in ("pid", "ctc"):
         assert json.loads((tmp_path / "eq" / c / "tune.json").read_text())["trials"] == 2
+    # the README's table of several comparisons: one column per arm, the tuned controllers, DNBS first
+    from pa10_dnbs.tune.comparison import arms_table
+
+    many = arms_table([tmp_path / "eq", tmp_path / "eq"]).splitlines()
+    assert many[0] == "| scenario | pa10 PID / CTC | pa10 PID / CTC |"
+    assert len(many) == 2 + 8 + 1 and all(line.count("|") == 4 for line in many)
+    tuned = json.loads((tmp_path / "eq" / "pid" / "tune.json").read_text())["held_out"]["tuned"]
+    assert many[2].startswith(f"| nominal | {tuned[0]['worst_rms_error_rad']:.1e} / ".replace("e-0", "e-"))
+    table = subprocess.run([sys.executable, str(path.parent / "equal_budget_table.py"), str(tmp_path / "eq"),
+                            str(tmp_path / "nowhere")], capture_output=True, text=True)
+    assert table.returncode == 2 and table.stdout == ""
+    assert table.stderr.strip().splitlines() == [f"equal_budget_table: error: no DIR/<controller>/tune.json "
+                                                 f"under {tmp_path / 'nowhere'}"]
 
 
 def test_progress_draws_trials_best_and_elapsed_on_a_terminal_only(tmp_path):

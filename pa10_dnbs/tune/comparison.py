@@ -1,0 +1,91 @@
+"""The equal-budget comparison's tables (docs/tuning.md, "Equal budget"): one arm's shipped-against-tuned
+table, and the tuned controllers of several arms side by side (the README's). Input: the ``tune.json`` that
+``pa10-dnbs tune`` writes in each ``DIR/<controller>/``."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from .objective import objective
+
+
+def _worst(rows, key="worst_rms_error_rad"):
+    vals = [r[key] for r in rows]
+    return None if any(v is None for v in vals) else max(vals)
+
+
+def _e(v) -> str:
+    return "diverged" if v is None else f"{v:.2e}"
+
+
+def comparison_markdown(results: dict[str, dict], command: str) -> str:
+    """One table: per scenario, each controller's worst held-out RMS as shipped and as tuned; the objective."""
+    ctrls = list(results)
+    first = next(iter(results.values()))
+    scenarios = list(dict.fromkeys(r["scenario"] for r in first["held_out"]["start"]))
+    seeds = first["held_out_seeds"]
+    opts = first["options"]
+    lines = [f"# Equal budget on {first['arm']}", "", f"`{command}`", "",
+             f"Each controller tuned with the same budget: {first['trials']} trials, the same objective "
+             f"(docs/tuning.md), training scenarios {', '.join(opts['scenarios'])} x seeds "
+             f"{', '.join(map(str, opts['seeds']))}, {opts['duration_s']:g} s runs, sampler seed {opts['seed']}. "
+             f"Below, held-out: seeds {', '.join(map(str, seeds))} (never seen by a search) on every scenario; "
+             "worst-joint RMS over the metrics window, worst over the seeds [rad]; 'shipped' is the arm's "
+             "settings the search started from (hand-tuned on the PA10, the gain rule elsewhere).", "",
+             "| scenario | " + " | ".join(f"{c.upper()} shipped | {c.upper()} tuned" for c in ctrls) + " |",
+             "|---|" + "---|---|" * len(ctrls)]
+    for sc in scenarios:
+        cells = []
+        for c in ctrls:
+            h = results[c]["held_out"]
+            cells += [_e(_worst([r for r in h["start"] if r["scenario"] == sc])),
+                      _e(_worst([r for r in h["tuned"] if r["scenario"] == sc]))]
+        lines.append(f"| {sc} | " + " | ".join(cells) + " |")
+    lines.append("| **objective (all held-out runs)** | " + " | ".join(
+        f"{objective(results[c]['held_out']['start']):.3f} | {objective(results[c]['held_out']['tuned']):.3f}"
+        for c in ctrls) + " |")
+    lines.append("| objective (training, best trial) | " + " | ".join(
+        f"{results[c]['start_objective']:.3f} | {results[c]['best_objective']:.3f}" for c in ctrls) + " |")
+    lines += ["", "Best points (multipliers of the shipped values; docs/tuning.md):", ""]
+    for c in ctrls:
+        p = results[c]["best_params"]
+        lines.append(f"- {c.upper()}: trial {results[c]['best_trial']}: "
+                     + ", ".join(f"{k} {v:.3g}" for k, v in p.items()))
+    return "\n".join(lines) + "\n"
+
+
+def _short(v) -> str:
+    """2 digits, the exponent without its leading zero (3.2e-5)."""
+    return "diverged" if v is None else f"{v:.1e}".replace("e-0", "e-").replace("e+0", "e+")
+
+
+def load_comparison(directory: Path) -> dict[str, dict]:
+    """{controller: its tune.json} of one comparison DIR, DNBS, PID and CTC first; ValueError when there is none."""
+    directory = Path(directory)
+    results = {c.name: json.loads((c / "tune.json").read_text())
+               for c in (sorted(directory.iterdir()) if directory.is_dir() else []) if (c / "tune.json").is_file()}
+    if not results:
+        raise ValueError(f"no DIR/<controller>/tune.json under {directory}")
+    first = [c for c in ("dnbs", "pid", "ctc") if c in results]
+    return {c: results[c] for c in first + [c for c in results if c not in first]}
+
+
+def arms_table(dirs: list[Path]) -> str:
+    """Per scenario and arm, each tuned controller's held-out worst RMS [rad] (``DIR/<controller>/tune.json`` of
+    every comparison DIR); the last row: each controller's objective over all its held-out runs."""
+    arms = []
+    for d in dirs:
+        results = load_comparison(d)
+        arms.append((next(iter(results.values()))["arm"], results))
+    scenarios = list(dict.fromkeys(r["scenario"] for _, res in arms for t in res.values()
+                                   for r in t["held_out"]["tuned"]))
+    lines = ["| scenario | " + " | ".join(f"{arm} {' / '.join(c.upper() for c in res)}" for arm, res in arms) + " |",
+             "|---|" + "---|" * len(arms)]
+    for sc in scenarios:
+        lines.append(f"| {sc} | " + " | ".join(" / ".join(
+            _short(_worst([r for r in t["held_out"]["tuned"] if r["scenario"] == sc])) for t in res.values())
+            for _, res in arms) + " |")
+    lines.append("| objective, all held-out runs (shipped -> tuned) | " + " | ".join(" / ".join(
+        f"{objective(t['held_out']['start']):.1f} -> {objective(t['held_out']['tuned']):.1f}" for t in res.values())
+        for _, res in arms) + " |")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,33 @@
+#!/usr/bin/env python3
+"""The tuned controllers of several equal-budget comparisons side by side (the README's table): one column per
+arm, per scenario each tuned controller's held-out worst RMS [rad], and each one's objective over all its
+held-out runs, shipped -> tuned (docs/tuning.md, "Equal budget").
+
+    .venv/bin/python scripts/equal_budget_table.py runs/eq_pa10 runs/eq_iiwa runs/eq_panda
+
+Each DIR is the --out of one ``scripts/equal_budget.py``. Exit 2 with one line when a DIR holds no tune.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from pa10_dnbs.tune.comparison import arms_table
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("dirs", nargs="+", type=Path, metavar="DIR", help="comparison directories, one per arm")
+    args = parser.parse_args(argv)
+    try:
+        table = arms_table(args.dirs)
+    except ValueError as exc:
+        print(f"equal_budget_table: error: {exc}", file=sys.stderr)
+        return 2
+    print(table, end="")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
