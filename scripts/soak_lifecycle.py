@@ -168,7 +168,7 @@ def one_run(i: int, args, keep: Path | None) -> dict:
     plant_log = logs / "plant.log"
     row = {"run": i, "rc": rc, "wall_s": round(wall, 2), "effort_timeouts": timeouts, "resends": resends, "resent_from_steps": resent_at,
            "stalled": bool(timeouts or resends), "deadline_exits": hung, "leftover_processes": left_procs,
-           "leftover_shm": left_shm, "ready_s": ready_s}
+           "leftover_shm": left_shm, "ready_s": ready_s, "load_1min": round(os.getloadavg()[0], 2)}
     if plant_log.is_file():
         mt = re.search(r"HANDSHAKE every node ready after ([0-9.]+) s", plant_log.read_text(errors="replace"))
         row["ready_s"] = float(mt.group(1)) if mt else None
@@ -193,7 +193,9 @@ def summary(rows: list[dict]) -> dict:
             "leftover_shm_files": sum(len(r["leftover_shm"]) for r in rows),
             "wall_s_median": _median([r["wall_s"] for r in rows]),
             "handshake_s_median": _median([r["ready_s"] for r in rows if r["ready_s"] is not None]),
-            "handshake_s_max": max((r["ready_s"] for r in rows if r["ready_s"] is not None), default=None)}
+            "handshake_s_max": max((r["ready_s"] for r in rows if r["ready_s"] is not None), default=None),
+            "load_1min_min": min((r["load_1min"] for r in rows), default=None),
+            "load_1min_median": _median([r["load_1min"] for r in rows])}
 
 
 def _median(xs: list[float]) -> float | None:
@@ -229,7 +231,7 @@ def main() -> int:
             flags = [k for k in ("deadline_exits", "leftover_processes", "leftover_shm") if r[k]]
             print(f"run {i:3d}: rc {r['rc']}, {r['wall_s']:6.2f} s, timeouts {r['effort_timeouts']}, resends "
                   f"{r['resends']}{' from steps ' + str(r['resent_from_steps']) if r['resent_from_steps'] else ''}, "
-                  f"ready {r['ready_s']} s" + "".join(f", {k} {r[k]}" for k in flags), flush=True)
+                  f"ready {r['ready_s']} s, load {r['load_1min']}" + "".join(f", {k} {r[k]}" for k in flags), flush=True)
     except KeyboardInterrupt:
         print("interrupted; the table covers the runs done", flush=True)
     finally:
@@ -238,7 +240,8 @@ def main() -> int:
             p.wait()
     s = summary(rows)
     load = os.getloadavg()
-    print(f"\nsoak: {s['runs']} runs of {args.duration:g} s lockstep, {args.busy} busy loops, load after "
+    print(f"\nsoak: {s['runs']} runs of {args.duration:g} s lockstep, {args.busy} busy loops, 1-min load at the "
+          f"runs' ends min {s['load_1min_min']} median {s['load_1min_median']}, load after "
           f"{load[0]:.1f} {load[1]:.1f} {load[2]:.1f}")
     print("| runs | failed | effort timeouts (runs) | stalled runs (resend or timeout; state 0 re-sent) | deadline exits | "
           "leftover processes | leftover shm files | wall per run, median [s] | start handshake, median / max [s] |")
