@@ -258,6 +258,24 @@ def test_one_step_is_semi_implicit_euler(client, make_plant):
         assert plant.step_count == 1
 
 
+def test_the_implicit_coulomb_root_converges_where_plain_newton_cycles():
+    """A sticking wrist of the PA10's coulomb scenario (v_free, k = dt Fc / J, 1 / eps): Newton alone cycles
+    across the steep part of tanh (the solver before rtsafe's safeguard left |g| = 0.12 there); a sweep of
+    sticking and sliding joints converges to the tolerance, inside the bracket, equal to bisection."""
+    from pa10_dnbs.plant.pybullet_plant import _implicit_coulomb_speed
+
+    inv_eps = 100.0
+    rng = np.random.default_rng(5)
+    vf = np.concatenate([[-0.0473812413467337], rng.uniform(-0.2, 0.2, 300), rng.uniform(-5.0, 5.0, 100)])
+    k = np.concatenate([[0.06283910477885069], rng.uniform(0.0, 0.5, 300), rng.uniform(0.0, 2.0, 100)])
+    v = _implicit_coulomb_speed(vf, k, inv_eps)
+    g = v - vf + k * np.tanh(v * inv_eps)
+    assert np.all(np.abs(g) <= 1e-13 * (1.0 + np.abs(vf)))
+    assert np.all((v >= vf - k) & (v <= vf + k))
+    ref = np.array([_bisect(lambda x: x - a + b * np.tanh(x * inv_eps), a - b, a + b) for a, b in zip(vf, k)])
+    np.testing.assert_allclose(v, ref, rtol=0, atol=1e-12)
+
+
 def test_torque_saturation_clips_to_table2(make_plant):
     plant = make_plant()
     twin = make_plant()

@@ -111,21 +111,45 @@ def _as_joint_vector(name: str, value, n: int) -> np.ndarray:
     return arr
 
 
-def _implicit_coulomb_speed(v_free: np.ndarray, k: np.ndarray, inv_eps: float) -> np.ndarray:
-    """Per joint, the root v of v - v_free + k tanh(v inv_eps) = 0 (k >= 0): monotone in v, bracketed in
-    [v_free - k, v_free + k]; Newton steps, bisection where one would leave the bracket."""
+def _coulomb_root(v_free: float, k: float, inv_eps: float) -> float:
+    """The root v of g(v) = v - v_free + k tanh(v inv_eps) (k >= 0), to |g| <= 1e-13 (1 + |v_free|).
+
+    g is increasing, g(v_free - k) <= 0 <= g(v_free + k). Newton from the linearised root (sticking, |v_free| < k)
+    or the sliding one, safeguarded as Numerical Recipes' rtsafe: a bisection of the bracket whenever the Newton
+    step would leave it or would not halve the step before last. Plain Newton cycles across the steep part of
+    tanh (from one flat side to the other), which a bracket test alone does not catch."""
+    if k <= 0.0:
+        return v_free
     lo, hi = v_free - k, v_free + k
-    v = np.clip(v_free - k * np.tanh(v_free * inv_eps), lo, hi)
-    for _ in range(60):
-        th = np.tanh(v * inv_eps)
+    v = v_free / (1.0 + k * inv_eps) if abs(v_free) < k else v_free - math.copysign(k, v_free)
+    v = min(max(v, lo), hi)
+    tol = 1e-13 * (1.0 + abs(v_free))
+    dx_before = dx = hi - lo
+    for _ in range(200):
+        th = math.tanh(v * inv_eps)
         g = v - v_free + k * th
-        if np.max(np.abs(g)) <= 1e-13 * (1.0 + np.max(np.abs(v_free))):
-            break
-        hi = np.where(g > 0.0, v, hi)
-        lo = np.where(g < 0.0, v, lo)
-        step = v - g / (1.0 + k * inv_eps * (1.0 - th * th))
-        v = np.where((step > lo) & (step < hi), step, 0.5 * (lo + hi))
+        if abs(g) <= tol:
+            return v
+        if g > 0.0:
+            hi = v
+        else:
+            lo = v
+        slope = 1.0 + k * inv_eps * (1.0 - th * th)
+        step = v - g / slope
+        if lo < step < hi and abs(2.0 * g) <= abs(dx_before * slope):
+            dx_before, dx = dx, g / slope
+            v = step
+        else:
+            dx_before, dx = dx, 0.5 * (hi - lo)
+            v = lo + dx
+        if hi - lo <= 4e-16 * (1.0 + abs(v)):  # the bracket is a few ulps wide: v is the root in floating point
+            return v
     return v
+
+
+def _implicit_coulomb_speed(v_free: np.ndarray, k: np.ndarray, inv_eps: float) -> np.ndarray:
+    """Per joint, the root v of v - v_free + k tanh(v inv_eps) = 0 (k >= 0; ``_coulomb_root``), shape (n,)."""
+    return np.array([_coulomb_root(vf, kk, inv_eps) for vf, kk in zip(v_free.tolist(), k.tolist())])
 
 
 class PyBulletArmPlant:
