@@ -63,6 +63,20 @@ def test_objective_ranks_runs():
     assert obj.objective([row] + worse) == max(obj.run_cost(w) for w in worse)
 
 
+def test_held_out_verdict_warns_when_the_tuned_settings_lose_to_the_start():
+    from pa10_dnbs.tune.report import held_out_verdict
+
+    row = {"diverged": False, "worst_rms_error_rad": 1e-5, "worst_settling_time_s": 0.2, "duration_s": 20.0,
+           "worst_torque_variation": 2.0, "worst_saturated_fraction_after_s": 0.0, "seed": 100}
+    start = [dict(row, scenario="nominal"), dict(row, scenario="coulomb", worst_rms_error_rad=2e-5)]
+    better = [dict(row, scenario="nominal"), dict(row, scenario="coulomb")]
+    worse = [dict(row, scenario="nominal"), dict(row, scenario="coulomb", worst_rms_error_rad=4e-5, seed=101)]
+    assert held_out_verdict({"start": start, "tuned": better}) is None
+    assert held_out_verdict({"start": start, "tuned": start}) is None
+    says = held_out_verdict({"start": start, "tuned": worse})
+    assert "worse than the start" in says and "worst: coulomb seed 101" in says
+
+
 @pytest.mark.parametrize("args, says", [
     (("--controller", "lqr"), "--controller: unknown lqr"),
     (("--controller", "pid", "--params", "bandwidth,gain"), "--params: unknown gain"),

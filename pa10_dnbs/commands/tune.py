@@ -20,7 +20,7 @@ from ..config import ConfigError, default_config_path, load_config
 from ..study.executor import Executor
 from ..study.scenarios import SCENARIOS
 from .name_list import name_list
-from ..tune.report import held_out_table, tune_figures, tune_markdown, tuned_yaml
+from ..tune.report import held_out_table, held_out_verdict, tune_figures, tune_markdown, tuned_yaml
 from ..tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 from ..tune.space import select, start_values
 from ..tune.tuner import TrialProgress, TuneSpec, completed, held_out, open_storage, open_study, optimize
@@ -105,6 +105,9 @@ def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, co
           + (f" (start {start.value:.3f})" if start is not None else "") + f"; wrote {out}/tuned.yaml, {out}/tune.md")
     if held:
         print("\n".join(held_out_table(held, held_scen)[-1:]))
+        verdict = held_out_verdict(held)
+        if verdict:
+            print(f"warning: {verdict}", file=sys.stderr)
     return 0
 
 

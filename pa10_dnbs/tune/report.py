@@ -6,7 +6,7 @@ from pathlib import Path
 
 import yaml
 
-from .objective import FAIL_COST, objective
+from .objective import FAIL_COST, objective, run_cost
 from .space import Param, on_bound, settings_fragment
 
 
@@ -39,6 +39,19 @@ def held_out_table(rows: dict[str, list[dict]], scenarios: list[str]) -> list[st
         lines.append(f"| {name} | {_e(rs)} | {_e(rt)} | {ratio} | {objective(s):.3f} | {objective(t):.3f} | "
                      f"{sum(r['diverged'] for r in s)} / {sum(r['diverged'] for r in t)} |")
     return lines
+
+
+def held_out_verdict(rows: dict[str, list[dict]]) -> str | None:
+    """A warning when the tuned settings score worse than the start on the held-out runs (their worst run, the
+    objective), naming the run that is worst; None when they are at least as good. The search only saw its
+    training runs: a point that fits them can lose on a scenario none of them contains."""
+    start, tuned = objective(rows["start"]), objective(rows["tuned"])
+    if tuned <= start:
+        return None
+    worst = max(rows["tuned"], key=run_cost)
+    return (f"The tuned settings are worse than the start on the held-out runs (objective {tuned:.3f} against "
+            f"{start:.3f}; worst: {worst['scenario']} seed {worst['seed']}): keep the start, or tune again with "
+            "that scenario among the training runs (--scenarios).")
 
 
 def tune_markdown(spec, study, best, start_trial, command: str, where: str, wall_s: float,
@@ -79,6 +92,9 @@ def tune_markdown(spec, study, best, start_trial, command: str, where: str, wall
                   f"(never used by the search) and every scenario ({len(held_scenarios)}), {spec.duration_s:g} s; "
                   "worst over the seeds.", ""]
         lines += held_out_table(held, held_scenarios)
+        verdict = held_out_verdict(held)
+        lines += ["", f"**Worse than the start:** {verdict}" if verdict else
+                  "The tuned settings are at least as good as the start on the held-out runs (the objective)."]
         lines.append("")
     for f in figures:
         lines += [f"![{f}]({f})", ""]
