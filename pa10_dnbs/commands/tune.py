@@ -121,7 +121,8 @@ def _command(controller, trials, out, arm, config_path, storage, seed, scenarios
     if storage is not None:
         parts.append(f"--storage {shlex.quote(storage)}")
     for flag, v, default in (("--seed", seed, 0), ("--scenarios", scenarios, TRAINING_SCENARIOS),
-                             ("--seeds", seeds, TRAINING_SEEDS), ("--held-out-seeds", held_out_seeds, 3), ("--duration", duration_s, 20.0),
+                             ("--seeds", seeds, TRAINING_SEEDS), ("--held-out-seeds", held_out_seeds, 3),
+                             ("--duration", duration_s, 20.0),
                              ("--params", params, None)):
         if v != default:
             parts.append(f"{flag} {v:g}" if isinstance(v, float) else f"{flag} {v}")
