@@ -53,7 +53,12 @@ class Proc:
                 self._cond.wait(min(left, 0.2))
 
     def wait(self, timeout: float) -> int:
-        rc = self.proc.wait(timeout=timeout)
+        """The exit code; an AssertionError with the output so far when the process outlives ``timeout`` [s]."""
+        try:
+            rc = self.proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            raise AssertionError(f"still running after {timeout:g} s: {' '.join(self.proc.args)}; output so far:\n"
+                                 + self.output) from None
         self._t.join(timeout=5)
         return rc
 
