@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import shlex
 from pathlib import Path
 
@@ -12,7 +11,6 @@ from ..config import ConfigError, default_config_path, load_config
 from ..report.outputs import atomic_output_dir, check_output_dir
 from ..report.progress import ProgressBar
 from ..sim.closed_loop import CONTROLLERS
-from ..study.executor import Executor
 from ..study.runner import run_study
 from ..study.scenarios import SCENARIOS
 from .name_list import name_list
@@ -48,8 +46,7 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
         done.append(row)
         bar.update(len(done) * steps_per_run, row["worst_max_abs_error_run_rad"])
 
-    with Executor(min(workers or os.cpu_count() or 1, n) if scheduler is None else None, scheduler) as ex:
-        rows = run_study(cfg, scen, ctrl, seeds, duration_s, on_done=finished, executor=ex)
+    rows = run_study(cfg, scen, ctrl, seeds, duration_s, workers, on_done=finished, scheduler=scheduler)
     bar.close()
     command = (f"pa10-dnbs study --scenarios {','.join(scen)} --controllers {','.join(ctrl)} --seeds {seeds} "
                f"--duration {duration_s:g} --out {shlex.quote(str(out))}"

@@ -37,11 +37,11 @@ def run_one(cfg: dict, scenario: str, controller: str, seed: int, duration_s: fl
 
 
 def run_study(cfg: dict, scenarios, controllers, seeds: int, duration_s: float, workers: int | None = None,
-              on_done=None, scheduler: str | None = None, executor: Executor | None = None) -> list[dict]:
+              on_done=None, scheduler: str | None = None) -> list[dict]:
     """Rows of every combination, sorted by scenario, controller, seed; ``on_done(row)`` once per run.
 
     ``workers``: local processes (default: one per core; 1 runs in this process); ``scheduler``: the address of
-    a Dask scheduler to run on instead; ``executor``: an open :class:`Executor` to use (then neither applies).
+    a Dask scheduler to run on instead.
     Results are keyed by (scenario, controller, seed): a run a cluster redid is one row.
     """
     tasks = {(sc, ctrl, seed): (cfg, sc, ctrl, seed, duration_s)
@@ -51,10 +51,6 @@ def run_study(cfg: dict, scenarios, controllers, seeds: int, duration_s: float, 
         if on_done:
             on_done(row)
 
-    if executor is not None:
-        results = executor.run(run_one, tasks, done)
-    else:
-        with Executor(min(workers or os.cpu_count() or 1, len(tasks)) if scheduler is None else None,
-                      scheduler) as ex:
-            results = ex.run(run_one, tasks, done)
+    with Executor(min(workers or os.cpu_count() or 1, len(tasks)) if scheduler is None else None, scheduler) as ex:
+        results = ex.run(run_one, tasks, done)
     return [results[k] for k in tasks]

@@ -7,11 +7,7 @@ import json
 from pathlib import Path
 
 from .objective import objective
-
-
-def _worst(rows, key="worst_rms_error_rad"):
-    vals = [r[key] for r in rows]
-    return None if any(v is None for v in vals) else max(vals)
+from .report import worst_rms
 
 
 def _e(v) -> str:
@@ -38,8 +34,8 @@ def comparison_markdown(results: dict[str, dict], command: str) -> str:
         cells = []
         for c in ctrls:
             h = results[c]["held_out"]
-            cells += [_e(_worst([r for r in h["start"] if r["scenario"] == sc])),
-                      _e(_worst([r for r in h["tuned"] if r["scenario"] == sc]))]
+            cells += [_e(worst_rms([r for r in h["start"] if r["scenario"] == sc])),
+                      _e(worst_rms([r for r in h["tuned"] if r["scenario"] == sc]))]
         lines.append(f"| {sc} | " + " | ".join(cells) + " |")
     lines.append("| **objective (all held-out runs)** | " + " | ".join(
         f"{objective(results[c]['held_out']['start']):.3f} | {objective(results[c]['held_out']['tuned']):.3f}"
@@ -83,7 +79,7 @@ def arms_table(dirs: list[Path]) -> str:
              "|---|" + "---|" * len(arms)]
     for sc in scenarios:
         lines.append(f"| {sc} | " + " | ".join(" / ".join(
-            _short(_worst([r for r in t["held_out"]["tuned"] if r["scenario"] == sc])) for t in res.values())
+            _short(worst_rms([r for r in t["held_out"]["tuned"] if r["scenario"] == sc])) for t in res.values())
             for _, res in arms) + " |")
     lines.append("| objective, all held-out runs (shipped -> tuned) | " + " | ".join(" / ".join(
         f"{objective(t['held_out']['start']):.1f} -> {objective(t['held_out']['tuned']):.1f}" for t in res.values())

@@ -7,7 +7,7 @@ from pathlib import Path
 import yaml
 
 from .objective import FAIL_COST, objective, run_cost
-from .space import Param, on_bound, settings_fragment
+from .space import SPACES, Param, on_bound, settings_fragment
 
 
 def tuned_yaml(spec, base_cfg: dict, values: dict, arm_value: str, extends: Path, header: list[str]) -> str:
@@ -15,10 +15,13 @@ def tuned_yaml(spec, base_cfg: dict, values: dict, arm_value: str, extends: Path
     sets the per-joint values of the best point (``simulate --config`` takes it as it is)."""
     fragment = settings_fragment(spec.controller, base_cfg, dict(spec.fixed, **values))
     doc = {"extends": str(Path(extends).resolve()), "arm": arm_value, **fragment}
-    return "".join(f"# {line}\n" for line in header) + yaml.safe_dump(doc, sort_keys=False, width=110, default_flow_style=None)
+    return "".join(f"# {line}\n" for line in header) + yaml.safe_dump(doc, sort_keys=False, width=110,
+                                                                      default_flow_style=None)
 
 
-def _worst(vals):
+def worst_rms(rows: list[dict]) -> float | None:
+    """The largest worst-joint RMS [rad] of ``rows`` (runs); None when one of them has none (diverged)."""
+    vals = [r["worst_rms_error_rad"] for r in rows]
     return None if any(v is None for v in vals) else max(vals)
 
 
@@ -33,7 +36,7 @@ def held_out_table(rows: dict[str, list[dict]], scenarios: list[str]) -> list[st
     for sc in scenarios + ["all"]:
         s = [r for r in rows["start"] if sc in ("all", r["scenario"])]
         t = [r for r in rows["tuned"] if sc in ("all", r["scenario"])]
-        rs, rt = _worst([r["worst_rms_error_rad"] for r in s]), _worst([r["worst_rms_error_rad"] for r in t])
+        rs, rt = worst_rms(s), worst_rms(t)
         ratio = f"{rt / rs:.2f}" if rs and rt is not None else "-"
         name = "**all (objective)**" if sc == "all" else sc
         lines.append(f"| {name} | {_e(rs)} | {_e(rt)} | {ratio} | {objective(s):.3f} | {objective(t):.3f} | "
@@ -73,7 +76,6 @@ def tune_markdown(spec, study, best, start_trial, command: str, where: str, wall
              "## Search space and best point", "",
              "| parameter | range | scale | meaning | start | best |", "|---|---|---|---|---|---|"]
     searched = {p.name for p in spec.params}
-    from .space import SPACES
     for p in SPACES[spec.controller]:
         best_v = f"{values[p.name]:.4g}" if p.name in searched else "(not searched)"
         lines.append(f"| {p.name} | [{p.low:g}, {p.high:g}] | {'log' if p.log else 'linear'} | {p.what} | "

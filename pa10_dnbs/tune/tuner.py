@@ -89,8 +89,8 @@ def open_study(storage, spec: TuneSpec, batch: int):
         study.set_user_attr(STUDY_ATTR, spec.identity())
     elif stored != spec.identity():
         diff = sorted(k for k in spec.identity() if (stored or {}).get(k) != spec.identity()[k])
-        raise ConfigError(f"--out/--storage: study {spec.study_name!r} there was run with other options ({', '.join(diff)}"
-                          f"): give another --out or --storage, or the same options")
+        raise ConfigError(f"--out/--storage: study {spec.study_name!r} there was run with other options "
+                          f"({', '.join(diff)}): give another --out or --storage, or the same options")
     for t in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
         study.tell(t.number, state=TrialState.FAIL)   # left by a tune that was killed: one coordinator per study
     if not any(t.user_attrs.get("start") for t in study.get_trials(
@@ -173,7 +173,7 @@ class TrialProgress:
 
     def text(self, done: int, runs_done: int, runs: int, now: float | None = None) -> str:
         trials = completed(self.study)
-        best = min((t for t in trials), key=lambda t: t.value, default=None)
+        best = min(trials, key=lambda t: t.value, default=None)
         el = int((self.clock() if now is None else now) - self.t0)
         parts = [f"{self.label}: {done}/{self.total} trials",
                  f"best {best.value:.3f} (trial {best.number})" if best is not None else "best -",
