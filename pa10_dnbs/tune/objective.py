@@ -20,7 +20,7 @@ import numpy as np
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..sim.closed_loop import simulate
 from ..study.runner import DIVERGED_RAD
-from ..study.scenarios import scenario_config
+from ..study.scenarios import SCENARIOS, scenario_config
 
 RMS_FLOOR_RAD = 1e-9
 SETTLE_WEIGHT = 0.2      # decades per second of settling: 0.5 s costs 0.1 decade
@@ -28,10 +28,12 @@ TV_FREE = 20.0           # torque variation (limits traversed) free of charge; a
 TV_WEIGHT = 0.5          # decades per decade of torque variation above TV_FREE
 SAT_WEIGHT = 5.0         # decades per unit of saturated fraction after start-up: 2 % costs 0.1 decade
 FAIL_COST = 10.0         # a diverged run
-# The training runs the objective is taken over by default (--scenarios, --seeds): nominal, saturation and windup
-# (5 kg), the loop's phase margin (a torque 1 ms late) and measurement noise (a small error scale learns from it)
-TRAINING_SCENARIOS = "nominal,payload_5kg,delay_1_tick,encoder_noise"
-TRAINING_SEEDS = 2
+# The training runs the objective is taken over by default (--scenarios, --seeds): every study scenario once,
+# seed 0 (8 runs per trial). The held-out runs (seeds 100...) are then new seeds of known scenarios: trained on
+# four scenarios x 2 seeds, the tuned CTC of the iiwa moved its worst run to Coulomb friction, which no
+# training run held, and lost to its start on the held-out runs (docs/tuning.md, "Equal budget").
+TRAINING_SCENARIOS = ",".join(SCENARIOS)
+TRAINING_SEEDS = 1
 
 
 def run_cost(row: dict) -> float:
