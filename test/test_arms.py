@@ -92,7 +92,7 @@ def test_the_pa10_settings_come_from_its_arm_file_and_nothing_is_derived(capsys)
     cfg = load_config(default_config_path())
     assert capsys.readouterr().err == ""
     assert cfg["dnbs"]["remedies"]["robust_term"]["torque_gain_nms_per_rad"] == (400, 400, 120, 120, 3, 3, 3)
-    assert cfg["pid"]["kp"] == (18600, 18600, 7430, 7430, 557, 557, 557)
+    assert cfg["pid"]["kp"] == (25500, 25500, 10200, 10200, 766, 766, 766)
 
 
 def test_a_config_value_beats_the_arm_file_and_the_rule(tmp_path):

@@ -13,9 +13,9 @@ def _ref(x, v):
 def test_gains_are_the_shipped_ones(cfg):
     """The PA10's PID as tuned with the equal budget (urdf/pa10/arm.yaml, docs/tuning.md)."""
     p = build_controllers(cfg, "pid").params
-    assert p.kp.tolist() == [18600, 18600, 7430, 7430, 557, 557, 557]
-    assert p.kd.tolist() == [331, 331, 99.4, 99.4, 4.97, 4.97, 4.97]
-    assert p.ki.tolist() == [116000, 116000, 46200, 46200, 3470, 3470, 3470]
+    assert p.kp.tolist() == [25500, 25500, 10200, 10200, 766, 766, 766]
+    assert p.kd.tolist() == [327, 327, 98.1, 98.1, 4.91, 4.91, 4.91]
+    assert p.ki.tolist() == [283000, 283000, 113000, 113000, 8490, 8490, 8490]
 
 
 def test_the_rule_of_thumb_gains_stay_available(cfg):
@@ -29,9 +29,9 @@ def test_the_rule_of_thumb_gains_stay_available(cfg):
 
 
 def test_law_and_saturation(cfg):
-    pid = build_controllers(cfg, "pid", [4])  # kp 557, ki 3470, kd 4.97, limit 14.5
+    pid = build_controllers(cfg, "pid", [4])  # kp 766, ki 8490, kd 4.91, limit 14.5
     u = pid.step(np.array([0.0]), np.array([0.2]), _ref(0.01, 0.5))
-    assert u[0] == pytest.approx(557 * 0.01 + 3470 * 0.01 * 1e-3 + 4.97 * (0.5 - 0.2))
+    assert u[0] == pytest.approx(766 * 0.01 + 8490 * 0.01 * 1e-3 + 4.91 * (0.5 - 0.2))
     assert pid.step(np.zeros(1), np.zeros(1), _ref(10.0, 0.0))[0] == 14.5
 
 
