@@ -52,6 +52,9 @@ class Arm:
         rule of docs/arms.md derives and under the user's config.
     chain : UrdfChain
         The URDF's joints (parsed once).
+    plant_urdf : Path or None
+        What PyBullet loads: a cleaned copy of ``urdf`` (:mod:`pa10_dnbs.arm.plant_urdf`: massless links made
+        explicit, inertias PyBullet would zero repaired, meshes dropped), or None for ``urdf`` itself.
     """
 
     name: str
@@ -71,6 +74,7 @@ class Arm:
     sources: dict = field(default_factory=dict)
     settings: dict = field(default_factory=dict)
     chain: UrdfChain | None = None
+    plant_urdf: Path | None = None
 
     @property
     def n_joints(self) -> int:
@@ -83,6 +87,11 @@ class Arm:
             return self.joint_names.index(joint)
         except ValueError:
             raise KeyError(f"{joint!r} is not a joint of arm {self.name} ({', '.join(self.joint_names)})") from None
+
+    @property
+    def physics_urdf(self) -> Path:
+        """The URDF the plant loads: the cleaned copy where one was needed, else ``urdf``."""
+        return self.plant_urdf if self.plant_urdf is not None else self.urdf
 
     def urdf_text(self) -> str:
         """The URDF as text (what /robot_description carries)."""

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 import math
+import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -20,11 +21,12 @@ from ..kinematics.urdf_chain import UrdfChain
 from ..paths import share_path
 from .arm import Arm
 from .chain_select import actuated_joints
+from .plant_urdf import plant_urdf
 
 DEFAULT_ARM = "pa10"
 FACTS = ("torque_limit_nm", "rotor_inertia_kgm2", "viscous_nms_per_rad", "coulomb_nm")
-KEYS = {"name", "description", "urdf", "tip_link", "joints", "exclude_joints", "flange_link", "sources",
-        "settings", *FACTS}
+KEYS = {"name", "description", "urdf", "tip_link", "joints", "exclude_joints", "keep_gripper", "flange_link",
+        "sources", "settings", *FACTS}
 
 
 class ArmError(ConfigError):
@@ -92,8 +94,12 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
         raise ArmError(f"{urdf}: the URDF does not parse: {exc}") from None
     names = _names(path, raw, "joints")
     exclude = _names(path, raw, "exclude_joints") or ()
+    keep_gripper = raw.get("keep_gripper", False)
+    if not isinstance(keep_gripper, bool):
+        raise ArmError(f"{path}: keep_gripper: expected true or false")
     try:
-        actuated, locked = actuated_joints(chain, exclude=exclude, tip_link=raw.get("tip_link"), names=names)
+        actuated, locked = actuated_joints(chain, exclude=exclude, tip_link=raw.get("tip_link"), names=names,
+                                           keep_gripper=keep_gripper)
     except ValueError as exc:
         raise ArmError(f"{path}: {exc}") from None
     joint_names = tuple(j.name for j in actuated)
@@ -132,13 +138,20 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
     settings = raw.get("settings") or {}
     if not isinstance(settings, dict):
         raise ArmError(f"{path}: settings: expected a mapping (config keys of this arm)")
+    try:
+        cleaned, notes = plant_urdf(urdf)
+    except ValueError as exc:
+        raise ArmError(f"{urdf}: {exc}") from None
+    for note in notes:
+        print(note, file=sys.stderr)
     locked_at = tuple(float(min(max(0.0, j.lower), j.upper)) for j in locked)
     name = raw["name"] if not bare else path.stem
     return Arm(name=name, description=str(raw.get("description", name)), file=path, urdf=urdf,
                joint_names=joint_names, locked_joints=tuple(j.name for j in locked), locked_position_rad=locked_at,
                lower_rad=lower, upper_rad=upper, torque_limit_nm=torque, flange_link=flange,
                rotor_inertia_kgm2=facts["rotor_inertia_kgm2"], viscous_nms_per_rad=facts["viscous_nms_per_rad"],
-               coulomb_nm=facts["coulomb_nm"], sources=dict(sources), settings=settings, chain=chain)
+               coulomb_nm=facts["coulomb_nm"], sources=dict(sources), settings=settings, chain=chain,
+               plant_urdf=cleaned)
 
 
 def _names(path: Path, raw: dict, key: str) -> tuple[str, ...] | None:

@@ -4,15 +4,20 @@ Numpy-free and pybullet-free: reads the parsed :class:`UrdfChain` only.
 """
 from __future__ import annotations
 
+import re
+
 from ..kinematics.urdf_chain import UrdfChain, UrdfJoint
 
 ACTUATABLE = ("revolute", "continuous")
+GRIPPER_NAME = re.compile(r"grip|finger|jaw|claw", re.IGNORECASE)
 
 
 def chain_joints(chain: UrdfChain, tip_link: str | None = None) -> list[UrdfJoint]:
-    """Joints from the root link to ``tip_link``, in order; with no tip, the chain is followed from the root
-    while each link has exactly one child joint (it ends at a leaf or where it branches, e.g. at a gripper's
-    fingers). Raises ValueError if ``tip_link`` is not a link of the URDF."""
+    """Joints from the root link to ``tip_link``, in order. With no tip, the chain of movable joints from the
+    root: at each link, child branches that hold only fixed joints (base, tool, flange and sensor frames) are
+    skipped and the branch with the most movable joints on its longest path is followed; where several tie
+    (a gripper's fingers) the chain ends before them. Raises ValueError if ``tip_link`` is not a link of the
+    URDF."""
     by_parent: dict[str, list[UrdfJoint]] = {}
     by_child: dict[str, UrdfJoint] = {}
     for j in chain.joints:
@@ -26,20 +31,55 @@ def chain_joints(chain: UrdfChain, tip_link: str | None = None) -> list[UrdfJoin
             path.append(by_child[link])
             link = by_child[link].parent
         return path[::-1]
+    depth = _movable_depth(chain, by_parent)
     path, link = [], chain.root_link
-    while len(by_parent.get(link, ())) == 1:
-        j = by_parent[link][0]
-        path.append(j)
-        link = j.child
-    return path
+    while True:
+        scores = [(j, (j.kind != "fixed") + depth[j.child]) for j in by_parent.get(link, ())]
+        best = max((s for _, s in scores), default=0)
+        top = [j for j, s in scores if s == best]
+        if best == 0 or len(top) > 1:
+            return path
+        path.append(top[0])
+        link = top[0].child
+
+
+def _movable_depth(chain: UrdfChain, by_parent: dict[str, list[UrdfJoint]]) -> dict[str, int]:
+    """Link -> the most movable joints on any path from it down to a leaf (0 for a leaf or fixed frames)."""
+    depth: dict[str, int] = {}
+    for j in reversed(_top_down(chain, by_parent)):
+        depth[j.child] = max(((k.kind != "fixed") + depth[k.child] for k in by_parent.get(j.child, ())), default=0)
+    return depth
+
+
+def _top_down(chain: UrdfChain, by_parent: dict[str, list[UrdfJoint]]) -> list[UrdfJoint]:
+    """Every joint reachable from the root, each after its parent's joint (breadth first)."""
+    order, frontier = [], [chain.root_link]
+    while frontier:
+        joints = [j for link in frontier for j in by_parent.get(link, ())]
+        order += joints
+        frontier = [j.child for j in joints]
+    return order
+
+
+def gripper_joints(on_chain: list[UrdfJoint]) -> list[UrdfJoint]:
+    """The gripper at the end of the chain: the trailing movable joints that are prismatic or whose name says
+    gripper, finger, jaw or claw (docs/arms.md)."""
+    tail = []
+    for j in reversed(on_chain):
+        if j.kind != "prismatic" and not GRIPPER_NAME.search(j.name):
+            break
+        tail.append(j)
+    return tail[::-1]
 
 
 def actuated_joints(chain: UrdfChain, exclude: tuple[str, ...] = (), tip_link: str | None = None,
-                    names: tuple[str, ...] | None = None) -> tuple[list[UrdfJoint], list[UrdfJoint]]:
+                    names: tuple[str, ...] | None = None,
+                    keep_gripper: bool = False) -> tuple[list[UrdfJoint], list[UrdfJoint]]:
     """(actuated joints in chain order, every other movable joint of the URDF: the locked ones).
 
     ``names``: the actuated joints given explicitly (each must be a movable joint on the chain, in chain
-    order); else every movable chain joint not in ``exclude``. Raises ValueError naming the joint for an
+    order); else every movable chain joint not in ``exclude`` and, unless ``keep_gripper``, not in the
+    gripper at the chain's end (:func:`gripper_joints`). Raises ValueError naming the joint for an
     unknown name, or an actuated joint that is not revolute or continuous (prismatic, floating, planar).
     """
     on_chain = [j for j in chain_joints(chain, tip_link) if j.kind != "fixed"]
@@ -57,7 +97,8 @@ def actuated_joints(chain: UrdfChain, exclude: tuple[str, ...] = (), tip_link: s
             raise ValueError(f"joints: list them in chain order ({', '.join(n for n in order if n in names)})")
         actuated = [j for j in on_chain if j.name in names]
     else:
-        actuated = [j for j in on_chain if j.name not in exclude]
+        gripper = set() if keep_gripper else {j.name for j in gripper_joints(on_chain)}
+        actuated = [j for j in on_chain if j.name not in exclude and j.name not in gripper]
     for j in actuated:
         if j.kind not in ACTUATABLE:
             raise ValueError(f"joint {j.name!r} is {j.kind}: only revolute or continuous joints can be actuated "

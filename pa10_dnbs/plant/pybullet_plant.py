@@ -191,7 +191,7 @@ class PyBulletArmPlant:
     def __init__(self, client, arm: Arm, params: PlantParams) -> None:
         if not isinstance(params, PlantParams):
             raise TypeError(f"params: expected PlantParams, got {type(params).__name__}")
-        urdf_path = os.fspath(arm.urdf)
+        urdf_path = os.fspath(arm.physics_urdf)  # the URDF itself, or its cleaned copy (pa10_dnbs.arm.plant_urdf)
         if not os.path.isfile(urdf_path):
             raise FileNotFoundError(f"URDF file not found: {urdf_path}")
         n = self._n = arm.n_joints
