@@ -45,6 +45,12 @@ class GraphOptions:
     namespace: str = DEFAULT_NS      # the arm's ROS namespace: every node runs in it (topics relative to it)
     clock_hz: float = DEFAULT_CLOCK_HZ  # /clock rate [Hz of simulated time]; every node but the plant uses it
     joint_names: tuple[str, ...] = ()   # the arm's actuated joints, chain order: one controller process each
+    trajectory_file: Path | None = None  # --trajectory: the reference node follows it from step 0 (not eq. 27)
+    robot: str = ""                     # '' = the project's plant; 'external': the joint bus to a running robot
+    robot_command: str = "joint_state"  # external: joint_state or forward:<controller> (docs/your_robot.md)
+    robot_state_topic: str = ""         # external: the robot's JointState topic; '' = the command form's default
+    robot_command_topic: str = ""       # external, joint_state form: the command topic; '' = /robot_joint_command
+    robot_timeout_s: float = 1.0        # external: wall time without a new robot state that makes it stale
 
 
 @dataclass

@@ -22,11 +22,14 @@ NODE_GROUPS = ("observer", "reference", "controllers", "plant")
 
 
 LIVE_VIEW = "live_view"  # the live observer: display only, its failure does not fail the run
+JOINT_BUS = "joint_bus"  # --robot external: in the plant's place, in front of the robot (docs/your_robot.md)
 
 
 def node_group(name: str) -> str:
     if name.startswith("joint_controller_"):
         return "controllers"
+    if name == JOINT_BUS:
+        return "plant"
     return name if name in ("reference", "plant") else "observer"
 
 
@@ -47,6 +50,18 @@ def graph_topics(joint_names, ns: str = DEFAULT_NS) -> list[str]:
         specs += [f"{arm.state(j)}:sensor_msgs/msg/JointState", f"{arm.effort(j)}:sensor_msgs/msg/JointState",
                   f"{arm.reference(j)}:trajectory_msgs/msg/JointTrajectory"]
     return specs
+
+
+def robot_topics(opt: GraphOptions) -> list[str]:
+    """With --robot external: the robot's state and command topics as recorder specs; else none."""
+    if opt.robot != "external":
+        return []
+    from ..wire.robot_interface import default_state_topic, parse_robot_command
+
+    command = parse_robot_command(opt.robot_command, opt.robot_command_topic or None)
+    kind = "std_msgs/msg/Float64MultiArray" if command.form == "forward" else "sensor_msgs/msg/JointState"
+    return [f"{opt.robot_state_topic or default_state_topic(command)}:sensor_msgs/msg/JointState",
+            f"{command.topic}:{kind}"]
 
 
 REALTIME_REFERENCE_BATCH = 20  # reference points per message in realtime (smaller bursts of work in the controllers)
@@ -101,7 +116,8 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
                   f"namespace={opt.namespace}"]
         cmds = [("recorder", py + ["pa10_dnbs.ros.recorder_node"] + ros("recorder", {
             "config_file": cfg, "bag": str(opt.record_bag), "force": str(opt.force_bag).lower(),
-            "topics": _yaml_list(graph_topics(opt.joint_names, opt.namespace)), "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns,
+            "topics": _yaml_list(graph_topics(opt.joint_names, opt.namespace) + robot_topics(opt)),
+            "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns,
             "compression": opt.bag_compression}))]
     if opt.live_port is not None:  # display only: started after the observer, never waited for by the plant
         cmds.append((LIVE_VIEW, py + ["pa10_dnbs.ros.live_observer_node"] + ros(LIVE_VIEW, {
@@ -112,15 +128,21 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
     cmds.append(("reference", py + ["pa10_dnbs.ros.reference_node"] + ros(
         "reference", {"config_file": cfg, "duration_s": opt.duration_s, "batch_steps": batch,
                       "lookahead_steps": reference_lookahead(opt),
-                      "reference_subscribers": 2})))  # the joint's controller and the observer
+                      "reference_subscribers": 2,  # the joint's controller and the observer
+                      **({"trajectory_file": str(opt.trajectory_file)} if opt.trajectory_file else {})})))
     if not opt.joint_names:
         raise ValueError("GraphOptions.joint_names: the arm's joints are needed to start one controller each")
     for j in opt.joint_names:
         cmds.append((f"joint_controller_{j}", controller_command(opt, stats_file.parent, j)))
     # the start handshake: the plant publishes step 0 once every node but the live view (display only) said ready
     ready = [name for name, _ in cmds if name != LIVE_VIEW]
-    cmds.append(("plant", py + ["pa10_dnbs.ros.plant_node"] + _ros_args("plant", {
-        "ready_nodes": _yaml_list(ready), "settle_s": 0.0,
+    plant, module, extra = "plant", "pa10_dnbs.ros.plant_node", {}
+    if opt.robot == "external":  # the joint bus in the plant's place: same handshake, topics and stats file
+        plant, module = JOINT_BUS, "pa10_dnbs.ros.joint_bus_node"
+        extra = {"robot_command": opt.robot_command, "robot_state_topic": opt.robot_state_topic or "''",
+                 "robot_command_topic": opt.robot_command_topic or "''", "robot_timeout_s": opt.robot_timeout_s}
+    cmds.append((plant, py + [module] + _ros_args(plant, {
+        **extra, "ready_nodes": _yaml_list(ready), "settle_s": 0.0,
         "config_file": cfg, "mode": opt.mode, "duration_s": opt.duration_s, "reliability": loop_reliability(opt),
         "effort_timeout_s": opt.effort_timeout_s, "on_missing_effort": opt.on_missing_effort,
         "real_time_factor": opt.real_time_factor, "deadline_fraction": opt.deadline_fraction,

@@ -46,11 +46,13 @@ from ..loop.plant_timing import PlantTiming
 from ..loop.scheduling import apply_fifo, check_priority
 from ..plant.from_config import open_client, plant_from_config
 from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, check_clock_hz
+from ..wire.robot_interface import default_state_topic, parse_robot_command
 from .diagnostics import DiagnosticsReporter
 from .params import CONFIG_FILE, RT_PRIORITY, Param, ParameterError, check_choice, declare, load_node_config
 from .plant_lockstep import run_lockstep
 from .plant_realtime import run_realtime
 from .plant_stats import diagnostics_report, plant_stats
+from .plant_standard_wire import StandardPlantWire
 from .plant_wire import PlantWire
 from .ready import ReadyListener
 from .runtime import announce_ready
@@ -83,6 +85,14 @@ PARAMS = {
     "handshake_steps": Param(3, "realtime: first steps that wait for every effort before the tick schedule starts [steps]", 1),
     "ready_nodes": Param([""], "nodes that must say ready on the ready topic before step 0 (the start handshake); "
                          "none: no handshake, settle_s instead"),
+    "interface": Param("", "'' = the per-joint topics of the graph; standard = one JointState state and commands, "
+                       "as a robot behind the joint bus (docs/your_robot.md; lockstep waits for every command)"),
+    "robot_state_topic": Param("", "standard interface: the state topic; '' = /robot_joint_states (/joint_states "
+                               "with a forward command)"),
+    "robot_command": Param("joint_state", "standard interface: joint_state (stamped JointState efforts) or "
+                           "forward:<controller> (Float64MultiArray on /<controller>/commands)"),
+    "robot_command_topic": Param("", "standard interface, joint_state form: the command topic; '' = "
+                                 "/robot_joint_command"),
 }
 
 
@@ -90,9 +100,12 @@ FINAL_FLUSH_S = 10.0  # wall seconds the finished plant waits for every reliable
 
 
 class PlantNode(Node):
+    NODE_NAME = "plant"
+    PARAMS = PARAMS
+
     def __init__(self):
-        super().__init__("plant")
-        p = declare(self, PARAMS)
+        super().__init__(self.NODE_NAME)
+        p = declare(self, self.PARAMS)
         check_choice("mode", p["mode"], ("lockstep", "realtime"))
         check_choice("on_missing_effort", p["on_missing_effort"], ("hold", "zero"))
         realtime = p["mode"] == "realtime"
@@ -120,18 +133,14 @@ class PlantNode(Node):
         duration = p["duration_s"] if p["duration_s"] > 0 else cfg["simulation"]["duration_s"]
         self.n_steps = int(round(duration / self.dt))
         self.clock_ = StepClock(self.dt)
-        self._client = open_client()
-        self.plant = plant_from_config(cfg, self._client)
+        self.plant = self._open_plant(cfg)
         n = self.plant.n_joints
         self.get_logger().info(arm_line(self.plant.arm))
         self.gate = EffortGate(n, p["on_missing_effort"])
         self.gate.bin_steps = max(1, int(round(60.0 / self.dt)))  # realtime on-time fraction per simulated minute
         # realtime: latest value only (depth 1), a late reader skips stale states. lockstep: a deep
         # history, so a recorder that falls behind for a while still gets every message.
-        self.wire = PlantWire(self, cfg, self.clock_, p["reliability"],
-                              state_depth=1 if realtime else record_qos().depth,
-                              effort_depth=1 if realtime else p["effort_queue_depth"], clock_hz=p["clock_hz"],
-                              last_step=self.n_steps)
+        self.wire = self._make_wire(cfg, realtime)
         self.timing = PlantTiming(self.n_steps, n)
         self.cpu = CpuMeter()
         self.resends = [0] * n
@@ -149,6 +158,32 @@ class PlantNode(Node):
         if p["rt_priority"]:
             print(self.rt_message, flush=True)
         announce_ready("plant")
+
+    def _open_plant(self, cfg: dict):
+        """The physics: the PyBullet plant of the config's arm, at its initial state."""
+        self._client = open_client()
+        return plant_from_config(cfg, self._client)
+
+    def _close_plant(self) -> None:
+        self._client.disconnect()
+
+    def _make_wire(self, cfg: dict, realtime: bool):
+        """The per-joint topics (``plant_wire.py``), or with ``interface:=standard`` the standard robot interface
+        (``plant_standard_wire.py``): there the plant waits for every command (no effort timeout)."""
+        p = self.p
+        check_choice("interface", p["interface"], ("", "standard"))
+        if p["interface"] == "standard":
+            try:
+                command = parse_robot_command(p["robot_command"], p["robot_command_topic"] or None)
+            except ValueError as exc:
+                raise ParameterError(f"parameter robot_command: {exc}") from None
+            p["effort_timeout_s"] = math.inf  # a robot in lockstep waits for its command (docs/your_robot.md)
+            return StandardPlantWire(self, cfg, self.clock_, p["robot_state_topic"] or default_state_topic(command),
+                                     command, p["clock_hz"], self.n_steps, lambda: self.gate.step)
+        return PlantWire(self, cfg, self.clock_, p["reliability"],
+                         state_depth=1 if realtime else record_qos().depth,
+                         effort_depth=1 if realtime else p["effort_queue_depth"], clock_hz=p["clock_hz"],
+                         last_step=self.n_steps)
 
     # ---------------------------------------------------------------- stepping
     def publish_state(self, k: int, joints=None, observed: bool = True) -> None:
@@ -236,8 +271,8 @@ class PlantNode(Node):
         path = self.p["stats_file"]
         if path:
             write_json(path, self.stats())
-        print(self.cpu.line("plant"), flush=True)
-        self._client.disconnect()
+        print(self.cpu.line(self.NODE_NAME), flush=True)
+        self._close_plant()
 
 
 def _check_positive(p: dict, *keys: str) -> None:

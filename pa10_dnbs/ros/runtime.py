@@ -39,6 +39,7 @@ from rclpy.experimental import EventsExecutor
 from rclpy.task import Future
 
 from . import exit_deadline
+from ..wire.robot_interface import RobotFault
 from .params import ParameterError
 
 SLICE_S = 0.2  # longest a spin call runs before the stop future is checked again
@@ -49,6 +50,14 @@ SLICE_S = 0.2  # longest a spin call runs before the stop future is checked agai
 _KEPT_EXCEPTIONS: list[BaseException] = []
 TEARDOWN_LIMIT_S = 5.0  # a close() (or the freeing of a half-built node) that takes longer is cut short
 TEARDOWN_DUMP_LEAD_S = 0.5  # the stacks of a hung close() are written this long before it is cut short
+
+
+_STOP: list[Future] = []  # the stop future of run_node, for code that runs before a node has its loop
+
+
+def stop_requested() -> bool:
+    """True once SIGINT or SIGTERM asked the process to stop (usable while a node is being built)."""
+    return bool(_STOP) and _STOP[-1].done()
 
 
 def spin_until(executor, future: Future, stop: Future) -> None:
@@ -71,6 +80,7 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
     """
     rclpy.init(args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     stop = Future()
+    _STOP.append(stop)
 
     def on_signal(signum, _frame):
         if not stop.done():
@@ -99,6 +109,10 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
         _KEPT_EXCEPTIONS.append(exc)
         print(f"FAILED {exc}", file=sys.stderr, flush=True)
         code = 2
+    except RobotFault as exc:  # the joint bus's robot broke the interface: one line (docs/your_robot.md)
+        _KEPT_EXCEPTIONS.append(exc)
+        print(f"ROBOT FAULT: {exc}", file=sys.stderr, flush=True)
+        code = 1
     except Exception as exc:  # a node that fails says why and exits non-zero
         _KEPT_EXCEPTIONS.append(exc)
         print(f"FAILED {type(exc).__name__}: {exc}", file=sys.stderr, flush=True)

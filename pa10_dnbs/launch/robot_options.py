@@ -1,0 +1,63 @@
+"""``pa10-dnbs launch --robot external``: the flags of the joint bus, checked before anything starts.
+
+No ROS here. The joint bus (``ros/joint_bus_node.py``) takes the plant's place in the graph; the robot is
+already running, so the graph joins its ROS domain (``--domain-id``, default this shell's ROS_DOMAIN_ID, 0 when
+unset) instead of leasing a private one. docs/your_robot.md has the interface.
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+
+from ..config import ConfigError
+from ..wire.robot_interface import parse_robot_command
+from ..wire.topics import check_namespace
+
+ROBOTS = ("external",)
+
+
+@dataclass(frozen=True)
+class RobotOptions:
+    robot: str = "external"
+    command: str = "joint_state"        # --robot-command: joint_state or forward:<controller>
+    state_topic: str | None = None      # --robot-state-topic; None: the command form's default
+    command_topic: str | None = None    # --robot-command-topic (joint_state form); None: /robot_joint_command
+    timeout_s: float = 1.0              # --robot-timeout [s of wall time]
+
+
+def _check_topic(flag: str, topic: str) -> None:
+    """A topic flag: an absolute ROS name (/a/b) or a relative one (resolved in the arm's namespace)."""
+    try:
+        check_namespace(topic if topic.startswith("/") else "/" + topic)
+    except ValueError:
+        raise ConfigError(f"{flag}: expected a ROS topic name like /robot_joint_states, got {topic!r}") from None
+
+
+def check_robot_options(opt: RobotOptions, mode: str) -> dict:
+    """The GraphOptions fields of ``opt``; ConfigError (one line, naming the flag) when one is wrong."""
+    if opt.robot not in ROBOTS:
+        raise ConfigError(f"--robot: expected {' or '.join(ROBOTS)}, got {opt.robot!r}")
+    if mode != "lockstep":
+        raise ConfigError("--robot external: only --mode lockstep (a robot that waits for commands) is supported "
+                          "so far")
+    try:
+        parse_robot_command(opt.command, opt.command_topic)
+    except ValueError as exc:
+        raise ConfigError(f"--robot-command: {exc}") from None
+    for flag, topic in (("--robot-state-topic", opt.state_topic), ("--robot-command-topic", opt.command_topic)):
+        if topic is not None:
+            _check_topic(flag, topic)
+    if not (math.isfinite(opt.timeout_s) and opt.timeout_s > 0):
+        raise ConfigError(f"--robot-timeout: must be a positive number of seconds, got {opt.timeout_s}")
+    return {"robot": opt.robot, "robot_command": opt.command, "robot_state_topic": opt.state_topic or "",
+            "robot_command_topic": opt.command_topic or "", "robot_timeout_s": opt.timeout_s}
+
+
+def robot_domain() -> int:
+    """The robot's ROS domain: this shell's ROS_DOMAIN_ID (0 when unset); ConfigError when it is not a number."""
+    raw = os.environ.get("ROS_DOMAIN_ID", "").strip() or "0"
+    try:
+        return int(raw)
+    except ValueError:
+        raise ConfigError(f"ROS_DOMAIN_ID: expected a number for the robot's domain, got {raw!r}") from None

@@ -1,0 +1,88 @@
+"""joint_bus_node: the graph's plant side, in front of a robot this project does not simulate.
+
+Between a robot speaking the standard interface (docs/your_robot.md: ``sensor_msgs/JointState`` states,
+JointState or Float64MultiArray effort commands) and the per-joint topics of docs/graph.md, so that each
+joint controller still sees only its own joint. It is the plant node with the physics replaced by the robot
+(``robot_link.RemoteRobot``): the same per-joint state and effort topics, joint_states, robot_description,
+effort gate, start handshake, lockstep loop and stats file, so the launcher, the recorder, the analysis and
+the live view work unchanged. Lockstep only: step k of the graph is the robot's k-th state; the efforts
+answering it go out as one command, and the bus waits for the robot's next state.
+
+Time: a robot that publishes /clock gives the graph its time (the bus publishes none; its first state must
+be at time 0). Otherwise the bus publishes the graph's /clock (``clock_hz``), the robot's states counted from
+the first.
+
+Faults (one line ``ROBOT FAULT: ...``, the safe command of zero effort on every joint, exit 1): a joint of
+the arm missing from the robot's state, a non-finite position or velocity, no state within
+``robot_timeout_s`` (``start_timeout_s`` for the first).
+"""
+from __future__ import annotations
+
+from typing import NoReturn
+
+from ..arm import arm_of
+from ..wire.robot_interface import default_state_topic, parse_robot_command
+from ..wire.steps import NS_PER_S
+from .params import Param, ParameterError
+from .plant_node import PARAMS as PLANT_PARAMS
+from .plant_node import PlantNode
+from .robot_link import RemoteRobot
+from .runtime import stop_requested
+from .wire import CLOCK
+
+PARAMS = {k: v for k, v in PLANT_PARAMS.items() if k != "interface"} | {
+    "robot_timeout_s": Param(1.0, "wall time without a new state from the robot that makes it stale [s]", 0.0),
+}
+
+
+class JointBusNode(PlantNode):
+    NODE_NAME = "joint_bus"
+    PARAMS = PARAMS
+
+    def _open_plant(self, cfg: dict) -> RemoteRobot:
+        """The robot, once its first state is in (it sets whether the bus publishes /clock)."""
+        p = self.p
+        if p["mode"] != "lockstep":
+            raise ParameterError("parameter mode: the joint bus runs lockstep only (a robot that waits for "
+                                 "commands); paced robots are not supported yet")
+        p["interface"] = ""
+        if not p["robot_timeout_s"] > 0:
+            raise ParameterError(f"parameter robot_timeout_s must be > 0 s, got {p['robot_timeout_s']}")
+        try:
+            command = parse_robot_command(p["robot_command"], p["robot_command_topic"] or None)
+        except ValueError as exc:
+            raise ParameterError(f"parameter robot_command: {exc}") from None
+        robot = RemoteRobot(self, arm_of(cfg), self.clock_.dt_ns, p["robot_state_topic"] or default_state_topic(command),
+                            command, p["robot_timeout_s"], stopped=stop_requested)
+        self.robot = robot
+        print(f"JOINT BUS {robot.state_topic} -> {command.topic} ({command.form}), joints "
+              f"{', '.join(robot.joint_names)}", flush=True)
+        if not robot.wait_first(p["start_timeout_s"]):
+            raise KeyboardInterrupt  # stopped before the robot's first state: a clean stop (run_node: exit 0)
+        robot_clock = self.count_publishers(CLOCK) > 0
+        sec, nanosec = robot.stamp
+        if robot_clock:
+            if sec or nanosec:
+                robot.fault(f"the robot publishes /clock but its first state is at {sec + nanosec / NS_PER_S:.6f} s: "
+                            "a robot with its own /clock must start at time 0 (restart its simulation)")
+            p["clock_hz"] = 0.0  # the graph runs on the robot's /clock
+        print(f"JOINT BUS first state at robot time {sec + nanosec / NS_PER_S:.6f} s; graph time from "
+              + ("the robot's /clock" if robot_clock else f"the bus's /clock ({p['clock_hz']:g} Hz)"), flush=True)
+        return robot
+
+    def _close_plant(self) -> None:
+        print("STATS joint_bus: " + ", ".join(f"{k} {v}" for k, v in self.robot.counters().items()), flush=True)
+        self.robot.close()
+
+    def stats(self) -> dict:
+        return super().stats() | {"robot": self.robot.counters()}
+
+
+def main(args=None) -> NoReturn:
+    from .runtime import exit_process, run_node
+
+    exit_process(run_node(JointBusNode, args))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,169 @@
+"""The robot behind the joint bus, seen by the plant's loops as a plant: ``state`` and ``step(tau)``.
+
+Subscribes the robot's ``sensor_msgs/JointState`` (best effort, so a reliable or a best-effort publisher
+matches; polled, raw CDR) and publishes its commands (reliable, volatile, depth 10): stamped JointState
+efforts, or a Float64MultiArray in the arm's joint order (``RobotCommand``). ``step(tau)`` sends the command
+answering the current state and blocks until the robot's next state (a newer stamp): lockstep, the robot
+waits for it. While waiting, a re-sent copy of the current state means the command was lost: it goes out
+again (JointState form only: a Float64MultiArray has no stamp, so a copy could be applied twice).
+Faults (``RobotFault``, one line): a joint missing, a non-finite position or velocity, no new state within
+``timeout_s`` of wall time; before raising, one command of zero effort on every joint goes out
+(``send_safe``). Joints are matched by name (``wire/robot_interface.py``).
+"""
+from __future__ import annotations
+
+import struct
+import time
+
+import numpy as np
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
+
+from ..wire import joint_state_cdr
+from ..wire.robot_interface import JointMatcher, RobotCommand, RobotFault, RobotTimeline
+from ..wire.steps import NS_PER_S
+from .plant_standard_wire import robot_qos
+from .polled import PolledSubscription, SubscriptionWaitSet
+
+SLICE_S = 0.05  # longest single wait for a robot state: the stop request is checked at least this often
+STATE_DEPTH = 100  # robot states kept between two takes
+
+
+class RemoteRobot:
+    def __init__(self, node, arm, dt_ns: int, state_topic: str, command: RobotCommand, timeout_s: float,
+                 stopped=lambda: False):
+        """``arm``: the arm whose joints are matched by name; ``dt_ns``: the graph's step [ns];
+        ``timeout_s``: wall time without a new state that makes the robot stale; ``stopped()``: True once the
+        node is asked to stop (a wait then returns)."""
+        self.arm = arm
+        self.joint_names = arm.joint_names
+        self.n_joints = len(self.joint_names)
+        self.limit_hits = np.zeros(self.n_joints, dtype=np.int64)  # the robot's own: not seen from here
+        self.command = command
+        self.state_topic = state_topic
+        self.timeout_s = timeout_s
+        self._stopped = stopped
+        self._matcher = JointMatcher(self.joint_names)
+        self.timeline = RobotTimeline(dt_ns)
+        self._sub = PolledSubscription(node, JointState, state_topic, robot_qos("best_effort", STATE_DEPTH))
+        self._wait_set = SubscriptionWaitSet(node, [self._sub])
+        forward = command.form == "forward"
+        self._pub = node.create_publisher(Float64MultiArray if forward else JointState, command.topic, robot_qos())
+        self._forward_msg = Float64MultiArray() if forward else None
+        self.q = self.qd = None           # the current state, arm order [rad], [rad/s]
+        self.stamp = (0, 0)               # its robot stamp (sec, nanosec)
+        self._next = None                 # a newer state that came before its command went out
+        self.duplicates = 0               # copies of the current state (the robot re-sent it)
+        self.old_states = 0               # states older than the current one (ignored)
+        self.commands_sent = 0
+        self.commands_resent = 0
+        self.unanswered_states = 0        # new states that came before the command of the previous one
+
+    @property
+    def state(self) -> tuple[np.ndarray, np.ndarray]:
+        return np.array(self.q), np.array(self.qd)
+
+    @property
+    def publisher_count(self) -> int:
+        return self._sub.get_publisher_count()
+
+    # ------------------------------------------------------------- states
+    def _decode(self, data: bytes):
+        """(kind, stamp, q, qd) of a robot state; RobotFault (after the safe command) when it is bad."""
+        try:
+            sec, nanosec, names, position, velocity, _ = joint_state_cdr.decode(data)
+        except (ValueError, IndexError, struct.error, UnicodeDecodeError) as exc:
+            self.fault(f"undecodable JointState on {self.state_topic}: {exc}")
+        kind = self.timeline.classify(sec * NS_PER_S + nanosec)
+        if kind != "new":
+            return kind, None, None, None
+        try:
+            q, qd = self._matcher.read(names, position, velocity)
+        except RobotFault as exc:
+            self.stamp = (sec, nanosec)  # the safe command answers the bad state
+            self.fault(f"{exc} (state at robot time {sec + nanosec / NS_PER_S:.6f} s on {self.state_topic})")
+        return kind, (sec, nanosec), q, qd
+
+    def _take_new(self) -> bool:
+        """Take every queued state; the first new one becomes ``_next``. Re-sent copies of the current state are
+        counted; True when one came (the caller may re-send its command)."""
+        copy = False
+        while (got := self._sub.take()) is not None:
+            kind, stamp, q, qd = self._decode(got[0])
+            if kind == "duplicate":
+                self.duplicates += 1
+                copy = True
+            elif kind == "old":
+                self.old_states += 1
+            elif self._next is None:
+                self._next = (stamp, q, qd)
+            else:  # two new states before we answered one: the robot does not wait for commands
+                self.unanswered_states += 1
+                self._next = (stamp, q, qd)
+        return copy
+
+    def wait_first(self, timeout_s: float) -> bool:
+        """Block until the robot's first state (it becomes the current state, step 0); False when stopped.
+        RobotFault when none came within ``timeout_s``."""
+        end = time.monotonic() + timeout_s
+        while self._next is None:
+            if self._stopped():
+                return False
+            left = end - time.monotonic()
+            if left <= 0:
+                raise RobotFault(f"no state from the robot on {self.state_topic} within {timeout_s:g} s "
+                                 f"({self.publisher_count} publishers matched): is it running, on this "
+                                 "ROS_DOMAIN_ID, publishing sensor_msgs/JointState?")
+            if self._wait_set.wait(min(SLICE_S, left)):
+                self._take_new()
+        self._advance()
+        return True
+
+    def _advance(self) -> None:
+        self.stamp, self.q, self.qd = self._next
+        self._next = None
+
+    # ------------------------------------------------------------- commands
+    def _send(self, tau) -> None:
+        if self._forward_msg is not None:
+            self._forward_msg.data = [float(u) for u in tau]
+            self._pub.publish(self._forward_msg)
+        else:
+            self._pub.publish(joint_state_cdr.encode(*self.stamp, self.joint_names, (), (), [float(u) for u in tau]))
+
+    def send_safe(self) -> None:
+        """The safe command: zero effort on every joint, answering the current state."""
+        self._send([0.0] * self.n_joints)
+
+    def fault(self, message: str):
+        """Send the safe command, then raise RobotFault(``message``)."""
+        self.send_safe()
+        raise RobotFault(message)
+
+    def step(self, tau) -> None:
+        """Send ``tau`` [N m] (arm order) answering the current state, then wait for the robot's next state."""
+        self._take_new()  # copies queued before this command are not a lost command
+        self._send(tau)
+        self.commands_sent += 1
+        end = time.monotonic() + self.timeout_s
+        while self._next is None:
+            if self._stopped():
+                return
+            left = end - time.monotonic()
+            if left <= 0:
+                sec, nanosec = self.stamp
+                self.fault(f"no state from the robot on {self.state_topic} for {self.timeout_s:g} s after the "
+                           f"command answering robot time {sec + nanosec / NS_PER_S:.6f} s (stale robot)")
+            if self._wait_set.wait(min(SLICE_S, left)) and self._take_new() and self._next is None \
+                    and self._forward_msg is None:
+                self._send(tau)  # the robot sent its state again: our command was lost
+                self.commands_resent += 1
+        self._advance()
+
+    def counters(self) -> dict:
+        return {"robot_duplicate_states": self.duplicates, "robot_old_states": self.old_states,
+                "robot_commands": self.commands_sent, "robot_commands_resent": self.commands_resent,
+                "robot_unanswered_states": self.unanswered_states, "robot_off_grid_states": self.timeline.off_grid}
+
+    def close(self) -> None:
+        self._wait_set.destroy()
