@@ -25,7 +25,7 @@ def _simulate(args: argparse.Namespace) -> int:
 
     return run_simulate(config_path=args.config, controller=args.controller, duration_s=args.duration,
                         out=args.out, force=args.force, progress=not args.no_progress and sys.stderr.isatty(),
-                        init_from=args.init_from, figures=not args.no_figures, arm=args.arm)
+                        init_from=args.init_from, figures=not args.no_figures, arm=args.arm, engine=args.engine)
 
 
 def _launch(args: argparse.Namespace) -> int:
@@ -41,6 +41,13 @@ def _launch(args: argparse.Namespace) -> int:
                       live_hz=args.live_hz, real_time_factor=args.rtf, deadline_fraction=args.deadline_fraction,
                       rt_priority=args.rt_priority, sched_batch=args.sched_batch, namespace=args.namespace,
                       clock_hz=args.clock_hz, figures=not args.no_figures, arm=args.arm)
+
+
+def _robot(args: argparse.Namespace) -> int:
+    from .commands.robot import run_robot
+
+    return run_robot(args.config, args.arm, args.mode, args.duration, args.state_topic, args.command_topic,
+                     args.clock_hz)
 
 
 def _study(args: argparse.Namespace) -> int:
@@ -133,6 +140,9 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--init-from", type=Path, default=None, metavar="CHECKPOINTS",
                      help="warm start: the DNBS weights and covariances of an earlier run (its output directory or "
                           "its checkpoints/ directory); reported as such")
+    sim.add_argument("--engine", choices=("pybullet", "mujoco"), default="pybullet",
+                     help="the plant's physics engine: pybullet (the project's plant) or mujoco (an independent "
+                          "second engine on the same arm; docs/engines.md)")
     sim.set_defaults(func=_simulate)
 
     la = sub.add_parser("launch", help="the ROS 2 node graph (plant, one controller per joint, reference)")
@@ -187,6 +197,24 @@ def build_parser() -> argparse.ArgumentParser:
     _add_live_args(la)
     add_fault_arguments(la)
     la.set_defaults(func=_launch)
+
+    rb = sub.add_parser("robot", help="the arm in MuJoCo as an external robot: a ROS 2 node on the standard robot "
+                                      "interface (docs/engines.md, docs/your_robot.md)")
+    rb.add_argument("--engine", choices=("mujoco",), default="mujoco", help="the simulator (mujoco)")
+    rb.add_argument("--config", type=Path, default=None, help=f"YAML config (default: {default_config_path()})")
+    add_arm_argument(rb)
+    rb.add_argument("--mode", choices=("lockstep", "paced"), default="lockstep",
+                    help="lockstep: publish state k, wait for the command stamped k, step once; paced: step every "
+                         "simulation.dt_s of wall time with the latest command")
+    rb.add_argument("--duration", type=float, default=None, metavar="SECONDS",
+                    help="robot time to run [s] (default: until Ctrl-C)")
+    rb.add_argument("--state-topic", default="/robot_joint_states", metavar="TOPIC",
+                    help="the robot's JointState topic (default /robot_joint_states)")
+    rb.add_argument("--command-topic", default="/robot_joint_command", metavar="TOPIC",
+                    help="its JointState effort command topic (default /robot_joint_command)")
+    rb.add_argument("--clock-hz", type=float, default=100.0, metavar="HZ",
+                    help="/clock rate in Hz of robot time (default 100; 0: none)")
+    rb.set_defaults(func=_robot)
 
     st = sub.add_parser("study", help="robustness study: scenarios x controllers x seeds, in parallel (in-process)")
     st.add_argument("--scenarios", default="nominal", metavar="LIST",

@@ -17,10 +17,11 @@ CHOICES = {"dnbs": ("dnbs",), "pid": ("pid",), "ctc": ("ctc",), "both": ("dnbs",
 
 def run_simulate(config_path: Path | None, controller: str, duration_s: float | None, out: Path,
                  force: bool, progress: bool, init_from: Path | None = None, figures: bool = True,
-                 arm: str | None = None) -> int:
+                 arm: str | None = None, engine: str = "pybullet") -> int:
     """Run one or more controllers; write everything into ``out`` atomically. Returns the exit code.
 
     ``arm``: a preset's name or an arm file or URDF (``--arm``); None: the config's ``arm``.
+    ``engine``: the plant's physics engine (``--engine``), pybullet or mujoco (docs/engines.md).
     ``init_from``: a warm start of the DNBS controllers from the checkpoints of an earlier run (a run's
     output directory, or a directory of ``<joint>.npz``); the report says so.
     """
@@ -50,13 +51,18 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
     settings = metrics_settings(cfg, duration_s)
     runs, metrics = [], []
     for kind in kinds:
-        run = simulate(cfg, kind, duration_s, progress=progress, init_states=init_states if kind == "dnbs" else None)
+        run = simulate(cfg, kind, duration_s, progress=progress, init_states=init_states if kind == "dnbs" else None,
+                       engine=engine)
         runs.append(run)
         extra = {"warm_start_from": str(Path(init_from).resolve())} if init_states is not None and kind == "dnbs" else {}
+        if engine != "pybullet":
+            extra["engine"] = engine
         metrics.append(metrics_dict(run, settings, source="in-process", config_file=str(config_path.resolve()),
                                     seed=cfg["simulation"]["seed"], limit_hits=run.extra["limit_hits"], **extra))
     notes = [f"config: `{config_path}`", f"arm: {the_arm.name} ({the_arm.description}), `{the_arm.file}`",
              "source: in-process simulation (no ROS)"]
+    if engine != "pybullet":
+        notes.append(f"engine: {engine} (docs/engines.md); the gains are the same as on the PyBullet plant")
     if init_states is not None:
         notes.append(f"DNBS warm-started from the checkpoints in `{init_from}` (not a cold start)")
     if "ctc" in kinds:

@@ -21,8 +21,16 @@ def plant_from_config(cfg: dict, client, arm: Arm | None = None) -> PyBulletArmP
     """The arm's plant with ``cfg['plant']`` parameters, reset to the configured initial state (``arm``: the
     config's own when None)."""
     arm = arm_of(cfg) if arm is None else arm
+    plant = PyBulletArmPlant(client, arm, plant_params(cfg))
+    q0, qd0 = initial_state(cfg)
+    plant.reset(q0, qd0)
+    return plant
+
+
+def plant_params(cfg: dict) -> PlantParams:
+    """The plant's parameters of a validated config (``plant`` section, ``simulation.dt_s``): either engine's."""
     p = cfg["plant"]
-    params = PlantParams(
+    return PlantParams(
         dt_s=cfg["simulation"]["dt_s"],
         gravity_mps2=p["gravity_mps2"],
         rotor_inertia_kgm2=p["rotor_inertia_kgm2"],
@@ -33,10 +41,6 @@ def plant_from_config(cfg: dict, client, arm: Arm | None = None) -> PyBulletArmP
         payload_kg=p["payload_kg"],
         link_mass_scale=p["link_mass_scale"],
     )
-    plant = PyBulletArmPlant(client, arm, params)
-    q0, qd0 = initial_state(cfg)
-    plant.reset(q0, qd0)
-    return plant
 
 
 def initial_state(cfg: dict) -> tuple[np.ndarray, np.ndarray]:

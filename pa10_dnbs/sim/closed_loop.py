@@ -13,7 +13,7 @@ import numpy as np
 
 from ..controller_factory import build_guarded_controllers, build_reference, build_state_guard
 from ..core.reference import ReferenceSample
-from ..plant.from_config import open_client, plant_from_config
+from ..plant.engines import DEFAULT_ENGINE, open_plant
 from ..loop.guarded_controllers import GuardedControllers
 from ..report.progress import ProgressBar
 from ..run_data import RunData
@@ -38,20 +38,21 @@ class Disturbances:
 
 
 def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = False,
-             init_states: list[dict] | None = None, disturbances: Disturbances | None = None) -> RunData:
+             init_states: list[dict] | None = None, disturbances: Disturbances | None = None,
+             engine: str = DEFAULT_ENGINE) -> RunData:
     """Closed loop for ``duration_s`` seconds of simulated time.
 
     At each step k every joint controller gets only its own x1(k), x2(k) and
     reference sample, returns its torque, and the plant advances to k+1.
     ``init_states``: one controller ``state_dict`` per joint to start from (a warm start).
     ``disturbances``: sensor noise and actuator delay (the study's scenarios); None: none.
+    ``engine``: the plant's physics engine, pybullet (default) or mujoco (``plant/engines.py``).
     """
     dt = cfg["simulation"]["dt_s"]
     n = int(round(duration_s / dt))
     reference = build_reference(cfg)
-    client = open_client()
+    plant, close_plant = open_plant(cfg, engine)
     try:
-        plant = plant_from_config(cfg, client)
         guarded = _controllers(cfg, controller, plant)
         if init_states is not None:
             for row, state in enumerate(init_states):
@@ -95,7 +96,7 @@ def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = Fal
                        wall_time_s=wall, extra={"limit_hits": plant.limit_hits.tolist(),
                                                 "controllers": guarded.controllers})
     finally:
-        client.disconnect()
+        close_plant()
 
 
 def _controllers(cfg: dict, controller: str, plant) -> GuardedControllers:

@@ -1,0 +1,91 @@
+"""`pa10-dnbs robot --engine mujoco`: the MuJoCo arm as an external robot on the standard interface, a ROS 2 node.
+
+Lockstep against a minimal client (test/robot_interface_probe.py): every state equals the in-process MuJoCo
+plant's under the same efforts, bit for bit; /clock goes out from time 0; SIGINT ends it cleanly.
+"""
+import json
+import sys
+
+import numpy as np
+import pytest
+
+from graph_harness import REPO, Proc, assert_no_leftovers
+from pa10_dnbs.arm import load_arm
+from pa10_dnbs.loop.robot_stepper import RobotStepper
+from pa10_dnbs.config import default_config_path, load_config
+from pa10_dnbs.plant.engines import open_plant
+from robot_interface_probe import effort
+
+STEPS = 300
+
+
+class _Recorder:
+    """A plant stand-in that records what it is stepped with (the stepper's unit test)."""
+
+    n_joints = 2
+
+    def __init__(self):
+        self.steps = []
+
+    def step(self, u):
+        self.steps.append(list(u))
+
+
+def test_lockstep_steps_once_on_the_command_for_the_current_state():
+    s = RobotStepper(_Recorder(), "lockstep", 1e-3)
+    assert not s.offer(1_000_000, [1.0, 2.0]) and s.stale == 1  # a command for state 1 while state 0 is out
+    assert s.offer(0, [1.0, 2.0]) and s.step == 1 and s.stamp_ns == 1_000_000
+    assert not s.offer(0, [3.0, 4.0]) and s.stale == 2  # state 0's answer again: ignored
+    assert not s.offer(1_000_000, [float("nan"), 0.0]) and s.refused == 1 and s.step == 1
+    assert s.plant.steps == [[1.0, 2.0]]
+    with pytest.raises(RuntimeError):
+        s.tick()
+
+
+def test_paced_steps_every_tick_with_the_latest_command():
+    s = RobotStepper(_Recorder(), "paced", 1e-3)
+    s.tick()
+    s.offer(123, [1.0, 1.0])
+    s.offer(456, [2.0, 2.0])
+    s.tick()
+    s.tick()
+    assert s.plant.steps == [[0.0, 0.0], [2.0, 2.0], [2.0, 2.0]] and s.step == 3 and s.commands == 2
+    with pytest.raises(ValueError, match="mode"):
+        RobotStepper(_Recorder(), "realtime", 1e-3)
+
+
+@pytest.mark.graph
+def test_the_robot_node_answers_lockstep_bit_for_bit_and_stops_on_sigint(domain, tmp_path):
+    from pa10_dnbs.launch.shm_cleanup import shm_files
+
+    shm_before = shm_files()
+    arm = load_arm("iiwa")
+    robot = Proc([sys.executable, "-m", "pa10_dnbs.cli", "robot", "--engine", "mujoco", "--arm", "iiwa",
+                  "--clock-hz", "1000"], domain)
+    probe = None
+    try:
+        robot.wait_for(r"READY mujoco_robot", 60)
+        out = tmp_path / "probe.json"
+        probe = Proc([sys.executable, str(REPO / "test" / "robot_interface_probe.py"), ",".join(arm.joint_names),
+                      STEPS, out], domain)
+        assert probe.wait(120) == 0, probe.output
+        robot.interrupt()
+        assert robot.wait(30) == 0, robot.output
+    finally:
+        robot.kill()
+        if probe is not None:
+            probe.kill()
+    assert "Traceback" not in robot.output
+    summary = robot.wait_for(r"mujoco_robot: (\d+) steps", 1)
+    assert int(summary.group(1)) == STEPS, robot.output
+    got = json.loads(out.read_text())
+    plant, _ = open_plant(load_config(default_config_path(), arm="iiwa"), "mujoco")  # the configured start
+    for k in range(STEPS + 1):
+        state = got["states"][str(k)]
+        q, qd = plant.state
+        assert state["position"] == q.tolist() and state["velocity"] == qd.tolist(), k
+        assert state["effort"] == plant.applied_torque_nm.tolist(), k
+        if k < STEPS:
+            plant.step(np.array([effort(k, j) for j in range(arm.n_joints)]))
+    assert got["clock_ns"][0] == 0 and got["clock_ns"] == sorted(got["clock_ns"])
+    assert_no_leftovers([robot.proc.pid, probe.proc.pid], shm_before)
