@@ -84,7 +84,9 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
               f"settled (|e| < {m['settle_band_rad']:g} rad) "
               + (f"after {settle:.3f} s" if settle is not None else "never")
               + f"; max |e| {m['worst_max_abs_error_run_rad']:.4f} rad; torque variation "
-              f"{m['worst_torque_variation']:.2f}; {m['real_time_factor']:.1f}x real time")
+              f"{m['worst_torque_variation']:.2f}; {m['real_time_factor']:.1f}x real time"
+              + (f"; DIVERGED: non-finite from step {m['diverged']['step']} ({m['diverged']['time_s']:.3f} s), "
+                 f"joint {m['diverged']['joint']}" if m.get("diverged") else ""))
     print(f"wrote {out}/report.md")
     ok = all(m["all_finite"] and m["torques_within_limits"] for m in metrics)
     return 0 if ok else 1

@@ -80,3 +80,25 @@ def run_metrics(error_rad: np.ndarray, torque_nm: np.ndarray, torque_limit_nm, d
         out.append({"settling_time_s": settle, "max_abs_error_run_rad": float(np.nanmax(np.abs(error_rad[:, j]))),
                     "torque_variation": float(tv[j]), "saturated_fraction_after_s": float(sat_after[j])})
     return out
+
+
+def divergence(position_rad: np.ndarray, velocity_rad_s: np.ndarray | None, torque_nm: np.ndarray) -> dict | None:
+    """Where a run went non-finite, or None when every sample is finite.
+
+    Inputs of shape (n_steps, n_joints) (``velocity_rad_s`` may be None). Returns ``{"step": k, "joint": j}``:
+    k the first step with a non-finite position, velocity or torque, j the joint running away: the one with the
+    largest |velocity| (|position| without velocities) at the last step before k, or the first non-finite
+    joint at step 0.
+    """
+    series = [np.asarray(a, dtype=float) for a in (position_rad, velocity_rad_s, torque_nm) if a is not None]
+    bad = np.zeros(series[0].shape, dtype=bool)
+    for a in series:
+        bad |= ~np.isfinite(a)
+    rows = np.flatnonzero(bad.any(axis=1))
+    if rows.size == 0:
+        return None
+    k = int(rows[0])
+    if k == 0:
+        return {"step": 0, "joint": int(np.flatnonzero(bad[0])[0])}
+    before = np.abs(np.asarray(velocity_rad_s if velocity_rad_s is not None else position_rad, dtype=float)[k - 1])
+    return {"step": k, "joint": int(np.argmax(before))}

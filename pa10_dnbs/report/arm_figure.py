@@ -26,13 +26,18 @@ def _chain_points(chain: UrdfChain, q: np.ndarray, names) -> np.ndarray:
 def _flange_path(chain: UrdfChain, q_rad: np.ndarray, names, idx: np.ndarray) -> np.ndarray:
     """Position [m] of the last link at the steps ``idx``, shape (len(idx), 3)."""
     tip = chain.joints[-1].child
-    return np.array([chain.link_poses(dict(zip(names, q_rad[k].tolist())))[tip][0] for k in idx])
+    return np.array([chain.link_poses(dict(zip(names, q_rad[k].tolist())))[tip][0] for k in idx]).reshape(-1, 3)
 
 
 def arm_figure(run: RunData, chain: UrdfChain, path: Path) -> None:
-    """Stick figures of the arm at N_POSES instants (coloured by time), the flange path and its reference."""
+    """Stick figures of the arm at N_POSES instants (coloured by time), the flange path and its reference.
+    Samples with a non-finite angle are left out (a diverged run: the figure ends where the run went)."""
     tip = chain.joints[-1].child
-    idx = np.unique(np.linspace(0, run.n_steps - 1, PATH_POINTS).astype(int))
+    finite = np.flatnonzero(np.all(np.isfinite(run.position_rad), axis=1) & np.all(np.isfinite(run.reference_rad),
+                                                                                    axis=1))
+    last = int(finite[-1]) if finite.size else 0
+    idx = np.unique(np.linspace(0, last, PATH_POINTS).astype(int))
+    idx = idx[np.isin(idx, finite)]
     flange = _flange_path(chain, run.position_rad, run.joint_names, idx)
     desired = _flange_path(chain, run.reference_rad, run.joint_names, idx)
     fig = plt.figure(figsize=(8, 8), constrained_layout=True)
@@ -42,13 +47,18 @@ def arm_figure(run: RunData, chain: UrdfChain, path: Path) -> None:
     ax.plot(flange[:, 0], flange[:, 1], flange[:, 2], color="0.35", lw=1.0, label=f"{tip} path")
     cmap = plt.get_cmap("viridis")
     points = [flange, desired]
-    for i, k in enumerate(np.linspace(0, run.n_steps - 1, N_POSES).astype(int)):
+    for i, k in enumerate(np.linspace(0, last, N_POSES).astype(int)):
+        if not np.all(np.isfinite(run.position_rad[k])):
+            continue
         pts = _chain_points(chain, run.position_rad[k], run.joint_names)
         points.append(pts)
         ax.plot(pts[:, 0], pts[:, 1], pts[:, 2], "-o", color=cmap(i / max(1, N_POSES - 1)), lw=3, ms=4,
                 label=f"t = {k * run.dt_s:.1f} s")
     # a cube around everything drawn, so lengths are not distorted
     allp = np.vstack(points)
+    allp = allp[np.all(np.isfinite(allp), axis=1)]
+    if allp.size == 0:
+        allp = np.zeros((1, 3))
     centre = 0.5 * (allp.min(axis=0) + allp.max(axis=0))
     half = 0.5 * float(np.max(allp.max(axis=0) - allp.min(axis=0))) + 0.05
     ax.set_xlim(centre[0] - half, centre[0] + half)

@@ -44,6 +44,15 @@ def startup_table(metrics: list[dict]) -> str:
     return "\n".join(rows)
 
 
+def _diverged(m: dict) -> str:
+    """'; DIVERGED at step k ...' for a run that went non-finite (its figures end there), else ''."""
+    d = m.get("diverged")
+    if not d:
+        return ""
+    return (f"; **diverged**: non-finite from step {d['step']} (t = {d['time_s']:.3f} s), joint {d['joint']} running "
+            f"away (the figures end there; its undefined figures are inf)")
+
+
 def report_markdown(metrics: list[dict], figures: list[tuple[str, str]], title: str, notes: list[str]) -> str:
     """Whole report; ``figures`` is a list of (caption, relative path)."""
     m0 = metrics[0]
@@ -56,7 +65,7 @@ def report_markdown(metrics: list[dict], figures: list[tuple[str, str]], title: 
         lines.append(f"- **{m['controller'].upper()}**: worst-joint RMS {m['worst_rms_error_rad']:.3e} rad; settled "
                      f"(|e| < {m['settle_band_rad']:g} rad) after {_settle(m['worst_settling_time_s'])} s; "
                      f"all values finite: {m['all_finite']}; torques within the limits: {m['torques_within_limits']}; "
-                     f"wall time {m['wall_time_s']:.2f} s" + (f" ({rtf:.1f}x real time)" if rtf else ""))
+                     f"wall time {m['wall_time_s']:.2f} s" + (f" ({rtf:.1f}x real time)" if rtf else "") + _diverged(m))
     lines += [""] + [f"- {n}" for n in notes]
     lines += ["", f"## Tracking over [{m0['window_s'][0]:g}, {m0['window_s'][1]:g}) s", "", metrics_table(metrics)]
     lines += ["", "## Start-up: the whole run", "", startup_table(metrics), "", "## Figures", ""]

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.metrics import joint_metrics, run_metrics
+from ..core.metrics import divergence, joint_metrics, run_metrics
 from ..run_data import RunData
 
 # metrics settings of configs written before the ``metrics`` section existed (bags of earlier runs)
@@ -30,7 +30,11 @@ def _worst_settling(values: list) -> float | None:
 
 def metrics_dict(run: RunData, settings: dict, **extra) -> dict:
     """Per-joint figures over the window and over the whole run, plus run-level facts; ``extra`` keys are
-    added as they are. ``settings``: :func:`metrics_settings`."""
+    added as they are. ``settings``: :func:`metrics_settings`.
+
+    ``diverged`` is None, or where the run went non-finite: ``{"step", "time_s", "joint"}``
+    (:func:`pa10_dnbs.core.metrics.divergence`); a figure of a diverged joint that the non-finite samples
+    leave undefined (NaN) is Infinity, and so is that joint's max |e| over the run."""
     duration = run.n_steps * run.dt_s
     window_s = settings["window_s"]
     joints = joint_metrics(run.error_rad, run.torque_nm, run.torque_limit_nm, run.dt_s, window_s)
@@ -39,6 +43,11 @@ def metrics_dict(run: RunData, settings: dict, **extra) -> dict:
     for name, j, w in zip(run.joint_names, joints, whole):
         j["name"] = name
         j.update(w)
+    diverged = divergence(run.position_rad, run.velocity_rad_s, run.torque_nm)
+    if diverged is not None:
+        _unbounded(joints, run)
+        diverged = {"step": diverged["step"], "time_s": diverged["step"] * run.dt_s,
+                    "joint": run.joint_names[diverged["joint"]]}
     finite = bool(np.all(np.isfinite(run.position_rad)) and np.all(np.isfinite(run.torque_nm)))
     within = bool(np.all(np.abs(run.torque_nm) <= run.torque_limit_nm * (1 + 1e-12)))
     out = {
@@ -56,6 +65,7 @@ def metrics_dict(run: RunData, settings: dict, **extra) -> dict:
         "worst_torque_variation": max(j["torque_variation"] for j in joints),
         "worst_saturated_fraction_after_s": max(j["saturated_fraction_after_s"] for j in joints),
         "all_finite": finite,
+        "diverged": diverged,
         "torques_within_limits": within,
         "joints": [{k: j[k] for k in ("name", "rms_error_rad", "max_abs_error_rad", "max_abs_torque_nm",
                                       "torque_limit_nm", "saturated_fraction", "settling_time_s",
@@ -64,3 +74,14 @@ def metrics_dict(run: RunData, settings: dict, **extra) -> dict:
     }
     out.update(extra)
     return out
+
+
+def _unbounded(joints: list[dict], run: RunData) -> None:
+    """In place: NaN figures become Infinity; a joint with non-finite samples gets max |e| over the run inf."""
+    gone = ~np.all(np.isfinite(run.error_rad), axis=0) | ~np.all(np.isfinite(run.torque_nm), axis=0)
+    for j, fig in enumerate(joints):
+        for key, value in fig.items():
+            if isinstance(value, float) and np.isnan(value):
+                fig[key] = float("inf")
+        if gone[j]:
+            fig["max_abs_error_run_rad"] = float("inf")

@@ -17,6 +17,7 @@ from ..kinematics.urdf_chain import UrdfChain
 from ..run_data import RunData
 from .arm_figure import arm_figure
 from .figures import error_figure, startup_figure, torque_figure, tracking_figure
+from .finite_view import until_step
 from .markdown import report_markdown
 
 
@@ -70,6 +71,7 @@ def write_run(directory: Path, run: RunData, metrics: dict, chain: UrdfChain | N
     run.save_npz(directory / "timeseries.npz")
     if not figures:
         return []
+    run = _shown(run, metrics)
     tag = run.controller.upper()
     settling = [j["settling_time_s"] for j in metrics["joints"]]
     figs = [(f"{tag}: reference (solid) and actual (dashed) angles, Figs. 4-10", "tracking.png"),
@@ -85,6 +87,12 @@ def write_run(directory: Path, run: RunData, metrics: dict, chain: UrdfChain | N
         figs.insert(0, (f"{tag}: the arm at six instants and its flange path (forward kinematics of the URDF)",
                         "arm.png"))
     return figs
+
+
+def _shown(run: RunData, metrics: dict) -> RunData:
+    """What a run's figures draw: the run itself, or a diverged run up to the step where it went non-finite."""
+    diverged = metrics.get("diverged")
+    return until_step(run, diverged["step"]) if diverged else run
 
 
 def write_report(directory: Path, runs: list[RunData], metrics: list[dict], title: str,
@@ -103,7 +111,8 @@ def write_report(directory: Path, runs: list[RunData], metrics: list[dict], titl
             figs += [(c, f"{sub}/{f}") for c, f in write_run(directory / sub, run, m, chain, figures)]
     if len(runs) > 1:
         if figures:
-            error_figure(runs, directory / "errors_compare.png", tuple(metrics[0]["window_s"]),
+            error_figure([_shown(r, m) for r, m in zip(runs, metrics)], directory / "errors_compare.png",
+                         tuple(metrics[0]["window_s"]),
                          [[j["settling_time_s"] for j in m["joints"]] for m in metrics])
             figs.insert(0, ("Tracking errors of " + " and ".join(r.controller.upper() for r in runs)
                             + " overlaid (metrics window shaded)", "errors_compare.png"))
