@@ -52,18 +52,6 @@ def graph_topics(joint_names, ns: str = DEFAULT_NS) -> list[str]:
     return specs
 
 
-def robot_topics(opt: GraphOptions) -> list[str]:
-    """With --robot external: the robot's state and command topics as recorder specs; else none."""
-    if opt.robot != "external":
-        return []
-    from ..wire.robot_interface import default_state_topic, parse_robot_command
-
-    command = parse_robot_command(opt.robot_command, opt.robot_command_topic or None)
-    kind = "std_msgs/msg/Float64MultiArray" if command.form == "forward" else "sensor_msgs/msg/JointState"
-    return [f"{opt.robot_state_topic or default_state_topic(command)}:sensor_msgs/msg/JointState",
-            f"{command.topic}:{kind}"]
-
-
 REALTIME_REFERENCE_BATCH = 20  # reference points per message in realtime (smaller bursts of work in the controllers)
 
 
@@ -116,8 +104,7 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
                   f"namespace={opt.namespace}"]
         cmds = [("recorder", py + ["pa10_dnbs.ros.recorder_node"] + ros("recorder", {
             "config_file": cfg, "bag": str(opt.record_bag), "force": str(opt.force_bag).lower(),
-            "topics": _yaml_list(graph_topics(opt.joint_names, opt.namespace) + robot_topics(opt)),
-            "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns,
+            "topics": _yaml_list(graph_topics(opt.joint_names, opt.namespace)), "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns,
             "compression": opt.bag_compression}))]
     if opt.live_port is not None:  # display only: started after the observer, never waited for by the plant
         cmds.append((LIVE_VIEW, py + ["pa10_dnbs.ros.live_observer_node"] + ros(LIVE_VIEW, {

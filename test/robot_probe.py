@@ -1,0 +1,80 @@
+"""A small lockstep robot for the joint bus's fault tests (run as its own process).
+
+    python test/robot_probe.py DOMAIN_ID FAULT STEP [ARM]
+
+Speaks the standard interface (docs/your_robot.md) without physics and without /clock: publishes the arm's
+JointState on /robot_joint_states (the arm's joints in reverse order, so matching by name is exercised; the
+configured initial posture, velocity 0; stamped with a wall-clock-like time that does not start at 0), waits
+for the JointState command stamped with it, then publishes the next state; re-sends a state every 0.25 s
+until its command comes. From step STEP on it injects FAULT: ``stop`` (publishes nothing more),
+``missing`` (leaves joint index 2 of the arm out of the names), ``nan`` (position of the arm's second joint is
+NaN), ``none`` (no fault). Prints ``COMMAND <step> <stamp ns> <efforts>`` for every command it takes and ends
+on SIGINT or SIGTERM with ``PROBE END``.
+"""
+import os
+import signal
+import sys
+import time
+
+
+def main() -> int:
+    os.environ["ROS_DOMAIN_ID"] = sys.argv[1]
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    fault, fault_step = sys.argv[2], int(sys.argv[3])
+    arm_name = sys.argv[4] if len(sys.argv) > 4 else "pa10"
+    import rclpy
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from sensor_msgs.msg import JointState
+
+    from pa10_dnbs.config import default_config_path, load_config
+    from pa10_dnbs.plant.from_config import initial_state
+
+    cfg = load_config(default_config_path(), arm=arm_name)
+    from pa10_dnbs.arm import arm_of
+
+    names = list(arm_of(cfg).joint_names)
+    q0, _ = initial_state(cfg)
+    rclpy.init(signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+    node = rclpy.create_node("robot_probe")
+    qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+    pub = node.create_publisher(JointState, "/robot_joint_states", qos)
+    commands = []
+    node.create_subscription(JointState, "/robot_joint_command", commands.append, qos)
+    stop = []
+    signal.signal(signal.SIGINT, lambda *_: stop.append(1))
+    signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
+    t0_ns, dt_ns = 1_700_000_000 * 10**9, 1_000_000  # not 0: the bus counts the graph's time from the first state
+    k = 0
+    print("PROBE READY", flush=True)
+    while not stop:
+        stamp = t0_ns + k * dt_ns
+        msg = JointState()
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 10**9)
+        order = list(reversed(range(len(names))))
+        if fault == "missing" and k >= fault_step:
+            order.remove(2)
+        pos = [float(q0[i]) for i in order]
+        if fault == "nan" and k >= fault_step:
+            pos[order.index(1)] = float("nan")
+        msg.name, msg.position, msg.velocity = [names[i] for i in order], pos, [0.0] * len(order)
+        silent = fault == "stop" and k >= fault_step
+        answered = False
+        next_send = 0.0
+        while not stop and not answered:
+            if not silent and time.monotonic() >= next_send:
+                pub.publish(msg)
+                next_send = time.monotonic() + 0.25
+            rclpy.spin_once(node, timeout_sec=0.02)
+            while commands:
+                c = commands.pop(0)
+                c_ns = c.header.stamp.sec * 10**9 + c.header.stamp.nanosec
+                print(f"COMMAND {(c_ns - t0_ns) // dt_ns} {c_ns} {list(c.effort)}", flush=True)
+                answered = answered or c_ns == stamp
+        k += 1
+    print("PROBE END", flush=True)
+    sys.stdout.flush()
+    os._exit(0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,112 @@
+"""``launch --robot external``: the joint bus in front of a robot speaking the standard interface.
+
+The project's PyBullet plant as that robot (``interface:=standard``): the recorded lockstep run equals the
+in-process run bit for bit, the bag holds the graph's topics as before, every process ends. A small probe robot
+(test/robot_probe.py, no /clock, stamps not starting at 0) for the faults: it stops publishing, a joint goes
+missing from its state, a position turns NaN. Each: one ``ROBOT FAULT`` line, the zero-effort safe command
+answering the last state, no traceback, every process ends (docs/your_robot.md).
+"""
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from graph_harness import Launcher, Proc, assert_no_leftovers, exit_codes
+from pa10_dnbs.launch.shm_cleanup import remove_stale, shm_files
+from pa10_dnbs.run_data import RunData
+from pa10_dnbs.sim.closed_loop import simulate
+
+pytestmark = pytest.mark.graph  # starts ROS processes
+
+HERE = Path(__file__).resolve().parent
+
+
+def _no_leftovers(pids, shm_before) -> None:
+    """Every process gone; the robot's own shared-memory files (it is no node of the launcher, which cleans up
+    only after its nodes) removed as the launcher does, then nothing new may be left."""
+    remove_stale(shm_files() - shm_before)
+    assert_no_leftovers(pids, shm_before)
+
+
+def _plant_robot(domain: int, duration_s: float, *params: str) -> Proc:
+    """The PyBullet plant speaking the standard interface, waiting for the bus (lockstep)."""
+    args = [sys.executable, "-m", "pa10_dnbs.ros.plant_node", "--ros-args", "-r", "__node:=robot",
+            "-p", "interface:=standard", "-p", f"duration_s:={duration_s}", "-p", "start_timeout_s:=120.0"]
+    for p in params:
+        args += ["-p", p]
+    return Proc(args, domain)
+
+
+def test_the_pybullet_robot_behind_the_bus_is_the_in_process_run(tmp_path, domain, _default_cfg):
+    shm_before = shm_files()
+    out, bag = tmp_path / "run", tmp_path / "bag"
+    robot = _plant_robot(domain, 1.0)
+    la = Launcher("--robot", "external", "--duration", 1.0, "--out", out, "--record", bag, domain_id=domain)
+    try:
+        pids = la.node_pids()
+        rc = la.wait(timeout=300)
+        robot_rc = robot.wait(timeout=60)
+    finally:
+        la.kill()
+        robot.kill()
+    assert rc == 0, la.output
+    assert robot_rc == 0, robot.output
+    assert "joint_bus" in pids and "plant" not in pids
+    bus_log = (out / "logs" / "joint_bus.log").read_text()
+    assert "graph time from the robot's /clock" in bus_log, bus_log
+    wire = RunData.load_npz(out / "timeseries.npz")
+    local = simulate(_default_cfg, "dnbs", 1.0)
+    for field in ("position_rad", "velocity_rad_s", "reference_rad", "torque_nm"):
+        a, b = getattr(local, field), getattr(wire, field)
+        assert np.array_equal(a, b), f"{field}: first (step, joint) that differs {np.argwhere(a != b)[:3].tolist()}"
+    m = json.loads((out / "metrics.json").read_text())
+    assert all(j["effort_timeouts"] == 0 for j in m["timing"]["joints"]), m["timing"]["joints"]
+    from pa10_dnbs.bag.bag_reader import Bag
+
+    with Bag(bag) as b:
+        assert {"/pa10/s1/state", "/pa10/s1/effort", "/pa10/joint_states", "/clock"} <= set(b.topics)
+    codes = exit_codes(la.output)
+    assert len(codes) == 10 and all(c == 0 for c in codes.values()), codes  # 9 nodes and the recorder
+    _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)
+
+
+FAULTS = [  # (fault, what the one line says)
+    ("stop", "(stale robot)"),
+    ("missing", "joint_states lacks s3"),
+    ("nan", "non-finite state of joint s2: position nan"),
+]
+
+
+@pytest.mark.parametrize("fault,says", FAULTS, ids=[f for f, _ in FAULTS])
+def test_a_robot_fault_is_one_line_and_the_safe_command(fault, says, tmp_path, domain):
+    shm_before = shm_files()
+    at = 300
+    robot = Proc([sys.executable, HERE / "robot_probe.py", domain, fault, at], domain)
+    robot.wait_for("PROBE READY", 60)
+    la = Launcher("--robot", "external", "--duration", 3.0, "--out", tmp_path / "run", domain_id=domain)
+    try:
+        pids = la.node_pids()
+        rc = la.wait(timeout=300)
+    finally:
+        la.kill()
+        robot.interrupt()
+        robot_rc = robot.wait(timeout=30)
+    assert rc == 1, la.output
+    assert robot_rc == 0 and "PROBE END" in robot.output, robot.output
+    lines = [x for x in la.output.splitlines() if "ROBOT FAULT:" in x]
+    assert len(lines) == 1 and says in lines[0], la.output
+    assert "joint_bus exited early with code 1" in la.output, la.output
+    logs = tmp_path / "run.failed" / "logs"
+    for log in [la.output] + [p.read_text() for p in logs.glob("*.log")]:
+        assert "Traceback" not in log, log
+    # the safe command: zero effort on every joint, answering the last state the robot sent
+    commands = [x.split(" ", 3) for x in robot.output.splitlines() if x.startswith("COMMAND ")]
+    step, _, efforts = int(commands[-1][1]), commands[-1][2], json.loads(commands[-1][3])
+    assert efforts == [0.0] * 7, commands[-3:]
+    assert step == (at - 1 if fault == "stop" else at), commands[-3:]
+    assert all(any(v != 0.0 for v in json.loads(c[3])) for c in commands[:-1]), "a zero command before the fault"
+    codes = exit_codes(la.output)
+    assert codes["joint_bus"] == 1 and all(c == 0 for n, c in codes.items() if n != "joint_bus"), codes
+    _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)

@@ -1,0 +1,90 @@
+"""The standard robot interface without ROS (pa10_dnbs/wire/robot_interface.py, launch/robot_options.py):
+command forms, joint matching by name, the faults a robot's state can carry, the robot's time line."""
+import math
+
+import pytest
+
+from pa10_dnbs.config import ConfigError
+from pa10_dnbs.launch.robot_options import RobotOptions, check_robot_options, robot_domain
+from pa10_dnbs.wire import joint_state_cdr
+from pa10_dnbs.wire.robot_interface import (JointMatcher, RobotCommand, RobotFault, RobotTimeline,
+                                            default_state_topic, parse_robot_command)
+
+PA10 = ("s1", "s2", "s3", "e1", "e2", "w1", "w2")
+
+
+def test_command_forms_and_their_default_topics():
+    assert parse_robot_command("joint_state") == RobotCommand("joint_state", "/robot_joint_command")
+    assert parse_robot_command("joint_state", "/arm/cmd") == RobotCommand("joint_state", "/arm/cmd")
+    fwd = parse_robot_command("forward:effort_controller")
+    assert fwd == RobotCommand("forward", "/effort_controller/commands")
+    assert default_state_topic(fwd) == "/joint_states"
+    assert default_state_topic(parse_robot_command("joint_state")) == "/robot_joint_states"
+    for bad in ("position", "forward:", "forward:1abc", "forward:a b", "JointState"):
+        with pytest.raises(ValueError):
+            parse_robot_command(bad)
+    with pytest.raises(ValueError, match="robot-command-topic"):
+        parse_robot_command("forward:effort_controller", "/x")
+
+
+def test_joints_are_matched_by_name_not_order():
+    m = JointMatcher(PA10)
+    names = list(reversed(PA10)) + ["gripper"]
+    pos = [float(i) for i in range(8)]
+    q, qd = m.read(names, pos, [10 * p for p in pos])
+    assert q == [6.0, 5.0, 4.0, 3.0, 2.0, 1.0, 0.0] and qd == [60.0, 50.0, 40.0, 30.0, 20.0, 10.0, 0.0]
+    assert m.efforts(names, pos) == q
+
+
+@pytest.mark.parametrize("names,pos,vel,says", [
+    (PA10[:2] + PA10[3:], [0.0] * 6, [0.0] * 6, "joint_states lacks s3"),
+    (PA10, [0.0, math.nan, 0, 0, 0, 0, 0], [0.0] * 7, "non-finite state of joint s2: position nan"),
+    (PA10, [0.0] * 7, [0, 0, 0, 0, 0, 0, math.inf], "non-finite state of joint w2"),
+    (PA10, [0.0] * 7, [], "7 names but 7 positions and 0 velocities"),
+])
+def test_a_bad_state_is_a_robot_fault_naming_it(names, pos, vel, says):
+    with pytest.raises(RobotFault, match=says.replace("(", r"\(")):
+        JointMatcher(PA10).read(names, pos, vel)
+
+
+def test_a_state_decoded_from_cdr_reads_the_same():
+    data = joint_state_cdr.encode(3, 5, list(reversed(PA10)), [0.1 * i for i in range(7)], [0.0] * 7, [])
+    sec, nanosec, names, pos, vel, eff = joint_state_cdr.decode(data)
+    assert (sec, nanosec) == (3, 5) and eff == ()
+    q, _ = JointMatcher(PA10).read(names, pos, vel)
+    assert q[0] == pytest.approx(0.6) and q[6] == 0.0
+
+
+def test_the_robot_time_line():
+    t = RobotTimeline(1_000_000)
+    base = 1_700_000_000_000_000_000
+    assert t.classify(base) == "new" and t.graph_ns(base) == 0
+    assert t.classify(base) == "duplicate"
+    assert t.classify(base - 1) == "old"
+    assert t.classify(base + 1_000_000) == "new" and t.off_grid == 0
+    assert t.classify(base + 3_000_000) == "new" and t.off_grid == 1  # a step of 2 ms on a 1 ms graph
+    assert t.graph_ns(base + 3_000_000) == 3_000_000
+
+
+def test_launch_flags_are_checked_with_one_line_naming_the_flag(monkeypatch):
+    ok = check_robot_options(RobotOptions(), "lockstep")
+    assert ok == {"robot": "external", "robot_command": "joint_state", "robot_state_topic": "",
+                  "robot_command_topic": "", "robot_timeout_s": 1.0}
+    assert check_robot_options(RobotOptions(command="forward:arm_effort"), "lockstep")["robot_command"] \
+        == "forward:arm_effort"
+    cases = [(RobotOptions(), "realtime", "--robot external"),
+             (RobotOptions(command="torque"), "lockstep", "--robot-command"),
+             (RobotOptions(state_topic="/bad topic"), "lockstep", "--robot-state-topic"),
+             (RobotOptions(command_topic="//x"), "lockstep", "--robot-command-topic"),
+             (RobotOptions(timeout_s=0.0), "lockstep", "--robot-timeout"),
+             (RobotOptions(timeout_s=math.nan), "lockstep", "--robot-timeout")]
+    for opt, mode, flag in cases:
+        with pytest.raises(ConfigError, match=f"^{flag}"):
+            check_robot_options(opt, mode)
+    monkeypatch.setenv("ROS_DOMAIN_ID", "42")
+    assert robot_domain() == 42
+    monkeypatch.delenv("ROS_DOMAIN_ID")
+    assert robot_domain() == 0
+    monkeypatch.setenv("ROS_DOMAIN_ID", "x")
+    with pytest.raises(ConfigError, match="^ROS_DOMAIN_ID"):
+        robot_domain()
