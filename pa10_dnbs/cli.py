@@ -25,7 +25,8 @@ def _simulate(args: argparse.Namespace) -> int:
 
     return run_simulate(config_path=args.config, controller=args.controller, duration_s=args.duration,
                         out=args.out, force=args.force, progress=not args.no_progress and sys.stderr.isatty(),
-                        init_from=args.init_from, figures=not args.no_figures, arm=args.arm, engine=args.engine)
+                        init_from=args.init_from, figures=not args.no_figures, arm=args.arm, engine=args.engine,
+                        trajectory=args.trajectory)
 
 
 def _launch(args: argparse.Namespace) -> int:
@@ -40,7 +41,8 @@ def _launch(args: argparse.Namespace) -> int:
                       bag_compression=args.bag_compression, live_port=args.live, live_host=args.live_host,
                       live_hz=args.live_hz, real_time_factor=args.rtf, deadline_fraction=args.deadline_fraction,
                       rt_priority=args.rt_priority, sched_batch=args.sched_batch, namespace=args.namespace,
-                      clock_hz=args.clock_hz, figures=not args.no_figures, arm=args.arm)
+                      clock_hz=args.clock_hz, figures=not args.no_figures, arm=args.arm,
+                      trajectory=args.trajectory)
 
 
 def _robot(args: argparse.Namespace) -> int:
@@ -117,6 +119,9 @@ def _add_run_args(p: argparse.ArgumentParser, controllers: tuple[str, ...], help
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-figures", action="store_true",
                    help="write metrics, time series and report.md without figures (batch runs; ~3 s less)")
+    p.add_argument("--trajectory", type=Path, default=None, metavar="FILE",
+                   help="follow this JointTrajectory (YAML or JSON) from t = 0 instead of eq. 27 "
+                        "(docs/trajectories.md; example: config/trajectory_example.yaml)")
 
 
 def _add_live_args(p: argparse.ArgumentParser) -> None:

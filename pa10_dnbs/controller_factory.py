@@ -11,8 +11,10 @@ import numpy as np
 from .arm import arm_of
 from .core.dnbs_controller import DNBSControllers, DNBSParams, NetworkParams, Remedies
 from .core.pid_controller import PIDControllers, PIDParams
+from .core.joint_trajectory import JointTrajectory
 from .core.reference import Reference
 from .core.state_guard import StateGuard
+from .core.trajectory_reference import TrajectoryReference
 from .loop.guarded_controllers import GuardedControllers
 
 CONTROLLER_KINDS = ("dnbs", "pid")
@@ -80,11 +82,42 @@ def build_controllers(cfg: dict, kind: str, joints=None):
     raise ValueError(f"unknown controller kind {kind!r} (expected one of {CONTROLLER_KINDS})")
 
 
-def build_reference(cfg: dict) -> Reference:
-    """Eq. 27 reference from ``cfg['reference']``."""
+def build_reference(cfg: dict, trajectory: JointTrajectory | None = None) -> Reference | TrajectoryReference:
+    """Eq. 27 reference from ``cfg['reference']``; with ``trajectory`` (``--trajectory FILE``), that trajectory
+    from step 0 on, starting from eq. 27's state at step 0 (TrajectoryError if the arm cannot follow it)."""
     r = cfg["reference"]
-    return Reference(r["amplitude_rad"], r["envelope_rate_per_s3"], r["frequency_rad_s"],
+    eq27 = Reference(r["amplitude_rad"], r["envelope_rate_per_s3"], r["frequency_rad_s"],
                      dt_s=cfg["simulation"]["dt_s"], preview_steps=r["preview_steps"], centre_rad=r["centre_rad"])
+    if trajectory is None:
+        return eq27
+    ref = switchable_reference(cfg, eq27)
+    ref.start(trajectory, 0)
+    return ref
+
+
+def load_reference_trajectory(cfg: dict, path, flag: str = "--trajectory") -> JointTrajectory:
+    """The JointTrajectory of file ``path`` (YAML or JSON, docs/trajectories.md), checked against the config's arm
+    and interpolated once from step 0 (its quintics within the joint limits); ConfigError ``<flag> <path>: <what
+    is wrong>`` (one line) otherwise."""
+    from .config_error import ConfigError
+    from .core.joint_trajectory import TrajectoryError
+    from .trajectory_file import load_trajectory_file
+
+    traj = load_trajectory_file(path, arm_of(cfg), flag)
+    try:
+        build_reference(cfg, traj)
+    except TrajectoryError as exc:
+        raise ConfigError(f"{flag} {path}: {exc}") from None
+    return traj
+
+
+def switchable_reference(cfg: dict, reference: Reference | TrajectoryReference) -> TrajectoryReference:
+    """``reference`` as a TrajectoryReference of the config's arm (joint names and URDF limits), which takes
+    trajectories while running (the reference node's ``trajectory`` topic); itself if it is one."""
+    if isinstance(reference, TrajectoryReference):
+        return reference
+    arm = arm_of(cfg)
+    return TrajectoryReference(reference, arm.joint_names, arm.lower_rad, arm.upper_rad)
 
 
 def build_state_guard(cfg: dict, joints=None) -> StateGuard:

@@ -6,6 +6,7 @@ CODE = """
 import sys
 import pa10_dnbs.core.reference, pa10_dnbs.core.honn, pa10_dnbs.core.ekf
 import pa10_dnbs.core.dnbs_controller, pa10_dnbs.core.pid_controller, pa10_dnbs.core.metrics
+import pa10_dnbs.core.joint_trajectory, pa10_dnbs.core.trajectory_reference
 bad = sorted(m for m in sys.modules if m.split('.')[0] in
              ('rclpy', 'pybullet', 'pybullet_utils', 'yaml', 'matplotlib', 'scipy', 'torch'))
 print(','.join(bad))
@@ -35,7 +36,8 @@ def test_launcher_does_not_load_rclpy():
 LAYERS = [
     {"__init__", "paths", "atomic_file", "run_data", "core", "wire", "kinematics", "faults",  # numpy-only data and maths
      "config_error"},
-    {"arm", "config", "derived_settings", "plant", "loop", "accel"},  # arms, config, physics, loop logic, compiled step
+    {"arm", "config", "derived_settings", "plant", "loop", "accel",  # arms, config, physics, loop logic, compiled step
+     "trajectory_file"},
     {"controller_factory"},
     {"sim", "bag", "report", "live"},                                          # in-process runs, bags, outputs, live view
     {"study", "tune"},                                                         # robustness study, tuning: sim runs

@@ -15,6 +15,7 @@ from ..bag.analysis import bag_arm, bag_joint_names, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
 from ..bag.bag_writer import COMPRESSIONS, check_bag_path
 from ..config import ConfigError, default_config_path, load_config
+from ..controller_factory import load_reference_trajectory
 from ..core.checkpoint import checkpoint_dir, load_joint_checkpoints
 from ..launch.fault_flags import apply_fault_flags, faults_active, plain
 from ..launch.fault_report import fault_note, fault_report
@@ -38,7 +39,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                live_port: int | None = None, live_host: str = "127.0.0.1", live_hz: float = 50.0,
                real_time_factor: float = 1.0, deadline_fraction: float = 0.9, rt_priority: int = DEFAULT_RT_PRIORITY,
                sched_batch: bool = False, namespace: str | None = None,
-               clock_hz: float = DEFAULT_CLOCK_HZ, figures: bool = True, arm: str | None = None) -> int:
+               clock_hz: float = DEFAULT_CLOCK_HZ, figures: bool = True, arm: str | None = None,
+               trajectory: Path | None = None) -> int:
     """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code.
 
     ``fault_args``: the parsed fault flags (launch/fault_flags.py) applied to the config; the config the
@@ -54,6 +56,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     ``namespace``: the arm's ROS namespace (every node runs in it; /clock, /tf, /diagnostics stay global); None:
     ``/<the arm's name>``. ``arm``: a preset's name or an arm file or URDF (``--arm``); None: the config's.
     ``clock_hz``: /clock rate [Hz of simulated time], > 0 (the reference node is paced by /clock).
+    ``trajectory``: a JointTrajectory file (YAML or JSON) the reference node follows from step 0 instead of
+    eq. 27 (docs/trajectories.md); checked here first (a bad file: ConfigError, nothing written).
     """
     config_path = Path(config_path).resolve() if config_path else default_config_path()
     cfg = load_config(config_path, arm=arm)
@@ -96,6 +100,9 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     n_steps = int(round(duration_s / dt))
     if n_steps < 2:
         raise ConfigError(f"--duration: {duration_s} s is shorter than two steps of {dt} s")
+    if trajectory is not None:  # the file read and checked as the reference node will: one line, exit 2
+        load_reference_trajectory(cfg, trajectory)
+        trajectory = Path(trajectory).resolve()
     if bag_compression not in COMPRESSIONS:
         raise ConfigError(f"--bag-compression: expected one of {', '.join(COMPRESSIONS)}, got {bag_compression!r}")
     if live_port is not None:
@@ -127,7 +134,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                        bag_compression=bag_compression, live_port=live_port, live_host=live_host, live_hz=live_hz,
                        real_time_factor=real_time_factor, deadline_fraction=deadline_fraction,
                        rt_priority=rt_priority, sched_batch=sched_batch, namespace=namespace,
-                       clock_hz=clock_hz, joint_names=joint_names)
+                       clock_hz=clock_hz, joint_names=joint_names,
+                       trajectory_file=trajectory)
     reliability = loop_reliability(opt)
     settings = metrics_settings(cfg, n_steps * dt)
     window = settings["window_s"]
@@ -163,6 +171,9 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                          f"source: ROS 2 node graph, {mode} mode, {reliability} QoS, domain {result.domain_id}; "
                          f"time series rebuilt from {source}",
                          _timing_note(stats)]
+                if trajectory is not None:
+                    notes.append(f"reference: the trajectory of `{trajectory}` from t = 0, not eq. 27 "
+                                 "(docs/trajectories.md)")
                 if init_from is not None:
                     notes.append(f"DNBS warm-started from the checkpoints in `{init_from}` (not a cold start)")
                 if faults_active(cfg) or result.restarts:

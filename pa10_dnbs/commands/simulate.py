@@ -7,6 +7,7 @@ from pathlib import Path
 from ..accel.choice import resolve_kernel
 from ..arm import arm_of
 from ..config import ConfigError, default_config_path, load_config
+from ..controller_factory import load_reference_trajectory
 from ..core.checkpoint import load_joint_checkpoints, save_checkpoint
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
@@ -17,11 +18,13 @@ CHOICES = {"dnbs": ("dnbs",), "pid": ("pid",), "ctc": ("ctc",), "both": ("dnbs",
 
 def run_simulate(config_path: Path | None, controller: str, duration_s: float | None, out: Path,
                  force: bool, progress: bool, init_from: Path | None = None, figures: bool = True,
-                 arm: str | None = None, engine: str = "pybullet") -> int:
+                 arm: str | None = None, engine: str = "pybullet", trajectory: Path | None = None) -> int:
     """Run one or more controllers; write everything into ``out`` atomically. Returns the exit code.
 
     ``arm``: a preset's name or an arm file or URDF (``--arm``); None: the config's ``arm``.
     ``engine``: the plant's physics engine (``--engine``), pybullet or mujoco (docs/engines.md).
+    ``trajectory``: a JointTrajectory file (YAML or JSON) followed from step 0 instead of eq. 27
+    (docs/trajectories.md); a bad one: ConfigError, nothing written.
     ``init_from``: a warm start of the DNBS controllers from the checkpoints of an earlier run (a run's
     output directory, or a directory of ``<joint>.npz``); the report says so.
     """
@@ -45,6 +48,7 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
             init_states = load_joint_checkpoints(init_from, the_arm.joint_names)
         except ValueError as exc:
             raise ConfigError(f"--init-from: {exc}") from None
+    traj = load_reference_trajectory(cfg, trajectory) if trajectory is not None else None
     check_output_dir(out, force)
     if "dnbs" in kinds:
         cfg = resolve_kernel(cfg, say=print)  # dnbs.kernel: auto -> c or numpy, said in one line
@@ -52,7 +56,7 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
     runs, metrics = [], []
     for kind in kinds:
         run = simulate(cfg, kind, duration_s, progress=progress, init_states=init_states if kind == "dnbs" else None,
-                       engine=engine)
+                       engine=engine, trajectory=traj)
         runs.append(run)
         extra = {"warm_start_from": str(Path(init_from).resolve())} if init_states is not None and kind == "dnbs" else {}
         if engine != "pybullet":
@@ -63,6 +67,8 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
              "source: in-process simulation (no ROS)"]
     if engine != "pybullet":
         notes.append(f"engine: {engine} (docs/engines.md); the gains are the same as on the PyBullet plant")
+    if traj is not None:
+        notes.append(f"reference: the trajectory of `{trajectory}` from t = 0, not eq. 27 (docs/trajectories.md)")
     if init_states is not None:
         notes.append(f"DNBS warm-started from the checkpoints in `{init_from}` (not a cold start)")
     if "ctc" in kinds:

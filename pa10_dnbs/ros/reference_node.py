@@ -11,6 +11,11 @@ Reports on /diagnostics the /clock messages it saw and those that went back
 in time (a fault: the reference it already sent cannot be taken back).
 /clock is taken every ``poll_period_s`` (``polled.Inbox``), not one wake-up
 per message: the lookahead covers many polls.
+
+Trajectories (docs/trajectories.md): ``trajectory_file`` (YAML or JSON) is followed from step 0 instead of
+eq. 27; a trajectory_msgs/JointTrajectory on <ns>/trajectory is followed while running, from the first step
+not yet published (or from its header stamp when that is non-zero and later), starting from the desired state
+there (``core/trajectory_reference.py``). A wrong one is refused with one line and changes nothing.
 """
 from __future__ import annotations
 
@@ -21,10 +26,14 @@ import numpy as np
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from trajectory_msgs.msg import JointTrajectory
 
 from ..arm import arm_of
-from ..controller_factory import build_reference
+from ..config_error import ConfigError
+from ..controller_factory import build_reference, load_reference_trajectory, switchable_reference
+from ..core.joint_trajectory import TrajectoryError, trajectory_from_lists
+from ..wire.topics import TRAJECTORY
 from ..wire.trajectory_cdr import encode_one_joint
 from .diagnostics import DiagnosticsReporter, status, status_name
 from ..loop.scheduling import apply_batch, apply_fifo
@@ -51,7 +60,11 @@ PARAMS = {
     "poll_period_s": Param(0.01, "wall time between two drains of /clock [s]", 0.0),
     "reference_subscribers": Param(1, "start handshake: subscribers of each reference topic that must hold the first "
                                    "batches (its controller, the observers) before the node says ready", 0),
+    "trajectory_file": Param("", "a JointTrajectory (YAML or JSON) followed from step 0 instead of eq. 27 "
+                             "(docs/trajectories.md); '' = eq. 27"),
 }
+TRAJECTORY_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
+                            durability=DurabilityPolicy.VOLATILE)  # as `ros2 topic pub` and JTC's clients offer
 
 
 class ReferenceNode(Node):
@@ -64,7 +77,14 @@ class ReferenceNode(Node):
             raise ParameterError(f"batch_steps must be >= 1 and lookahead_steps > reference.preview_steps = {preview}")
         if not p["poll_period_s"] > 0:
             raise ParameterError(f"parameter poll_period_s must be > 0 s, got {p['poll_period_s']}")
-        self.reference = build_reference(cfg)
+        trajectory = None
+        if p["trajectory_file"]:
+            try:
+                trajectory = load_reference_trajectory(cfg, p["trajectory_file"], flag="parameter trajectory_file:")
+            except ConfigError as exc:
+                raise ParameterError(str(exc)) from None
+        self.reference = switchable_reference(cfg, build_reference(cfg, trajectory))
+        self.trajectories = {"accepted": 0, "refused": 0}
         self.clock_ = StepClock(cfg["simulation"]["dt_s"])
         self.p = p
         self.batch = p["batch_steps"]
@@ -82,6 +102,7 @@ class ReferenceNode(Node):
         self.cpu = CpuMeter()
         self.inbox = Inbox(self, p["poll_period_s"])
         self.inbox.subscribe(Clock, CLOCK, record_qos(CLOCK_DEPTH), self._on_clock)
+        self.create_subscription(JointTrajectory, TRAJECTORY, self._on_trajectory, TRAJECTORY_QOS)
         self._publish_through(self.lookahead)
         self.diagnostics = DiagnosticsReporter(self, self._diagnostics,
                                                lambda: self.clock_.stamp(max(0, self.clock_step)))
@@ -122,12 +143,44 @@ class ReferenceNode(Node):
         self.clock_step = max(self.clock_step, step)
         self._publish_through(step + self.lookahead)
 
+    def _on_trajectory(self, msg: JointTrajectory) -> None:
+        """Follow a trajectory from the first step not yet published (or its header stamp, when non-zero and
+        later), or refuse it with one line; nothing changes then."""
+        stamp_s = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+        dt = self.reference.dt_s
+        start = self.published_until
+        origin = None
+        if stamp_s != 0.0:
+            origin = stamp_s
+            start = max(start, int(np.ceil(stamp_s / dt - 1e-9)))
+        try:
+            if not msg.points:
+                raise TrajectoryError("no points")
+            traj = trajectory_from_lists(list(msg.joint_names),
+                                         [p.time_from_start.sec + p.time_from_start.nanosec * 1e-9 for p in msg.points],
+                                         [list(p.positions) for p in msg.points],
+                                         [list(p.velocities) for p in msg.points],
+                                         [list(p.accelerations) for p in msg.points])
+            if any(len(p.effort) for p in msg.points):
+                raise TrajectoryError("points carry efforts: only positions are followed")
+            s = self.reference.start(traj, start, origin)
+        except TrajectoryError as exc:
+            self.trajectories["refused"] += 1
+            print(f"TRAJECTORY refused: {exc}", flush=True)
+            return
+        self.trajectories["accepted"] += 1
+        print(f"TRAJECTORY accepted: {len(msg.points)} points, {s.knots} knots from step {s.start_step} "
+              f"(t = {s.start_step * dt:.3f} s) to step {s.end_step} (t = {s.end_step * dt:.3f} s), then the last "
+              f"point held" + (f"; {s.dropped} points before the start left out" if s.dropped else ""), flush=True)
+
     def close(self) -> None:
         print(self.cpu.line("reference"), flush=True)
 
     def _diagnostics(self) -> list:
         counters = {"clock_messages": self.clock_messages, "clock_backwards": self.clock_backwards,
-                    "clock_step": self.clock_step, "published_through_step": self.published_until - 1}
+                    "clock_step": self.clock_step, "published_through_step": self.published_until - 1,
+                    "trajectories_accepted": self.trajectories["accepted"],
+                    "trajectories_refused": self.trajectories["refused"]}
         return [status(status_name(self, "reference"), self.get_name(), counters, FAULT_KEYS)]
 
     def _publish_through(self, last_step: int) -> None:

@@ -39,7 +39,7 @@ class Disturbances:
 
 def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = False,
              init_states: list[dict] | None = None, disturbances: Disturbances | None = None,
-             engine: str = DEFAULT_ENGINE) -> RunData:
+             engine: str = DEFAULT_ENGINE, trajectory=None) -> RunData:
     """Closed loop for ``duration_s`` seconds of simulated time.
 
     At each step k every joint controller gets only its own x1(k), x2(k) and
@@ -47,10 +47,12 @@ def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = Fal
     ``init_states``: one controller ``state_dict`` per joint to start from (a warm start).
     ``disturbances``: sensor noise and actuator delay (the study's scenarios); None: none.
     ``engine``: the plant's physics engine, pybullet (default) or mujoco (``plant/engines.py``).
+    ``trajectory``: a JointTrajectory (``--trajectory FILE``) followed from step 0 instead of eq. 27; the
+    reference node builds the same reference (``build_reference``), so the lockstep graph gives the same bits.
     """
     dt = cfg["simulation"]["dt_s"]
     n = int(round(duration_s / dt))
-    reference = build_reference(cfg)
+    reference = build_reference(cfg, trajectory)
     plant, close_plant = open_plant(cfg, engine)
     try:
         guarded = _controllers(cfg, controller, plant)

@@ -20,6 +20,7 @@ DEFAULT_NS = "/pa10"
 JOINT_STATES = "joint_states"
 ROBOT_DESCRIPTION = "robot_description"
 TRACKING = "tracking"  # the live view's JSON channel (Foxglove only, not a ROS topic)
+TRAJECTORY = "trajectory"  # trajectory_msgs/JointTrajectory of every joint, taken by the reference node
 
 # global
 CLOCK = "/clock"

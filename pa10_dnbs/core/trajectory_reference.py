@@ -1,0 +1,138 @@
+"""The reference with joint trajectories spliced in: eq. 27 (or any base) until a trajectory starts, then it.
+
+``TrajectoryReference`` answers what ``Reference`` answers (position, velocity, acceleration at step(s) k,
+``sample`` with the k + preview_steps look-ahead), so the in-process loop and the reference node sample it
+alike. ``start(traj, start_step, origin_s)`` splices a trajectory in from ``start_step`` on (steps before it
+keep what they had; a later start replaces what an earlier trajectory planned from there on):
+
+- its time origin is ``origin_s`` [s] (a message's header stamp), or the start step's time;
+- the first knot is the current desired state (position, velocity, acceleration) at the start step; a point
+  within half a step of the start replaces its position (a jump if it differs; the velocity and acceleration
+  it gives, else the current ones), points before the start are dropped, the later points follow;
+- one quintic per segment and joint (``QuinticSpline``; velocities and accelerations the points do not give
+  come from ``knot_derivatives``); after the last point its position is held;
+- it is refused (``TrajectoryError``, one line, nothing changes) when ``check_trajectory`` refuses it, when no
+  point is left after the start, or when the interpolation passes a joint limit between the points.
+Numpy only.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .joint_trajectory import JointTrajectory, QuinticSpline, TrajectoryError, check_trajectory, knot_derivatives
+from .reference import ReferenceSample
+
+CHECK_CHUNK = 100_000  # steps sampled at once when checking an interpolation against the limits
+
+
+@dataclass(frozen=True)
+class Started:
+    """What ``start`` did: first step it decides, the step its last knot falls on (held after), knots used."""
+
+    start_step: int
+    end_step: int
+    knots: int
+    dropped: int  # points before the start step, left out
+
+
+class TrajectoryReference:
+    """``base`` (a Reference: eq. 27) with trajectories of the arm's joints spliced in.
+
+    joint_names (n,), lower_rad, upper_rad (n,): the arm's joints and position limits [rad], against which
+    every trajectory is checked (by name) and its interpolation sampled at every step.
+    """
+
+    def __init__(self, base, joint_names, lower_rad, upper_rad):
+        self.base = base
+        self.dt_s = base.dt_s
+        self.preview_steps = base.preview_steps
+        self.joint_names = tuple(joint_names)
+        self.lower_rad = np.asarray(lower_rad, dtype=float)
+        self.upper_rad = np.asarray(upper_rad, dtype=float)
+        if not (len(self.joint_names) == self.lower_rad.size == self.upper_rad.size == base.n_joints):
+            raise ValueError("joint_names, lower_rad, upper_rad must have one entry per joint of the base reference")
+        self._starts: list[int] = []
+        self._splines: list[QuinticSpline] = []
+
+    @property
+    def n_joints(self) -> int:
+        return self.base.n_joints
+
+    def start(self, traj: JointTrajectory, start_step: int, origin_s: float | None = None) -> Started:
+        """Follow ``traj`` from step ``start_step`` on, its time_from_start counted from ``origin_s`` [s] (None:
+        the start step's time). Raises TrajectoryError (and changes nothing) on a trajectory that cannot be
+        followed."""
+        traj = check_trajectory(traj, self.joint_names, self.lower_rad, self.upper_rad)
+        dt, start_step = self.dt_s, int(start_step)
+        t_start = start_step * dt
+        times = (t_start if origin_s is None else float(origin_s)) + traj.time_from_start_s
+        at_start = np.flatnonzero(np.abs(times - t_start) <= 0.5 * dt)
+        later = np.flatnonzero(times > t_start + 0.5 * dt)
+        if at_start.size == 0 and later.size == 0:
+            raise TrajectoryError(f"every point lies before step {start_step} (t = {t_start:.3f} s), where the "
+                                  "reference can still change: nothing left to follow")
+        first = at_start[-1] if at_start.size else None
+        p0 = self.position(start_step) if first is None else traj.positions_rad[first]
+        given_v, given_a = traj.velocities_rad_s, traj.accelerations_rad_s2
+        v0 = given_v[first] if first is not None and given_v is not None else self.velocity(start_step)
+        a0 = given_a[first] if first is not None and given_a is not None else self.acceleration(start_step)
+        t = np.concatenate([[t_start], times[later]])
+        p = np.vstack([p0, traj.positions_rad[later]])
+        pick = lambda a: None if a is None else np.vstack([np.zeros(self.n_joints), a[later]])  # noqa: E731
+        v, a = knot_derivatives(t, p, pick(given_v), pick(given_a), v0=v0, a0=a0)
+        spline = QuinticSpline(t, p, v, a)
+        end_step = int(np.ceil(spline.end_s / dt - 1e-9))
+        self._check_limits(spline, start_step, end_step)
+        keep = [i for i, s in enumerate(self._starts) if s < start_step]
+        self._starts = [self._starts[i] for i in keep] + [start_step]
+        self._splines = [self._splines[i] for i in keep] + [spline]
+        return Started(start_step, end_step, t.size, len(times) - later.size - int(first is not None))
+
+    def _check_limits(self, spline: QuinticSpline, first: int, last: int) -> None:
+        """TrajectoryError when the interpolation leaves [lower_rad, upper_rad] at a step in [first, last]."""
+        for k0 in range(first, last + 1, CHECK_CHUNK):
+            k = np.arange(k0, min(k0 + CHECK_CHUNK, last + 1))
+            x = spline.evaluate(k * self.dt_s)
+            beyond = (x < self.lower_rad) | (x > self.upper_rad)
+            if np.any(beyond):
+                i, j = np.argwhere(beyond)[0]
+                lo, hi = self.lower_rad[j], self.upper_rad[j]
+                raise TrajectoryError(f"the interpolation of joint {self.joint_names[j]!r} reaches {x[i, j]:.6g} rad "
+                                      f"at t = {k[i] * self.dt_s:.3f} s, beyond its limits [{lo:.6g}, {hi:.6g}] rad "
+                                      "(give velocities, or points further inside)")
+
+    def _evaluate(self, k, derivative: int) -> np.ndarray:
+        base = (self.base.position, self.base.velocity, self.base.acceleration)[derivative]
+        if not self._starts:
+            return base(k)  # eq. 27 alone: exactly its own values
+        scalar = np.ndim(k) == 0
+        ks = np.atleast_1d(np.asarray(k))
+        piece = np.searchsorted(self._starts, ks, side="right") - 1
+        out = np.empty((ks.size, self.n_joints))
+        before = piece < 0
+        if np.any(before):
+            out[before] = base(ks[before])
+        for i in np.unique(piece[~before]):
+            mask = piece == i
+            out[mask] = self._splines[i].evaluate(ks[mask] * self.dt_s, derivative)
+        return out[0] if scalar else out
+
+    def position(self, k) -> np.ndarray:
+        """x_d at step(s) k [rad]: shape (n,) for scalar k, (len(k), n) for an array."""
+        return self._evaluate(k, 0)
+
+    def velocity(self, k) -> np.ndarray:
+        """dx_d/dt at step(s) k [rad/s], same shapes as :meth:`position`."""
+        return self._evaluate(k, 1)
+
+    def acceleration(self, k) -> np.ndarray:
+        """d2x_d/dt2 at step(s) k [rad/s^2], same shapes as :meth:`position`."""
+        return self._evaluate(k, 2)
+
+    def sample(self, k: int, joints=None) -> ReferenceSample:
+        """The reference at step k for ``joints`` (indices; all when None), with the k + preview_steps preview."""
+        sel = slice(None) if joints is None else np.asarray(joints)
+        return ReferenceSample(self.position(k)[sel], self.velocity(k)[sel],
+                               self.position(k + self.preview_steps)[sel], self.acceleration(k)[sel])

@@ -1,0 +1,118 @@
+"""Send JointTrajectory files to a running graph's reference node, on <ns>/trajectory, one after another.
+
+    python -m pa10_dnbs.ros.trajectory_sender FILE [FILE ...] [--namespace /pa10] [--after-clock S]
+                                                [--gap S] [--stamp S] [--wait S]
+
+Each file (YAML or JSON, docs/trajectories.md) goes out as a trajectory_msgs/JointTrajectory exactly as
+written: the sender reads its fields but does not check them against an arm, so the reference node is the one
+that accepts or refuses it (its log says which, in one line). It waits until the reference node's
+subscription has matched (``--wait`` s of wall time, else exit 1), and with ``--after-clock S`` until /clock
+has reached S s of simulated time; then it sends the files in order, ``--gap`` s of wall time apart (reliable,
+so none is lost and they arrive in order). ``--stamp S``: header.stamp (0, the default: the trajectory starts
+at the first step the reference node has not yet published). Prints one ``sent FILE`` line per file. Exit 0
+once every message is acknowledged, 1 on a timeout, 2 on a file it cannot read.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import threading
+import time
+from pathlib import Path
+
+import rclpy
+from rclpy.duration import Duration
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+from ..core.joint_trajectory import JointTrajectory as Trajectory
+from ..core.joint_trajectory import TrajectoryError
+from ..trajectory_file import read_trajectory
+from ..wire.topics import CLOCK, DEFAULT_NS, TRAJECTORY, resolve
+from .reference_node import TRAJECTORY_QOS
+
+
+def message(traj: Trajectory, stamp_s: float) -> JointTrajectory:
+    """The ROS message of ``traj`` with header.stamp ``stamp_s`` [s]."""
+    msg = JointTrajectory()
+    msg.header.stamp.sec, ns = divmod(int(round(stamp_s * 1e9)), 10**9)
+    msg.header.stamp.nanosec = ns
+    msg.joint_names = list(traj.joint_names)
+    for i, t in enumerate(traj.time_from_start_s):
+        pt = JointTrajectoryPoint()
+        pt.positions = [float(x) for x in traj.positions_rad[i]]
+        if traj.velocities_rad_s is not None:
+            pt.velocities = [float(x) for x in traj.velocities_rad_s[i]]
+        if traj.accelerations_rad_s2 is not None:
+            pt.accelerations = [float(x) for x in traj.accelerations_rad_s2[i]]
+        sec, nanosec = divmod(int(round(float(t) * 1e9)), 10**9)
+        pt.time_from_start.sec, pt.time_from_start.nanosec = sec, nanosec
+        msg.points.append(pt)
+    return msg
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="trajectory_sender", description=__doc__.splitlines()[0])
+    ap.add_argument("files", nargs="+", type=Path, metavar="FILE")
+    ap.add_argument("--namespace", default=DEFAULT_NS, help="the arm's namespace (default /pa10)")
+    ap.add_argument("--after-clock", type=float, default=0.0, metavar="S",
+                    help="send once /clock has reached S seconds of simulated time (default 0: at once)")
+    ap.add_argument("--gap", type=float, default=0.0, metavar="S",
+                    help="wall time between two files [s] (default 0)")
+    ap.add_argument("--stamp", type=float, default=0.0, metavar="S", help="header.stamp [s] (default 0)")
+    ap.add_argument("--wait", type=float, default=60.0, metavar="S",
+                    help="wall time to wait for the subscriber, /clock and each acknowledgement (default 60)")
+    args = ap.parse_args(argv)
+    try:
+        msgs = [(f, message(read_trajectory(f), args.stamp)) for f in args.files]
+    except (TrajectoryError, OSError) as exc:
+        print(f"trajectory_sender: error: {exc}", file=sys.stderr)
+        return 2
+    rclpy.init(args=[], signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+    node = rclpy.create_node("trajectory_sender")
+    try:
+        return _send(node, msgs, args)
+    finally:  # a short-lived client: its participant is destroyed, so Fast DDS removes its /dev/shm files; a
+        # teardown that blocks (ros/runtime.py says how it can) is left after 5 s
+        closing = threading.Thread(target=lambda: (node.destroy_node(), rclpy.try_shutdown()), daemon=True)
+        closing.start()
+        closing.join(5.0)
+
+
+def _send(node, msgs, args) -> int:
+    topic = resolve(TRAJECTORY, args.namespace)
+    pub = node.create_publisher(JointTrajectory, topic, TRAJECTORY_QOS)
+    clock = [-1.0]
+    node.create_subscription(Clock, CLOCK, lambda m: clock.__setitem__(0, m.clock.sec + m.clock.nanosec * 1e-9),
+                             QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
+                                        reliability=ReliabilityPolicy.BEST_EFFORT))
+    deadline = time.monotonic() + args.wait
+    while pub.get_subscription_count() < 1 or clock[0] < args.after_clock:
+        if time.monotonic() > deadline:
+            what = (f"no subscriber on {topic}" if pub.get_subscription_count() < 1
+                    else f"/clock at {clock[0]:g} s, not yet {args.after_clock:g} s")
+            print(f"trajectory_sender: {what} after {args.wait:g} s", file=sys.stderr, flush=True)
+            return 1
+        rclpy.spin_once(node, timeout_sec=0.05)
+    for i, (f, msg) in enumerate(msgs):
+        if i:
+            until = time.monotonic() + args.gap
+            while time.monotonic() < until:
+                rclpy.spin_once(node, timeout_sec=min(0.05, max(until - time.monotonic(), 0.0)))
+        pub.publish(msg)
+        print(f"sent {f}" + (f" at /clock {clock[0]:.3f} s" if clock[0] >= 0 else ""), flush=True)
+    # the acknowledgements come with the writer's next heartbeat exchange (up to a few seconds): waited once
+    if not pub.wait_for_all_acked(Duration(seconds=args.wait)):
+        print(f"trajectory_sender: not acknowledged within {args.wait:g} s", file=sys.stderr, flush=True)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.stdout.flush()
+    code = main()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)  # no interpreter finalization: rclpy's threads may still be in a teardown left behind

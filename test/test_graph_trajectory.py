@@ -1,0 +1,98 @@
+"""Trajectories sent to a running lockstep graph (issue 37): the 5-point, 4 s example is followed from the
+step the reference node names, every joint within 1e-3 rad RMS after its first 0.5 s; three wrong ones (an
+unknown joint, a position beyond a limit, times not increasing), one before it and two while it runs, are
+refused with one line each and change nothing: the recorded reference is eq. 27 spliced with the example
+at that step, bit for bit, as core/trajectory_reference.py computes it. One graph, four sends."""
+import re
+import sys
+
+import numpy as np
+import pytest
+import yaml
+
+from graph_harness import REPO, Launcher, Proc, assert_no_leftovers, exit_codes
+from pa10_dnbs.controller_factory import build_reference, switchable_reference
+from pa10_dnbs.core.joint_trajectory import trajectory_from_lists
+from pa10_dnbs.run_data import RunData
+from pa10_dnbs.trajectory_file import read_trajectory
+
+pytestmark = pytest.mark.graph  # starts ROS processes
+
+DURATION_S = 6.5
+EXAMPLE = REPO / "config" / "trajectory_example.yaml"
+RMS_LIMIT_RAD = 1e-3
+SETTLE_S = 0.5  # the first 0.5 s of the trajectory are not counted
+
+
+def _as_received(path):
+    """The file's trajectory as the node rebuilds it from the message (time_from_start as sec + nanosec * 1e-9)."""
+    t = read_trajectory(path)
+    times = [s + ns * 1e-9 for s, ns in (divmod(int(round(x * 1e9)), 10**9) for x in t.time_from_start_s)]
+    return trajectory_from_lists(t.joint_names, times, t.positions_rad.tolist(), [[]] * len(times),
+                                 [[]] * len(times))
+
+
+def _bad_files(tmp_path):
+    good = yaml.safe_load(EXAMPLE.read_text())
+    unknown = {**good, "joint_names": ["s1", "s2", "s3", "e1", "e2", "w1", "wrist_9"]}
+    beyond = yaml.safe_load(EXAMPLE.read_text())
+    beyond["points"][2]["positions"][1] = 1.7  # s2's limit is 1.64 rad
+    backwards = yaml.safe_load(EXAMPLE.read_text())
+    backwards["points"][3]["time_from_start"] = 2.0  # after 2.4 s
+    files = []
+    for name, doc in (("unknown", unknown), ("beyond", beyond), ("backwards", backwards)):
+        files.append(tmp_path / f"{name}.yaml")
+        files[-1].write_text(yaml.safe_dump(doc))
+    return files
+
+
+def test_a_trajectory_sent_while_running_is_tracked_and_wrong_ones_change_nothing(tmp_path, domain, cfg):
+    from pa10_dnbs.launch.shm_cleanup import shm_files
+
+    shm_before = shm_files()
+    unknown, beyond, backwards = _bad_files(tmp_path)
+    out = tmp_path / "run"
+    la = Launcher("--mode", "lockstep", "--controller", "dnbs", "--duration", DURATION_S, "--out", out,
+                  domain_id=domain)
+    sender = Proc([sys.executable, "-m", "pa10_dnbs.ros.trajectory_sender", unknown, EXAMPLE, beyond, backwards,
+                   "--after-clock", "1.0", "--gap", "0.3", "--wait", "240"], domain)
+    try:
+        pids = la.node_pids()
+        sender_rc = sender.wait(timeout=300)
+        rc = la.wait(timeout=600)
+    finally:
+        sender.kill()
+        la.kill()
+    assert sender_rc == 0 and sender.output.count("sent ") == 4, sender.output
+    assert rc == 0, la.output
+    log = (out / "logs" / "reference.log").read_text()
+    refused = [x for x in log.splitlines() if "TRAJECTORY refused" in x]
+    assert [x.split(": ", 1)[0] for x in refused] == ["TRAJECTORY refused"] * 3, log
+    assert "unknown joint 'wrist_9'" in refused[0], refused
+    assert "points[2].positions of joint 's2' = 1.7 rad is beyond its limits" in refused[1], refused
+    assert "points[3].time_from_start = 2 s is not after points[2]'s 2.4 s" in refused[2], refused
+    started = re.findall(r"TRAJECTORY accepted: 5 points, 6 knots from step (\d+) .* to step (\d+)", log)
+    assert len(started) == 1, log
+    start, end = int(started[0][0]), int(started[0][1])
+    n = int(round(DURATION_S * 1000))
+    assert 1000 < start and end == start + 4000 and end + 200 <= n, (start, end)
+
+    # the reference on the wire: eq. 27, then the example from `start`, and nothing else (the wrong ones)
+    run = RunData.load_npz(out / "timeseries.npz")
+    assert run.n_steps == n
+    expected = switchable_reference(cfg, build_reference(cfg))
+    expected.start(_as_received(EXAMPLE), start)
+    assert np.array_equal(run.reference_rad, expected.position(np.arange(n)))
+    points = read_trajectory(EXAMPLE)
+    knots = start + np.round(points.time_from_start_s * 1000).astype(int)
+    np.testing.assert_allclose(run.reference_rad[knots], points.positions_rad, atol=1e-12)
+    assert np.array_equal(run.reference_rad[end:], np.tile(points.positions_rad[-1], (n - end, 1)))  # held
+
+    # every joint tracks it: RMS over the trajectory after its first 0.5 s
+    window = slice(start + int(SETTLE_S * 1000), end)
+    rms = np.sqrt(np.mean(run.error_rad[window] ** 2, axis=0))
+    print(f"trajectory from step {start}: RMS per joint over steps [{window.start}, {window.stop}) "
+          f"{np.array2string(rms, precision=2)}; worst {rms.max():.3e} rad")
+    assert rms.max() <= RMS_LIMIT_RAD, rms
+    assert all(c == 0 for c in exit_codes(la.output).values())
+    assert_no_leftovers(pids.values(), shm_before)
