@@ -8,17 +8,25 @@ results are keyed, so a run that comes back twice is counted once and ``on_done`
 - ``scheduler`` given (``tcp://host:port``): a ``distributed.Client`` to that scheduler; its workers must
   import the same pa10_dnbs (docs/tuning.md, "A cluster").
 - otherwise ``jobs`` local processes (default: one per core); ``jobs == 1`` runs in this process.
+
+Interrupted (Ctrl-C, an error) while runs are out: the local workers (which ignore SIGINT, pa10_dnbs/interrupt.py)
+are terminated and reaped within ``STOP_GRACE_S`` (then killed); a cluster's futures are cancelled, so the
+scheduler drops every run not started (a run already on a worker thread ends with that run, its result dropped).
 """
 from __future__ import annotations
 
 import os
+import time
 import uuid
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Callable, Hashable
 
 from ..config_error import ConfigError
+from ..interrupt import POLL_S, check, ignore_sigint, immediate, sigint_blocked
 
 CONNECT_TIMEOUT_S = 10.0   # to reach the scheduler and to see its first worker
+STOP_GRACE_S = 2.0         # interrupted: SIGTERM to the workers, SIGKILL after this
+CLOSE_TIMEOUT_S = 5.0      # interrupted: the cluster connection closes within this
 
 
 class Executor:
@@ -37,16 +45,41 @@ class Executor:
             self._client = connect(self.scheduler)
             self.jobs = max(1, len(self._client.scheduler_info(n_workers=-1)["workers"]))
         elif self.jobs > 1:
-            self._pool = ProcessPoolExecutor(max_workers=self.jobs)
+            self._pool = ProcessPoolExecutor(max_workers=self.jobs, initializer=ignore_sigint)
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, exc_type, exc, tb) -> None:
         if self._pool is not None:
-            self._pool.shutdown(wait=True, cancel_futures=True)
+            if exc_type is None:
+                self._pool.shutdown(wait=True, cancel_futures=True)
+            else:
+                self._stop_pool()
             self._pool = None
         if self._client is not None:
-            self._client.close()
+            if exc_type is None:
+                self._client.close()
+            else:
+                self._client.close(timeout=CLOSE_TIMEOUT_S)
             self._client = None
+
+    def _stop_pool(self) -> None:
+        """Interrupted: cancel what is queued, terminate the workers (their runs are pure computation), reap
+        them; bounded by ``STOP_GRACE_S`` plus a second, whatever a worker was doing."""
+        pool = self._pool
+        procs = list((pool._processes or {}).values())
+        pool.shutdown(wait=False, cancel_futures=True)
+        for p in procs:
+            p.terminate()
+        deadline = time.monotonic() + STOP_GRACE_S
+        for p in procs:
+            p.join(max(0.0, deadline - time.monotonic()))
+        for p in procs:
+            if p.is_alive():
+                p.kill()
+                p.join(1.0)
+        manager = getattr(pool, "_executor_manager_thread", None)
+        if manager is not None:   # it sees the workers gone and ends; joined here so exit does not wait on it
+            manager.join(1.0)
 
     @property
     def where(self) -> str:
@@ -70,22 +103,43 @@ class Executor:
             from distributed import as_completed as dask_completed
 
             token = uuid.uuid4().hex[:12]
-            futures = {self._client.submit(fn, *args, pure=False, key=f"{fn.__name__}-{token}-{i}"): key
-                       for i, (key, args) in enumerate(tasks.items())}
-            for fut in dask_completed(list(futures), loop=self._client.loop):
-                finished(futures[fut], fut.result())
-        elif self._pool is not None:
-            futures = {self._pool.submit(fn, *args): key for key, args in tasks.items()}
+            futures = {}
             try:
-                for fut in as_completed(futures):
-                    finished(futures[fut], fut.result())
+                for i, (key, args) in enumerate(tasks.items()):
+                    futures[self._client.submit(fn, *args, pure=False, key=f"{fn.__name__}-{token}-{i}")] = key
+                done = dask_completed(list(futures), loop=self._client.loop)
+                while not done.is_empty():   # polled: a Ctrl-C noted meanwhile (interrupt.deferred) is raised here
+                    batch = done.next_batch(block=False)
+                    for fut in batch:
+                        finished(futures[fut], fut.result())
+                    check()
+                    if not batch:
+                        time.sleep(POLL_S / 2)
+            except BaseException:
+                self._client.cancel(list(futures), force=True)   # the scheduler drops them: nothing left queued
+                raise
+        elif self._pool is not None:
+            futures, order = {}, {}
+            try:
+                with sigint_blocked():   # the workers forked by the first submit must not see a Ctrl-C
+                    for key, args in tasks.items():
+                        fut = self._pool.submit(fn, *args)
+                        futures[fut], order[fut] = key, len(order)
+                pending = set(futures)
+                while pending:   # polled: a Ctrl-C noted meanwhile (interrupt.deferred) is raised here
+                    done, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
+                    for fut in sorted(done, key=lambda f: order[f]):
+                        finished(futures[fut], fut.result())
+                    check()
             except BaseException:
                 for fut in futures:
                     fut.cancel()
                 raise
         else:
             for key, args in tasks.items():
-                finished(key, fn(*args))
+                with immediate():   # pure computation: a Ctrl-C stops it at once
+                    value = fn(*args)
+                finished(key, value)
         return results
 
 

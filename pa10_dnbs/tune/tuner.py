@@ -88,9 +88,7 @@ def open_study(storage, spec: TuneSpec, batch: int):
     if stored is None and not study.trials:
         study.set_user_attr(STUDY_ATTR, spec.identity())
     elif stored != spec.identity():
-        diff = sorted(k for k in spec.identity() if (stored or {}).get(k) != spec.identity()[k])
-        raise ConfigError(f"--out/--storage: study {spec.study_name!r} there was run with other options "
-                          f"({', '.join(diff)}): give another --out or --storage, or the same options")
+        raise ConfigError(refusal(spec.study_name, stored or {}, spec.identity()))
     for t in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
         study.tell(t.number, state=TrialState.FAIL)   # left by a tune that was killed: one coordinator per study
     if not any(t.user_attrs.get("start") for t in study.get_trials(
@@ -99,6 +97,24 @@ def open_study(storage, spec: TuneSpec, batch: int):
     study.sampler = optuna.samplers.TPESampler(seed=spec.seed + len(study.trials), multivariate=True,
                                                constant_liar=batch > 1)
     return study
+
+
+IDENTITY_FLAGS = {"arm": "--arm", "controller": "--controller", "params": "--params", "scenarios": "--scenarios",
+                  "seeds": "--seeds", "duration_s": "--duration", "config_file": "--config", "seed": "--seed"}
+
+
+def refusal(study_name: str, stored: dict, given: dict) -> str:
+    """Why a stored study cannot go on with these options, and what to do: one line naming each flag that
+    differs, as stored and as given."""
+    def shown(key, v):
+        if key == "seeds" and isinstance(v, list):
+            return str(len(v))          # --seeds N means seeds 0..N-1
+        return ",".join(map(str, v)) if isinstance(v, list) else f"{v:g}" if isinstance(v, float) else str(v)
+    diff = [f"{IDENTITY_FLAGS.get(k, k)} {shown(k, given.get(k))} (stored: {shown(k, stored.get(k))})"
+            for k in given if stored.get(k) != given[k]]
+    return (f"--out/--storage: study {study_name!r} there was run with other options, so its trials do not "
+            f"score the same objective: {'; '.join(diff)}; rerun with the stored options to resume it, or give "
+            "another --out (or --storage) to start a new study")
 
 
 def completed(study) -> list:

@@ -1,0 +1,193 @@
+"""Ctrl-C for the long commands (docs/tuning.md, "Interrupting"): the command alone decides, its workers do not.
+
+A terminal's Ctrl-C sends SIGINT to every process of the foreground group: the command and its pool workers.
+
+- Pool workers ignore SIGINT (:func:`ignore_sigint`, their pool's initializer; :func:`sigint_blocked` closes the
+  window between fork and initializer). A worker interrupted inside multiprocessing's queues can leave a half
+  message in a pipe the pool reads forever (the rare hang of issue 38); the parent stops them itself.
+- The command: the first SIGINT raises KeyboardInterrupt (the command stops its work, keeps what is complete,
+  says where, exits 130); from then on a second SIGINT ends at once (:func:`two_stage_sigint`): every child is
+  killed and reaped, one line (:func:`on_second_sigint` sets it), exit 130, no clean-up that could wait.
+- Code that talks to a database (the tune's Optuna storage) runs :func:`deferred`: there the first SIGINT is
+  only noted, and :func:`check` raises KeyboardInterrupt at the next safe point (the executor checks every
+  ``POLL_S``), never inside a SQL statement (an interrupted cursor prints SQLAlchemy's traceback and can leave
+  the connection unusable). Pure computation may run :func:`immediate` inside it.
+"""
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import sys
+import time
+
+EXIT_INTERRUPTED = 130   # 128 + SIGINT, as a shell reports a command ended by Ctrl-C
+POLL_S = 0.1            # how often a waiting executor looks at a deferred Ctrl-C
+
+_second_line = "pa10-dnbs: interrupted again: stopped at once"
+_state = {"deferred": 0, "requested": False, "raised": False}
+
+
+def ignore_sigint() -> None:
+    """A pool worker's initializer: Ctrl-C is for the parent, which stops the workers itself."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+@contextlib.contextmanager
+def sigint_blocked():
+    """SIGINT held back in this thread while workers are forked (they inherit the mask, then ignore it); a
+    SIGINT that came meanwhile is delivered on exit."""
+    try:
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    except (AttributeError, OSError, ValueError):  # pragma: no cover - not POSIX
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+def on_second_sigint(line: str) -> None:
+    """The line a second Ctrl-C prints (what stays where); set by a command once it knows."""
+    global _second_line
+    _second_line = line
+
+
+def child_pids(parent: int | None = None) -> list[int]:
+    """Living direct children of ``parent`` (default: this process), from /proc."""
+    parent = os.getpid() if parent is None else parent
+    pids = []
+    for name in os.listdir("/proc"):
+        if not name.isdigit():
+            continue
+        try:
+            with open(f"/proc/{name}/stat") as f:
+                stat = f.read()
+        except OSError:
+            continue
+        fields = stat[stat.rfind(")") + 2:].split()   # state, ppid, pgrp, ...
+        if int(fields[1]) == parent and fields[0] != "Z":
+            pids.append(int(name))
+    return pids
+
+
+def kill_children(wait_s: float = 2.0) -> None:
+    """SIGKILL every child and reap it (a killed worker must not stay a zombie or an orphan); at most ``wait_s``."""
+    deadline = time.monotonic() + wait_s
+    while True:
+        for pid in child_pids():
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+        try:
+            while (pid := os.waitpid(-1, os.WNOHANG)[0]) != 0:
+                pass
+        except ChildProcessError:
+            return
+        if time.monotonic() > deadline:
+            return
+        time.sleep(0.01)
+
+
+def _second(signum, frame) -> None:
+    kill_children()
+    with contextlib.suppress(Exception):
+        os.write(2, ("\n" + _second_line + "\n").encode())
+    os._exit(EXIT_INTERRUPTED)
+
+
+def _first(signum, frame) -> None:
+    signal.signal(signal.SIGINT, _second)
+    _state["requested"] = True
+    if not _state["deferred"]:
+        _state["raised"] = True
+        raise KeyboardInterrupt
+
+
+def check() -> None:
+    """Raise the KeyboardInterrupt of a Ctrl-C noted in :func:`deferred` (once)."""
+    if _state["requested"] and not _state["raised"]:
+        _state["raised"] = True
+        raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def deferred():
+    """Within: the first SIGINT is noted, raised by the next :func:`check` (and at the end of the block)."""
+    _state["deferred"] += 1
+    try:
+        yield
+    finally:
+        _state["deferred"] -= 1
+    check()
+
+
+@contextlib.contextmanager
+def immediate():
+    """Within (pure computation inside :func:`deferred`): the first SIGINT raises at once, as outside."""
+    depth, _state["deferred"] = _state["deferred"], 0
+    try:
+        check()
+        yield
+    finally:
+        _state["deferred"] = depth
+
+
+@contextlib.contextmanager
+def two_stage_sigint():
+    """Within: the first SIGINT raises KeyboardInterrupt, the second ends the process at once (see the module).
+    Outside the main thread: nothing changes."""
+    global _second_line
+    try:
+        previous = signal.signal(signal.SIGINT, _first)
+    except ValueError:   # not the main thread
+        yield
+        return
+    _second_line = "pa10-dnbs: interrupted again: stopped at once"
+    _state.update(deferred=0, requested=False, raised=False)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        _state.update(deferred=0, requested=False, raised=False)
+
+
+def quiet_start() -> object:
+    """While the command's modules load (before it can say anything useful): a SIGINT ends at once with one
+    line and exit 130 instead of an import traceback. Returns the previous handler for :func:`end_quiet_start`."""
+    def stop(signum, frame):
+        with contextlib.suppress(Exception):
+            os.write(2, b"pa10-dnbs: interrupted while starting; nothing written\n")
+        os._exit(EXIT_INTERRUPTED)
+    try:
+        return signal.signal(signal.SIGINT, stop)
+    except ValueError:   # not the main thread
+        return None
+
+
+def end_quiet_start(previous) -> None:
+    if previous is not None:
+        with contextlib.suppress(ValueError):
+            signal.signal(signal.SIGINT, previous)
+
+
+def quiet_end() -> None:
+    """Once the command has returned: a SIGINT while the interpreter exits ends it at once with one line and exit
+    130 instead of a traceback from the interpreter's own clean-up."""
+    def stop(signum, frame):
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(Exception):
+                stream.flush()
+        kill_children(0.5)
+        with contextlib.suppress(Exception):
+            os.write(2, b"pa10-dnbs: interrupted while exiting, after the command had finished (the lines "
+                     b"above say what it wrote)\n")
+        os._exit(EXIT_INTERRUPTED)
+    with contextlib.suppress(ValueError):
+        signal.signal(signal.SIGINT, stop)
+
+
+def say(line: str) -> None:
+    """One line on stderr (the interruption's verdict)."""
+    print(line, file=sys.stderr, flush=True)
