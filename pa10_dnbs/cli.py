@@ -14,6 +14,8 @@ from .launch.fault_flags import add_fault_arguments
 from .loop.scheduling import DEFAULT_RT_PRIORITY
 from .bag.bag_reader import BagError
 from .bag.bag_writer import BagExistsError
+from .cli_values import OneLineParser, nonnegative, number_in, positive, seconds, whole_in
+from .output_lock import OutputInUseError, held, release_all
 from .report.outputs import OutputExistsError
 from .tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 
@@ -29,17 +31,37 @@ def _simulate(args: argparse.Namespace) -> int:
                         trajectory=args.trajectory)
 
 
+def _unused_flags(args: argparse.Namespace, rules) -> None:
+    """Refuse a flag that has no effect in the chosen mode: ``rules`` are (dest, applies, why) triples."""
+    for dest, applies, why in rules:
+        if getattr(args, dest) is not None and not applies:
+            raise ConfigError(f"--{dest.replace('_', '-')}: {why}")
+
+
+def _live_defaults(args: argparse.Namespace) -> None:
+    _unused_flags(args, [(d, args.live is not None, "only with --live") for d in ("live_host", "live_hz")])
+    args.live_host = "127.0.0.1" if args.live_host is None else args.live_host
+    args.live_hz = 50.0 if args.live_hz is None else args.live_hz
+
+
 def _launch(args: argparse.Namespace) -> int:
     from .commands.launch import run_launch
 
+    realtime = args.mode == "realtime"
+    _unused_flags(args, [("rtf", realtime, "only with --mode realtime (lockstep runs as fast as the graph answers)"),
+                         ("deadline_fraction", realtime, "only with --mode realtime (lockstep has no deadlines)"),
+                         ("bag_compression", args.record is not None, "only with --record")])
+    _live_defaults(args)
     return run_launch(config_path=args.config, mode=args.mode, controller=args.controller,
                       duration_s=args.duration, out=args.out, force=args.force,
                       progress=not args.no_progress and sys.stderr.isatty(), domain_id=args.domain_id,
-                      reliability=args.reliability, effort_timeout_s=args.effort_timeout,
+                      reliability=args.reliability,
+                      effort_timeout_s=1.0 if args.effort_timeout is None else args.effort_timeout,
                       on_missing_effort=args.on_missing_effort, record=args.record, fault_args=args,
                       restart=args.restart, netns=args.netns, init_from=args.init_from,
-                      bag_compression=args.bag_compression, live_port=args.live, live_host=args.live_host,
-                      live_hz=args.live_hz, real_time_factor=args.rtf, deadline_fraction=args.deadline_fraction,
+                      bag_compression=args.bag_compression or "zstd", live_port=args.live, live_host=args.live_host,
+                      live_hz=args.live_hz, real_time_factor=1.0 if args.rtf is None else args.rtf,
+                      deadline_fraction=0.9 if args.deadline_fraction is None else args.deadline_fraction,
                       rt_priority=args.rt_priority, sched_batch=args.sched_batch, namespace=args.namespace,
                       clock_hz=args.clock_hz, figures=not args.no_figures, arm=args.arm,
                       trajectory=args.trajectory)
@@ -86,6 +108,7 @@ def _analyse(args: argparse.Namespace) -> int:
 def _replay(args: argparse.Namespace) -> int:
     from .commands.replay import run_replay
 
+    _live_defaults(args)
     return run_replay(args.bag, rate=args.rate, topics=args.topics, start_offset_s=args.start_offset, loop=args.loop,
                       clock_hz=args.clock, wait_for_subscribers_s=args.wait_for_subscribers,
                       queue_depth=args.queue_depth, live_port=args.live, live_host=args.live_host,
@@ -101,7 +124,7 @@ def add_arm_argument(p: argparse.ArgumentParser) -> None:
 
 def add_parallel_arguments(p: argparse.ArgumentParser, what: str) -> None:
     """``--jobs N`` (alias ``--workers``) and ``--scheduler ADDRESS``: where the runs execute (docs/tuning.md)."""
-    p.add_argument("--jobs", "--workers", dest="jobs", type=int, default=None, metavar="N",
+    p.add_argument("--jobs", "--workers", dest="jobs", type=whole_in(1, 4096), default=None, metavar="N",
                    help=f"local worker processes for the {what} (default: one per core; 1: in this process)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help=f"run the {what} on a Dask distributed cluster (e.g. tcp://127.0.0.1:8786) instead of "
@@ -112,7 +135,7 @@ def _add_run_args(p: argparse.ArgumentParser, controllers: tuple[str, ...], help
     p.add_argument("--config", type=Path, default=None, help=f"YAML config (default: {default_config_path()})")
     add_arm_argument(p)
     p.add_argument("--controller", choices=controllers, default="dnbs", help=help_controller)
-    p.add_argument("--duration", type=float, default=None, metavar="SECONDS",
+    p.add_argument("--duration", type=seconds, default=None, metavar="SECONDS",
                    help="simulated time [s] (default: simulation.duration_s of the config, 20 s)")
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
     p.add_argument("--force", action="store_true", help="replace an existing output directory")
@@ -128,14 +151,14 @@ def _add_live_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--live", type=int, nargs="?", const=LIVE_PORT, default=None, metavar="PORT",
                    help=f"serve a live view for Foxglove (WebSocket) on PORT (default {LIVE_PORT}; 0: any free port); "
                         "in Foxglove: Open connection, Foxglove WebSocket, ws://127.0.0.1:PORT (docs/live_view.md)")
-    p.add_argument("--live-host", default="127.0.0.1", metavar="ADDRESS",
-                   help="address the live view listens on (default 127.0.0.1: this machine only)")
-    p.add_argument("--live-hz", type=float, default=50.0, metavar="HZ",
-                   help="live view frames per second of wall time, at most (default 50)")
+    p.add_argument("--live-host", default=None, metavar="ADDRESS",
+                   help="with --live: address the live view listens on (default 127.0.0.1: this machine only)")
+    p.add_argument("--live-hz", type=positive, default=None, metavar="HZ",
+                   help="with --live: live view frames per second of wall time, at most (default 50)")
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="pa10-dnbs", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="pa10-dnbs", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
 
     sim = sub.add_parser("simulate", help="closed loop in one process (no ROS), with metrics, figures, report")
@@ -155,13 +178,13 @@ def build_parser() -> argparse.ArgumentParser:
                     help="lockstep: the plant steps once every joint has answered (deterministic, as fast as the "
                          "graph goes); realtime: the plant steps on a wall-clock schedule with deadlines "
                          "(docs/timing.md)")
-    la.add_argument("--rtf", type=float, default=1.0, metavar="R",
-                    help="realtime: real-time factor, as Gazebo's real_time_factor: a step of dt takes dt / R of "
+    la.add_argument("--rtf", type=number_in(0, 100), default=None, metavar="R",
+                    help="realtime only: real-time factor, as Gazebo's real_time_factor: a step of dt takes dt / R of "
                          "wall time (1.0: 1 kHz; 0.5: half speed, a 2 ms tick)")
-    la.add_argument("--deadline-fraction", type=float, default=0.9, metavar="F",
-                    help="realtime: an effort counts when it arrives within this fraction of its tick "
+    la.add_argument("--deadline-fraction", type=number_in(0, 1), default=None, metavar="F",
+                    help="realtime only: an effort counts when it arrives within this fraction of its tick "
                          "(default 0.9); a missing one is held or zeroed (--on-missing-effort) and counted")
-    la.add_argument("--rt-priority", type=int, default=DEFAULT_RT_PRIORITY, metavar="N",
+    la.add_argument("--rt-priority", type=whole_in(0, 99), default=DEFAULT_RT_PRIORITY, metavar="N",
                     help=f"SCHED_FIFO priority 1..99 for every node of the graph where the OS allows it (root, "
                          f"CAP_SYS_NICE or ulimit -r); otherwise one line and the default policy. Default "
                          f"{DEFAULT_RT_PRIORITY}, as ros2_control's controller manager; 0: off (docs/timing.md)")
@@ -174,16 +197,17 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the arm's ROS namespace (default /<arm name>, /pa10 for the PA10): every node runs in it, its "
                          "topics are NS/<joint>/state, "
                          "NS/joint_states, ...; /clock, /tf, /tf_static, /diagnostics stay global")
-    la.add_argument("--clock-hz", type=float, default=100.0, metavar="HZ",
+    la.add_argument("--clock-hz", type=positive, default=100.0, metavar="HZ",
                     help="/clock rate in Hz of simulated time (default 100, as `ros2 bag play --clock`); every node "
                          "but the plant runs with use_sim_time:=true")
-    la.add_argument("--domain-id", type=int, default=None, help="ROS_DOMAIN_ID (default: a free one, leased for the run so concurrent runs never share it)")
+    la.add_argument("--domain-id", type=whole_in(0, 101), default=None, help="ROS_DOMAIN_ID (default: a free one, leased for the run so concurrent runs never share it)")
     la.add_argument("--reliability", choices=("reliable", "best_effort"), default=None,
                     help="QoS of the per-joint state/effort topics (default: best_effort, depth 1 in realtime, "
                          "the sensor-data convention; in lockstep best_effort too, reliable when --record or "
                          "--netns is given; docs/timing.md)")
-    la.add_argument("--effort-timeout", type=float, default=1.0, metavar="SECONDS",
-                    help="lockstep: wall time to wait for a joint's effort before holding/zeroing it")
+    la.add_argument("--effort-timeout", type=seconds, default=None, metavar="SECONDS",
+                    help="lockstep only: wall time to wait for a joint's effort before holding/zeroing it "
+                         "(default 1)")
     la.add_argument("--on-missing-effort", choices=("hold", "zero"), default="hold",
                     help="what replaces a missing effort: the joint's last applied torque (hold) or zero")
     la.add_argument("--record", type=Path, default=None, metavar="BAG_DIR",
@@ -197,7 +221,7 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--init-from", type=Path, default=None, metavar="CHECKPOINTS",
                     help="warm start: the DNBS weights and covariances of an earlier run (its output directory or "
                          "its checkpoints/ directory); reported as such")
-    la.add_argument("--bag-compression", choices=("zstd", "none"), default="zstd",
+    la.add_argument("--bag-compression", choices=("zstd", "none"), default=None,
                     help="with --record: zstd-compressed MCAP chunks (default, as `ros2 bag record -s mcap`) or none")
     _add_live_args(la)
     add_fault_arguments(la)
@@ -226,8 +250,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="comma-separated: nominal, payload_2kg, payload_5kg, links_heavier_30pct, encoder_noise, "
                          "delay_1_tick, coulomb, fast_reference")
     st.add_argument("--controllers", default="dnbs,pid", metavar="LIST", help="comma-separated: dnbs, pid, ctc")
-    st.add_argument("--seeds", type=int, default=1, help="seeds 0..N-1 of the DNBS initial weights and the noise")
-    st.add_argument("--duration", type=float, default=20.0, metavar="SECONDS", help="simulated time per run")
+    st.add_argument("--seeds", type=whole_in(1, 100000), default=1, help="seeds 0..N-1 of the DNBS initial weights and the noise")
+    st.add_argument("--duration", type=seconds, default=20.0, metavar="SECONDS", help="simulated time per run")
     st.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
     st.add_argument("--config", type=Path, default=None, help="YAML config the scenarios start from")
     add_arm_argument(st)
@@ -243,7 +267,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     tu = sub.add_parser("tune", help="search a controller's settings on an arm with Optuna (docs/tuning.md)")
     tu.add_argument("--controller", required=True, metavar="NAME", help="dnbs, pid or ctc")
-    tu.add_argument("--trials", type=int, default=20, metavar="N",
+    tu.add_argument("--trials", type=whole_in(1, 1000000), default=20, metavar="N",
                     help="completed trials the study should hold (a resumed tune runs the rest; default 20)")
     tu.add_argument("--out", type=Path, required=True, metavar="DIR",
                     help="tuned.yaml, tune.md, tune.json, figures, and the study's SQLite storage tune.db")
@@ -252,17 +276,17 @@ def build_parser() -> argparse.ArgumentParser:
                     help="YAML config the search starts from (default: the shipped default)")
     tu.add_argument("--storage", default=None, metavar="URL",
                     help="Optuna storage URL (default: sqlite:///DIR/tune.db), e.g. postgresql://host/db")
-    tu.add_argument("--seed", type=int, default=0, help="the sampler's seed (default 0)")
+    tu.add_argument("--seed", type=whole_in(0, 2**32 - 1), default=0, help="the sampler's seed (default 0)")
     tu.add_argument("--params", default=None, metavar="LIST",
                     help="search only these parameters of the controller's space (the rest stay at the start)")
     tu.add_argument("--scenarios", default=TRAINING_SCENARIOS, metavar="LIST",
                     help=f"training scenarios (default {TRAINING_SCENARIOS})")
-    tu.add_argument("--seeds", type=int, default=TRAINING_SEEDS, metavar="N",
+    tu.add_argument("--seeds", type=whole_in(1, 100000), default=TRAINING_SEEDS, metavar="N",
                     help=f"training seeds 0..N-1 (default {TRAINING_SEEDS})")
-    tu.add_argument("--held-out-seeds", type=int, default=3, metavar="N",
+    tu.add_argument("--held-out-seeds", type=whole_in(0, 100000), default=3, metavar="N",
                     help="held-out seeds 100..100+N-1 on every scenario, for the best and the start (default 3; "
                          "0: none)")
-    tu.add_argument("--duration", type=float, default=20.0, metavar="SECONDS", help="simulated time per run")
+    tu.add_argument("--duration", type=seconds, default=20.0, metavar="SECONDS", help="simulated time per run")
     add_parallel_arguments(tu, "runs of the trials")
     tu.add_argument("--no-progress", action="store_true", help="no progress line")
     tu.set_defaults(func=_tune)
@@ -279,20 +303,20 @@ def build_parser() -> argparse.ArgumentParser:
 
     rp = sub.add_parser("replay", help="publish a bag's topics with their recorded timing (like ros2 bag play)")
     rp.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 bag directory")
-    rp.add_argument("--rate", type=float, default=1.0, help="playback speed factor (default 1)")
+    rp.add_argument("--rate", type=number_in(0, 1000), default=1.0, help="playback speed factor (default 1)")
     rp.add_argument("--topics", nargs="+", default=None, metavar="TOPIC", help="only these topics (default: all)")
-    rp.add_argument("--start-offset", type=float, default=0.0, metavar="SECONDS",
+    rp.add_argument("--start-offset", type=nonnegative, default=0.0, metavar="SECONDS",
                     help="skip the bag's first SECONDS (of its own timeline)")
     rp.add_argument("--loop", action="store_true", help="play again and again until Ctrl-C")
-    rp.add_argument("--clock", type=float, nargs="?", const=100.0, default=0.0, metavar="HZ",
+    rp.add_argument("--clock", type=nonnegative, nargs="?", const=100.0, default=0.0, metavar="HZ",
                     help="publish /clock from the bag's timeline at HZ (default 100 when given); "
                          "the recorded /clock is then not replayed")
-    rp.add_argument("--wait-for-subscribers", type=float, default=0.0, metavar="SECONDS",
+    rp.add_argument("--wait-for-subscribers", type=nonnegative, default=0.0, metavar="SECONDS",
                     help="before playing, wait up to SECONDS until every topic has a subscriber (exit 1 if not)")
     rp.add_argument("--namespace", default=None, metavar="NS",
                     help="publish the arm's topics under NS (e.g. /arm2: /pa10/s1/state -> /arm2/s1/state); "
                          "/clock, /tf, /tf_static, /diagnostics stay global (default: as recorded)")
-    rp.add_argument("--queue-depth", type=int, default=1000,
+    rp.add_argument("--queue-depth", type=whole_in(1, 1000000), default=1000,
                     help="keep_last depth of each publisher, at least (default 1000)")
     _add_live_args(rp)
     rp.add_argument("--config", type=Path, default=None,
@@ -303,9 +327,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    locked_before = held()   # a command run inside another (scripts/equal_budget.py) keeps its caller's locks
     try:
         return args.func(args)
-    except (ConfigError, KernelBuildError, OutputExistsError, BagExistsError, BagError) as exc:
+    except (ConfigError, KernelBuildError, OutputExistsError, OutputInUseError, BagExistsError, BagError) as exc:
         print(f"pa10-dnbs: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:
@@ -314,6 +339,8 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("pa10-dnbs: interrupted, no output written", file=sys.stderr)
         return 130
+    finally:
+        release_all(keep=locked_before)  # the output paths this command locked (output_lock.py)
 
 
 if __name__ == "__main__":

@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
-"""Ablation of the DNBS remedies: each remedy of the default config off in turn (and the ones it leaves off
-switched on in turn), against the default and the paper's law, on three runs:
+"""Ablation of the DNBS remedies: the default config against each remedy off (or on) in turn, and the paper's law.
+
+Each remedy of the default config is switched off in turn (and the ones it leaves off switched on in turn),
+against the default and the paper's law, on three runs:
 
 - nominal, 20 s: settling time, max |e| over the run, torque variation, steps at the limit after 0.2 s,
   RMS over [10, 20) s (worst joint of each);
@@ -21,6 +23,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from pa10_dnbs.cli_values import OneLineParser, number_in, whole_in  # noqa: E402
 from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
 from pa10_dnbs.paths import share_path  # noqa: E402
 from pa10_dnbs.report.metrics_file import metrics_dict, metrics_settings  # noqa: E402
@@ -82,16 +85,28 @@ def _f(v, spec):
     return "never" if v is None else format(v, spec)
 
 
-def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--workers", type=int, default=None)
-    ap.add_argument("--long-s", type=float, default=100.0, help="length of the noisy run [s]")
-    ap.add_argument("--only", default=None, help="comma-separated variant numbers (0 = default) to run")
-    a = ap.parse_args()
-    if not a.long_s >= 20.0:
-        print(f"ablation: --long-s must be >= 20 s (its RMS is over the last 20 s), got {a.long_s:g}", file=sys.stderr)
-        return 2
-    rows = range(len(VARIANTS)) if a.only is None else [int(x) for x in a.only.split(",")]
+def _variants(text: str) -> list[int]:
+    try:
+        rows = [int(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        rows = []
+    if not rows or any(not 0 <= r < len(VARIANTS) for r in rows):
+        raise argparse.ArgumentTypeError(f"expected comma-separated variant numbers 0..{len(VARIANTS) - 1}, "
+                                         f"got {text!r}")
+    return list(dict.fromkeys(rows))
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = OneLineParser(prog="ablation", description=__doc__.split("\n\n")[0],
+                       epilog="variants: " + "; ".join(f"{i} {name}" for i, (name, _) in enumerate(VARIANTS)))
+    ap.add_argument("--workers", "--jobs", dest="workers", type=whole_in(1, 4096), default=None, metavar="N",
+                    help="worker processes (default: one per core)")
+    ap.add_argument("--long-s", type=number_in(20.0, 1e5, low_open=False), default=100.0, metavar="SECONDS",
+                    help="length of the noisy run [s], >= 20 (its RMS is over the last 20 s; default 100)")
+    ap.add_argument("--only", type=_variants, default=None, metavar="LIST",
+                    help="comma-separated variant numbers to run (0 = the default config; default: all)")
+    a = ap.parse_args(argv)
+    rows = range(len(VARIANTS)) if a.only is None else a.only
     jobs = [(i, sc, d, w) for i in rows for sc, d, w in (
         ("nominal", 20.0, (10.0, 20.0)), ("payload_5kg", 20.0, (10.0, 20.0)),
         ("encoder_noise", a.long_s, (a.long_s - 20.0, a.long_s)))]

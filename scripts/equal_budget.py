@@ -1,14 +1,16 @@
 #!/usr/bin/env python3
-"""Equal budget, side by side: tune several controllers on one arm with the same trials, objective, training
-scenarios and seeds (``pa10-dnbs tune`` once per controller, into DIR/<controller>/), then write
-DIR/comparison.md: the held-out figures of each controller as shipped (hand- or rule-tuned, the start of its
-search) and as tuned, per scenario (docs/tuning.md, "Equal budget").
+"""Tune several controllers on one arm with the same budget, then compare them on held-out seeds.
+
+Each controller is tuned with the same trials, objective, training scenarios and seeds (``pa10-dnbs tune`` once
+per controller, into DIR/<controller>/); then DIR/comparison.md holds the held-out figures of each controller as
+shipped (hand- or rule-tuned, the start of its search) and as tuned, per scenario (docs/tuning.md, "Equal budget").
 
     .venv/bin/python scripts/equal_budget.py --arm pa10 --controllers pid,dnbs,ctc --trials 20 --out runs/eq
 
-Every option but --controllers is passed to each tune as it is (--trials, --arm, --config, --scenarios,
---seeds, --held-out-seeds, --duration, --seed, --jobs, --scheduler). A tune that exists in DIR/<controller>/
-resumes (the same command finishes an interrupted comparison)."""
+Every option is checked before the first tune starts (bad input: one line, exit 2). A tune that exists in
+DIR/<controller>/ resumes (the same command finishes an interrupted comparison); a second copy running into the
+same DIR at once is refused.
+"""
 from __future__ import annotations
 
 import argparse
@@ -17,27 +19,84 @@ import shlex
 import sys
 from pathlib import Path
 
-from pa10_dnbs.cli import main as cli_main
-from pa10_dnbs.tune.comparison import comparison_markdown
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from pa10_dnbs.cli import main as cli_main  # noqa: E402
+from pa10_dnbs.cli_values import OneLineParser, seconds, whole_in  # noqa: E402
+from pa10_dnbs.output_lock import OutputInUseError, lock_output, release_output  # noqa: E402
+from pa10_dnbs.report.outputs import OutputExistsError, check_creatable  # noqa: E402
+from pa10_dnbs.tune.comparison import comparison_markdown  # noqa: E402
+from pa10_dnbs.tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS  # noqa: E402
+
+CONTROLLERS = ("pid", "dnbs", "ctc")
+PROG = "equal_budget"
+
+
+def _controllers(text: str) -> list[str]:
+    names = [c.strip() for c in text.split(",") if c.strip()]
+    bad = [c for c in names if c not in CONTROLLERS]
+    if bad or not names:
+        raise argparse.ArgumentTypeError(f"expected a comma-separated list of {', '.join(CONTROLLERS)}, got {text!r}")
+    return list(dict.fromkeys(names))
+
+
+def build_parser() -> argparse.ArgumentParser:
+    doc = __doc__.split("\n\n")
+    p = OneLineParser(prog=PROG, description=doc[0] + "\n\n" + doc[1],
+                      epilog=doc[3], formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--out", type=Path, required=True, metavar="DIR",
+                   help="the comparison: DIR/<controller>/ (each tune) and DIR/comparison.md")
+    p.add_argument("--controllers", type=_controllers, default=list(CONTROLLERS), metavar="LIST",
+                   help=f"comma-separated, of {', '.join(CONTROLLERS)} (default {','.join(CONTROLLERS)})")
+    p.add_argument("--arm", default=None, metavar="NAME|PATH", help="the arm: pa10, iiwa, panda or an arm file "
+                   "(default: the config's)")
+    p.add_argument("--config", type=Path, default=None, help="YAML config every search starts from")
+    p.add_argument("--trials", type=whole_in(1, 1000000), default=None, metavar="N",
+                   help="completed trials per controller (tune's default 20)")
+    p.add_argument("--scenarios", default=None, metavar="LIST", help=f"training scenarios ({TRAINING_SCENARIOS})")
+    p.add_argument("--seeds", type=whole_in(1, 100000), default=None, metavar="N",
+                   help=f"training seeds 0..N-1 (default {TRAINING_SEEDS})")
+    p.add_argument("--held-out-seeds", type=whole_in(1, 100000), default=None, metavar="N",
+                   help="held-out seeds 100..100+N-1 the comparison is made on (>= 1; default 3)")
+    p.add_argument("--duration", type=seconds, default=None, metavar="SECONDS", help="simulated time per run (20)")
+    p.add_argument("--seed", type=whole_in(0, 2**32 - 1), default=None, help="the samplers' seed (default 0)")
+    p.add_argument("--jobs", "--workers", dest="jobs", type=whole_in(1, 4096), default=None, metavar="N",
+                   help="local worker processes (default: one per core)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS", help="a Dask scheduler to run on instead")
+    p.add_argument("--no-progress", action="store_true", help="no progress line")
+    return p
+
+
+def tune_arguments(args: argparse.Namespace) -> list[str]:
+    """The options every ``pa10-dnbs tune`` of the comparison gets, as words."""
+    words = []
+    for dest in ("arm", "config", "trials", "scenarios", "seeds", "held_out_seeds", "duration", "seed", "jobs",
+                 "scheduler"):
+        value = getattr(args, dest)
+        if value is not None:
+            words += ["--" + dest.replace("_", "-"), str(value)]
+    return words + (["--no-progress"] if args.no_progress else [])
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
-    parser.add_argument("--controllers", default="pid,dnbs,ctc", help="comma-separated (default pid,dnbs,ctc)")
-    parser.add_argument("--out", type=Path, required=True, metavar="DIR")
-    args, rest = parser.parse_known_args(argv)
-    if "--held-out-seeds" in rest and rest[rest.index("--held-out-seeds") + 1] == "0":
-        print("equal_budget: error: --held-out-seeds: the comparison is on held-out seeds (>= 1)", file=sys.stderr)
+    args = build_parser().parse_args(argv)
+    try:
+        check_creatable(args.out, "--out")
+        lock_output(args.out, "comparison directory")
+    except (OutputExistsError, OutputInUseError) as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
-    ctrls = [c.strip() for c in args.controllers.split(",") if c.strip()]
-    results = {}
-    for c in ctrls:
-        rc = cli_main(["tune", "--controller", c, "--out", str(args.out / c), *rest])
-        if rc != 0:
-            return rc
-        results[c] = json.loads((args.out / c / "tune.json").read_text())
-    command = "python scripts/equal_budget.py " + " ".join(shlex.quote(a) for a in (argv or sys.argv[1:]))
-    (args.out / "comparison.md").write_text(comparison_markdown(results, command))
+    try:
+        results = {}
+        for c in args.controllers:
+            rc = cli_main(["tune", "--controller", c, "--out", str(args.out / c), *tune_arguments(args)])
+            if rc != 0:
+                return rc
+            results[c] = json.loads((args.out / c / "tune.json").read_text())
+        command = "python scripts/equal_budget.py " + " ".join(shlex.quote(a) for a in (argv or sys.argv[1:]))
+        (args.out / "comparison.md").write_text(comparison_markdown(results, command))
+    finally:
+        release_output(args.out)
     print(f"wrote {args.out}/comparison.md")
     return 0
 

@@ -17,7 +17,7 @@ from pa10_dnbs.tune.comparison import arms_table
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()))
     parser.add_argument("dirs", nargs="+", type=Path, metavar="DIR", help="comparison directories, one per arm")
     args = parser.parse_args(argv)
     try:

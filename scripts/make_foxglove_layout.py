@@ -24,7 +24,7 @@ from pa10_dnbs.wire.topics import arm_topics, default_namespace  # noqa: E402
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()))
     ap.add_argument("--config", type=Path, default=default_config_path())
     ap.add_argument("--arm", default=None, help="an arm preset or arm file (default: the config's, pa10)")
     ap.add_argument("--namespace", default=None, help="the arm's namespace (default /<arm name>, /pa10)")

@@ -7,6 +7,7 @@ from pathlib import Path
 from ..bag.analysis import bag_arm, bag_joint_names, robot_chain, run_info, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
 from ..config import default_config_path, load_config
+from ..number_text import interval
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..report.progress import ProgressBar
@@ -95,7 +96,7 @@ def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None
                          figures=figures)
     if truncated:
         print(f"analyse: {truncated}")
-    print(f"{controller}: worst-joint RMS error {metrics['worst_rms_error_rad']:.3e} rad over {metrics['window_s']} s "
+    print(f"{controller}: worst-joint RMS error {metrics['worst_rms_error_rad']:.3e} rad over {interval(metrics['window_s'])} s "
           f"({rec.n} steps from {bag.path})")
     print(f"wrote {out}/report.md")
     return 0 if metrics["all_finite"] and metrics["torques_within_limits"] else 1

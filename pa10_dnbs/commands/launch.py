@@ -24,7 +24,10 @@ from ..launch.realtime_advice import ON_TIME_TARGET, injected_misses, realtime_h
 from ..live.options import check_live_options
 from ..loop.scheduling import DEFAULT_RT_PRIORITY, check_priority, granted_priority
 from ..report.metrics_file import metrics_dict, metrics_settings
-from ..report.outputs import atomic_output_dir, check_output_dir, write_report
+from ..number_text import interval
+from ..report.outputs import atomic_output_dir, check_creatable, check_output_dir, write_report
+from ..output_lock import lock_output
+from ..run_size import check_run_size, say_note
 from ..wire.wire_record import load_wire_run
 from ..wire.steps import StepClock
 from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, ClockSchedule, check_clock_hz
@@ -100,6 +103,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     n_steps = int(round(duration_s / dt))
     if n_steps < 2:
         raise ConfigError(f"--duration: {duration_s} s is shorter than two steps of {dt} s")
+    check_run_size("--duration", duration_s, n_steps, len(joint_names), graph=True, say=say_note,
+                   wall_s=n_steps * dt / real_time_factor if mode == "realtime" else None)
     if trajectory is not None:  # the file read and checked as the reference node will: one line, exit 2
         load_reference_trajectory(cfg, trajectory)
         trajectory = Path(trajectory).resolve()
@@ -123,6 +128,10 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         record = Path(record).resolve()
         if record == Path(out).resolve() or Path(out).resolve() in record.parents:
             raise ConfigError(f"--record: the bag {record} must not be inside the output directory {out}")
+        if not record.parent.is_dir():
+            raise ConfigError(f"--record: {record.parent} is not a directory (the bag's folder must exist)")
+        check_creatable(record, "--record")
+        lock_output(record, "bag")
         check_bag_path(record, force)
     if controller == "dnbs":  # auto resolved (and c built) once here, before the seven controllers start; the
         # nodes read the resolved kernel from config_used.yaml (KernelBuildError if c cannot be built)
@@ -182,7 +191,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                     notes.append(nondeterministic)
                     print(f"pa10-dnbs launch: warning: {nondeterministic}", file=sys.stderr, flush=True)
                 if tuple(window) != tuple(cfg["simulation"]["window_s"]):
-                    notes.append(f"run shorter than the configured window {list(cfg['simulation']['window_s'])}: "
+                    notes.append(f"run shorter than the configured window {interval(cfg['simulation']['window_s'])} s: "
                                  "metrics over the second half instead")
                 write_report(tmp, [run], [metrics], title=f"{the_arm.description}: node graph run ({mode})",
                              notes=notes, chain=the_arm.chain, figures=figures)
@@ -194,7 +203,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
             print(f"pa10-dnbs launch: the bag recorded so far is closed and readable: {record}", file=sys.stderr)
         return 130 if exc.interrupted else 1
     m = metrics
-    print(f"{controller} ({mode}): worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over {m['window_s']} s, "
+    print(f"{controller} ({mode}): worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over {interval(m['window_s'])} s, "
           f"real-time factor {m['real_time_factor']:.2f}")
     if mode == "realtime":
         t = m["timing"]

@@ -9,8 +9,10 @@ from ..arm import arm_of
 from ..config import ConfigError, default_config_path, load_config
 from ..controller_factory import load_reference_trajectory
 from ..core.checkpoint import load_joint_checkpoints, save_checkpoint
+from ..number_text import interval
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
+from ..run_size import check_run_size, say_note
 from ..sim.closed_loop import simulate
 
 CHOICES = {"dnbs": ("dnbs",), "pid": ("pid",), "ctc": ("ctc",), "both": ("dnbs", "pid"), "all": ("dnbs", "pid", "ctc")}
@@ -40,6 +42,8 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
         raise ConfigError(f"--duration: {duration_s} s is shorter than two steps")
     duration_s = n_steps * cfg["simulation"]["dt_s"]
     kinds = CHOICES[controller]
+    check_run_size("--duration", duration_s, n_steps, len(the_arm.joint_names), kept_runs=len(kinds),
+                   total_runs=len(kinds), say=say_note)
     init_states = None
     if init_from is not None:
         if "dnbs" not in kinds:
@@ -75,7 +79,7 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
         notes.append("CTC: centralized computed torque with the plant's own model (the reference a decentralized "
                      "controller is compared to; in-process only)")
     if tuple(settings["window_s"]) != tuple(cfg["simulation"]["window_s"]):
-        notes.append(f"run shorter than the configured window {cfg['simulation']['window_s']}: "
+        notes.append(f"run shorter than the configured window {interval(cfg['simulation']['window_s'])} s: "
                      f"metrics over the second half instead")
     with atomic_output_dir(out, force) as tmp:
         write_report(tmp, runs, metrics, title=f"{the_arm.description}: closed-loop run", notes=notes,
@@ -86,7 +90,7 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
                                   run.extra["controllers"], n_steps - 1, the_arm.joint_names)
     for m in metrics:
         settle = m["worst_settling_time_s"]
-        print(f"{m['controller']}: worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over {m['window_s']} s; "
+        print(f"{m['controller']}: worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over {interval(m['window_s'])} s; "
               f"settled (|e| < {m['settle_band_rad']:g} rad) "
               + (f"after {settle:.3f} s" if settle is not None else "never")
               + f"; max |e| {m['worst_max_abs_error_run_rad']:.4f} rad; torque variation "

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import shlex
 from pathlib import Path
 
@@ -11,6 +12,7 @@ from ..config import ConfigError, default_config_path, load_config
 from ..report.outputs import atomic_output_dir, check_output_dir
 from ..report.progress import ProgressBar
 from ..sim.closed_loop import CONTROLLERS
+from ..run_size import check_run_size, say_note
 from ..study.runner import run_study
 from ..study.scenarios import SCENARIOS
 from .name_list import name_list
@@ -34,6 +36,10 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
     config_path = Path(config_path) if config_path else default_config_path()
     cfg = load_config(config_path, arm=arm)
     check_output_dir(out, force)
+    n_runs, n_steps = len(scen) * len(ctrl) * seeds, int(round(duration_s / cfg["simulation"]["dt_s"]))
+    at_once = 1 if scheduler is not None else min(n_runs, workers or os.cpu_count() or 1)
+    check_run_size("--duration", duration_s, n_steps, len(cfg["plant"]["torque_limit_nm"]), at_once=at_once,
+                   total_runs=n_runs, say=say_note)
     if "dnbs" in ctrl:
         cfg = resolve_kernel(cfg, say=print)  # once here, not in each worker
     n = len(scen) * len(ctrl) * seeds

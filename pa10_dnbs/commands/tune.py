@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import shlex
 import sys
 import time
@@ -17,6 +18,9 @@ from pathlib import Path
 from ..arm import arm_of, preset_names
 from ..atomic_file import atomic_path
 from ..config import ConfigError, default_config_path, load_config
+from ..output_lock import lock_output
+from ..report.outputs import check_creatable
+from ..run_size import check_run_size, say_note
 from ..study.executor import Executor
 from ..study.scenarios import SCENARIOS
 from .name_list import name_list
@@ -51,15 +55,22 @@ def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, co
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out: {out} exists and is not a directory")
+    check_creatable(out, "--out")
     config_path = Path(config_path) if config_path else default_config_path()
     base_cfg = load_config(config_path, arm=arm)
     the_arm = arm_of(base_cfg)
-    if int(round(duration_s / base_cfg["simulation"]["dt_s"])) < 2:
+    n_steps = int(round(duration_s / base_cfg["simulation"]["dt_s"]))
+    if n_steps < 2:
         raise ConfigError(f"--duration: {duration_s} s is shorter than two steps")
+    runs_per_trial = len(train) * seeds
+    at_once = 1 if scheduler is not None else min(runs_per_trial, jobs or os.cpu_count() or 1)
+    check_run_size("--duration", duration_s, n_steps, len(the_arm.joint_names), at_once=at_once,
+                   total_runs=runs_per_trial * trials, say=say_note)
     spec = TuneSpec(the_arm.name, controller, param_list, train, list(range(seeds)), duration_s,
                     str(config_path.resolve()), seed, start_values(controller, base_cfg))
     command = _command(controller, trials, out, arm, config_path, storage, seed, scenarios, seeds, held_out_seeds,
                        duration_s, params)
+    lock_output(out)  # a second tune into DIR at once is refused (the same command later resumes)
     with Executor(jobs, scheduler) as ex:   # an unreachable scheduler stops here, before any storage is touched
         storage_obj = open_storage(storage) if storage is not None else None
         if storage is None:

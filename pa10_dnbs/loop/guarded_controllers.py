@@ -44,6 +44,15 @@ class GuardedControllers:
         self.learn()
         return u
 
+    def count_bad(self, x1: np.ndarray, x2: np.ndarray) -> None:
+        """Count a state that is received but not answered (a resend of an answered step, a stale or superseded
+        one) by reason if it fails the guard, so the counters match every bad state message (docs/faults.md)."""
+        if self.guard is None or self.guard.all_plausible(x1, x2):
+            return
+        code = self.guard.check(x1, x2)
+        for i, reason in enumerate(REASONS):
+            self.bad_states[reason] += code == i
+
     def answer(self, x1: np.ndarray, x2: np.ndarray, ref: ReferenceSample) -> np.ndarray:
         """The torques of ``step``, leaving a learning controller's training pending until ``learn``."""
         if self.guard is None or self.guard.all_plausible(x1, x2):

@@ -4,7 +4,8 @@ Receives the joint's state for step k and reference points by step, and
 answers each state exactly once with an effort. A state that arrives before
 its references (x_d(k) and x_d(k + preview)) waits for them, so the answer
 does not depend on message timing; a state seen again (a resend) gets the
-same effort back without training the networks twice. The answer comes
+same effort back without training the networks twice (a bad one is still counted by the guard's reasons, so the
+counters equal the corrupted states the plant sent, resends included). The answer comes
 before the training: ``on_state`` returns the effort with the training
 pending, and the node calls ``learn`` once the effort is out.
 
@@ -68,12 +69,22 @@ class JointLoop:
         """Answer state ``step``: a list of (step, effort) ready to publish (empty while waiting)."""
         if step == self.last_step:
             self.duplicates += 1
+            self._count_bad(position, velocity)
             return [(step, self.last_effort)]
         if step < self.last_step:
             self.out_of_order += 1
+            self._count_bad(position, velocity)
             return []
+        if step in self._pending:  # a resend while the first waits for its references: the newer one is kept
+            self._count_bad(*self._pending[step])
         self._pending[step] = (position, velocity)
         return self._drain()
+
+    def _count_bad(self, position: float, velocity: float) -> None:
+        """Every state message is checked once: the one answered by the guard as it answers, any other here
+        (counted, never answered again nor trained on), so a corrupted resend is counted as it was injected."""
+        self._x1[0], self._x2[0] = position, velocity
+        self.guarded.count_bad(self._x1, self._x2)
 
     @property
     def learning_pending(self) -> bool:

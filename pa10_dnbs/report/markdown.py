@@ -1,6 +1,8 @@
 """The Markdown report: metrics tables and the figures."""
 from __future__ import annotations
 
+import math
+
 
 def _settle(v) -> str:
     return "never" if v is None else f"{v:.3f}"
@@ -44,6 +46,13 @@ def startup_table(metrics: list[dict]) -> str:
     return "\n".join(rows)
 
 
+def _wall_time(wall_s, rtf) -> str:
+    """The run's wall time, or what is true when it is not known (a run rebuilt from a bag: NaN)."""
+    if wall_s is None or not math.isfinite(wall_s):
+        return "wall time not known (the run was rebuilt from a record that does not hold it)"
+    return f"wall time {wall_s:.2f} s" + (f" ({rtf:.1f}x real time)" if rtf and math.isfinite(rtf) else "")
+
+
 def _diverged(m: dict) -> str:
     """'; DIVERGED at step k ...' for a run that went non-finite (its figures end there), else ''."""
     d = m.get("diverged")
@@ -65,7 +74,7 @@ def report_markdown(metrics: list[dict], figures: list[tuple[str, str]], title: 
         lines.append(f"- **{m['controller'].upper()}**: worst-joint RMS {m['worst_rms_error_rad']:.3e} rad; settled "
                      f"(|e| < {m['settle_band_rad']:g} rad) after {_settle(m['worst_settling_time_s'])} s; "
                      f"all values finite: {m['all_finite']}; torques within the limits: {m['torques_within_limits']}; "
-                     f"wall time {m['wall_time_s']:.2f} s" + (f" ({rtf:.1f}x real time)" if rtf else "") + _diverged(m))
+                     + _wall_time(m['wall_time_s'], rtf) + _diverged(m))
     lines += [""] + [f"- {n}" for n in notes]
     lines += ["", f"## Tracking over [{m0['window_s'][0]:g}, {m0['window_s'][1]:g}) s", "", metrics_table(metrics)]
     lines += ["", "## Start-up: the whole run", "", startup_table(metrics), "", "## Figures", ""]

@@ -14,6 +14,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from ..kinematics.urdf_chain import UrdfChain
+from ..output_lock import lock_output, release_output
 from ..run_data import RunData
 from .arm_figure import arm_figure
 from .figures import error_figure, startup_figure, torque_figure, tracking_figure
@@ -22,18 +23,33 @@ from .markdown import report_markdown
 
 
 class OutputExistsError(FileExistsError):
-    """The output directory exists and ``--force`` was not given, or cannot be written."""
+    """The output directory exists and ``--force`` was not given, or cannot be written, or another run uses it."""
 
 
-def check_output_dir(out: Path, force: bool) -> None:
-    """Fail early, before any work, if ``out`` exists and may not be replaced."""
+def check_output_dir(out: Path, force: bool, flag: str = "--out") -> None:
+    """Fail early, before any work, if ``out`` is in use by another run (output_lock.py: this process then
+    holds it until the output is in place), exists and may not be replaced, or cannot be created."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise OutputExistsError(f"{flag}: {out} exists and is not a directory")
+    check_creatable(out, flag)
+    lock_output(out)
     if out.exists() and not force:
         raise OutputExistsError(f"output directory exists: {out} (use --force to replace it)")
-    parent = Path(out).resolve().parent
+
+
+def check_creatable(path: Path, flag: str) -> None:
+    """``path`` can be made: its nearest existing ancestor is a directory in which a folder can be created
+    (tried with a temporary one, removed at once: a check that holds for root and read-only mounts too)."""
+    parent = Path(path).resolve().parent
     while not parent.exists():
         parent = parent.parent
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise OutputExistsError(f"cannot write under {parent} (output directory {out})")
+    if not parent.is_dir():
+        raise OutputExistsError(f"{flag}: {parent} is not a directory (output {path})")
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".pa10_dnbs-probe-", dir=parent))
+    except OSError as exc:
+        raise OutputExistsError(f"{flag}: cannot create {path}: {exc.strerror} in {parent}") from None
 
 
 @contextmanager
@@ -41,8 +57,12 @@ def atomic_output_dir(out: Path, force: bool):
     """Yield a temporary directory; on success it replaces ``out``, on error it is removed."""
     out = Path(out)
     check_output_dir(out, force)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+    except BaseException:
+        release_output(out)
+        raise
     try:
         yield tmp
         old = None
@@ -57,9 +77,11 @@ def atomic_output_dir(out: Path, force: bool):
             raise
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
+        release_output(out)
         raise
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
+    release_output(out)
 
 
 def write_run(directory: Path, run: RunData, metrics: dict, chain: UrdfChain | None = None,

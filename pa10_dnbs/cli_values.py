@@ -1,0 +1,87 @@
+"""The command line's value checks, in one place: argparse ``type=`` validators and a parser whose errors are one line.
+
+A validator turns the flag's text into a value or raises ``argparse.ArgumentTypeError``; argparse then prints
+``prog: error: argument --flag: <why>`` and exits 2 before any work. The library checks the same settings again
+(by their config key) for callers that do not come through the CLI.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """An ArgumentParser whose errors are ONE line (``prog: error: ...; see prog --help``), exit 2."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def _number(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
+    return v
+
+
+def _integer(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+
+
+def seconds(text: str) -> float:
+    """A duration in seconds: finite and > 0 (the size of the run is checked against memory later)."""
+    v = _number(text)
+    if v <= 0:
+        raise argparse.ArgumentTypeError(f"must be a positive number of seconds, got {text!r}")
+    return v
+
+
+def nonnegative(text: str) -> float:
+    """A finite number >= 0 (an offset, a wait, a delay)."""
+    v = _number(text)
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {text!r}")
+    return v
+
+
+def positive(text: str) -> float:
+    """A finite number > 0 (a rate, a frequency)."""
+    v = _number(text)
+    if v <= 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text!r}")
+    return v
+
+
+def number_in(low: float, high: float, low_open: bool = True):
+    """A validator of a finite number in (low, high] (``low_open``) or [low, high]."""
+    def check(text: str) -> float:
+        v = _number(text)
+        if v > high or v < low or (low_open and v == low):
+            raise argparse.ArgumentTypeError(f"must be in {'(' if low_open else '['}{low:g}, {high:g}], got {text!r}")
+        return v
+    check.__name__ = "number"
+    return check
+
+
+def whole_in(low: int, high: int | None = None):
+    """A validator of a whole number in [low, high] (``high`` None: no upper bound)."""
+    def check(text: str) -> int:
+        v = _integer(text)
+        if v < low or (high is not None and v > high):
+            raise argparse.ArgumentTypeError(
+                f"must be >= {low}, got {text!r}" if high is None else f"must be in {low}..{high}, got {text!r}")
+        return v
+    check.__name__ = "whole number"
+    return check
+
+
+def say(prog: str, line: str) -> None:
+    """A one-line warning on stderr, as ``prog: warning: line``."""
+    print(f"{prog}: warning: {line}", file=sys.stderr, flush=True)

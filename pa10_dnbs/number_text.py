@@ -1,0 +1,17 @@
+"""Numbers as people write them: ``0.829`` not ``0.8290000000000001``, ``1e9`` not ``1e+09``."""
+from __future__ import annotations
+
+
+def num(x, digits: int = 6) -> str:
+    """``x`` in at most ``digits`` significant digits, without a float's binary tail or an exponent's padding."""
+    text = f"{float(x):.{digits}g}"
+    if "e" in text:
+        mantissa, exp = text.split("e")
+        text = f"{mantissa}e{int(exp)}"
+    return text
+
+
+def interval(pair) -> str:
+    """A window ``(a, b)`` as ``[a, b]`` with :func:`num`."""
+    a, b = pair
+    return f"[{num(a)}, {num(b)}]"

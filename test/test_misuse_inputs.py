@@ -1,0 +1,405 @@
+"""The misuse harness (issue 38): every command and script the docs name, given the mistakes people make.
+
+Out-of-range, non-finite and huge values, missing or unwritable paths, a flag without effect in the chosen mode,
+and a second copy of a run into the same output at once. Each must answer with ONE line naming the flag and exit
+2, before any work: no traceback, nothing written, nothing of another run touched, no process left. (Ctrl-C of
+each command: test/test_misuse_interrupt.py.) Fast tier but the two graph-marked copies of ``launch``.
+"""
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import os
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from cli_runner import run_cli
+from script_module import load_script
+
+from pa10_dnbs.output_lock import _lock_file
+
+REPO = Path(__file__).resolve().parent.parent
+PY = sys.executable
+
+
+def _assert_one_line(rc: int, stdout: str, stderr: str, flag: str) -> None:
+    """Exit 2, one line on stderr naming ``flag``, no traceback, nothing on stdout."""
+    lines = stderr.strip().splitlines()
+    assert rc == 2, (rc, stderr)
+    assert len(lines) == 1, stderr
+    assert flag in lines[0], (flag, lines[0])
+    assert "Traceback" not in stderr + stdout and stdout == "", stdout
+
+
+def _untouched(tmp_path: Path, before: set) -> None:
+    assert {p.name for p in tmp_path.iterdir()} == before, "a refused command wrote something"
+
+
+# (command words, the flag the one line must name); --out DIR is added as <tmp>/run
+VALUE_CASES = [
+    (["simulate", "--duration", "nan"], "--duration"),
+    (["simulate", "--duration", "inf"], "--duration"),
+    (["simulate", "--duration", "-1"], "--duration"),
+    (["simulate", "--duration", "0"], "--duration"),
+    (["simulate", "--duration", "0.0001"], "--duration"),          # shorter than two steps
+    (["simulate", "--duration", "1e9"], "--duration"),             # was a 50.9 TiB MemoryError traceback
+    (["simulate", "--controller", "all", "--duration", "1e300"], "--duration"),
+    (["simulate", "--duration", "ten"], "--duration"),
+    (["simulate", "--controller", "pid", "--init-from", "/nonexistent"], "--init-from"),
+    (["launch", "--duration", "1e9"], "--duration"),
+    (["launch", "--duration", "nan"], "--duration"),
+    (["launch", "--rtf", "0.5"], "--rtf"),                         # without --mode realtime: no effect
+    (["launch", "--deadline-fraction", "0.5"], "--deadline-fraction"),
+    (["launch", "--mode", "realtime", "--rtf", "0"], "--rtf"),
+    (["launch", "--mode", "realtime", "--rtf", "nan"], "--rtf"),
+    (["launch", "--mode", "realtime", "--rtf", "1e6"], "--rtf"),
+    (["launch", "--mode", "realtime", "--deadline-fraction", "1.5"], "--deadline-fraction"),
+    (["launch", "--effort-timeout", "inf"], "--effort-timeout"),
+    (["launch", "--effort-timeout", "-2"], "--effort-timeout"),
+    (["launch", "--clock-hz", "-5"], "--clock-hz"),
+    (["launch", "--domain-id", "500"], "--domain-id"),
+    (["launch", "--rt-priority", "100"], "--rt-priority"),
+    (["launch", "--bag-compression", "none"], "--bag-compression"),  # without --record: no effect
+    (["launch", "--live-hz", "10"], "--live-hz"),                  # without --live: no effect
+    (["launch", "--live-host", "0.0.0.0"], "--live-host"),
+    (["launch", "--live", "0", "--live-hz", "inf"], "--live-hz"),
+    (["launch", "--drop-states", "2"], "--drop-states"),
+    (["launch", "--delay-efforts", "inf"], "--delay-efforts"),
+    (["launch", "--kill", "s1@nan"], "--kill"),
+    (["study", "--duration", "1e7"], "--duration"),
+    (["study", "--duration", "nan"], "--duration"),
+    (["study", "--seeds", "0"], "--seeds"),
+    (["study", "--seeds", "1e3"], "--seeds"),
+    (["study", "--jobs", "0"], "--jobs"),
+    (["study", "--scenarios", "nominal,nope"], "--scenarios"),
+    (["tune", "--controller", "pid", "--trials", "0"], "--trials"),
+    (["tune", "--controller", "pid", "--held-out-seeds", "-1"], "--held-out-seeds"),
+    (["tune", "--controller", "pid", "--duration", "1e8"], "--duration"),
+    (["tune", "--controller", "pid", "--duration", "-inf"], "--duration"),
+    (["tune", "--controller", "pid", "--seed", "-3"], "--seed"),
+    (["tune", "--controller", "pid", "--jobs", "-1"], "--jobs"),
+]
+
+
+@pytest.mark.parametrize("words,flag", VALUE_CASES, ids=[" ".join(w) for w, _ in VALUE_CASES])
+def test_a_bad_value_is_one_line_naming_the_flag_and_exit_2_before_any_work(tmp_path, words, flag):
+    before = {p.name for p in tmp_path.iterdir()}
+    r = run_cli(*words, "--out", tmp_path / "run", "--no-progress")
+    _assert_one_line(r.returncode, r.stdout, r.stderr, flag)
+    _untouched(tmp_path, before)
+
+
+def _bag(tmp_path: Path) -> Path:
+    """A directory that is not a bag: enough for replay's and analyse's argument checks, which come first."""
+    bag = tmp_path / "bag"
+    bag.mkdir()
+    return bag
+
+
+REPLAY_CASES = [(["--rate", "0"], "--rate"), (["--rate", "nan"], "--rate"), (["--start-offset", "-1"], "--start-offset"),
+                (["--queue-depth", "0"], "--queue-depth"), (["--wait-for-subscribers", "inf"], "--wait-for-subscribers"),
+                (["--live-hz", "5"], "--live-hz"), (["--clock", "-100"], "--clock")]
+
+
+@pytest.mark.parametrize("words,flag", REPLAY_CASES, ids=[" ".join(w) for w, _ in REPLAY_CASES])
+def test_replay_refuses_bad_values_in_one_line(tmp_path, words, flag):
+    r = run_cli("replay", _bag(tmp_path), *words)
+    _assert_one_line(r.returncode, r.stdout, r.stderr, flag)
+
+
+def test_arm_and_analyse_name_what_is_wrong(tmp_path):
+    r = run_cli("arm", "--arm", "nope")
+    _assert_one_line(r.returncode, r.stdout, r.stderr, "nope")
+    r = run_cli("analyse", tmp_path / "missing_bag", "--out", tmp_path / "again")
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
+    assert not (tmp_path / "again").exists()
+
+
+# ------------------------------------------------------------------ output paths, checked before any work
+PATH_CASES = [
+    (["simulate", "--duration", "0.1"], "/proc/nope/x", "--out"),   # was a raw [Errno 2], rc 1, after the run
+    (["study", "--duration", "0.1"], "/proc/nope/x", "--out"),
+    (["tune", "--controller", "pid", "--duration", "0.1"], "/proc/nope/x", "--out"),
+    (["launch", "--duration", "0.1"], "/proc/nope/x", "--out"),
+    (["analyse", "BAG"], "/proc/nope/x", "--out"),
+    (["simulate", "--duration", "0.1"], "FILE/x", "--out"),          # under a file
+    (["simulate", "--duration", "0.1"], "FILE", "--out"),            # a file
+]
+
+
+@pytest.mark.parametrize("words,out,flag", PATH_CASES, ids=[f"{w[0]} --out {o}" for w, o, _ in PATH_CASES])
+def test_an_output_that_cannot_be_made_is_refused_before_any_work(tmp_path, words, out, flag):
+    (tmp_path / "FILE").write_text("not a folder")
+    words = [str(_bag(tmp_path)) if w == "BAG" else w for w in words]
+    out = out.replace("FILE", str(tmp_path / "FILE"))
+    before = {p.name for p in tmp_path.iterdir()}
+    t0 = time.monotonic()
+    r = run_cli(*words, "--out", out, "--no-progress")
+    _assert_one_line(r.returncode, r.stdout, r.stderr, flag)
+    assert time.monotonic() - t0 < 30  # refused up front, not after the run
+    _untouched(tmp_path, before)
+
+
+def test_record_into_a_missing_folder_is_exit_2(tmp_path):
+    """``--record nofolder/x`` gave a clear line but rc 1."""
+    r = run_cli("launch", "--duration", "0.1", "--out", tmp_path / "run", "--record", tmp_path / "nofolder" / "x")
+    _assert_one_line(r.returncode, r.stdout, r.stderr, "--record")
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+# ------------------------------------------------------------------ scripts the docs tell users to run
+def _script(name: str, *argv) -> tuple[int, str, str]:
+    """scripts/<name>.py's main(argv) in this process: (exit code, stdout, stderr); argparse exits too."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            rc = load_script(name).main([str(a) for a in argv])
+        except SystemExit as exc:
+            rc = exc.code if isinstance(exc.code, int) else 2
+    return rc, out.getvalue(), err.getvalue()
+
+
+EQUAL_BUDGET_CASES = [
+    (["--held-out-seeds"], "--held-out-seeds"),          # the last word: was an IndexError
+    (["--held-out-seeds=0"], "--held-out-seeds"),        # was a TypeError after the tunes ran
+    (["--held-out-seeds", "0"], "--held-out-seeds"),
+    (["--trials", "0"], "--trials"),
+    (["--duration", "nan"], "--duration"),
+    (["--duration", "1e9"], "--duration"),
+    (["--controllers", "pid,nope"], "--controllers"),
+    (["--seeds", "-1"], "--seeds"),
+    (["--jobs", "0"], "--jobs"),
+    (["--bogus"], "--bogus"),
+]
+
+
+@pytest.mark.parametrize("words,flag", EQUAL_BUDGET_CASES, ids=[" ".join(w) for w, _ in EQUAL_BUDGET_CASES])
+def test_equal_budget_refuses_bad_options_before_any_tune(tmp_path, words, flag):
+    rc, out, err = _script("equal_budget", "--out", tmp_path / "eq", "--trials", "1", "--scenarios", "nominal",
+                           *words)
+    _assert_one_line(rc, out, err, flag)
+    assert not (tmp_path / "eq").exists()
+
+
+def test_equal_budget_refuses_an_unwritable_out(tmp_path):
+    rc, out, err = _script("equal_budget", "--out", "/proc/nope/eq")
+    _assert_one_line(rc, out, err, "--out")
+
+
+def _help(script: str) -> str:
+    r = subprocess.run([PY, str(REPO / "scripts" / script), "--help"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and r.stderr == ""
+    return r.stdout
+
+
+def test_equal_budget_help_has_a_whole_first_line_and_every_option_the_docs_pass():
+    text = _help("equal_budget.py")
+    first = text.split("\n\n")[1].replace("\n", " ")
+    assert first.endswith(".") and "Tune several controllers" in first
+    for flag in ("--arm", "--controllers", "--trials", "--config", "--out", "--scenarios", "--seeds",
+                 "--held-out-seeds", "--duration", "--seed", "--jobs", "--scheduler", "--no-progress"):
+        assert re.search(rf"^\s+{flag}\b", text, re.M), flag
+
+
+@pytest.mark.parametrize("script", ["ablation.py", "equal_budget_table.py", "make_foxglove_layout.py"])
+def test_scripts_help_starts_with_a_whole_sentence(script):
+    """The description was cut mid-sentence (the docstring's first line only)."""
+    text = _help(script)
+    first = " ".join(text.split("\n\n")[1].split())
+    assert first.endswith(".") and not first.endswith(("the.", "(the.")), first
+
+
+ABLATION_CASES = [(["--long-s", "5"], "--long-s"), (["--long-s", "nan"], "--long-s"), (["--only", "99"], "--only"),
+                  (["--only", "x"], "--only"), (["--workers", "0"], "--workers")]
+
+
+@pytest.mark.parametrize("words,flag", ABLATION_CASES, ids=[" ".join(w) for w, _ in ABLATION_CASES])
+def test_ablation_refuses_bad_options(words, flag):
+    rc, out, err = _script("ablation", *words)
+    _assert_one_line(rc, out, err, flag)
+
+
+def test_ablation_help_lists_every_option_and_variant():
+    text = _help("ablation.py")
+    for flag in ("--workers", "--long-s", "--only"):
+        assert re.search(rf"^\s+{flag}\b", text, re.M), flag
+    assert "0 default" in text and "10 + projection" in " ".join(text.split())
+
+
+def test_equal_budget_table_without_a_comparison_is_one_line(tmp_path):
+    rc, out, err = _script("equal_budget_table", tmp_path / "nowhere")
+    _assert_one_line(rc, out, err, "nowhere")
+
+
+def test_run_main_sh_passes_a_bad_value_back_as_one_line():
+    r = subprocess.run(["bash", str(REPO / "scripts" / "run_main.sh"), "--duration", "nan"], capture_output=True,
+                       text=True, timeout=120, cwd=REPO)
+    _assert_one_line(r.returncode, r.stdout, r.stderr, "--duration")
+
+
+# ------------------------------------------------------------------ a second copy at once
+def _cli_process(*args, cwd=None) -> subprocess.Popen:
+    env = {**os.environ, "PYTHONPATH": str(REPO), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    return subprocess.Popen([PY, "-m", "pa10_dnbs.cli", *map(str, args)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env, cwd=cwd)
+
+
+def _wait_for_lock(out: Path, proc: subprocess.Popen, timeout_s: float = 120.0) -> None:
+    """Until ``proc`` holds the lock of ``out`` (its lock file names it)."""
+    lock = _lock_file(str(out.resolve()))
+    t0 = time.monotonic()
+    while not (lock.exists() and lock.read_text().split()[:1] == [str(proc.pid)]):
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() - t0 < timeout_s, "the first run never took its lock"
+        time.sleep(0.05)
+
+
+def _leftovers(marker: str) -> list[str]:
+    """Processes whose command line names ``marker`` (a test's own folder): none may outlive a test."""
+    found = []
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit() and int(d.name) != os.getpid():
+            try:
+                cmd = (d / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+            except OSError:
+                continue
+            if marker in cmd:
+                found.append(f"{d.name}: {cmd}")
+    return found
+
+
+@pytest.mark.parametrize("force", [False, True], ids=["plain", "with --force"])
+def test_a_second_simulate_into_a_running_ones_out_is_refused_and_the_first_is_intact(tmp_path, force):
+    """--force replaces a finished run's output, never a running one's."""
+    out = tmp_path / "run"
+    first = _cli_process("simulate", "--controller", "pid", "--duration", "20", "--no-figures", "--out", out)
+    try:
+        _wait_for_lock(out, first)
+        r = run_cli("simulate", "--controller", "pid", "--duration", "0.2", "--no-figures", "--out", out,
+                    *(["--force"] if force else []))
+        _assert_one_line(r.returncode, r.stdout, r.stderr, "in use by another run")
+        stdout, stderr = first.communicate(timeout=300)
+    finally:
+        first.kill() if first.poll() is None else None
+    assert first.returncode == 0, stderr
+    assert "over [10, 20] s" in stdout and (out / "report.md").is_file()
+    assert '"duration_s": 20.0' in (out / "metrics.json").read_text()
+    assert not _leftovers(str(tmp_path))
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temporary, no lock left beside it
+
+
+def test_a_second_tune_into_one_out_at_once_is_refused(tmp_path):
+    out = tmp_path / "t"
+    first = _cli_process("tune", "--controller", "pid", "--trials", "1", "--scenarios", "nominal", "--seeds", "1",
+                         "--held-out-seeds", "0", "--duration", "20", "--jobs", "1", "--out", out)
+    try:
+        _wait_for_lock(out, first)
+        r = run_cli("tune", "--controller", "pid", "--trials", "1", "--scenarios", "nominal", "--seeds", "1",
+                    "--held-out-seeds", "0", "--duration", "0.2", "--jobs", "1", "--out", out)
+        _assert_one_line(r.returncode, r.stdout, r.stderr, "in use by another run")
+    finally:
+        first.kill()
+        first.communicate(timeout=60)
+    assert not _leftovers(str(tmp_path))
+
+
+def test_an_existing_output_is_refused_without_force_and_replaced_with_it(tmp_path):
+    out = tmp_path / "run"
+    assert run_cli("simulate", "--controller", "pid", "--duration", "0.2", "--no-figures", "--out", out).returncode == 0
+    before = (out / "metrics.json").read_text()
+    r = run_cli("simulate", "--controller", "pid", "--duration", "0.3", "--no-figures", "--out", out)
+    _assert_one_line(r.returncode, r.stdout, r.stderr, "--force")
+    assert (out / "metrics.json").read_text() == before
+    r = run_cli("simulate", "--controller", "pid", "--duration", "0.3", "--no-figures", "--out", out, "--force")
+    assert r.returncode == 0 and '"duration_s": 0.3' in (out / "metrics.json").read_text()
+
+
+@pytest.mark.graph
+@pytest.mark.parametrize("how", ["launch", "run_main.sh"])
+def test_a_second_launch_into_one_out_at_once_is_refused_and_the_first_is_intact(tmp_path, how):
+    """Two copies into one --out at once: both exited 0 and the second replaced the first's results."""
+    out, bag = tmp_path / "main", tmp_path / "main_bag"
+    env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    if how == "launch":
+        cmd = [str(REPO / ".venv" / "bin" / "pa10-dnbs"), "launch", "--duration", "1", "--no-figures", "--out", str(out)]
+    else:  # the main job, as the README runs it, into this test's folder (later flags win)
+        cmd = ["bash", str(REPO / "scripts" / "run_main.sh"), "--duration", "1", "--no-figures", "--out", str(out),
+               "--record", str(bag)]
+    first = subprocess.Popen(["timeout", "-s", "INT", "300", *cmd], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             text=True, env=env, cwd=tmp_path)
+    try:
+        _wait_for_lock(out, first) if how == "launch" else _wait_for_any_lock(out, first)
+        second = subprocess.run(["timeout", "-s", "INT", "300", *cmd], capture_output=True, text=True, env=env,
+                                cwd=tmp_path)
+        _assert_one_line(second.returncode, second.stdout, second.stderr, "in use by another run")
+        stdout, stderr = first.communicate(timeout=300)
+    finally:
+        if first.poll() is None:
+            first.send_signal(2)
+            first.communicate(timeout=60)
+    assert first.returncode == 0, stderr
+    assert f"wrote {out}/report.md" in stdout and (out / "report.md").is_file() and (out / "metrics.json").is_file()
+    assert not _leftovers(str(tmp_path))
+
+
+def _wait_for_any_lock(out: Path, proc: subprocess.Popen, timeout_s: float = 120.0) -> None:
+    """Until some process (run_main.sh execs the launcher) holds the lock of ``out``."""
+    lock = _lock_file(str(out.resolve()))
+    t0 = time.monotonic()
+    while not lock.exists():
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() - t0 < timeout_s, "the first run never took its lock"
+        time.sleep(0.05)
+
+
+# ------------------------------------------------------------------ what the docs say, followed in order
+OUTPUT_FLAG = re.compile(r"--(?:out|record)\s+((?:runs|bags)/[\w./-]+)")
+RESUMES = re.compile(r"pa10-dnbs\s+tune|scripts/equal_budget\.py")  # the same command resumes: shared by design
+
+
+def test_docs_blocks_never_write_one_output_with_two_different_commands():
+    """A user following README.md then docs/*.md: live_view.md's first block failed because the README had
+    made runs/live. An output path may recur only in the same command (a tune or comparison resumes)."""
+    seen: dict[str, tuple[str, str]] = {}
+    for md in [REPO / "README.md", *sorted((REPO / "docs").glob("*.md")), REPO / "urdf" / "README.md"]:
+        text = md.read_text().replace("\\\n", " ")
+        for line in text.splitlines():
+            if "pa10-dnbs" not in line and "scripts/" not in line:
+                continue
+            command = line.split("#")[0].strip().strip("`")
+            for path in OUTPUT_FLAG.findall(command):
+                path = path.rstrip(".")
+                if path in seen and seen[path][1] != command and not RESUMES.search(command):
+                    pytest.fail(f"{path}: {seen[path][0]} and {md.name} write it with different commands")
+                seen.setdefault(path, (md.name, command))
+
+
+def test_urdf_readme_lists_every_arm_that_ships():
+    table = (REPO / "urdf" / "README.md").read_text()
+    arms = sorted(d.name for d in (REPO / "urdf").iterdir() if (d / "arm.yaml").is_file())
+    assert arms and all(f"| `{a}`" in table and f"({a}/README.md)" in table for a in arms), arms
+
+
+def test_report_of_a_run_without_wall_time_says_so_instead_of_nan():
+    from pa10_dnbs.report.markdown import _wall_time
+
+    assert _wall_time(math.nan, math.nan) == "wall time not known (the run was rebuilt from a record that does not " \
+                                             "hold it)"
+    assert _wall_time(2.0, 10.0) == "wall time 2.00 s (10.0x real time)"
+
+
+def test_numbers_are_printed_as_people_write_them(tmp_path):
+    """The window of a 1.658 s run was printed [0.8290000000000001, 1.6580000000000001]."""
+    from pa10_dnbs.number_text import interval, num
+
+    assert interval((0.8290000000000001, 1.6580000000000001)) == "[0.829, 1.658]"
+    assert num(1e9) == "1e9" and num(2.5e-05) == "2.5e-5" and num(20.0) == "20"
+    r = run_cli("simulate", "--controller", "pid", "--duration", "1.658", "--no-figures", "--out", tmp_path / "r")
+    assert r.returncode == 0 and "over [0.829, 1.658] s" in r.stdout
+    assert not re.search(r"\d\.\d{12,}", r.stdout + r.stderr + (tmp_path / "r" / "report.md").read_text())
