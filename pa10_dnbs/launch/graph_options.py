@@ -51,6 +51,7 @@ class GraphOptions:
     robot_state_topic: str = ""         # external: the robot's JointState topic; '' = the command form's default
     robot_command_topic: str = ""       # external, joint_state form: the command topic; '' = /robot_joint_command
     robot_timeout_s: float = 1.0        # external: wall time without a new robot state that makes it stale
+    plant_engine: str = ""              # 'mujoco': the MuJoCo robot node runs behind the joint bus (launch/plant_engine.py)
 
 
 @dataclass

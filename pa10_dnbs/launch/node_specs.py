@@ -123,6 +123,10 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
         cmds.append((f"joint_controller_{j}", controller_command(opt, stats_file.parent, j)))
     # the start handshake: the plant publishes step 0 once every node but the live view (display only) said ready
     ready = [name for name, _ in cmds if name != LIVE_VIEW]
+    if opt.plant_engine == "mujoco":  # --plant mujoco: our own external robot, before the bus (the last process)
+        from .plant_engine import mujoco_robot_command
+
+        cmds.append(mujoco_robot_command(opt, lambda node, params: _ros_args(node, params, opt.namespace)))
     plant, module, extra = "plant", "pa10_dnbs.ros.plant_node", {}
     if opt.robot == "external":  # the joint bus in the plant's place: same handshake, topics and stats file
         plant, module = JOINT_BUS, "pa10_dnbs.ros.joint_bus_node"

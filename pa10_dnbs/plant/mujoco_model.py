@@ -1,9 +1,11 @@
 """The arm as a MuJoCo model: its URDF loaded by MuJoCo's own parser, with the arm file's facts as joint properties.
 
 Built from the same :class:`~pa10_dnbs.arm.Arm` as the PyBullet plant (no URDF parsing of ours): MuJoCo reads
-the URDF into an ``MjSpec``, which is then edited before compiling:
+the URDF the PyBullet plant loads (``arm.physics_urdf``: the URDF, or its cleaned copy where massless links and
+inconsistent inertias were made explicit) into an ``MjSpec``, which is then edited before compiling:
 
-- every geom is removed (no contacts, no inertia from geometry: each link keeps the URDF's ``<inertial>``);
+- every geom and mesh is removed (no contacts, no inertia from geometry, no mesh file read: each link keeps
+  its ``<inertial>``);
 - each locked joint (``arm.locked_joints``) is removed and its child body posed at the locked position, which
   welds it there (exact, as the PyBullet plant's block of M(q) is for a joint held still);
 - rotor inertia -> joint ``armature`` (added to diag(M) by MuJoCo itself), viscous friction -> ``damping``,
@@ -29,13 +31,15 @@ def build_model(arm: Arm, params):
     filled); its degrees of freedom are exactly the actuated joints."""
     import mujoco
 
-    urdf_path = os.fspath(arm.urdf)
+    urdf_path = os.fspath(arm.physics_urdf)
     if not os.path.isfile(urdf_path):
         raise FileNotFoundError(f"URDF file not found: {urdf_path}")
     spec = mujoco.MjSpec.from_file(urdf_path)
     spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
     for geom in list(spec.geoms):
         spec.delete(geom)
+    for mesh in list(spec.meshes):
+        spec.delete(mesh)
     _scale_and_load(spec, arm, params)
     joints = {j.name: j for j in spec.joints}
     for name, q_locked in zip(arm.locked_joints, arm.locked_position_rad):

@@ -16,6 +16,7 @@ import struct
 import time
 from typing import NoReturn
 
+from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
@@ -52,6 +53,7 @@ CLOCK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=Re
                        durability=DurabilityPolicy.TRANSIENT_LOCAL)
 MATCH_POLL_S = 0.05  # wall time between two looks at the endpoints before state 0 [s]
 NS = 1_000_000_000
+FINAL_FLUSH_S = 2.0  # wall time the finished robot waits for its last state to be acknowledged [s]
 
 
 class MuJoCoRobotNode(Node):
@@ -159,6 +161,8 @@ class MuJoCoRobotNode(Node):
         else:
             self._run_paced(stop)
         self.wall_end = time.perf_counter()
+        if not stop.done():  # the run's end: the last state reaches every reliable reader before the process goes
+            self._state_pub.wait_for_all_acked(Duration(seconds=FINAL_FLUSH_S))
 
     def _run_lockstep(self, stop) -> None:
         self._publish_state()
