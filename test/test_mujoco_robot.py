@@ -89,3 +89,16 @@ def test_the_robot_node_answers_lockstep_bit_for_bit_and_stops_on_sigint(domain,
             plant.step(np.array([effort(k, j) for j in range(arm.n_joints)]))
     assert got["clock_ns"][0] == 0 and got["clock_ns"] == sorted(got["clock_ns"])
     assert_no_leftovers([robot.proc.pid, probe.proc.pid], shm_before)
+
+
+@pytest.mark.parametrize("flags, message", [
+    (["--arm", "nope"], "arm: no arm called 'nope'"),
+    (["--duration", "-1"], "--duration: must be >= 0"),
+    (["--clock-hz", "5000"], "--clock-hz: must be in [0, 1000]"),
+    (["--mode", "realtime"], "invalid choice: 'realtime'"),
+])
+def test_robot_refuses_bad_arguments_in_one_line_before_starting(flags, message):
+    from cli_runner import run_cli
+
+    r = run_cli("robot", "--engine", "mujoco", *flags)
+    assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr, r.stderr
