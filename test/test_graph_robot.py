@@ -1,7 +1,8 @@
 """``launch --robot external``: the joint bus in front of a robot speaking the standard interface.
 
 The project's PyBullet plant as that robot (``interface:=standard``): the recorded lockstep run equals the
-in-process run bit for bit, the bag holds the graph's topics as before, every process ends. A small probe robot
+in-process run bit for bit, the bag holds the graph's topics as before, every process ends; paced
+(``--mode realtime``), the bus follows the robot's own ticks. A small probe robot
 (test/robot_probe.py, no /clock, stamps not starting at 0) for the faults: it stops publishing, a joint goes
 missing from its state, a position turns NaN. Each: one ``ROBOT FAULT`` line, the zero-effort safe command
 answering the last state, no traceback, every process ends (docs/your_robot.md).
@@ -69,6 +70,30 @@ def test_the_pybullet_robot_behind_the_bus_is_the_in_process_run(tmp_path, domai
         assert {"/pa10/s1/state", "/pa10/s1/effort", "/pa10/joint_states", "/clock"} <= set(b.topics)
     codes = exit_codes(la.output)
     assert len(codes) == 10 and all(c == 0 for c in codes.values()), codes  # 9 nodes and the recorder
+    _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)
+
+
+def test_a_paced_robot_is_followed(tmp_path, domain):
+    """--mode realtime: the plant as a robot on its own wall-clock ticks (R = 0.5), not waiting for the bus; the
+    bus forwards each state as it comes and answers it as soon as every controller has. The run converges; the
+    robot outlasts the run (it is the user's: the test stops it)."""
+    shm_before = shm_files()
+    out = tmp_path / "run"
+    robot = _plant_robot(domain, 3.0, "mode:=realtime", "real_time_factor:=0.5")
+    la = Launcher("--robot", "external", "--mode", "realtime", "--duration", 1.0, "--out", out, domain_id=domain)
+    try:
+        pids = la.node_pids()
+        rc = la.wait(timeout=300)
+    finally:
+        la.kill()
+        robot.kill()
+    assert rc == 0, la.output
+    m = json.loads((out / "metrics.json").read_text())
+    assert m["mode"] == "realtime" and m["all_finite"] and m["torques_within_limits"], m
+    assert m["worst_rms_error_rad"] < 1e-2, m["worst_rms_error_rad"]
+    assert 0 < m["timing"]["on_time_fraction"] <= 1, m["timing"]
+    stats = json.loads((out / "plant_stats.json").read_text())
+    assert stats["steps"] == 1000 and stats["robot"]["robot_commands"] >= 1000, stats["robot"]
     _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)
 
 

@@ -72,8 +72,8 @@ def test_launch_flags_are_checked_with_one_line_naming_the_flag(monkeypatch):
                   "robot_command_topic": "", "robot_timeout_s": 1.0}
     assert check_robot_options(RobotOptions(command="forward:arm_effort"), "lockstep")["robot_command"] \
         == "forward:arm_effort"
-    cases = [(RobotOptions(), "realtime", "--robot external"),
-             (RobotOptions(command="torque"), "lockstep", "--robot-command"),
+    assert check_robot_options(RobotOptions(), "realtime")["robot"] == "external"  # paced: the bus follows
+    cases = [(RobotOptions(command="torque"), "lockstep", "--robot-command"),
              (RobotOptions(state_topic="/bad topic"), "lockstep", "--robot-state-topic"),
              (RobotOptions(command_topic="//x"), "lockstep", "--robot-command-topic"),
              (RobotOptions(timeout_s=0.0), "lockstep", "--robot-timeout"),

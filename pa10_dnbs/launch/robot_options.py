@@ -38,9 +38,6 @@ def check_robot_options(opt: RobotOptions, mode: str) -> dict:
     """The GraphOptions fields of ``opt``; ConfigError (one line, naming the flag) when one is wrong."""
     if opt.robot not in ROBOTS:
         raise ConfigError(f"--robot: expected {' or '.join(ROBOTS)}, got {opt.robot!r}")
-    if mode != "lockstep":
-        raise ConfigError("--robot external: only --mode lockstep (a robot that waits for commands) is supported "
-                          "so far")
     try:
         parse_robot_command(opt.command, opt.command_topic)
     except ValueError as exc:

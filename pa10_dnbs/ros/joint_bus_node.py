@@ -5,8 +5,10 @@ JointState or Float64MultiArray effort commands) and the per-joint topics of doc
 joint controller still sees only its own joint. It is the plant node with the physics replaced by the robot
 (``robot_link.RemoteRobot``): the same per-joint state and effort topics, joint_states, robot_description,
 effort gate, start handshake, lockstep loop and stats file, so the launcher, the recorder, the analysis and
-the live view work unchanged. Lockstep only: step k of the graph is the robot's k-th state; the efforts
-answering it go out as one command, and the bus waits for the robot's next state.
+the live view work unchanged. Step k of the graph is the k-th robot state the bus forwards. Lockstep
+(``mode:=lockstep``, a robot that waits for commands): the efforts answering state k go out as one command, and
+the bus waits for the robot's next state (the plant's lockstep loop, ``plant_lockstep.py``). Paced
+(``mode:=realtime``): the robot runs at its own rate and the bus follows it (``joint_bus_paced.py``).
 
 Time: a robot that publishes /clock gives the graph its time (the bus publishes none; its first state must
 be at time 0). Otherwise the bus publishes the graph's /clock (``clock_hz``), the robot's states counted from
@@ -18,6 +20,7 @@ the arm missing from the robot's state, a non-finite position or velocity, no st
 """
 from __future__ import annotations
 
+import time
 from typing import NoReturn
 
 from ..arm import arm_of
@@ -26,6 +29,7 @@ from ..wire.steps import NS_PER_S
 from .params import Param, ParameterError
 from .plant_node import PARAMS as PLANT_PARAMS
 from .plant_node import PlantNode
+from .joint_bus_paced import run_paced
 from .robot_link import RemoteRobot
 from .runtime import stop_requested
 from .wire import CLOCK
@@ -42,9 +46,6 @@ class JointBusNode(PlantNode):
     def _open_plant(self, cfg: dict) -> RemoteRobot:
         """The robot, once its first state is in (it sets whether the bus publishes /clock)."""
         p = self.p
-        if p["mode"] != "lockstep":
-            raise ParameterError("parameter mode: the joint bus runs lockstep only (a robot that waits for "
-                                 "commands); paced robots are not supported yet")
         p["interface"] = ""
         if not p["robot_timeout_s"] > 0:
             raise ParameterError(f"parameter robot_timeout_s must be > 0 s, got {p['robot_timeout_s']}")
@@ -69,6 +70,22 @@ class JointBusNode(PlantNode):
         print(f"JOINT BUS first state at robot time {sec + nanosec / NS_PER_S:.6f} s; graph time from "
               + ("the robot's /clock" if robot_clock else f"the bus's /clock ({p['clock_hz']:g} Hz)"), flush=True)
         return robot
+
+    def step_to_robot_state(self) -> None:
+        """Paced: the robot's next state is in (its command went out already): count the step."""
+        self.cpu.mark(self.gate.step)
+        if self.gate.step >= self.n_steps:
+            self.finished = True
+            self.wall_end = time.perf_counter()
+
+    def loop(self, executor, stop) -> None:
+        if self.p["mode"] == "lockstep":
+            return super().loop(executor, stop)
+        if not self.wait_for_graph(executor, stop):
+            return
+        print("RUNNING plant", flush=True)
+        self.wall_start = time.perf_counter()
+        run_paced(self, executor, stop)
 
     def _close_plant(self) -> None:
         print("STATS joint_bus: " + ", ".join(f"{k} {v}" for k, v in self.robot.counters().items()), flush=True)

@@ -110,6 +110,11 @@ class PlantWire:
         self._js_pub.publish(joint_state_cdr.encode(sec, nanosec, self.joint_names, q, qd, applied))
 
     # ------------------------------------------------------------- in
+    @property
+    def effort_subscriptions(self) -> list:
+        """The seven polled effort subscriptions, in joint order (the joint bus's paced loop waits on them)."""
+        return list(self._effort_subs)
+
     def wait(self, timeout_s: float) -> list[int]:
         """Block until some effort is queued or ``timeout_s`` [s] passed; the joints with efforts queued."""
         ready = self._wait_set.wait(timeout_s)

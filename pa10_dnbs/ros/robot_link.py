@@ -67,6 +67,11 @@ class RemoteRobot:
     def publisher_count(self) -> int:
         return self._sub.get_publisher_count()
 
+    @property
+    def subscription(self):
+        """The polled subscription of the robot's states (for a wait set over it and the efforts)."""
+        return self._sub
+
     # ------------------------------------------------------------- states
     def _decode(self, data: bytes):
         """(kind, stamp, q, qd) of a robot state; RobotFault (after the safe command) when it is bad."""
@@ -119,6 +124,21 @@ class RemoteRobot:
         self._advance()
         return True
 
+    def take_state(self) -> bool:
+        """Paced: take what is queued; True when a new state became the current one (a newer one that came
+        meanwhile replaces it: the robot does not wait, the latest state is what counts)."""
+        self._take_new()
+        if self._next is None:
+            return False
+        self._advance()
+        return True
+
+    def stale(self, waited_s: float):
+        """The safe command and RobotFault: no new state for ``waited_s`` [s of wall time]."""
+        sec, nanosec = self.stamp
+        self.fault(f"no state from the robot on {self.state_topic} for {waited_s:.3g} s after robot time "
+                   f"{sec + nanosec / NS_PER_S:.6f} s (stale robot)")
+
     def _advance(self) -> None:
         self.stamp, self.q, self.qd = self._next
         self._next = None
@@ -130,6 +150,11 @@ class RemoteRobot:
             self._pub.publish(self._forward_msg)
         else:
             self._pub.publish(joint_state_cdr.encode(*self.stamp, self.joint_names, (), (), [float(u) for u in tau]))
+
+    def send(self, tau) -> None:
+        """Paced: the command ``tau`` [N m] (arm order) answering the current state."""
+        self._send(tau)
+        self.commands_sent += 1
 
     def send_safe(self) -> None:
         """The safe command: zero effort on every joint, answering the current state."""
@@ -151,9 +176,7 @@ class RemoteRobot:
                 return
             left = end - time.monotonic()
             if left <= 0:
-                sec, nanosec = self.stamp
-                self.fault(f"no state from the robot on {self.state_topic} for {self.timeout_s:g} s after the "
-                           f"command answering robot time {sec + nanosec / NS_PER_S:.6f} s (stale robot)")
+                self.stale(self.timeout_s)
             if self._wait_set.wait(min(SLICE_S, left)) and self._take_new() and self._next is None \
                     and self._forward_msg is None:
                 self._send(tau)  # the robot sent its state again: our command was lost
