@@ -124,6 +124,7 @@ SCHEMA: dict[str, Any] = {
             "dead_zone": _switch(alpha_rad=Joints(NONNEG), torque_rad_s=Joints(NONNEG)),
             "e_modification": _switch(sigma=NONNEG),
             "projection": _switch(weight_bound=POS),
+            "slope_bound": _switch(fraction=Joints(FRACTION)),  # per arm: the gain rule (docs/arms.md)
             "learning_ramp": _switch(ramp_s=NONNEG),
             "covariance_bound": _switch(p_max=POS),
         },
@@ -276,7 +277,7 @@ def load_config(path: str | Path, arm: str | Path | None = None) -> dict:
     from .derived_settings import GAIN_KEYS, REFERENCE_KEYS, derived_gains, derived_reference
 
     if any(_get(merged, key) is None for key in REFERENCE_KEYS):
-        merged = _merge(derived_reference(the_arm), merged)
+        merged = _merge(derived_reference(the_arm, merged), merged)
     if any(_get(merged, key) is None for key in GAIN_KEYS):
         checked = _check("", _merge(_placeholders(GAIN_KEYS, the_arm.n_joints), merged), SCHEMA, the_arm.n_joints)
         merged = _merge(derived_gains(the_arm, checked), merged)
@@ -293,14 +294,15 @@ def _get(tree: dict, dotted: str):
 
 
 def _placeholders(keys: tuple[str, ...], n: int) -> dict:
-    """Ones at ``keys`` (so the rest of a config can be checked before the rule gives their values)."""
+    """Ones (true for a switch) at ``keys`` (so the rest of a config can be checked before the rule gives their
+    values)."""
     out: dict = {}
     for key in keys:
         *parents, leaf = key.split(".")
         node = out
         for part in parents:
             node = node.setdefault(part, {})
-        node[leaf] = [1.0] * n  # > 0 passes every bound of these keys
+        node[leaf] = True if leaf == "enabled" else [1.0] * n  # > 0 passes every bound of these keys
     return out
 
 

@@ -39,6 +39,7 @@ def remedies_from_config(rem: dict) -> Remedies:
         dead_zone_rad_s=a("dead_zone", "torque_rad_s"),
         e_modification=rem["e_modification"]["enabled"], e_modification_sigma=rem["e_modification"]["sigma"],
         projection=rem["projection"]["enabled"], weight_bound=rem["projection"]["weight_bound"],
+        slope_bound=rem["slope_bound"]["enabled"], slope_fraction=a("slope_bound", "fraction"),
         learning_ramp=rem["learning_ramp"]["enabled"], learning_ramp_s=rem["learning_ramp"]["ramp_s"],
         covariance_bound=rem["covariance_bound"]["enabled"], p_max=rem["covariance_bound"]["p_max"])
 

@@ -6,6 +6,8 @@ gave are taken from them; the PA10's arm file gives all, so nothing is derived f
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .arm import Arm
@@ -14,15 +16,41 @@ from .arm.reference_rule import reference_rule
 
 REFERENCE_KEYS = tuple(f"reference.{k}" for k in ("amplitude_rad", "envelope_rate_per_s3", "frequency_rad_s",
                                                    "centre_rad"))
-GAIN_KEYS = ("dnbs.torque_net.output_scale_nm", "dnbs.torque_net.error_scale_rad_s",
-             "dnbs.remedies.robust_term.alpha_gain_per_s", "dnbs.remedies.robust_term.torque_gain_nms_per_rad",
-             "pid.kp", "pid.ki", "pid.kd")
+GAIN_KEYS = ("dnbs.alpha_net.error_scale_rad", "dnbs.torque_net.output_scale_nm",
+             "dnbs.torque_net.error_scale_rad_s", "dnbs.remedies.robust_term.alpha_gain_per_s",
+             "dnbs.remedies.robust_term.torque_gain_nms_per_rad", "dnbs.remedies.slope_bound.enabled",
+             "dnbs.remedies.slope_bound.fraction", "pid.kp", "pid.ki", "pid.kd")
 DERIVED_KEYS = REFERENCE_KEYS + GAIN_KEYS
 
 
-def derived_reference(arm: Arm) -> dict:
-    """The ``reference`` fragment of the reference rule."""
-    return {"reference": reference_rule(arm.lower_rad, arm.upper_rad)}
+def derived_reference(arm: Arm, cfg: dict | None = None, report: bool = True) -> dict:
+    """The ``reference`` fragment of the reference rule, made feasible (reference_rule.feasible_reference: the
+    torque it asks along ``cfg``'s simulation.duration_s, inverse dynamics with gravity, within the limits);
+    ``report``: its lines on stderr. ``cfg``: the config so far (unchecked; the defaults where it gives none)."""
+    import sys
+
+    from .arm.reference_rule import feasible_reference
+    from .plant.reference_torque import ReferenceTorque
+
+    fragment = reference_rule(arm.lower_rad, arm.upper_rad)
+    sim, plant = (cfg or {}).get("simulation", {}), (cfg or {}).get("plant", {})
+    try:
+        duration, dt = float(sim.get("duration_s", 20.0)), float(sim.get("dt_s", 0.001))
+        gravity = float(plant.get("gravity_mps2", 9.81))
+    except (TypeError, ValueError):
+        return {"reference": fragment}  # the config's own check names the bad key
+    if not (duration > 0 and dt > 0 and math.isfinite(duration) and gravity >= 0):
+        return {"reference": fragment}
+    torque = ReferenceTorque(arm, duration, dt, gravity)
+    try:
+        fragment, lines = feasible_reference(fragment, arm.lower_rad, arm.upper_rad, arm.torque_limit_nm,
+                                             torque.peak, arm.joint_names)
+    finally:
+        torque.close()
+    if report:
+        for line in lines:
+            print(f"warning: arm {arm.name}: {line}", file=sys.stderr)
+    return {"reference": fragment}
 
 
 def inertia_sweep_along(arm: Arm, cfg: dict):

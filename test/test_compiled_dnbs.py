@@ -61,7 +61,7 @@ def test_a_closed_loop_on_the_kernel_is_the_numpy_loop_bit_for_bit(cfg):
         assert np.array_equal(getattr(a, field), getattr(b, field)), field
 
 
-@pytest.mark.parametrize("variant", ["default", "every_remedy", "printed_sign"])
+@pytest.mark.parametrize("variant", ["default", "every_remedy", "printed_sign", "slope_bound"])
 def test_every_branch_of_the_step_gives_the_same_bits(cfg, variant):
     """Saturation and anti-windup, the learning ramp, the covariance bound, untrusted rows (``active``),
     an EKF reset, and per variant the dead zone, e-modification, projection, eta < 1, another width, or
@@ -70,6 +70,8 @@ def test_every_branch_of_the_step_gives_the_same_bits(cfg, variant):
         cfg = _every_remedy(cfg)
     if variant == "printed_sign":
         cfg["dnbs"]["e2_sign"] = "printed"
+    if variant == "slope_bound":  # per-weight bounds (2n, W), tight enough to act
+        cfg["dnbs"]["remedies"]["slope_bound"] = {"enabled": True, "fraction": [0.02] * 7}
     cfg["dnbs"]["remedies"]["learning_ramp"]["ramp_s"] = 0.3  # the ramp ends inside the run
     numpy_cfg, c_cfg = _kernels(cfg)
     ref = build_reference(cfg)
@@ -96,6 +98,9 @@ def test_every_branch_of_the_step_gives_the_same_bits(cfg, variant):
     assert c_bank.controllers.ekf_resets["torque"][2] >= 1
     assert ref_bank.bad_states["speed"][1] == c_bank.bad_states["speed"][1] == 30
     assert saturated > 0  # the anti-windup branch was taken
+    if variant == "slope_bound":  # the projection acted: some weight sits on its bound
+        bank = c_bank.controllers
+        assert np.any(np.abs(bank.ekf.w) == bank._bounds)
 
 
 def test_a_single_joint_bank_answer_then_learn_and_checkpoints(cfg):

@@ -26,8 +26,8 @@ class _Config(ctypes.Structure):
 
     _fields_ = ([(f, ctypes.c_long) for f in ("n", "W", "La", "Lt", "Da", "Dt", "oa", "ot")]
                 + [(f, _P) for f in ("fa", "ft", "w", "P", "H", "hph", "alpha", "u_unsat", "ia", "it", "A", "U", "ka",
-                                     "ku", "lim", "E", "d", "eta", "r", "q")]
-                + [(f, ctypes.c_double) for f in ("kv", "p_max", "ramp_steps", "sigma", "bound")]
+                                     "ku", "lim", "E", "d", "eta", "r", "q", "bounds")]
+                + [(f, ctypes.c_double) for f in ("kv", "p_max", "ramp_steps", "sigma")]
                 + [(f, ctypes.c_long) for f in ("eta_is_ones", "anti_windup", "dead_zone", "printed")])
 
 
@@ -82,7 +82,8 @@ class CompiledDNBSControllers(DNBSControllers):
             A=addr(self._A, size=n), U=addr(self._U, size=n), ka=addr(self._k_a), ku=addr(self._k_u),
             lim=addr(self._lim, size=n), E=addr(self._E), d=addr(self._d), eta=addr(ekf.eta), r=addr(ekf.r),
             q=addr(ekf.q), kv=float(self._k_v), p_max=ekf.p_max, ramp_steps=float(self._ramp_steps),
-            sigma=float(self._sigma), bound=float(self._bound), eta_is_ones=int(ekf._ones is not None),
+            sigma=float(self._sigma), bounds=None if self._bounds is None else addr(self._bounds),
+            eta_is_ones=int(ekf._ones is not None),
             anti_windup=int(self._anti_windup), dead_zone=int(self._dead_zone), printed=int(self._printed))
         kernel = lib.dnbs_new(ctypes.byref(cfg))
         if not kernel:

@@ -65,7 +65,8 @@ typedef struct {
     const double *lim;              /* Table 2 torque limits (n) */
     const double *E, *d;            /* training-error scales and dead-zone bands (2n) */
     const double *eta, *r, *q;      /* EKF learning rates, R and Q (2n) */
-    double kv, p_max, ramp_steps, sigma, bound;
+    const double *bounds;           /* projection's per-weight bounds (2n, W), NULL: none */
+    double kv, p_max, ramp_steps, sigma;
     long eta_is_ones, anti_windup, dead_zone, printed;
 } dnbs_config;
 
@@ -287,8 +288,8 @@ int dnbs_learn(dnbs_kernel *k, long steps) {
             for (long l = 0; l < W; l++) c->w[i * W + l] *= keep;
         }
     }
-    if (c->bound != INFINITY)
-        for (long l = 0; l < rows * W; l++) c->w[l] = np_min(np_max(c->w[l], -c->bound), c->bound);
+    if (c->bounds)
+        for (long l = 0; l < rows * W; l++) c->w[l] = np_min(np_max(c->w[l], -c->bounds[l]), c->bounds[l]);
     double total = psum(c->w, rows * W) + reduce_row(c->hph, rows);
     double lowest = c->hph[0];
     for (long i = 1; i < rows; i++) lowest = np_min(lowest, c->hph[i]);

@@ -7,15 +7,29 @@ lightest effective inertia the joint ever feels along the reference, J_light = 1
 the heaviest, J_heavy = 1 / min_q (M + J_r)^-1_jj:
 
 - k_u = RHO J_light / T: the velocity loop's discrete-time figure is RHO at the lightest pose;
-- k_a = clip(k_u / (SEPARATION J_heavy), K_A_MIN, K_A_MAX): the position loop SEPARATION times slower than
-  the velocity loop at the heaviest pose;
-- DNBS: U = the torque limit; E2 = torque limit / k_u (the e2 at which the linear term alone saturates);
+- k_a = min(k_u / (SEPARATION J_heavy), K_A_MAX): the position loop SEPARATION times slower than the velocity
+  loop at the heaviest pose (never raised above that: a faster outer loop would invert the cascade);
+- DNBS: U = the torque limit; E2 = (torque limit / k_u) s_j with s_j = max(1, (J_heavy / J_light)_j /
+  RATIO_SAFE), and E1 = E1_BASE s_max^3 with s_max the arm's largest s_j. Up to a 10x inertia range the
+  torque network adapts at k_u per step and the alpha network at 1 / E1_BASE (the presets: nothing changes).
+  Beyond, the torque network slows with its joint's range, so that its integral action keeps at the heavy
+  pose the damping it has at a 10x range; and the alpha networks of every joint slow with the arm's largest
+  range: through the coupling that makes the range, the outer adaptation must stay below the slowest inner
+  loop (measured: without this the SO-101's alpha weights ran to 700 and every joint diverged; s^2 was not
+  enough on the SO-101 and the Panda without rotor inertia, s^3 was);
+- DNBS slope bound: the torque network's slope in x1, x2 and alpha stays within f = min(SLOPE_FRACTION,
+  FIGURE_MAX / figure - 1) of the linear term's own gain in that input (figure: the coupled figure of k_u), so
+  the loop's gains stay within (1 +- f) of the linear term's and the coupled figure below FIGURE_MAX < 2
+  (without it the network's weights of alpha and x2 grew to 15-60 on the Panda without rotor inertia, and its
+  position slope turned a 3.5e-5 kg m^2 SO-101 wrist unstable);
 - PID: Kd = k_u, Kp = k_a k_u, Ki = Kp k_a / 4 (the outer pair critically damped).
 
-The model enters here only (plant/inertia_sweep.py reads M(q) once, before the run): at run time every controller still sees its own joint alone. The rule warns
-(one line, naming the joint) where J_heavy / J_light > INERTIA_RATIO_WARN (one fixed gain is either slow at
-the heavy pose or unstable at the light one), where the coupled figure exceeds COUPLED_WARN, and where the
-plant's explicit viscous friction is near its own limit (T Fv / J_light > 1).
+The model enters here only (plant/inertia_sweep.py reads M(q) once, before the run): at run time every
+controller still sees its own joint alone. The rule warns (one line, naming the joint) where J_heavy /
+J_light > INERTIA_RATIO_WARN (one fixed gain is slow at the heavy pose: the line gives the joint's
+discrete-time limit and the rotor inertia that would bring the range to 10x), where the coupled figure
+exceeds COUPLED_WARN, and where the plant's explicit viscous friction is near its own limit (T Fv / J_light >
+1).
 """
 from __future__ import annotations
 
@@ -28,7 +42,11 @@ from .arm import Arm
 
 RHO = 0.4               # T k_u / J_light: the velocity loop's discrete-time figure at the lightest pose (< 2)
 SEPARATION = 8.0        # velocity-loop bandwidth at the heaviest pose / k_a
-K_A_MIN, K_A_MAX = 5.0, 20.0   # 1/s: the PA10's hand-tuned k_a span 10-20
+K_A_MAX = 20.0          # 1/s: the PA10's hand-tuned k_a span 10-20
+RATIO_SAFE = 10.0       # J_heavy / J_light up to which the adaptation gains are the PA10-like ones
+E1_BASE = 0.5           # rad: E1 where the inertia range is within RATIO_SAFE
+FIGURE_MAX = 1.5        # the coupled figure the linear term plus the network's slope may reach (< 2)
+SLOPE_FRACTION = 0.5    # the network's slope in each input / the linear term's gain in it, at most
 INERTIA_RATIO_WARN = 10.0
 COUPLED_WARN = 1.0
 SWEEP_STEP_S = 0.02     # the reference is sampled every 20 ms for the inertia sweep
@@ -53,15 +71,32 @@ def coupled_figure(sweep: InertiaSweep, k_u: np.ndarray, dt_s: float) -> float:
 def gain_rule(arm: Arm, sweep: InertiaSweep, dt_s: float) -> dict:
     """The per-joint config values the rule gives (a config fragment, lists of n floats)."""
     k_u = RHO * sweep.light_kgm2 / dt_s
-    k_a = np.clip(k_u / (SEPARATION * sweep.heavy_kgm2), K_A_MIN, K_A_MAX)
+    k_a = np.minimum(k_u / (SEPARATION * sweep.heavy_kgm2), K_A_MAX)
+    slow = np.maximum(1.0, sweep.heavy_kgm2 / sweep.light_kgm2 / RATIO_SAFE)
     tau = arm.torque_limit_nm
     kp = k_a * k_u
+    fraction = float(np.clip(FIGURE_MAX / coupled_figure(sweep, k_u, dt_s) - 1.0, 0.0, SLOPE_FRACTION))
+    e1 = np.full(arm.n_joints, E1_BASE * float(slow.max()) ** 3)
     return {
-        "dnbs": {"torque_net": {"output_scale_nm": tau.tolist(), "error_scale_rad_s": (tau / k_u).tolist()},
+        "dnbs": {"alpha_net": {"error_scale_rad": e1.tolist()},
+                 "torque_net": {"output_scale_nm": tau.tolist(), "error_scale_rad_s": (tau / k_u * slow).tolist()},
                  "remedies": {"robust_term": {"alpha_gain_per_s": k_a.tolist(),
-                                              "torque_gain_nms_per_rad": k_u.tolist()}}},
+                                              "torque_gain_nms_per_rad": k_u.tolist()},
+                              "slope_bound": {"enabled": True, "fraction": [fraction] * arm.n_joints}}},
         "pid": {"kp": kp.tolist(), "ki": (kp * k_a / 4.0).tolist(), "kd": k_u.tolist()},
     }
+
+
+def discrete_limit_rad_s(light_kgm2, heavy_kgm2, dt_s: float):
+    """The largest velocity-loop bandwidth [rad/s] a fixed gain can give at the heavy pose while the sampled
+    loop stays stable at the light one (T k_u / J_light < 2): 2 J_light / (T J_heavy)."""
+    return 2.0 * np.asarray(light_kgm2) / (dt_s * np.asarray(heavy_kgm2))
+
+
+def rotor_inertia_for_ratio(light_kgm2, heavy_kgm2, ratio: float = INERTIA_RATIO_WARN):
+    """The reflected rotor inertia [kg m^2] that, added to both ends of the range, brings J_heavy / J_light down
+    to ``ratio``: (J_heavy - ratio J_light) / (ratio - 1), at least 0."""
+    return np.maximum(0.0, (np.asarray(heavy_kgm2) - ratio * np.asarray(light_kgm2)) / (ratio - 1.0))
 
 
 def rule_warnings(arm: Arm, sweep: InertiaSweep, k_u: np.ndarray, dt_s: float) -> list[str]:
@@ -70,9 +105,13 @@ def rule_warnings(arm: Arm, sweep: InertiaSweep, k_u: np.ndarray, dt_s: float) -
     ratio = sweep.heavy_kgm2 / sweep.light_kgm2
     for j, name in enumerate(arm.joint_names):
         if ratio[j] > INERTIA_RATIO_WARN:
+            lo, hi = sweep.light_kgm2[j], sweep.heavy_kgm2[j]
             out.append(f"arm {arm.name}: joint {name}: effective inertia varies {ratio[j]:.0f}x along the reference "
-                       f"({sweep.light_kgm2[j]:.3g}-{sweep.heavy_kgm2[j]:.3g} kg m^2): one fixed gain is slow at the "
-                       f"heavy pose (no rotor inertia in the arm file?)")
+                       f"({lo:.3g}-{hi:.3g} kg m^2): at T = {dt_s * 1e3:g} ms one fixed gain gives at most "
+                       f"{discrete_limit_rad_s(lo, hi, dt_s):.3g} rad/s of velocity bandwidth at the heavy pose "
+                       f"(2 J_light / (T J_heavy); the rule takes {RHO / 2:g} of it); add the reflected rotor "
+                       f"inertia N^2 Jm (rotor_inertia_kgm2, >= {rotor_inertia_for_ratio(lo, hi):.3g} kg m^2 "
+                       f"brings the range to {INERTIA_RATIO_WARN:g}x)")
         if dt_s * arm.viscous_nms_per_rad[j] / sweep.light_kgm2[j] > 1.0:
             out.append(f"arm {arm.name}: joint {name}: T Fv / J = "
                        f"{dt_s * arm.viscous_nms_per_rad[j] / sweep.light_kgm2[j]:.2f} > 1: the plant's explicit "

@@ -4,10 +4,16 @@ The rule (docs/arms.md): joint i takes Table 1's row i mod 7 (c, d, w); its cent
 limits (0 for symmetric limits and for continuous joints) and its amplitude is c capped at two thirds of the
 half range, so the reference, the 0.1 rad start offset and the transient stay clear of the limits. On the
 PA10 (symmetric limits, the narrowest half range 1.64 rad on s2) the rule gives Table 1 exactly.
+
+Then, once before the run, :func:`feasible_reference` checks the torque the reference asks of each joint
+(inverse dynamics with gravity along it, plant/reference_torque.py) against TORQUE_FRACTION of its limit.
+Where it asks more, it moves centres (a grid across each joint's range, amplitude capped as above, or halved)
+until it does not; where no such reference is found, one line names the joint and what it needs.
 """
 from __future__ import annotations
 
 import math
+from typing import Callable
 
 import numpy as np
 
@@ -17,6 +23,11 @@ TABLE1_ENVELOPE_RATE_PER_S3 = (0.001, 0.001, 0.01, 0.01, 0.01, 0.01, 0.01)
 TABLE1_FREQUENCY_RAD_S = (0.285, 0.435, 0.555, 0.645, 0.345, 0.615, 0.465)
 #: The amplitude is at most this fraction of the half range between the limits.
 RANGE_FRACTION = 2.0 / 3.0
+#: The reference may ask each joint for at most this fraction of its torque limit (the rest is the controller's).
+TORQUE_FRACTION = 0.8
+CENTRE_GRID = 9        # candidate centres across a joint's range (the two limits excluded)
+AMPLITUDE_SCALES = (1.0, 0.5)
+SEARCH_PASSES = 2
 
 
 def reference_rule(lower_rad: np.ndarray, upper_rad: np.ndarray) -> dict:
@@ -37,3 +48,64 @@ def reference_rule(lower_rad: np.ndarray, upper_rad: np.ndarray) -> dict:
             "envelope_rate_per_s3": [TABLE1_ENVELOPE_RATE_PER_S3[r] for r in rows],
             "frequency_rad_s": [TABLE1_FREQUENCY_RAD_S[r] for r in rows],
             "centre_rad": centre}
+
+
+def _with_centre(fragment: dict, j: int, centre: float, scale: float, lower: float, upper: float) -> dict:
+    """``fragment`` with joint j's centre moved to ``centre`` and its Table 1 amplitude times ``scale``, capped at
+    RANGE_FRACTION of the distance to the nearer limit."""
+    out = {k: list(v) for k, v in fragment.items()}
+    c = TABLE1_AMPLITUDE_RAD[j % len(TABLE1_AMPLITUDE_RAD)] * scale
+    if math.isfinite(lower) and math.isfinite(upper):
+        c = min(c, RANGE_FRACTION * min(centre - lower, upper - centre))
+    out["centre_rad"][j], out["amplitude_rad"][j] = centre, c
+    return out
+
+
+def _centres(lower: float, upper: float) -> np.ndarray:
+    if not (math.isfinite(lower) and math.isfinite(upper)):
+        lower, upper = -math.pi, math.pi
+    return lower + (upper - lower) * np.arange(1, CENTRE_GRID - 1) / (CENTRE_GRID - 1)
+
+
+def feasible_reference(fragment: dict, lower_rad, upper_rad, torque_limit_nm, peak_torque: Callable[[dict], np.ndarray],
+                       joint_names) -> tuple[dict, list[str]]:
+    """(the reference fragment, lines): ``fragment`` itself where ``peak_torque(fragment)`` (n,) [N m] stays
+    within TORQUE_FRACTION of every limit; else the first fragment of a coordinate search over the joints'
+    centres (and halved amplitudes) that does, or the one that asks least of its worst joint, with one line
+    per joint still over."""
+    limit = np.asarray(torque_limit_nm, float)
+    best, best_r = fragment, peak_torque(fragment) / limit
+    if best_r.max() <= TORQUE_FRACTION:
+        return fragment, []
+    first = best_r.copy()
+    for _ in range(SEARCH_PASSES):
+        for j in np.argsort(-best_r):
+            # every candidate of joint j: a feasible one with the largest amplitude, else the least asking one
+            trials = []
+            for centre in _centres(float(lower_rad[j]), float(upper_rad[j])):
+                for scale in AMPLITUDE_SCALES:
+                    trial = _with_centre(best, int(j), float(centre), scale, float(lower_rad[j]), float(upper_rad[j]))
+                    r = peak_torque(trial) / limit
+                    ok = r.max() <= TORQUE_FRACTION
+                    trials.append(((not ok, -trial["amplitude_rad"][j] if ok else r.max()), trial, r))
+            key, trial, r = min(trials, key=lambda t: t[0])
+            if r.max() < best_r.max() - 1e-9:
+                best, best_r = trial, r
+            if best_r.max() <= TORQUE_FRACTION:
+                break
+        if best_r.max() <= TORQUE_FRACTION:
+            break
+    lines = []
+    for j in np.flatnonzero(first > TORQUE_FRACTION):
+        lines.append(f"reference: joint {joint_names[j]}: the rule's reference asked {first[j]:.0%} of its "
+                     f"{limit[j]:g} N m (inverse dynamics with gravity along it); "
+                     + ("moved: " + ", ".join(f"{joint_names[k]} centre {best['centre_rad'][k]:+.2f} rad amplitude "
+                                               f"{best['amplitude_rad'][k]:.2f} rad" for k in range(len(limit))
+                                               if best["centre_rad"][k] != fragment["centre_rad"][k]
+                                               or best["amplitude_rad"][k] != fragment["amplitude_rad"][k])
+                        + f" (now {best_r.max():.0%} at most)"))
+    for j in np.flatnonzero(best_r > TORQUE_FRACTION):
+        lines.append(f"reference: joint {joint_names[j]} cannot hold any reference the rule tried: it needs "
+                     f"{best_r[j]:.0%} of its {limit[j]:g} N m at best: raise torque_limit_nm (if the data sheet "
+                     f"allows) or give reference.centre_rad / amplitude_rad in the arm file's settings")
+    return best, lines

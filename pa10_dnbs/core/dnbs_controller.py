@@ -34,6 +34,12 @@ reason, reference and ablation; ``config/paper.yaml`` keeps only the anti-windup
   vanishes with the error (Narendra & Annaswamy 1987);
 - projection: every weight is kept in [-B, B] (Ioannou & Sun 8.5; B large
   enough for the ideal weights);
+- slope bound: the torque network's weights of the terms that hold x1, x2 or
+  alpha are kept in a box, so that the network's slope in each input stays
+  within a fraction f of the linear term's own gain in it (k_a k_u in x1, k_u
+  in x2 and alpha): the loop's gains stay within (1 +- f) of the linear
+  term's, whose discrete-time margin the gain rule checked. Projection onto a
+  box (Gong & Yao 2001; Ioannou & Sun 8.5); f comes from the gain rule;
 - learning ramp: eta grows linearly from 0 over ramp_s seconds, so the
   networks do not learn from the first, least informative, transient;
 - covariance bound: Q stops growing a diagonal entry of P beyond p_max
@@ -100,6 +106,8 @@ class Remedies:
     e_modification_sigma: float = 0.0                    # sigma [-] per step, per unit of |e/E|
     projection: bool = False
     weight_bound: float = float("inf")                   # B [-]
+    slope_bound: bool = False
+    slope_fraction: np.ndarray | float = 0.0             # f [-] per joint: the network's slope / the linear term's
     learning_ramp: bool = False
     learning_ramp_s: float = 0.0                         # [s]
     covariance_bound: bool = False
@@ -159,6 +167,17 @@ def initial_weights(seed: int, joint: int, n_alpha: int, n_torque: int, std_alph
     return rng.normal(0.0, std_alpha, n_alpha), rng.normal(0.0, std_torque, n_torque)
 
 
+def max_slope(exponents: np.ndarray, input_scale, p: int) -> float:
+    """The largest summed slope in input p [1/unit of p] of the HONN terms holding it: each term
+    tanh(z_p / s_p)^k times factors of magnitude <= 1 has slope at most k max(tanh^(k-1) sech^2) / s_p."""
+    y = np.linspace(0.0, 6.0, 6001)
+    total = 0.0
+    for k in np.asarray(exponents)[:, p]:
+        if k > 0:
+            total += float(np.max(k * np.tanh(y) ** (k - 1) / np.cosh(y) ** 2))
+    return total / float(np.asarray(input_scale, float)[p])
+
+
 class DNBSControllers:
     """The DNBS controllers of joints ``joints`` (indices 0..6), one per row; see the module docstring."""
 
@@ -211,7 +230,7 @@ class DNBSControllers:
                                   on(rem.dead_zone, rem.dead_zone_rad_s, 0.0)))
         self._neg_d = -self._d
         self._sigma = rem.e_modification_sigma if rem.e_modification else 0.0
-        self._bound = rem.weight_bound if rem.projection else np.inf
+        self._bounds = self._weight_bounds(rem, n, width, ot)  # (2n, width) or None: no projection at all
         self._ramp_steps = rem.learning_ramp_s / params.dt_s if rem.learning_ramp and rem.learning_ramp_s > 0 else 0.0
         self._anti_windup = rem.anti_windup
         self._dead_zone = rem.dead_zone
@@ -228,6 +247,31 @@ class DNBSControllers:
         self.steps = 0                           # steps trained
         self._pending = None                     # (e1, e2, u, active) of an answer not yet trained on
         self.ekf_resets = {"alpha": np.zeros(n, dtype=np.int64), "torque": np.zeros(n, dtype=np.int64)}
+
+    def _weight_bounds(self, rem: Remedies, n: int, width: int, ot: int) -> np.ndarray | None:
+        """Per-weight bounds (2n, width) of the padded bank (projection's B everywhere; the slope bound's on the
+        torque rows' terms of x1, x2, alpha), or None when neither remedy is on: then no weight is touched."""
+        if not (rem.projection or rem.slope_bound):
+            return None
+        bounds = np.full((2 * n, width), float(rem.weight_bound) if rem.projection else np.inf)
+        if rem.slope_bound:
+            f = _per_joint(rem.slope_fraction, n)
+            U = _per_joint(self.params.torque_net.output_scale, n)
+            gains = (self._k_a * self._k_u, self._k_u, self._k_u)  # the linear term's gain in x1, x2, alpha
+            ex = self.torque_honn.exponents
+            for p in range(3):
+                c = max_slope(ex, self.torque_honn.input_scale, p)
+                cols = ot + np.flatnonzero(ex[:, p] > 0)
+                bounds[n:, cols] = np.minimum(bounds[n:, cols], (f * gains[p] / (U * c))[:, None])
+            # the alpha network: every weight within f k_a / (A c), c its summed slope in x1: its slope in x1
+            # stays within f of k_a, and its output (bias and reference terms) within f k_a s1 rad/s
+            A = _per_joint(self.params.alpha_net.output_scale, n)
+            c = max_slope(self.alpha_honn.exponents, self.alpha_honn.input_scale, 0)
+            la = self.alpha_honn.n_terms
+            oa = self.alpha_ekf.cols.start
+            bounds[:n, oa:oa + la] = np.minimum(bounds[:n, oa:oa + la], (f * self._k_a / (A * c))[:, None])
+        self._neg_bounds = -bounds
+        return bounds
 
     @property
     def n_joints(self) -> int:
@@ -309,8 +353,8 @@ class DNBSControllers:
             if act is not None:
                 leak *= act
             self.ekf.w *= (1.0 - np.minimum(1.0, leak))[:, None]
-        if self._bound != np.inf:
-            clip(self.ekf.w, -self._bound, self._bound, out=self.ekf.w)
+        if self._bounds is not None:
+            clip(self.ekf.w, self._neg_bounds, self._bounds, out=self.ekf.w)
         self.steps += 1
         self._guard()
 

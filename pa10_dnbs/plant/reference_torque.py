@@ -1,0 +1,40 @@
+"""The torque a reference asks of each joint: inverse dynamics with gravity along it, read once before a run.
+
+tau(t) = (M(q) + J_r) qdd + h(q, qd) + F(qd) at the reference's q, qd, qdd (the plant's own model: PyBullet's
+mass matrix and calculateInverseDynamics on the actuated block, the locked joints held, rotor inertia and
+friction from the arm file). The reference rule (arm/reference_rule.py) keeps its peak within the limits.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..arm import Arm
+from ..core.reference import Reference
+from .from_config import open_client
+from .pybullet_plant import PlantParams, PyBulletArmPlant
+
+SAMPLE_STEP_S = 0.05  # the reference is sampled every 50 ms
+
+
+class ReferenceTorque:
+    """peak(fragment) -> (n,) the largest |tau_j| [N m] along a ``reference`` fragment (amplitude_rad,
+    envelope_rate_per_s3, frequency_rad_s, centre_rad) over ``duration_s``. Holds one PyBullet client: close()."""
+
+    def __init__(self, arm: Arm, duration_s: float, dt_s: float, gravity_mps2: float = 9.81):
+        self._client = open_client()
+        self._plant = PyBulletArmPlant(self._client, arm, PlantParams(gravity_mps2=gravity_mps2))
+        self._dt = dt_s
+        self._steps = np.arange(0, int(round(duration_s / dt_s)) + 1, max(1, int(round(SAMPLE_STEP_S / dt_s))))
+        self._lower, self._upper = arm.lower_rad, arm.upper_rad
+
+    def peak(self, fragment: dict) -> np.ndarray:
+        ref = Reference(fragment["amplitude_rad"], fragment["envelope_rate_per_s3"], fragment["frequency_rad_s"],
+                        dt_s=self._dt, centre_rad=fragment["centre_rad"])
+        q = np.clip(ref.position(self._steps), self._lower, self._upper)
+        qd, qdd = ref.velocity(self._steps), ref.acceleration(self._steps)
+        p = self._plant
+        tau = np.array([p.mass_matrix(a) @ c + p.bias_torque(a, b) + p.friction_torque(b) for a, b, c in zip(q, qd, qdd)])
+        return np.abs(tau).max(axis=0)
+
+    def close(self) -> None:
+        self._client.disconnect()
