@@ -53,8 +53,18 @@ def leftovers(pgid: int, marker: str) -> list[str]:
 
 def one_try(cmd: list[str], delay_s: float, env: dict) -> dict:
     """Start ``cmd``, SIGINT its group after ``delay_s``; what happened."""
+    t0 = time.monotonic()
     proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             start_new_session=True)
+    try:
+        return _interrupt(proc, cmd, delay_s, t0)
+    finally:   # this script stopped (Ctrl-C, SIGTERM, an error): the try's processes go with it
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+
+
+def _interrupt(proc: subprocess.Popen, cmd: list[str], delay_s: float, t0: float) -> dict:
     try:
         proc.wait(delay_s)
         finished_first = True
@@ -80,7 +90,8 @@ def one_try(cmd: list[str], delay_s: float, env: dict) -> dict:
             pass
     err_text = err.decode(errors="replace")
     lines = [ln for ln in err_text.splitlines() if ln.strip()]
-    return {"delay_s": round(delay_s, 3), "finished_before_sigint": finished_first, "rc": proc.returncode,
+    return {"delay_s": round(delay_s, 3), "finished_before_sigint": finished_first,
+            "ran_s": round(t_sig - t0, 3) if finished_first else None, "rc": proc.returncode,
             "exit_s": round(exit_s, 3), "hang": hang, "left": left, "traceback": "Traceback" in err_text,
             "stderr_lines": len(lines), "line": lines[-1] if lines else ""}
 
@@ -95,7 +106,9 @@ def resume(cmd: list[str], env: dict, out: Path, trials: int) -> bool:
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--tries", type=int, default=50, help="interrupted runs (default 50)")
+    p.add_argument("--tries", type=int, default=50,
+                   help="interrupted runs (default 50); a run that ends before its SIGINT does not count, and is "
+                        "listed (at most --tries of them)")
     p.add_argument("--seed", type=int, default=0, help="seed of the random moments (default 0)")
     p.add_argument("--trials", type=int, default=3, help="--trials of each tune (default 3)")
     p.add_argument("--duration", type=float, default=1.0, help="--duration of each tune [s] (default 1)")
@@ -124,19 +137,25 @@ def _run(args, argv, env, rng, base: Path, load: list) -> int:
         print(f"interrupt_tune: the uninterrupted run failed (rc {full.returncode}): "
               f"{full.stderr.decode(errors='replace').strip().splitlines()[-1:]}", file=sys.stderr)
         return 1
-    rows = []
-    print(f"uninterrupted run: {full_s:.1f} s; SIGINT at a uniform moment in [0.05, {full_s:.1f}] s")
+    rows, window_s = [], full_s
+    print(f"uninterrupted run: {full_s:.1f} s; SIGINT at a uniform moment in [0.05, {full_s:.1f}] s (shortened to "
+          "0.95 x a run that ends first)")
     print(f"{'try':>3} {'sigint_s':>8} {'rc':>4} {'exit_s':>6} {'left':>4} {'tb':>3} {'resumed':>7}  line")
-    for i in range(args.tries):
+    i = 0
+    while sum(not r["finished_before_sigint"] for r in rows) < args.tries and i < 2 * args.tries:
         out = base / f"try{i:03d}"
         cmd = tune_command(out, args.trials, args.duration)
-        row = one_try(cmd, rng.uniform(0.05, full_s), env)
+        row = one_try(cmd, rng.uniform(0.05, window_s), env)
+        if row["finished_before_sigint"]:   # the machine got faster (load): draw from the shorter run from now on
+            window_s = max(0.5, min(window_s, 0.95 * row["ran_s"]))
         row["try"] = i
         row["resumed"] = None
-        if not row["finished_before_sigint"] and (i + 1) % args.resume_every == 0:
+        if not row["finished_before_sigint"] and (sum(not r["finished_before_sigint"] for r in rows) + 1) \
+                % args.resume_every == 0:
             row["resumed"] = resume(cmd, env, out, args.trials)
         rows.append(row)
-        print(f"{i:>3} {row['delay_s']:>8.2f} {row['rc']:>4} {row['exit_s']:>6.2f} {len(row['left']):>4} "
+        i += 1
+        print(f"{row['try']:>3} {row['delay_s']:>8.2f} {row['rc']:>4} {row['exit_s']:>6.2f} {len(row['left']):>4} "
               f"{'yes' if row['traceback'] else 'no':>3} "
               f"{'-' if row['resumed'] is None else ('yes' if row['resumed'] else 'NO'):>7}  {row['line'][:90]}",
               flush=True)

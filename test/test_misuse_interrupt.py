@@ -257,3 +257,44 @@ def test_study_on_a_cluster_ctrl_c_cancels_its_tasks(tmp_path):
             c.kill()
     assert rc == 130 and seconds < BOUND_S, (rc, seconds)
     assert re.fullmatch(r"pa10-dnbs: interrupted after \d+ of 16 runs; nothing written to .*", one_line(err)), err
+
+
+def _launch(out: Path, domain: int) -> Command:
+    """``pa10-dnbs launch`` (lockstep, 60 s: it runs until the Ctrl-C) in its own process group."""
+    from graph_harness import ros_env
+
+    os.environ.update({k: v for k, v in ros_env(domain).items() if k.startswith("ROS_")})
+    return Command("launch", "--domain-id", domain, "--duration", 60, "--no-figures", "--no-progress", "--out", out)
+
+
+def _running(c: Command) -> None:
+    """Wait until the plant steps (the launcher's 'plant running' line on stdout)."""
+    for line in c.proc.stdout:
+        if "launch: plant running" in line:
+            return
+    pytest.fail("the graph never ran: " + c.proc.stderr.read())
+
+
+@pytest.mark.graph
+@pytest.mark.parametrize("presses", [1, 2])
+def test_launch_ctrl_c_once_or_twice_stops_every_node_and_writes_nothing(tmp_path, domain, monkeypatch, presses):
+    from graph_harness import assert_no_leftovers
+
+    from pa10_dnbs.launch.shm_cleanup import shm_files
+
+    monkeypatch.setattr(os, "environ", dict(os.environ))   # _launch's ROS_* settings stay in this test
+    shm_before = shm_files()
+    c = _launch(tmp_path / "run", domain)
+    try:
+        _running(c)
+        nodes = child_pids(c.proc.pid)
+        for _ in range(presses):
+            c.ctrl_c()
+            time.sleep(0.05)
+        rc, seconds, err = c.end(bound_s=20.0)   # the nodes' own graces: SIGINT 5 s, SIGTERM 3 s (launch/processes.py)
+    finally:
+        c.kill()
+    assert rc == 130 and seconds < 20.0, (rc, seconds, err)
+    assert "Traceback" not in err and "interrupted" in err, err
+    assert_no_leftovers(nodes, shm_before)
+    assert not (tmp_path / "run").exists()

@@ -2,10 +2,12 @@
 tune.md (space, best trial, held-out table, every trial), history.png and importance.png."""
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import yaml
 
+from ..interrupt import check, immediate
 from .objective import FAIL_COST, objective, run_cost
 from .space import SPACES, Param, on_bound, settings_fragment
 
@@ -116,16 +118,20 @@ def tune_markdown(spec, study, best, start_trial, command: str, where: str, wall
 def tune_figures(study, directory: Path) -> list[str]:
     """history.png and importance.png (optuna.visualization.matplotlib); the names written (importances need
     at least two completed trials with different points)."""
-    import matplotlib
+    with immediate():   # seconds of imports on a busy machine: a Ctrl-C stops them at once
+        import matplotlib
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from optuna.visualization.matplotlib import plot_optimization_history, plot_param_importances
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        from optuna.visualization.matplotlib import plot_optimization_history, plot_param_importances
 
     out = []
     for name, plot in (("history.png", plot_optimization_history), ("importance.png", plot_param_importances)):
+        check()   # a Ctrl-C noted meanwhile (the plots read the storage: never interrupted inside)
         try:
-            ax = plot(study)
+            with warnings.catch_warnings():   # optuna's "too few trials" for importances: not the user's concern
+                warnings.simplefilter("ignore", UserWarning)
+                ax = plot(study)
         except (ValueError, RuntimeError, ZeroDivisionError):
             continue
         fig = ax.figure
