@@ -10,6 +10,7 @@ from pa10_dnbs.config import ConfigError
 from pa10_dnbs.controller_factory import build_reference, switchable_reference
 from pa10_dnbs.core.joint_trajectory import (JointTrajectory, QuinticSpline, TrajectoryError, check_trajectory,
                                              knot_derivatives, trajectory_from_mapping)
+from pa10_dnbs.core.trajectory_reference import received_start
 from pa10_dnbs.trajectory_file import load_trajectory_file
 
 NAMES = ("s1", "s2", "s3", "e1", "e2", "w1", "w2")
@@ -110,6 +111,25 @@ def test_a_trajectory_sent_while_running_splices_in_continuously(cfg):
     assert (s.knots, s.dropped) == (2, 2)
     s = ref.start(_traj([0.5, 1.0, 5.0], np.zeros((3, 7))), 4500, origin_s=4.0)  # the first at the start
     assert (s.knots, s.dropped) == (3, 0)
+
+
+def test_the_step_named_as_the_end_is_the_first_step_held(cfg):
+    """k T and the start time plus time_from_start round differently: the end step is the one evaluate() holds
+    from (1640 + 4000 steps: k T = 5.64 < 1.64 + 4.0 in floating point, so the hold starts at 5641)."""
+    last = np.linspace(0.1, 0.3, 7)
+    for start in (1500, 1600, 1640):
+        ref = switchable_reference(cfg, build_reference(cfg))
+        s = ref.start(_traj([2.0, 4.0], np.vstack([last / 2, last])), start)
+        assert s.end_step in (start + 4000, start + 4001)
+        assert not np.array_equal(ref.position(s.end_step - 1), last), start
+        assert np.array_equal(ref.position(np.arange(s.end_step, s.end_step + 50)), np.tile(last, (50, 1))), start
+
+
+def test_a_received_trajectory_starts_at_the_first_free_step_or_its_stamp():
+    assert received_start(1234, 0.0, 1e-3) == (1234, None)  # no stamp: t = 0 where the reference can change
+    assert received_start(1234, 2.0, 1e-3) == (2000, 2.0)  # a later stamp: there
+    assert received_start(1234, 2.0005, 1e-3) == (2001, 2.0005)  # between two steps: the next one
+    assert received_start(1234, 1.0, 1e-3) == (1234, 1.0)  # an earlier stamp: its time origin, started here
 
 
 BAD = [

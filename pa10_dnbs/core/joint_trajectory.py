@@ -63,8 +63,8 @@ POINT_KEYS = ("positions", "velocities", "accelerations", "effort", "time_from_s
 def trajectory_from_mapping(data) -> JointTrajectory:
     """A JointTrajectory from a mapping as in a YAML or JSON file: ``joint_names`` (list of str) and ``points``
     (list of mappings: positions [rad], optional velocities [rad/s], accelerations [rad/s^2], time_from_start
-    [s] or {sec, nanosec}; an empty or absent optional list = not given; effort must be empty). Shapes and types
-    only: ``check_trajectory`` does the rest."""
+    [s] or {sec, nanosec}; an empty or absent optional list = not given; effort must be empty); a ``header`` is
+    ignored (a file starts at t = 0). Shapes and types only: ``check_trajectory`` does the rest."""
     if not isinstance(data, dict):
         raise TrajectoryError("a trajectory is a mapping with joint_names and points")
     unknown = set(data) - {"joint_names", "points", "header"}

@@ -37,6 +37,15 @@ class Started:
     dropped: int  # points before the start step, left out
 
 
+def received_start(first_free_step: int, stamp_s: float, dt_s: float) -> tuple[int, float | None]:
+    """(start step, time origin [s] or None) of a trajectory received while running: the first step not yet
+    published (``first_free_step``), its t = 0 there (None); with a non-zero header stamp ``stamp_s`` [s], t = 0
+    at the stamp and the start at the stamp's step, or at ``first_free_step`` if that is later."""
+    if stamp_s == 0.0:
+        return int(first_free_step), None
+    return max(int(first_free_step), int(np.ceil(stamp_s / dt_s - 1e-9))), float(stamp_s)
+
+
 class TrajectoryReference:
     """``base`` (a Reference: eq. 27) with trajectories of the arm's joints spliced in.
 
@@ -84,6 +93,7 @@ class TrajectoryReference:
         v, a = knot_derivatives(t, p, pick(given_v), pick(given_a), v0=v0, a0=a0)
         spline = QuinticSpline(t, p, v, a)
         end_step = int(np.ceil(spline.end_s / dt - 1e-9))
+        end_step += int(end_step * dt < spline.end_s)  # the first step held, as evaluate() decides it
         self._check_limits(spline, start_step, end_step)
         keep = [i for i, s in enumerate(self._starts) if s < start_step]
         self._starts = [self._starts[i] for i in keep] + [start_step]

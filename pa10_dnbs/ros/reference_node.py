@@ -33,6 +33,7 @@ from ..arm import arm_of
 from ..config_error import ConfigError
 from ..controller_factory import build_reference, load_reference_trajectory, switchable_reference
 from ..core.joint_trajectory import TrajectoryError, trajectory_from_lists
+from ..core.trajectory_reference import received_start
 from ..wire.topics import TRAJECTORY
 from ..wire.trajectory_cdr import encode_one_joint
 from .diagnostics import DiagnosticsReporter, status, status_name
@@ -146,13 +147,9 @@ class ReferenceNode(Node):
     def _on_trajectory(self, msg: JointTrajectory) -> None:
         """Follow a trajectory from the first step not yet published (or its header stamp, when non-zero and
         later), or refuse it with one line; nothing changes then."""
-        stamp_s = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         dt = self.reference.dt_s
-        start = self.published_until
-        origin = None
-        if stamp_s != 0.0:
-            origin = stamp_s
-            start = max(start, int(np.ceil(stamp_s / dt - 1e-9)))
+        start, origin = received_start(self.published_until,
+                                       msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, dt)
         try:
             if not msg.points:
                 raise TrajectoryError("no points")
