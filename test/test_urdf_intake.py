@@ -15,6 +15,7 @@ from script_module import load_script
 from pa10_dnbs.arm import ArmError, load_arm
 from pa10_dnbs.arm.arm_file import _load
 from pa10_dnbs.arm.plant_urdf import principal_moments
+from pa10_dnbs.arm.summary import arm_line
 from pa10_dnbs.plant.dynamics_check import compare_with_mujoco
 from pa10_dnbs.plant.from_config import open_client
 from pa10_dnbs.plant.pybullet_plant import PlantParams, PyBulletArmPlant
@@ -59,6 +60,7 @@ def test_a_link_without_inertial_is_massless_not_one_kilogram():
     _, loaded = _pybullet_loads(arm.physics_urdf)
     assert loaded[-1] == (0.0, (0.0, 0.0, 0.0))             # the plant's copy: massless, as the spec says
     assert [m for m, _ in loaded[:-1]] == [m for m, _ in as_written[:-1]]
+    assert f"the plant loads the cleaned copy {arm.plant_urdf}" in arm_line(arm)
 
 
 def test_a_tensor_pybullet_would_zero_is_repaired_with_one_line_naming_the_link(capsys):
@@ -124,6 +126,7 @@ def test_presets_load_their_urdf_as_written():
     for name in ("pa10", "iiwa", "panda"):
         arm = load_arm(name)
         assert arm.plant_urdf is None and arm.physics_urdf == arm.urdf, name
+        assert "cleaned copy" not in arm_line(arm)
 
 
 def test_a_continuous_joint_arm_runs_every_controller(tmp_path):

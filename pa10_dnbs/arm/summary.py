@@ -5,9 +5,12 @@ from .arm import Arm
 
 
 def arm_line(arm: Arm) -> str:
-    """One line: the arm, its file and, per joint, limits [rad], torque limit [N m] and rotor inertia [kg m^2]."""
+    """One line: the arm, its file and, per joint, limits [rad], torque limit [N m] and rotor inertia [kg m^2];
+    the locked joints and the cleaned copy PyBullet loads, where there are."""
     joints = "; ".join(f"{n} [{lo:+.2f}, {hi:+.2f}] rad, {t:g} N m, rotor {r:g} kg m^2"
                        for n, lo, hi, t, r in zip(arm.joint_names, arm.lower_rad, arm.upper_rad, arm.torque_limit_nm,
                                                   arm.rotor_inertia_kgm2))
     locked = f"; locked: {', '.join(arm.locked_joints)}" if arm.locked_joints else ""
-    return f"ARM {arm.name} ({arm.description}) from {arm.file}: {arm.n_joints} joints: {joints}{locked}"
+    copy = (f"; the plant loads the cleaned copy {arm.plant_urdf} (massless links explicit, meshes dropped: "
+            f"docs/arms.md)" if arm.plant_urdf is not None else "")
+    return f"ARM {arm.name} ({arm.description}) from {arm.file}: {arm.n_joints} joints: {joints}{locked}{copy}"
