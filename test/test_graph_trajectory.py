@@ -2,7 +2,8 @@
 step the reference node names, every joint within 1e-3 rad RMS after its first 0.5 s; three wrong ones (an
 unknown joint, a position beyond a limit, times not increasing), one before it and two while it runs, are
 refused with one line each and change nothing: the recorded reference is eq. 27 spliced with the example
-at that step, bit for bit, as core/trajectory_reference.py computes it. One graph, four sends."""
+at that step, bit for bit, as core/trajectory_reference.py computes it, and the whole run equals the
+in-process loop given that reference, bit for bit. One graph, four sends."""
 import re
 import sys
 
@@ -11,6 +12,7 @@ import pytest
 import yaml
 
 from graph_harness import REPO, Launcher, Proc, assert_no_leftovers, exit_codes
+from pa10_dnbs.config import load_config
 from pa10_dnbs.controller_factory import build_reference, switchable_reference
 from pa10_dnbs.core.joint_trajectory import trajectory_from_lists
 from pa10_dnbs.run_data import RunData
@@ -46,7 +48,8 @@ def _bad_files(tmp_path):
     return files
 
 
-def test_a_trajectory_sent_while_running_is_tracked_and_wrong_ones_change_nothing(tmp_path, domain, cfg):
+def test_a_trajectory_sent_while_running_is_tracked_and_wrong_ones_change_nothing(tmp_path, domain, cfg,
+                                                                                   monkeypatch):
     from pa10_dnbs.launch.shm_cleanup import shm_files
 
     shm_before = shm_files()
@@ -94,5 +97,14 @@ def test_a_trajectory_sent_while_running_is_tracked_and_wrong_ones_change_nothin
     print(f"trajectory from step {start}: RMS per joint over steps [{window.start}, {window.stop}) "
           f"{np.array2string(rms, precision=2)}; worst {rms.max():.3e} rad")
     assert rms.max() <= RMS_LIMIT_RAD, rms
+
+    # the in-process loop with the same reference (eq. 27, the example spliced in at `start`): the same run
+    import pa10_dnbs.sim.closed_loop as closed_loop
+
+    monkeypatch.setattr(closed_loop, "build_reference", lambda cfg, trajectory=None: expected)
+    local = closed_loop.simulate(load_config(out / "config_used.yaml"), "dnbs", DURATION_S)
+    for field in ("position_rad", "velocity_rad_s", "reference_rad", "torque_nm"):
+        a, b = getattr(local, field), getattr(run, field)
+        assert np.array_equal(a, b), f"{field}: max diff {np.abs(a - b).max()}"
     assert all(c == 0 for c in exit_codes(la.output).values())
     assert_no_leftovers(pids.values(), shm_before)
