@@ -101,5 +101,19 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
+def interruptible_main(argv: list[str] | None = None) -> int:
+    """``main`` with Ctrl-C done right (docs/tuning.md, "Interrupting"): exit 130 and one line; each tune keeps
+    its completed trials and says where; a second Ctrl-C ends at once (pa10_dnbs/interrupt.py)."""
+    from pa10_dnbs.interrupt import EXIT_INTERRUPTED, say, two_stage_sigint
+
+    try:
+        with two_stage_sigint():
+            return main(argv)
+    except KeyboardInterrupt:   # between two tunes or while comparison.md is written (the same command rewrites it)
+        say(f"{PROG}: interrupted; every tune keeps its completed trials in DIR/<controller>/tune.db: the same "
+            "command resumes")
+        return EXIT_INTERRUPTED
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(interruptible_main())

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from ..accel.choice import resolve_kernel
 from ..config import ConfigError, default_config_path, load_config
+from ..interrupt import EXIT_INTERRUPTED, say
 from ..report.outputs import atomic_output_dir, check_output_dir
 from ..report.progress import ProgressBar
 from ..sim.closed_loop import CONTROLLERS
@@ -52,7 +53,13 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
         done.append(row)
         bar.update(len(done) * steps_per_run, row["worst_max_abs_error_run_rad"])
 
-    rows = run_study(cfg, scen, ctrl, seeds, duration_s, workers, on_done=finished, scheduler=scheduler)
+    try:
+        rows = run_study(cfg, scen, ctrl, seeds, duration_s, workers, on_done=finished, scheduler=scheduler)
+    except KeyboardInterrupt:   # the workers are stopped (study/executor.py); nothing of this study is written
+        bar.close()
+        say(f"pa10-dnbs: interrupted after {len(done)} of {n} runs; nothing written to {out} (a study is written "
+            "whole, at its end): run the same command again")
+        return EXIT_INTERRUPTED
     bar.close()
     command = (f"pa10-dnbs study --scenarios {','.join(scen)} --controllers {','.join(ctrl)} --seeds {seeds} "
                f"--duration {duration_s:g} --out {shlex.quote(str(out))}"

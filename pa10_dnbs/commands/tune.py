@@ -3,7 +3,8 @@
 Everything is checked before anything is written (bad input: exit 2, one line): the controller, the
 parameters, scenarios and numbers, the arm and config, the storage URL, the scheduler. Then DIR holds the
 study's storage (``tune.db``, unless ``--storage``), and, once the trials are done, tuned.yaml, tune.md,
-tune.json and the figures. Ctrl-C keeps every completed trial; the same command resumes.
+tune.json and the figures. Ctrl-C keeps every completed trial and says how many, where; the same command
+resumes (a second Ctrl-C ends at once: pa10_dnbs/interrupt.py).
 """
 from __future__ import annotations
 
@@ -18,6 +19,7 @@ from pathlib import Path
 from ..arm import arm_of, preset_names
 from ..atomic_file import atomic_path
 from ..config import ConfigError, default_config_path, load_config
+from ..interrupt import EXIT_INTERRUPTED, check, deferred, on_second_sigint, say
 from ..output_lock import lock_output
 from ..report.outputs import check_creatable
 from ..run_size import check_run_size, say_note
@@ -71,6 +73,38 @@ def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, co
     command = _command(controller, trials, out, arm, config_path, storage, seed, scenarios, seeds, held_out_seeds,
                        duration_s, params)
     lock_output(out)  # a second tune into DIR at once is refused (the same command later resumes)
+    where_kept = storage if storage is not None else str(out / "tune.db")
+    on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; the completed trials stay in {where_kept}; "
+                     "run the same command to resume")
+    state = {"study": None, "phase": "start", "bar": None}
+    try:
+        with deferred():   # a Ctrl-C stops the tune between two storage operations, never inside one
+            return _tune(state, spec, base_cfg, trials, out, storage, jobs, scheduler, train, seeds, held_out_seeds,
+                         controller, the_arm, config_path, command, progress)
+    except KeyboardInterrupt:
+        if state["bar"] is not None:
+            state["bar"].close()
+        say(_interrupted_line(state, trials, where_kept))
+        return EXIT_INTERRUPTED
+
+
+def _interrupted_line(state: dict, trials: int, where_kept: str) -> str:
+    """The truth after a Ctrl-C: how many trials the storage keeps, where, and what the same command does."""
+    if state["study"] is None:
+        return "pa10-dnbs: interrupted before the first trial; no trial kept: run the same command to start"
+    n = len(completed(state["study"]))
+    if state["phase"] == "done":
+        return f"pa10-dnbs: interrupted after the tune was complete: {n} trials in {where_kept}, its reports written"
+    if state["phase"] == "trials":
+        return (f"pa10-dnbs: interrupted: kept {n} completed trial{'s' * (n != 1)} (of --trials {trials}) in "
+                f"{where_kept}; run the same command to resume")
+    return (f"pa10-dnbs: interrupted after the trials ({n} kept in {where_kept}), before the held-out runs and "
+            "reports were all written: run the same command to finish them")
+
+
+def _tune(state, spec, base_cfg, trials, out, storage, jobs, scheduler, train, seeds, held_out_seeds, controller,
+          the_arm, config_path, command, progress) -> int:
+    """The search, the held-out runs and the reports; ``state`` says how far it got (for an interruption)."""
     with Executor(jobs, scheduler) as ex:   # an unreachable scheduler stops here, before any storage is touched
         storage_obj = open_storage(storage) if storage is not None else None
         if storage is None:
@@ -79,16 +113,12 @@ def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, co
             storage_obj = open_storage(storage)
         batch = max(1, ex.jobs // (len(train) * seeds))
         study = open_study(storage_obj, spec, batch)
+        state["study"], state["phase"] = study, "trials"
         t0 = time.monotonic()
-        bar = TrialProgress(study, trials, f"tune {controller} on {the_arm.name}", progress)
-        try:
-            optimize(study, spec, base_cfg, trials, ex, bar)
-        except KeyboardInterrupt:
-            bar.close()
-            print(f"pa10-dnbs: interrupted; {len(completed(study))} completed trials kept in {storage}: the same "
-                  "command resumes", file=sys.stderr)
-            return 130
+        bar = state["bar"] = TrialProgress(study, trials, f"tune {controller} on {the_arm.name}", progress)
+        optimize(study, spec, base_cfg, trials, ex, bar)
         bar.close()
+        state["bar"], state["phase"] = None, "reports"
         trials_done = completed(study)
         best = min(trials_done, key=lambda t: t.value)
         start = next((t for t in trials_done if t.user_attrs.get("start")), None)
@@ -96,6 +126,7 @@ def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, co
         held = held_out(base_cfg, spec, best.params, held_scen, held_seeds, ex) if held_out_seeds else None
         where = ex.where
     wall = time.monotonic() - t0
+    check()
     out.mkdir(parents=True, exist_ok=True)
     arm_value = the_arm.name if the_arm.name in preset_names() and arm_of({"arm": the_arm.name}).file == the_arm.file \
         else str(the_arm.file)
@@ -104,6 +135,7 @@ def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, co
         f"trial {best.number} of study {spec.study_name}, objective {best.value:.4f} (docs/tuning.md)",
         f"run it: pa10-dnbs simulate --config {out / 'tuned.yaml'} --controller {controller} --out DIR"]))
     figures = tune_figures(study, out)
+    check()
     _write(out / "tune.md", tune_markdown(spec, study, best, start, command, where, wall, held, held_scen, held_seeds,
                                           storage, figures))
     _write(out / "tune.json", json.dumps({
@@ -112,6 +144,7 @@ def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, co
         "best_objective": best.value, "best_params": dict(spec.fixed, **best.params), "start_params": spec.start,
         "start_objective": start.value if start is not None else None,
         "held_out_seeds": held_seeds if held else [], "held_out": held}, indent=2) + "\n")
+    state["phase"] = "done"
     print(f"{len(trials_done)} trials; best trial {best.number}: objective {best.value:.3f}"
           + (f" (start {start.value:.3f})" if start is not None else "") + f"; wrote {out}/tuned.yaml, {out}/tune.md")
     if held:
