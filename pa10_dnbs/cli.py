@@ -348,10 +348,10 @@ def main(argv: list[str] | None = None) -> int:
               "command again", file=sys.stderr)
         return 130
     finally:
+        if argv is None:   # this process is the command (not a caller's in-process run): Ctrl-C while it exits
+            interrupt.quiet_end()
         release_all(keep=locked_before)  # the output paths this command locked (output_lock.py)
 
 
 if __name__ == "__main__":
     sys.exit(main())
-        if argv is None:   # this process is the command (not a caller's in-process run): Ctrl-C while it exits
-            interrupt.quiet_end()
