@@ -152,3 +152,9 @@ def test_the_plant_equals_mujoco_on_every_serial_arm_of_the_collection(path):
     arm = load_arm(COLLECTION / path)
     d = compare_with_mujoco(arm, states=10)
     assert d.worst < MUJOCO_RTOL, (path, d)
+
+
+def test_a_urdf_without_joints_is_refused_in_one_line(tmp_path):
+    (tmp_path / "empty.urdf").write_text('<?xml version="1.0"?>\n<robot name="empty"/>\n')   # example-robot-data's ur3.urdf
+    with pytest.raises(ArmError, match=r"empty.urdf: the URDF has no joints"):
+        load_arm(tmp_path / "empty.urdf")

@@ -82,6 +82,8 @@ def actuated_joints(chain: UrdfChain, exclude: tuple[str, ...] = (), tip_link: s
     gripper at the chain's end (:func:`gripper_joints`). Raises ValueError naming the joint for an
     unknown name, or an actuated joint that is not revolute or continuous (prismatic, floating, planar).
     """
+    if not chain.joints:
+        raise ValueError("the URDF has no joints")
     on_chain = [j for j in chain_joints(chain, tip_link) if j.kind != "fixed"]
     known = {j.name for j in chain.joints}
     for name in tuple(exclude) + tuple(names or ()):
