@@ -8,9 +8,6 @@ import argparse
 import sys
 from pathlib import Path
 
-from . import interrupt
-_startup_sigint = interrupt.quiet_start()   # Ctrl-C while the modules load: one line, exit 130
-
 from .accel.build import KernelBuildError
 from .config import ConfigError, default_config_path
 from .launch.fault_flags import add_fault_arguments
@@ -21,9 +18,6 @@ from .cli_values import OneLineParser, nonnegative, number_in, positive, seconds
 from .output_lock import OutputInUseError, held, release_all
 from .report.outputs import OutputExistsError
 from .tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
-
-if __name__ != "__main__" and not sys.argv[0].endswith("pa10-dnbs"):   # imported by a caller: its own Ctrl-C
-    interrupt.end_quiet_start(_startup_sigint)
 
 LIVE_PORT = 8765  # Foxglove's default WebSocket port
 
@@ -69,8 +63,20 @@ def _launch(args: argparse.Namespace) -> int:
                       live_hz=args.live_hz, real_time_factor=1.0 if args.rtf is None else args.rtf,
                       deadline_fraction=0.9 if args.deadline_fraction is None else args.deadline_fraction,
                       rt_priority=args.rt_priority, sched_batch=args.sched_batch, namespace=args.namespace,
-                      clock_hz=args.clock_hz, figures=not args.no_figures, arm=args.arm,
-                      trajectory=args.trajectory)
+                      clock_hz=args.clock_hz, figures=not args.no_figures, arm=args.arm, robot=_robot_options(args),
+                      trajectory=args.trajectory, plant=args.plant)
+
+
+def _robot_options(args: argparse.Namespace):
+    """``--robot external`` and its flags (docs/your_robot.md), or None (the project's plant)."""
+    _unused_flags(args, [(d, args.robot is not None, "only with --robot external")
+                         for d in ("robot_command", "robot_state_topic", "robot_command_topic", "robot_timeout")])
+    if args.robot is None:
+        return None
+    from .launch.robot_options import RobotOptions
+
+    return RobotOptions(args.robot, args.robot_command or "joint_state", args.robot_state_topic,
+                        args.robot_command_topic, 1.0 if args.robot_timeout is None else args.robot_timeout)
 
 
 def _robot(args: argparse.Namespace) -> int:
@@ -230,6 +236,23 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--bag-compression", choices=("zstd", "none"), default=None,
                     help="with --record: zstd-compressed MCAP chunks (default, as `ros2 bag record -s mcap`) or none")
     _add_live_args(la)
+    la.add_argument("--plant", choices=("pybullet", "mujoco"), default="pybullet",
+                    help="pybullet: the project's plant node; mujoco: the arm in MuJoCo as an external robot behind "
+                         "the joint bus (lockstep; docs/engines.md)")
+    la.add_argument("--robot", choices=("external",), default=None,
+                    help="external: no plant; the joint bus drives a robot already running that speaks the standard "
+                         "interface, on this shell's ROS_DOMAIN_ID or --domain-id (docs/your_robot.md)")
+    la.add_argument("--robot-command", default=None, metavar="FORM",
+                    help="with --robot external: joint_state (stamped JointState efforts, the default) or "
+                         "forward:<controller> (Float64MultiArray on /<controller>/commands)")
+    la.add_argument("--robot-state-topic", default=None, metavar="TOPIC",
+                    help="with --robot external: the robot's JointState topic (default /robot_joint_states; "
+                         "/joint_states with forward:...)")
+    la.add_argument("--robot-command-topic", default=None, metavar="TOPIC",
+                    help="with --robot external and joint_state commands: the command topic (default "
+                         "/robot_joint_command)")
+    la.add_argument("--robot-timeout", type=positive, default=None, metavar="SECONDS",
+                    help="with --robot external: wall time without a new robot state that makes it stale (default 1)")
     add_fault_arguments(la)
     la.set_defaults(func=_launch)
 
@@ -335,8 +358,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     locked_before = held()   # a command run inside another (scripts/equal_budget.py) keeps its caller's locks
     try:
-        with interrupt.two_stage_sigint():   # Ctrl-C: the command stops and says what it kept; twice: at once
-            return args.func(args)
+        return args.func(args)
     except (ConfigError, KernelBuildError, OutputExistsError, OutputInUseError, BagExistsError, BagError) as exc:
         print(f"pa10-dnbs: error: {exc}", file=sys.stderr)
         return 2
@@ -344,12 +366,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"pa10-dnbs: error: {exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
-        print("pa10-dnbs: interrupted; nothing written (outputs are written whole, at the end): run the same "
-              "command again", file=sys.stderr)
+        print("pa10-dnbs: interrupted, no output written", file=sys.stderr)
         return 130
     finally:
-        if argv is None:   # this process is the command (not a caller's in-process run): Ctrl-C while it exits
-            interrupt.quiet_end()
         release_all(keep=locked_before)  # the output paths this command locked (output_lock.py)
 
 

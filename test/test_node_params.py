@@ -16,6 +16,9 @@ CASES = [  # (node module, bad parameter, word the error line must hold): each n
     ("recorder_node", "qos_depth:=0", "qos_depth"),
     ("live_observer_node", "port:=70000", "port"),
     ("plant_node", "on_missing_effort:=guess", "on_missing_effort"),  # not one of the choices
+    ("plant_node", "interface:=ros2_control", "interface"),
+    ("joint_bus_node", "robot_command:=torque", "robot_command"),     # before it waits for any robot
+    ("joint_bus_node", "robot_timeout_s:=0.0", "robot_timeout_s"),
 ]
 TIMEOUT_S = 60
 

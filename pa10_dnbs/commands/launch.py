@@ -23,8 +23,8 @@ from ..launch.graph_run import GraphFailure, GraphOptions, loop_reliability, par
 from ..launch.realtime_advice import ON_TIME_TARGET, injected_misses, realtime_hint
 from ..live.options import check_live_options
 from ..loop.scheduling import DEFAULT_RT_PRIORITY, check_priority, granted_priority
-from ..report.metrics_file import metrics_dict, metrics_settings
 from ..number_text import interval
+from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_creatable, check_output_dir, write_report
 from ..output_lock import lock_output
 from ..run_size import check_run_size, say_note
@@ -32,6 +32,8 @@ from ..wire.wire_record import load_wire_run
 from ..wire.steps import StepClock
 from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, ClockSchedule, check_clock_hz
 from ..wire.topics import CLOCK, ArmTopics, check_namespace, default_namespace
+from ..launch.robot_options import RobotOptions, check_robot_options, robot_domain
+from ..launch.plant_engine import plant_robot_options
 
 
 
@@ -43,7 +45,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                real_time_factor: float = 1.0, deadline_fraction: float = 0.9, rt_priority: int = DEFAULT_RT_PRIORITY,
                sched_batch: bool = False, namespace: str | None = None,
                clock_hz: float = DEFAULT_CLOCK_HZ, figures: bool = True, arm: str | None = None,
-               trajectory: Path | None = None) -> int:
+               robot: RobotOptions | None = None, trajectory: Path | None = None, plant: str = "pybullet") -> int:
     """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code.
 
     ``fault_args``: the parsed fault flags (launch/fault_flags.py) applied to the config; the config the
@@ -59,6 +61,10 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     ``namespace``: the arm's ROS namespace (every node runs in it; /clock, /tf, /diagnostics stay global); None:
     ``/<the arm's name>``. ``arm``: a preset's name or an arm file or URDF (``--arm``); None: the config's.
     ``clock_hz``: /clock rate [Hz of simulated time], > 0 (the reference node is paced by /clock).
+    ``robot``: ``--robot external`` and its topics: the joint bus in the plant's place, against a running robot
+    on ``domain_id`` (default: this shell's ROS_DOMAIN_ID; docs/your_robot.md). None: the project's plant.
+    ``plant``: 'pybullet' (the project's plant node) or 'mujoco': the MuJoCo robot node behind the joint bus, in the
+    launcher's own domain (launch/plant_engine.py, docs/engines.md).
     ``trajectory``: a JointTrajectory file (YAML or JSON) the reference node follows from step 0 instead of
     eq. 27 (docs/trajectories.md); checked here first (a bad file: ConfigError, nothing written).
     """
@@ -81,6 +87,13 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         duration_s = cfg["simulation"]["duration_s"]
     if not (math.isfinite(duration_s) and duration_s > 0):
         raise ConfigError(f"--duration: must be a positive finite number of seconds, got {duration_s}")
+    own_robot = plant == "mujoco"
+    robot = plant_robot_options(plant, robot, mode)
+    robot_fields = check_robot_options(robot, mode) if robot is not None else {}
+    if own_robot:
+        robot_fields["plant_engine"] = "mujoco"
+    if robot is not None and domain_id is None and not own_robot:  # the robot is running: the graph joins its domain
+        domain_id = robot_domain()
     if domain_id is not None and not 0 <= domain_id <= 101:
         raise ConfigError(f"--domain-id: must be in 0..101, got {domain_id}")
     if not (math.isfinite(effort_timeout_s) and effort_timeout_s > 0):
@@ -143,8 +156,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                        bag_compression=bag_compression, live_port=live_port, live_host=live_host, live_hz=live_hz,
                        real_time_factor=real_time_factor, deadline_fraction=deadline_fraction,
                        rt_priority=rt_priority, sched_batch=sched_batch, namespace=namespace,
-                       clock_hz=clock_hz, joint_names=joint_names,
-                       trajectory_file=trajectory)
+                       clock_hz=clock_hz, joint_names=joint_names, trajectory_file=trajectory,
+                       **robot_fields)
     reliability = loop_reliability(opt)
     settings = metrics_settings(cfg, n_steps * dt)
     window = settings["window_s"]
@@ -183,6 +196,12 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                 if trajectory is not None:
                     notes.append(f"reference: the trajectory of `{trajectory}` from t = 0, not eq. 27 "
                                  "(docs/trajectories.md)")
+                if own_robot:
+                    notes.append("plant: the arm in MuJoCo (`pa10-dnbs robot --engine mujoco`) behind the joint bus, "
+                                 "lockstep (docs/engines.md)")
+                elif robot is not None:
+                    notes.append(f"plant: an external robot behind the joint bus ({robot.command} commands; "
+                                 "docs/your_robot.md)")
                 if init_from is not None:
                     notes.append(f"DNBS warm-started from the checkpoints in `{init_from}` (not a cold start)")
                 if faults_active(cfg) or result.restarts:
@@ -203,7 +222,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
             print(f"pa10-dnbs launch: the bag recorded so far is closed and readable: {record}", file=sys.stderr)
         return 130 if exc.interrupted else 1
     m = metrics
-    print(f"{controller} ({mode}): worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over {interval(m['window_s'])} s, "
+    print(f"{controller} ({mode}): worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over "
+          f"{interval(m['window_s'])} s, "
           f"real-time factor {m['real_time_factor']:.2f}")
     if mode == "realtime":
         t = m["timing"]

@@ -46,7 +46,6 @@ class JointBusNode(PlantNode):
     def _open_plant(self, cfg: dict) -> RemoteRobot:
         """The robot, once its first state is in (it sets whether the bus publishes /clock)."""
         p = self.p
-        p["interface"] = ""
         if not p["robot_timeout_s"] > 0:
             raise ParameterError(f"parameter robot_timeout_s must be > 0 s, got {p['robot_timeout_s']}")
         try:

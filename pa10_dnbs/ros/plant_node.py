@@ -108,6 +108,9 @@ class PlantNode(Node):
         p = declare(self, self.PARAMS)
         check_choice("mode", p["mode"], ("lockstep", "realtime"))
         check_choice("on_missing_effort", p["on_missing_effort"], ("hold", "zero"))
+        if p.setdefault("interface", "") not in ("", "standard"):
+            raise ParameterError(f"parameter interface must be '' (the per-joint topics) or standard, got "
+                                 f"{p['interface']!r}")
         realtime = p["mode"] == "realtime"
         if not p["reliability"]:  # realtime: the sensor-data convention; lockstep: lossless
             p["reliability"] = "best_effort" if realtime else "reliable"
@@ -171,7 +174,6 @@ class PlantNode(Node):
         """The per-joint topics (``plant_wire.py``), or with ``interface:=standard`` the standard robot interface
         (``plant_standard_wire.py``): there the plant waits for every command (no effort timeout)."""
         p = self.p
-        check_choice("interface", p["interface"], ("", "standard"))
         if p["interface"] == "standard":
             try:
                 command = parse_robot_command(p["robot_command"], p["robot_command_topic"] or None)
