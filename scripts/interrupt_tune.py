@@ -118,6 +118,7 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     if args.tries < 1 or args.resume_every < 1 or args.trials < 1 or not args.duration > 0:
         p.error("--tries, --resume-every, --trials must be >= 1 and --duration > 0")
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))   # stopped: the try's processes and folder go too
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     rng = random.Random(args.seed)
     base = Path(tempfile.mkdtemp(prefix="interrupt_tune-"))

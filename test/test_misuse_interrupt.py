@@ -294,6 +294,7 @@ def test_launch_ctrl_c_once_or_twice_stops_every_node_and_writes_nothing(tmp_pat
         rc, seconds, err = c.end(bound_s=20.0)   # the nodes' own graces: SIGINT 5 s, SIGTERM 3 s (launch/processes.py)
     finally:
         c.kill()
+    print(f"launch: {presses} Ctrl-C, exit after {seconds:.2f} s")
     assert rc == 130 and seconds < 20.0, (rc, seconds, err)
     assert "Traceback" not in err and "interrupted" in err, err
     assert_no_leftovers(nodes, shm_before)

@@ -19,7 +19,7 @@ from pathlib import Path
 from ..arm import arm_of, preset_names
 from ..atomic_file import atomic_path
 from ..config import ConfigError, default_config_path, load_config
-from ..interrupt import EXIT_INTERRUPTED, check, deferred, on_second_sigint, say
+from ..interrupt import EXIT_INTERRUPTED, check, deferred, immediate, on_second_sigint, say
 from ..output_lock import lock_output
 from ..report.outputs import check_creatable
 from ..run_size import check_run_size, say_note
@@ -79,6 +79,8 @@ def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, co
     state = {"study": None, "phase": "start", "bar": None}
     try:
         with deferred():   # a Ctrl-C stops the tune between two storage operations, never inside one
+            with immediate():   # seconds of imports on a busy machine: a Ctrl-C stops them at once
+                import optuna  # noqa: F401
             return _tune(state, spec, base_cfg, trials, out, storage, jobs, scheduler, train, seeds, held_out_seeds,
                          controller, the_arm, config_path, command, progress)
     except KeyboardInterrupt:
