@@ -150,7 +150,7 @@ def _add_run_args(p: argparse.ArgumentParser, controllers: tuple[str, ...], help
     p.add_argument("--duration", type=seconds, default=None, metavar="SECONDS",
                    help="simulated time [s] (default: simulation.duration_s of the config, 20 s)")
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
-    p.add_argument("--force", action="store_true", help="replace an existing output directory")
+    p.add_argument("--force", action="store_true", help="replace an existing output (never one a running command writes)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-figures", action="store_true",
                    help="write metrics, time series and report.md without figures (batch runs; ~3 s less)")
@@ -285,7 +285,7 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("--config", type=Path, default=None, help="YAML config the scenarios start from")
     add_arm_argument(st)
     add_parallel_arguments(st, "runs")
-    st.add_argument("--force", action="store_true", help="replace an existing output directory")
+    st.add_argument("--force", action="store_true", help="replace an existing output (never one a running command writes)")
     st.add_argument("--no-progress", action="store_true", help="no progress bar")
     st.set_defaults(func=_study)
 
@@ -325,7 +325,7 @@ def build_parser() -> argparse.ArgumentParser:
     an.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
     an.add_argument("--config", type=Path, default=None,
                     help="YAML config (default: the one stored in the bag, else the shipped default)")
-    an.add_argument("--force", action="store_true", help="replace an existing output directory")
+    an.add_argument("--force", action="store_true", help="replace an existing output (never one a running command writes)")
     an.add_argument("--no-progress", action="store_true", help="no progress bar")
     an.add_argument("--no-figures", action="store_true", help="metrics and report.md without figures")
     an.set_defaults(func=_analyse)

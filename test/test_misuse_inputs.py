@@ -77,6 +77,7 @@ VALUE_CASES = [
     (["study", "--seeds", "0"], "--seeds"),
     (["study", "--seeds", "1e3"], "--seeds"),
     (["study", "--jobs", "0"], "--jobs"),
+    (["study", "--jobs", "4096", "--seeds", "1000"], "--jobs"),     # 2000 runs at once: more than memory holds
     (["study", "--scenarios", "nominal,nope"], "--scenarios"),
     (["tune", "--controller", "pid", "--trials", "0"], "--trials"),
     (["tune", "--controller", "pid", "--held-out-seeds", "-1"], "--held-out-seeds"),
@@ -334,7 +335,7 @@ def test_a_second_launch_into_one_out_at_once_is_refused_and_the_first_is_intact
     first = subprocess.Popen(["timeout", "-s", "INT", "300", *cmd], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                              text=True, env=env, cwd=tmp_path)
     try:
-        _wait_for_lock(out, first) if how == "launch" else _wait_for_any_lock(out, first)
+        _wait_for_any_lock(out, first)  # held by the launcher under `timeout` (and bash, for run_main.sh)
         second = subprocess.run(["timeout", "-s", "INT", "300", *cmd], capture_output=True, text=True, env=env,
                                 cwd=tmp_path)
         _assert_one_line(second.returncode, second.stdout, second.stderr, "in use by another run")
@@ -349,7 +350,8 @@ def test_a_second_launch_into_one_out_at_once_is_refused_and_the_first_is_intact
 
 
 def _wait_for_any_lock(out: Path, proc: subprocess.Popen, timeout_s: float = 120.0) -> None:
-    """Until some process (run_main.sh execs the launcher) holds the lock of ``out``."""
+    """Until some process under ``proc`` (the launcher, started by ``timeout`` or run_main.sh) holds the lock of
+    ``out``: its lock file exists only while held."""
     lock = _lock_file(str(out.resolve()))
     t0 = time.monotonic()
     while not lock.exists():
@@ -368,8 +370,8 @@ def test_docs_blocks_never_write_one_output_with_two_different_commands():
     made runs/live. An output path may recur only in the same command (a tune or comparison resumes)."""
     seen: dict[str, tuple[str, str]] = {}
     for md in [REPO / "README.md", *sorted((REPO / "docs").glob("*.md")), REPO / "urdf" / "README.md"]:
-        text = md.read_text().replace("\\\n", " ")
-        for line in text.splitlines():
+        blocks = re.findall(r"^```bash\n(.*?)^```", md.read_text(), re.M | re.S)  # the blocks a user runs
+        for line in "\n".join(blocks).replace("\\\n", " ").splitlines():
             if "pa10-dnbs" not in line and "scripts/" not in line:
                 continue
             command = line.split("#")[0].strip().strip("`")

@@ -96,7 +96,8 @@ def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None
                          figures=figures)
     if truncated:
         print(f"analyse: {truncated}")
-    print(f"{controller}: worst-joint RMS error {metrics['worst_rms_error_rad']:.3e} rad over {interval(metrics['window_s'])} s "
+    print(f"{controller}: worst-joint RMS error {metrics['worst_rms_error_rad']:.3e} rad over "
+          f"{interval(metrics['window_s'])} s "
           f"({rec.n} steps from {bag.path})")
     print(f"wrote {out}/report.md")
     return 0 if metrics["all_finite"] and metrics["torques_within_limits"] else 1

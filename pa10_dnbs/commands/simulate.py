@@ -90,7 +90,8 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
                                   run.extra["controllers"], n_steps - 1, the_arm.joint_names)
     for m in metrics:
         settle = m["worst_settling_time_s"]
-        print(f"{m['controller']}: worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over {interval(m['window_s'])} s; "
+        print(f"{m['controller']}: worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over "
+              f"{interval(m['window_s'])} s; "
               f"settled (|e| < {m['settle_band_rad']:g} rad) "
               + (f"after {settle:.3f} s" if settle is not None else "never")
               + f"; max |e| {m['worst_max_abs_error_run_rad']:.4f} rad; torque variation "
