@@ -4,7 +4,7 @@ from __future__ import annotations
 
 def num(x, digits: int = 6) -> str:
     """``x`` in at most ``digits`` significant digits, without a float's binary tail or an exponent's padding."""
-    text = f"{float(x):.{digits}g}"
+    text = f"{float(f'{float(x):.{digits}g}'):g}"  # rounded to ``digits``, then without an exponent below 1e6
     if "e" in text:
         mantissa, exp = text.split("e")
         text = f"{mantissa}e{int(exp)}"

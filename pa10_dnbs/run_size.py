@@ -55,19 +55,19 @@ def run_bytes(n_steps: int, n_joints: int, kept_runs: int = 1, at_once: int = 1,
 def _size(n: float) -> str:
     for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
         if n < 1024 or unit == "PiB":
-            return f"{n:.3g} {unit}"
+            return f"{num(n, 3)} {unit}"
         n /= 1024
-    return f"{n:.3g} PiB"
+    return f"{num(n, 3)} PiB"
 
 
 def _duration(s: float) -> str:
     if s < 120:
-        return f"{s:.3g} s"
+        return f"{num(s, 3)} s"
     if s < 7200:
-        return f"{s / 60:.3g} min"
+        return f"{num(s / 60, 3)} min"
     if s < 3 * 86400:
-        return f"{s / 3600:.3g} h"
-    return f"{s / 86400:.3g} days"
+        return f"{num(s / 3600, 3)} h"
+    return f"{num(s / 86400, 3)} days"
 
 
 def check_run_size(flag: str, duration_s: float, n_steps: int, n_joints: int, kept_runs: int = 1,

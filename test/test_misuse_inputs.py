@@ -401,7 +401,7 @@ def test_numbers_are_printed_as_people_write_them(tmp_path):
     from pa10_dnbs.number_text import interval, num
 
     assert interval((0.8290000000000001, 1.6580000000000001)) == "[0.829, 1.658]"
-    assert num(1e9) == "1e9" and num(2.5e-05) == "2.5e-5" and num(20.0) == "20"
+    assert num(1e9) == "1e9" and num(2.5e-05) == "2.5e-5" and num(20.0) == "20" and num(1160.4, 3) == "1160"
     r = run_cli("simulate", "--controller", "pid", "--duration", "1.658", "--no-figures", "--out", tmp_path / "r")
     assert r.returncode == 0 and "over [0.829, 1.658] s" in r.stdout
     assert not re.search(r"\d\.\d{12,}", r.stdout + r.stderr + (tmp_path / "r" / "report.md").read_text())
