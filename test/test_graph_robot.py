@@ -40,11 +40,16 @@ def _plant_robot(domain: int, duration_s: float, *params: str) -> Proc:
     return Proc(args, domain)
 
 
-def test_the_pybullet_robot_behind_the_bus_is_the_in_process_run(tmp_path, domain, _default_cfg):
+@pytest.mark.parametrize("form", ["joint_state", "forward:effort_controller"])
+def test_the_pybullet_robot_behind_the_bus_is_the_in_process_run(form, tmp_path, domain, _default_cfg):
+    """Either command form; the JointState one recorded (the Float64MultiArray one on /joint_states and
+    /effort_controller/commands, as beside a JointGroupEffortController)."""
     shm_before = shm_files()
     out, bag = tmp_path / "run", tmp_path / "bag"
-    robot = _plant_robot(domain, 1.0)
-    la = Launcher("--robot", "external", "--duration", 1.0, "--out", out, "--record", bag, domain_id=domain)
+    robot = _plant_robot(domain, 1.0, f"robot_command:={form}")
+    record = ("--record", bag) if form == "joint_state" else ()
+    la = Launcher("--robot", "external", "--robot-command", form, "--duration", 1.0, "--out", out, *record,
+                  domain_id=domain)
     try:
         pids = la.node_pids()
         rc = la.wait(timeout=300)
@@ -64,12 +69,15 @@ def test_the_pybullet_robot_behind_the_bus_is_the_in_process_run(tmp_path, domai
         assert np.array_equal(a, b), f"{field}: first (step, joint) that differs {np.argwhere(a != b)[:3].tolist()}"
     m = json.loads((out / "metrics.json").read_text())
     assert all(j["effort_timeouts"] == 0 for j in m["timing"]["joints"]), m["timing"]["joints"]
-    from pa10_dnbs.bag.bag_reader import Bag
+    if record:
+        from pa10_dnbs.bag.bag_reader import Bag
 
-    with Bag(bag) as b:
-        assert {"/pa10/s1/state", "/pa10/s1/effort", "/pa10/joint_states", "/clock"} <= set(b.topics)
+        with Bag(bag) as b:
+            assert {"/pa10/s1/state", "/pa10/s1/effort", "/pa10/joint_states", "/clock"} <= set(b.topics)
+    else:
+        assert "JOINT BUS /joint_states -> /effort_controller/commands (forward)" in bus_log, bus_log
     codes = exit_codes(la.output)
-    assert len(codes) == 10 and all(c == 0 for c in codes.values()), codes  # 9 nodes and the recorder
+    assert len(codes) == 10 and all(c == 0 for c in codes.values()), codes  # 9 nodes and the observer
     _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)
 
 
