@@ -52,6 +52,11 @@ VALUE_CASES = [
     (["simulate", "--controller", "all", "--duration", "1e300"], "--duration"),
     (["simulate", "--duration", "ten"], "--duration"),
     (["simulate", "--controller", "pid", "--init-from", "/nonexistent"], "--init-from"),
+    (["simulate", "--init-from", "/nonexistent"], "--init-from"),
+    (["simulate", "--config", "/nonexistent.yaml"], "/nonexistent.yaml"),
+    (["simulate", "--arm", "nope"], "arm"),
+    (["launch", "--namespace", "bad//ns"], "--namespace"),
+    (["launch", "--netns", "foo"], "--netns"),
     (["launch", "--duration", "1e9"], "--duration"),
     (["launch", "--duration", "nan"], "--duration"),
     (["launch", "--rtf", "0.5"], "--rtf"),                         # without --mode realtime: no effect
@@ -85,6 +90,8 @@ VALUE_CASES = [
     (["tune", "--controller", "pid", "--duration", "-inf"], "--duration"),
     (["tune", "--controller", "pid", "--seed", "-3"], "--seed"),
     (["tune", "--controller", "pid", "--jobs", "-1"], "--jobs"),
+    (["tune", "--controller", "pid", "--storage", "bogus://x"], "--storage"),
+    (["tune", "--controller", "nope"], "nope"),
 ]
 
 
