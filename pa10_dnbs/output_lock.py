@@ -29,12 +29,31 @@ def _lock_file(key: str) -> Path:
     return d / (hashlib.sha256(key.encode()).hexdigest()[:24] + ".lock")
 
 
+def _sweep_stale(directory: Path) -> None:
+    """Remove the lock files no process holds (their holders were killed before they could): each is taken and
+    unlinked; a run opening it at that moment sees its file gone and makes a new one (the inode check below)."""
+    for file in directory.glob("*.lock"):
+        try:
+            fd = os.open(file, os.O_RDWR)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            if os.fstat(fd).st_ino == os.stat(file).st_ino:
+                os.unlink(file)
+        except OSError:  # held (BlockingIOError), or gone meanwhile
+            pass
+        finally:
+            os.close(fd)
+
+
 def lock_output(path: Path, what: str = "output directory") -> None:
     """Hold the lock of ``path`` for this process (again: no-op); raises OutputInUseError if another run holds it."""
     key = str(Path(path).resolve())
     if key in _held:
         return
     file = _lock_file(key)
+    _sweep_stale(file.parent)
     while True:
         fd = os.open(file, os.O_RDWR | os.O_CREAT, 0o600)
         try:

@@ -312,9 +312,14 @@ def test_a_second_tune_into_one_out_at_once_is_refused(tmp_path):
                     "--held-out-seeds", "0", "--duration", "0.2", "--jobs", "1", "--out", out)
         _assert_one_line(r.returncode, r.stdout, r.stderr, "in use by another run")
     finally:
-        first.kill()
-        first.communicate(timeout=60)
+        first.send_signal(2)  # Ctrl-C: the tune stops, keeps its storage and drops its lock (and its lock file)
+        try:
+            first.communicate(timeout=60)
+        except subprocess.TimeoutExpired:
+            first.kill()
+            first.communicate(timeout=60)
     assert not _leftovers(str(tmp_path))
+    assert not _lock_file(str(out.resolve())).exists()
 
 
 def test_an_existing_output_is_refused_without_force_and_replaced_with_it(tmp_path):
@@ -412,3 +417,30 @@ def test_numbers_are_printed_as_people_write_them(tmp_path):
     r = run_cli("simulate", "--controller", "pid", "--duration", "1.658", "--no-figures", "--out", tmp_path / "r")
     assert r.returncode == 0 and "over [0.829, 1.658] s" in r.stdout
     assert not re.search(r"\d\.\d{12,}", r.stdout + r.stderr + (tmp_path / "r" / "report.md").read_text())
+
+
+def test_a_killed_runs_lock_never_blocks_and_its_file_is_swept(tmp_path):
+    """SIGKILL leaves no chance to release: the kernel drops the flock, the next run takes the path and removes
+    the stale lock file; a held lock refuses with the holder's pid."""
+    from pa10_dnbs.output_lock import OutputInUseError, lock_output, release_output
+
+    out = tmp_path / "run"
+    code = ("import sys, time; from pathlib import Path; from pa10_dnbs.output_lock import lock_output; "
+            f"lock_output(Path({str(out)!r})); print('held', flush=True); time.sleep(60)")
+    holder = subprocess.Popen([PY, "-c", code], stdout=subprocess.PIPE, text=True,
+                              env={**os.environ, "PYTHONPATH": str(REPO)})
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        with pytest.raises(OutputInUseError, match=f"pid {holder.pid}"):
+            lock_output(out)
+    finally:
+        holder.kill()
+        holder.wait(timeout=60)
+    stale = _lock_file(str(out.resolve()))
+    assert stale.exists()
+    lock_output(tmp_path / "other")     # any run sweeps what no process holds
+    assert not stale.exists()
+    lock_output(out)
+    release_output(out)
+    release_output(tmp_path / "other")
+    assert not _lock_file(str(out.resolve())).exists()
