@@ -9,14 +9,13 @@ the heaviest, J_heavy = 1 / min_q (M + J_r)^-1_jj:
 - k_u = RHO J_light / T: the velocity loop's discrete-time figure is RHO at the lightest pose;
 - k_a = min(k_u / (SEPARATION J_heavy), K_A_MAX): the position loop SEPARATION times slower than the velocity
   loop at the heaviest pose (never raised above that: a faster outer loop would invert the cascade);
-- DNBS: U = the torque limit; E2 = (torque limit / k_u) s_j with s_j = max(1, (J_heavy / J_light)_j /
-  RATIO_SAFE), and E1 = E1_BASE s_max^3 with s_max the arm's largest s_j. Up to a 10x inertia range the
-  torque network adapts at k_u per step and the alpha network at 1 / E1_BASE (the presets: nothing changes).
-  Beyond, the torque network slows with its joint's range, so that its integral action keeps at the heavy
-  pose the damping it has at a 10x range; and the alpha networks of every joint slow with the arm's largest
-  range: through the coupling that makes the range, the outer adaptation must stay below the slowest inner
-  loop (measured: without this the SO-101's alpha weights ran to 700 and every joint diverged; s^2 was not
-  enough on the SO-101 and the Panda without rotor inertia, s^3 was);
+- DNBS: U = the torque limit; E2 = torque limit / k_u (the torque network adapts at k_u per step); E1 =
+  E1_BASE s^3 on every joint, s = max(1, the arm's largest J_heavy / J_light / RATIO_SAFE). Up to a 10x
+  inertia range E1 = E1_BASE (the presets: nothing changes). Beyond, the alpha networks of every joint slow
+  with the arm's largest range: through the coupling that makes the range, the outer adaptation must stay
+  below the slowest inner loop (measured: without this the SO-101's alpha weights ran to 700 and every joint
+  diverged; s^2 was not enough on the SO-101 and the Panda without rotor inertia, s^3 was; slowing E2 as well
+  cost 10-50 % of RMS on every bare arm and let the Kinova's joint 4 pass 1 rad);
 - DNBS slope bound: the torque network's slope in x1, x2 and alpha stays within f = min(SLOPE_FRACTION,
   FIGURE_MAX / figure - 1) of the linear term's own gain in that input (figure: the coupled figure of k_u), so
   the loop's gains stay within (1 +- f) of the linear term's and the coupled figure below FIGURE_MAX < 2
@@ -79,7 +78,7 @@ def gain_rule(arm: Arm, sweep: InertiaSweep, dt_s: float) -> dict:
     e1 = np.full(arm.n_joints, E1_BASE * float(slow.max()) ** 3)
     return {
         "dnbs": {"alpha_net": {"error_scale_rad": e1.tolist()},
-                 "torque_net": {"output_scale_nm": tau.tolist(), "error_scale_rad_s": (tau / k_u * slow).tolist()},
+                 "torque_net": {"output_scale_nm": tau.tolist(), "error_scale_rad_s": (tau / k_u).tolist()},
                  "remedies": {"robust_term": {"alpha_gain_per_s": k_a.tolist(),
                                               "torque_gain_nms_per_rad": k_u.tolist()},
                               "slope_bound": {"enabled": True, "fraction": [fraction] * arm.n_joints}}},

@@ -1,0 +1,169 @@
+"""The collection benchmark (issue 35): every serial arm of example-robot-data, bare and with an arm file.
+
+One row per (arm, mode): accepted or refused (the one line the intake gives), the rule's warnings, and per
+controller (DNBS, PID, CTC) the worst joint's RMS error over the window [rad], settling time into 1e-2 rad [s],
+torque variation, steps at a torque limit after 0.2 s, max |e| [rad] and whether the run diverged (non-finite,
+or |e| > 1 rad, the study's mark). :func:`targets` checks a row against the issue's targets;
+:func:`markdown_table` writes the table docs/arms.md shows. scripts/arm_collection.py runs it.
+"""
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import sysconfig
+import time
+from pathlib import Path
+
+import numpy as np
+
+#: example-robot-data's version the benchmark is pinned to (requirements-collection.txt).
+COLLECTION_VERSION = "6.0.0"
+DIVERGED_RAD = 1.0   # |e| above this (or a non-finite value): diverged (as the study counts it)
+CONTROLLERS = ("dnbs", "pid", "ctc")
+
+#: key -> (URDF under example-robot-data's robots/, what it is). Every serial arm of 6.0.0.
+ARMS = {
+    "ur3": ("ur_description/urdf/ur3_joint_limited_robot.urdf", "Universal Robots UR3"),
+    "ur5": ("ur_description/urdf/ur5_joint_limited_robot.urdf", "Universal Robots UR5"),
+    "ur10": ("ur_description/urdf/ur10_joint_limited_robot.urdf", "Universal Robots UR10"),
+    "kinova": ("kinova_description/robots/kinova.urdf", "Kinova Jaco 2 j2s6s200"),
+    "xarm7": ("xarm_description/urdf/xarm7.urdf", "UFACTORY xArm7"),
+    "z1": ("z1_description/urdf/z1.urdf", "Unitree Z1"),
+    "so100": ("so_arm_description/urdf/so100.urdf", "SO-100 (SO-ARM100)"),
+    "so101": ("so_arm_description/urdf/so101.urdf", "SO-101"),
+    "talos_left_arm": ("talos_data/robots/talos_left_arm.urdf", "PAL TALOS left arm"),
+    "panda": ("panda_description/urdf/panda.urdf", "Franka Emika Panda (no armature)"),
+    "twodof": ("asr_twodof_description/urdf/TwoDofs.urdf", "ASR 2-DOF arm"),
+    "double_pendulum": ("double_pendulum_description/urdf/double_pendulum_continuous.urdf", "double pendulum"),
+}
+MODES = ("bare", "arm_file")
+
+# The issue's targets
+BARE_CTC_RMS = 1e-4
+AIM_SETTLE_S, AIM_RMS = 1.0, 1e-4
+FILE_SETTLE_S, FILE_RMS, FILE_TV, FILE_LIMIT_STEPS = 0.5, 2e-5, 10.0, 0
+
+
+def collection_root() -> Path | None:
+    """example-robot-data's robots/ folder in this interpreter's site-packages, or None when not installed."""
+    root = Path(sysconfig.get_paths()["purelib"]) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
+    return root if root.is_dir() else None
+
+
+def arm_file(key: str) -> Path:
+    """The shipped arm file of ``key``: urdf/collection/<key>/arm.yaml."""
+    from ..paths import share_path
+    return share_path("urdf", "collection", key, "arm.yaml")
+
+
+def _controller_figures(run, cfg: dict, duration_s: float) -> dict:
+    from ..report.metrics_file import metrics_dict, metrics_settings
+
+    m = metrics_dict(run, metrics_settings(cfg, duration_s))
+    err, tau = run.error_rad, run.torque_nm
+    finite = bool(np.all(np.isfinite(err)) and np.all(np.isfinite(tau)))
+    max_abs = float(np.nanmax(np.abs(err))) if np.any(np.isfinite(err)) else math.inf
+    start = int(math.ceil(cfg["metrics"]["startup_s"] / run.dt_s))
+    lim = np.asarray(run.torque_limit_nm, float)
+    with np.errstate(invalid="ignore"):
+        at_limit = int(np.sum(np.any(np.abs(tau[start:]) >= lim * (1 - 1e-12), axis=1)))
+
+    def num(x):
+        return float(x) if x is not None and math.isfinite(x) else None
+
+    return {"rms_rad": num(m["worst_rms_error_rad"]), "settled_s": num(m["worst_settling_time_s"]),
+            "torque_variation": num(m["worst_torque_variation"]), "steps_at_limit_after_startup": at_limit,
+            "max_abs_error_rad": max_abs if math.isfinite(max_abs) else None,
+            "diverged": (not finite) or max_abs > DIVERGED_RAD,
+            "worst_rms_joint": max(m["joints"], key=lambda j: j["rms_error_rad"]
+                                   if math.isfinite(j["rms_error_rad"]) else math.inf)["name"]}
+
+
+def run_row(key: str, mode: str, spec: str, duration_s: float) -> dict:
+    """One row: the arm ``spec`` (URDF or arm file) loaded as ``--arm`` would, then each controller for
+    ``duration_s``. A refused arm is a row with its one line; an exception that is not a refusal is a row too
+    (status ``error``), so one arm cannot stop the table."""
+    from ..accel.choice import resolve_kernel
+    from ..config import ConfigError, default_config_path, load_config
+    from ..sim.closed_loop import simulate
+
+    row = {"arm": key, "mode": mode, "spec": spec, "status": "accepted", "reason": "", "warnings": []}
+    t0 = time.perf_counter()
+    err = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+            cfg = resolve_kernel(load_config(default_config_path(), arm=spec))
+    except ConfigError as exc:
+        row.update(status="refused", reason=str(exc).splitlines()[0])
+        return row
+    except Exception as exc:  # noqa: BLE001 - a row says what went wrong instead of ending the table
+        row.update(status="error", reason=f"{type(exc).__name__}: {exc}".splitlines()[0])
+        return row
+    row["warnings"] = [line.split(": ", 2)[-1] for line in err.getvalue().splitlines() if line.startswith("warning:")]
+    row["n_joints"] = len(cfg["plant"]["torque_limit_nm"])
+    for kind in CONTROLLERS:
+        try:
+            with np.errstate(all="ignore"), contextlib.redirect_stderr(io.StringIO()):
+                run = simulate(cfg, kind, duration_s)
+            row[kind] = _controller_figures(run, cfg, duration_s)
+        except Exception as exc:  # noqa: BLE001
+            row[kind] = {"error": f"{type(exc).__name__}: {exc}".splitlines()[0]}
+    row["wall_time_s"] = time.perf_counter() - t0
+    return row
+
+
+def targets(row: dict) -> dict:
+    """{target: True/False} of the issue's targets that apply to ``row`` (empty for a refused row)."""
+    if row["status"] != "accepted" or any("error" in row.get(k, {}) for k in CONTROLLERS):
+        return {}
+    d, p, c = row["dnbs"], row["pid"], row["ctc"]
+
+    def below(x, y):
+        return x is not None and y is not None and x <= y
+
+    if row["mode"] == "bare":
+        return {"CTC <= 1e-4 rad": below(c["rms_rad"], BARE_CTC_RMS),
+                "DNBS never diverges": not d["diverged"],
+                "aim: DNBS settles by 1 s": below(d["settled_s"], AIM_SETTLE_S),
+                "aim: DNBS RMS <= 1e-4 rad": below(d["rms_rad"], AIM_RMS),
+                "aim: DNBS ahead of PID": d["rms_rad"] is not None and (p["rms_rad"] is None or d["rms_rad"] < p["rms_rad"])}
+    return {"DNBS settles by 0.5 s": below(d["settled_s"], FILE_SETTLE_S),
+            "DNBS RMS <= 2e-5 rad": below(d["rms_rad"], FILE_RMS),
+            "DNBS torque variation <= 10": below(d["torque_variation"], FILE_TV),
+            "DNBS 0 steps at a limit after 0.2 s": d["steps_at_limit_after_startup"] == FILE_LIMIT_STEPS,
+            "DNBS never diverges": not d["diverged"]}
+
+
+def _g(x, fmt="{:.1e}") -> str:
+    return "-" if x is None else fmt.format(x)
+
+
+def _cell(row: dict, field: str, fmt: str) -> str:
+    parts = []
+    for k in CONTROLLERS:
+        f = row.get(k, {})
+        if "error" in f:
+            parts.append("error")
+        elif field == "settled_s" and f.get("settled_s") is None:
+            parts.append("never")
+        else:
+            v = f.get(field)
+            parts.append(_g(v, fmt) + ("!" if field == "rms_rad" and f.get("diverged") else ""))
+    return " / ".join(parts)
+
+
+def markdown_table(rows: list[dict]) -> str:
+    """The table of docs/arms.md: one line per (arm, mode); ``!`` marks a diverged run."""
+    out = ["| arm | mode | result | RMS [10, 20) s [rad] DNBS / PID / CTC | settled [s] | torque variation | "
+           "steps at limit after 0.2 s | targets missed |",
+           "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        if r["status"] != "accepted":
+            out.append(f"| {r['arm']} | {r['mode']} | {r['status']}: {r['reason'].replace('|', '/')} | | | | | |")
+            continue
+        missed = [t for t, ok in targets(r).items() if not ok]
+        out.append(f"| {r['arm']} | {r['mode']} | accepted ({r['n_joints']} joints) | {_cell(r, 'rms_rad', '{:.1e}')} | "
+                   f"{_cell(r, 'settled_s', '{:.2f}')} | {_cell(r, 'torque_variation', '{:.1f}')} | "
+                   f"{_cell(r, 'steps_at_limit_after_startup', '{:d}')} | {'; '.join(missed) or 'none'} |")
+    return "\n".join(out) + "\n"

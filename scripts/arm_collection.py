@@ -1,0 +1,105 @@
+"""The collection benchmark: every serial arm of example-robot-data, bare and with its shipped arm file.
+
+    .venv/bin/python scripts/arm_collection.py --install            # the pinned collection (131 MB), once
+    .venv/bin/python scripts/arm_collection.py                      # every arm, both modes, 20 s runs
+    .venv/bin/python scripts/arm_collection.py --arms ur5,so101 --duration 5 --out /tmp/collection.json
+
+Each (arm, mode) runs DNBS, PID and CTC in-process (pa10_dnbs/study/collection.py) in a pool of ``--jobs``
+processes. The table goes to ``--out`` (benchmarks/arm_collection.json) and beside it as markdown (.md),
+rewritten after every row, so Ctrl-C (exit 130) keeps the completed rows. The collection is not in
+requirements.txt: it is the benchmark's choice (131 MB that no test needs), pinned in ONE place,
+requirements-collection.txt, which ``--install`` installs. Exit 2 with one line when it is not installed.
+"""
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from pa10_dnbs.atomic_file import atomic_path, write_json  # noqa: E402
+from pa10_dnbs.interrupt import EXIT_INTERRUPTED  # noqa: E402
+from pa10_dnbs.study.collection import (ARMS, COLLECTION_VERSION, MODES, arm_file, collection_root,  # noqa: E402
+                                        markdown_table, run_row)
+
+REQUIREMENTS = ROOT / "requirements-collection.txt"
+
+
+def _args(argv):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--arms", default=",".join(ARMS), help=f"comma-separated, of: {', '.join(ARMS)}")
+    ap.add_argument("--modes", default=",".join(MODES), help="bare, arm_file or both")
+    ap.add_argument("--duration", type=float, default=20.0, help="s per run (the window is [10, 20) s at 20 s)")
+    ap.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
+    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "arm_collection.json")
+    ap.add_argument("--install", action="store_true", help="pip install requirements-collection.txt, then exit")
+    return ap.parse_args(argv)
+
+
+def _fail(msg: str) -> int:
+    print(f"arm_collection: error: {msg}", file=sys.stderr)
+    return 2
+
+
+def main(argv=None) -> int:
+    a = _args(argv)
+    if a.install:
+        return subprocess.call([sys.executable, "-m", "pip", "install", "--quiet", "-r", str(REQUIREMENTS)])
+    arms = [k for k in a.arms.split(",") if k]
+    modes = [m for m in a.modes.split(",") if m]
+    bad = [k for k in arms if k not in ARMS] + [m for m in modes if m not in MODES]
+    if bad:
+        return _fail(f"--arms/--modes: unknown {bad[0]!r} (arms: {', '.join(ARMS)}; modes: {', '.join(MODES)})")
+    if not (a.duration > 0 and a.duration < 1e4):
+        return _fail(f"--duration: must be a positive number of seconds, got {a.duration}")
+    if a.jobs < 1:
+        return _fail(f"--jobs: must be >= 1, got {a.jobs}")
+    root = collection_root()
+    if root is None:
+        return _fail(f"example-robot-data is not installed: --install (pip install -r {REQUIREMENTS.name}, 131 MB)")
+    tasks = {}
+    for k in arms:
+        for m in modes:
+            spec = str(root / ARMS[k][0]) if m == "bare" else str(arm_file(k))
+            tasks[(k, m)] = (k, m, spec, a.duration)
+    done: dict = {}
+    t0 = time.perf_counter()
+
+    def write() -> None:
+        rows = [done[key] for key in tasks if key in done]
+        meta = {"collection": f"example-robot-data {COLLECTION_VERSION}", "duration_s": a.duration,
+                "jobs": a.jobs, "wall_time_s": round(time.perf_counter() - t0, 1), "rows_done": len(rows),
+                "rows_planned": len(tasks),
+                "command": "scripts/arm_collection.py " + " ".join(argv if argv is not None else sys.argv[1:])}
+        a.out.parent.mkdir(parents=True, exist_ok=True)
+        write_json(a.out, {"meta": meta, "rows": rows}, indent=1)
+        with atomic_path(a.out.with_suffix(".md")) as tmp:
+            tmp.write_text(markdown_table(rows))
+
+    def on_done(key, row) -> None:
+        done[key] = row
+        d = row.get("dnbs", {})
+        print(f"{row['arm']} {row['mode']}: {row['status']} {row['reason']}"
+              + (f" DNBS RMS {d.get('rms_rad')}" if d else ""), flush=True)
+        write()
+
+    from pa10_dnbs.study.executor import Executor
+    try:
+        with Executor(min(a.jobs, len(tasks))) as ex:
+            ex.run(run_row, tasks, on_done)
+    except KeyboardInterrupt:
+        write()
+        print(f"arm_collection: interrupted: {len(done)} of {len(tasks)} rows kept in {a.out}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    write()
+    print(f"wrote {a.out} and {a.out.with_suffix('.md')} ({len(done)} rows, "
+          f"{time.perf_counter() - t0:.0f} s)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
