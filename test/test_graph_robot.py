@@ -105,20 +105,22 @@ def test_a_paced_robot_is_followed(tmp_path, domain):
     _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)
 
 
-FAULTS = [  # (fault, what the one line says)
-    ("stop", "(stale robot)"),
-    ("missing", "joint_states lacks s3"),
-    ("nan", "non-finite state of joint s2: position nan"),
+FAULTS = [  # (fault, mode, what the one line says): each fault in lockstep, the paced loop's own stale check
+    ("stop", "lockstep", "(stale robot)"),
+    ("missing", "lockstep", "joint_states lacks s3"),
+    ("nan", "lockstep", "non-finite state of joint s2: position nan"),
+    ("stop", "realtime", "(stale robot)"),
 ]
 
 
-@pytest.mark.parametrize("fault,says", FAULTS, ids=[f for f, _ in FAULTS])
-def test_a_robot_fault_is_one_line_and_the_safe_command(fault, says, tmp_path, domain):
+@pytest.mark.parametrize("fault,mode,says", FAULTS, ids=[f"{f}-{m}" for f, m, _ in FAULTS])
+def test_a_robot_fault_is_one_line_and_the_safe_command(fault, mode, says, tmp_path, domain):
     shm_before = shm_files()
     at = 300
     robot = Proc([sys.executable, HERE / "robot_probe.py", domain, fault, at], domain)
     robot.wait_for("PROBE READY", 60)
-    la = Launcher("--robot", "external", "--duration", 3.0, "--out", tmp_path / "run", domain_id=domain)
+    la = Launcher("--robot", "external", "--mode", mode, "--duration", 3.0, "--out", tmp_path / "run",
+                  domain_id=domain)
     try:
         pids = la.node_pids()
         rc = la.wait(timeout=300)

@@ -88,3 +88,25 @@ def test_launch_flags_are_checked_with_one_line_naming_the_flag(monkeypatch):
     monkeypatch.setenv("ROS_DOMAIN_ID", "x")
     with pytest.raises(ConfigError, match="^ROS_DOMAIN_ID"):
         robot_domain()
+
+
+def test_the_launcher_starts_the_joint_bus_in_the_plants_place(tmp_path):
+    """node_specs: with --robot external the last process is the joint bus with the robot's flags, no plant."""
+    from pa10_dnbs.launch.graph_options import GraphOptions
+    from pa10_dnbs.launch.node_specs import node_commands, node_group
+
+    fields = check_robot_options(RobotOptions(command="forward:arm", state_topic="/arm/states"), "lockstep")
+    opt = GraphOptions(config_path=tmp_path / "c.yaml", joint_names=PA10, **fields)
+    cmds = node_commands(opt, tmp_path / "plant_stats.json", tmp_path / "wire.npz")
+    names = [n for n, _ in cmds]
+    assert names[-1] == "joint_bus" and "plant" not in names and node_group("joint_bus") == "plant"
+    argv = cmds[-1][1]
+    assert "pa10_dnbs.ros.joint_bus_node" in argv
+    for param in ("robot_command:=forward:arm", "robot_state_topic:=/arm/states", "robot_command_topic:=''",
+                  "robot_timeout_s:=1.0", f"stats_file:={tmp_path / 'plant_stats.json'}"):
+        assert param in argv, (param, argv)
+    ready = next(a for a in argv if a.startswith("ready_nodes:="))
+    assert "joint_controller_s1" in ready and "reference" in ready and "joint_bus" not in ready
+    plain = node_commands(GraphOptions(config_path=tmp_path / "c.yaml", joint_names=PA10), tmp_path / "s.json",
+                          tmp_path / "w.npz")
+    assert plain[-1][0] == "plant" and not any("robot_" in a for a in plain[-1][1])
