@@ -34,6 +34,7 @@ setup(
             "wire_monitor = pa10_dnbs.ros.wire_monitor:main",
             "recorder_node = pa10_dnbs.ros.recorder_node:main",
             "live_observer_node = pa10_dnbs.ros.live_observer_node:main",
+            "joint_bus_node = pa10_dnbs.ros.joint_bus_node:main",
         ],
     },
 )
