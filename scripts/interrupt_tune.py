@@ -138,10 +138,14 @@ def _run(args, argv, env, rng, base: Path, load: list) -> int:
         print(f"interrupt_tune: the uninterrupted run failed (rc {full.returncode}): "
               f"{full.stderr.decode(errors='replace').strip().splitlines()[-1:]}", file=sys.stderr)
         return 1
-    rows, window_s = [], full_s
-    print(f"uninterrupted run: {full_s:.1f} s; SIGINT at a uniform moment in [0.05, {full_s:.1f}] s (shortened to "
-          "0.95 x a run that ends first)")
-    print(f"{'try':>3} {'sigint_s':>8} {'rc':>4} {'exit_s':>6} {'left':>4} {'tb':>3} {'resumed':>7}  line")
+    rows, window_s, table = [], full_s, []
+
+    def show(line: str) -> None:
+        table.append(line)
+        print(line, flush=True)
+    show(f"uninterrupted run: {full_s:.1f} s; SIGINT at a uniform moment in [0.05, {full_s:.1f}] s (shortened to "
+         "0.95 x a run that ends first)")
+    show(f"{'try':>3} {'sigint_s':>8} {'rc':>4} {'exit_s':>6} {'left':>4} {'tb':>3} {'resumed':>7}  line")
     i = 0
     while sum(not r["finished_before_sigint"] for r in rows) < args.tries and i < 2 * args.tries:
         out = base / f"try{i:03d}"
@@ -156,10 +160,9 @@ def _run(args, argv, env, rng, base: Path, load: list) -> int:
             row["resumed"] = resume(cmd, env, out, args.trials)
         rows.append(row)
         i += 1
-        print(f"{row['try']:>3} {row['delay_s']:>8.2f} {row['rc']:>4} {row['exit_s']:>6.2f} {len(row['left']):>4} "
-              f"{'yes' if row['traceback'] else 'no':>3} "
-              f"{'-' if row['resumed'] is None else ('yes' if row['resumed'] else 'NO'):>7}  {row['line'][:90]}",
-              flush=True)
+        show(f"{row['try']:>3} {row['delay_s']:>8.2f} {row['rc']:>4} {row['exit_s']:>6.2f} {len(row['left']):>4} "
+             f"{'yes' if row['traceback'] else 'no':>3} "
+             f"{'-' if row['resumed'] is None else ('yes' if row['resumed'] else 'NO'):>7}  {row['line'][:90]}")
     hit = [r for r in rows if not r["finished_before_sigint"]]
     resumed = [r for r in hit if r["resumed"] is not None]
     summary = {
@@ -175,7 +178,7 @@ def _run(args, argv, env, rng, base: Path, load: list) -> int:
             f"{summary['tries_with_leftovers']}; tracebacks {summary['tracebacks']}; not one line "
             f"{summary['not_one_line']}; resumed {summary['resumes_ok']}/{summary['resumes_tried']} "
             f"(every {args.resume_every}th try)")
-    print(line)
+    show(line)
     if args.out is not None:
         args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text(json.dumps({
@@ -183,7 +186,7 @@ def _run(args, argv, env, rng, base: Path, load: list) -> int:
             "command": "python scripts/interrupt_tune.py " + " ".join(argv if argv is not None else sys.argv[1:]),
             "tune_command": " ".join(tune_command(Path("DIR"), args.trials, args.duration)[1:]),
             "uninterrupted_s": round(full_s, 2), "load_at_start": load, "cpus": os.cpu_count(),
-            "summary": summary, "summary_line": line, "rows": rows}, indent=1) + "\n")
+            "summary": summary, "summary_line": line, "table": table, "rows": rows}, indent=1) + "\n")
     ok = (summary["all_rc_130"] and not summary["hangs"] and not summary["tries_with_leftovers"]
           and not summary["tracebacks"] and summary["resumes_ok"] == summary["resumes_tried"])
     return 0 if ok else 1

@@ -28,10 +28,10 @@ leftovers = load_script("interrupt_tune").leftovers
 
 
 class Command:
-    """``pa10-dnbs ARGS`` in its own process group (a terminal's foreground job)."""
+    """``pa10-dnbs ARGS`` (or ``python SCRIPT ARGS``) in its own process group (a terminal's foreground job)."""
 
-    def __init__(self, *args):
-        self.args = [sys.executable, "-m", "pa10_dnbs.cli", *map(str, args)]
+    def __init__(self, *args, script: str | None = None):
+        self.args = [sys.executable, *(["-m", "pa10_dnbs.cli"] if script is None else [script]), *map(str, args)]
         self.proc = subprocess.Popen(self.args, cwd=REPO, env=dict(os.environ, PYTHONPATH=str(REPO)),
                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                      start_new_session=True)
@@ -227,6 +227,25 @@ def test_simulate_all_ctrl_c_mid_run_writes_nothing_and_says_so(tmp_path):
     assert rc == 130 and seconds < BOUND_S, (rc, seconds)
     assert one_line(err).startswith("pa10-dnbs: interrupted; nothing written"), err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_equal_budget_ctrl_c_mid_tune_exits_130_with_the_tunes_line_and_the_same_command_finishes(tmp_path):
+    out = tmp_path / "eq"
+    c = Command("--controllers", "pid,ctc", "--trials", 2, "--scenarios", "nominal", "--duration", 0.5,
+                "--held-out-seeds", 1, "--jobs", 2, "--out", out, script="scripts/equal_budget.py")
+    try:
+        wait_until(lambda: completed_trials(out / "pid" / "tune.db") >= 1, "a completed pid trial", proc=c)
+        c.ctrl_c()
+        rc, seconds, err = c.end()
+    finally:
+        c.kill()
+    assert rc == 130 and seconds < BOUND_S, (rc, seconds)
+    assert re.fullmatch(r"pa10-dnbs: interrupted(: kept \d completed trials? \(of --trials 2\) in .*/eq/pid/tune\.db; "
+                        r"run the same command to resume| after the trials .*)", one_line(err)), err
+    assert not (out / "comparison.md").exists()
+    r = subprocess.run(c.args, cwd=REPO, env=dict(os.environ, PYTHONPATH=str(REPO)), capture_output=True,
+                       text=True, timeout=300)
+    assert r.returncode == 0 and (out / "comparison.md").exists(), r.stderr
 
 
 def test_a_refused_resume_names_each_differing_flag_and_what_to_do():
