@@ -248,6 +248,35 @@ def test_equal_budget_ctrl_c_mid_tune_exits_130_with_the_tunes_line_and_the_same
     assert r.returncode == 0 and (out / "comparison.md").exists(), r.stderr
 
 
+def _sigint_disposition(_):
+    return signal.getsignal(signal.SIGINT) == signal.SIG_IGN
+
+
+def test_pool_workers_leave_ctrl_c_to_the_command():
+    """A worker that took the SIGINT could die holding the result queue's lock: the rare endless wait."""
+    from pa10_dnbs.study.executor import Executor
+
+    with Executor(2) as ex:
+        assert ex.run(_sigint_disposition, {i: (i,) for i in range(4)}) == {i: True for i in range(4)}
+
+
+def test_an_interrupted_executor_stops_its_busy_workers_within_seconds():
+    """Ctrl-C while both workers are 30 s into a run: the pool is gone within STOP_GRACE_S and a second."""
+    import _thread
+    import threading
+
+    from pa10_dnbs.study.executor import STOP_GRACE_S, Executor
+
+    t0 = time.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        with Executor(2) as ex:
+            workers = []
+            threading.Timer(1.0, lambda: (workers.extend(child_pids()), _thread.interrupt_main())).start()
+            ex.run(time.sleep, {i: (30.0,) for i in range(2)})
+    assert time.monotonic() - t0 < 1.0 + STOP_GRACE_S + 1.5
+    assert len(workers) == 2 and not [p for p in workers if p in child_pids()], workers
+
+
 def test_a_refused_resume_names_each_differing_flag_and_what_to_do():
     stored = {"arm": "pa10", "controller": "pid", "params": ["kp"], "scenarios": ["nominal"], "seeds": [0],
               "duration_s": 2.0, "config_file": "/c.yaml", "seed": 0}
