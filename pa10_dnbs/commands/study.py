@@ -36,11 +36,11 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
         raise ConfigError(f"--jobs: must be >= 1, got {workers}")
     config_path = Path(config_path) if config_path else default_config_path()
     cfg = load_config(config_path, arm=arm)
-    check_output_dir(out, force)
     n_runs, n_steps = len(scen) * len(ctrl) * seeds, int(round(duration_s / cfg["simulation"]["dt_s"]))
     at_once = 1 if scheduler is not None else min(n_runs, workers or os.cpu_count() or 1)
     check_run_size("--duration", duration_s, n_steps, len(cfg["plant"]["torque_limit_nm"]), at_once=at_once,
                    total_runs=n_runs, say=say_note)
+    check_output_dir(out, force)
     if "dnbs" in ctrl:
         cfg = resolve_kernel(cfg, say=print)  # once here, not in each worker
     n = len(scen) * len(ctrl) * seeds
