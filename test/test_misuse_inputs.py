@@ -446,3 +446,20 @@ def test_a_killed_runs_lock_never_blocks_and_its_file_is_swept(tmp_path):
     release_output(out)
     release_output(tmp_path / "other")
     assert not _lock_file(str(out.resolve())).exists()
+
+
+def test_analyse_of_a_bag_another_run_is_recording_is_refused(tmp_path):
+    """The recorder's bag is locked by its launcher until the run ends: analyse says so instead of misreading it."""
+    bag = _bag(tmp_path)
+    code = ("import time; from pathlib import Path; from pa10_dnbs.output_lock import lock_output; "
+            f"lock_output(Path({str(bag)!r}), 'bag'); print('held', flush=True); time.sleep(60)")
+    holder = subprocess.Popen([PY, "-c", code], stdout=subprocess.PIPE, text=True,
+                              env={**os.environ, "PYTHONPATH": str(REPO)})
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        r = run_cli("analyse", bag, "--out", tmp_path / "again")
+        _assert_one_line(r.returncode, r.stdout, r.stderr, "in use by another run")
+    finally:
+        holder.send_signal(2)
+        holder.wait(timeout=60)
+    assert not (tmp_path / "again").exists()

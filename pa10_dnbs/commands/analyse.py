@@ -8,6 +8,7 @@ from ..bag.analysis import bag_arm, bag_joint_names, robot_chain, run_info, wire
 from ..bag.bag_reader import Bag, BagError
 from ..config import default_config_path, load_config
 from ..number_text import interval
+from ..output_lock import lock_output
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..report.progress import ProgressBar
@@ -45,6 +46,7 @@ def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None
     ``progress``: a progress bar on stderr while the bag is read (report/progress.py; drawn on a terminal only).
     """
     check_output_dir(out, force)
+    lock_output(bag_path, "bag")  # a bag another run is still recording (or replacing) is refused, not misread
     with Bag(bag_path) as bag:
         info = run_info(bag)
         cfg, cfg_note = _run_config(info, config_path, bag)
