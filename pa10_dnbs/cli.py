@@ -8,6 +8,9 @@ import argparse
 import sys
 from pathlib import Path
 
+from . import interrupt
+_startup_sigint = interrupt.quiet_start()   # Ctrl-C while the modules load: one line, exit 130
+
 from .accel.build import KernelBuildError
 from .config import ConfigError, default_config_path
 from .launch.fault_flags import add_fault_arguments
@@ -18,6 +21,9 @@ from .cli_values import OneLineParser, nonnegative, number_in, positive, seconds
 from .output_lock import OutputInUseError, held, release_all
 from .report.outputs import OutputExistsError
 from .tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
+
+if __name__ != "__main__" and not sys.argv[0].endswith("pa10-dnbs"):   # imported by a caller: its own Ctrl-C
+    interrupt.end_quiet_start(_startup_sigint)
 
 LIVE_PORT = 8765  # Foxglove's default WebSocket port
 
@@ -358,7 +364,8 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     locked_before = held()   # a command run inside another (scripts/equal_budget.py) keeps its caller's locks
     try:
-        return args.func(args)
+        with interrupt.two_stage_sigint():   # Ctrl-C: the command stops and says what it kept; twice: at once
+            return args.func(args)
     except (ConfigError, KernelBuildError, OutputExistsError, OutputInUseError, BagExistsError, BagError) as exc:
         print(f"pa10-dnbs: error: {exc}", file=sys.stderr)
         return 2
@@ -366,9 +373,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"pa10-dnbs: error: {exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
-        print("pa10-dnbs: interrupted, no output written", file=sys.stderr)
+        print("pa10-dnbs: interrupted before it wrote anything (outputs are written whole, at the end): run the "
+              "same command again", file=sys.stderr)
         return 130
     finally:
+        if argv is None:   # this process is the command (not a caller's in-process run): Ctrl-C while it exits
+            interrupt.quiet_end()
         release_all(keep=locked_before)  # the output paths this command locked (output_lock.py)
 
 

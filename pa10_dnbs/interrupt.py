@@ -158,7 +158,7 @@ def quiet_start() -> object:
     line and exit 130 instead of an import traceback. Returns the previous handler for :func:`end_quiet_start`."""
     def stop(signum, frame):
         with contextlib.suppress(Exception):
-            os.write(2, b"pa10-dnbs: interrupted while starting; nothing written\n")
+            os.write(2, b"pa10-dnbs: interrupted while starting, before any work: nothing changed\n")
         os._exit(EXIT_INTERRUPTED)
     try:
         return signal.signal(signal.SIGINT, stop)

@@ -158,7 +158,7 @@ def test_ctrl_c_keeps_completed_trials_and_the_same_command_resumes(tmp_path, mo
     cmd = ("--controller", "pid", "--trials", 3, "--scenarios", "nominal", "--seeds", 2, "--jobs", 1,
            "--out", tmp_path / "t", *SHORT)
     r = _tune(*cmd)
-    assert r.returncode == 130 and "the same command resumes" in r.stderr
+    assert r.returncode == 130 and "run the same command to resume" in r.stderr
     assert not (tmp_path / "t" / "tune.md").exists()
     study = optuna.load_study(study_name="pa10-pid", storage=f"sqlite:///{tmp_path / 't' / 'tune.db'}")
     kept = [t.state.name for t in study.trials]

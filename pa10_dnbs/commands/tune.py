@@ -76,7 +76,8 @@ def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, co
     where_kept = storage if storage is not None else str(out / "tune.db")
     on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; the completed trials stay in {where_kept}; "
                      "run the same command to resume")
-    state = {"study": None, "phase": "start", "bar": None}
+    state = {"study": None, "phase": "start", "bar": None,
+             "had_storage": storage is not None or (out / "tune.db").exists()}
     try:
         with deferred():   # a Ctrl-C stops the tune between two storage operations, never inside one
             with immediate():   # seconds of imports on a busy machine: a Ctrl-C stops them at once
@@ -93,6 +94,9 @@ def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, co
 def _interrupted_line(state: dict, trials: int, where_kept: str) -> str:
     """The truth after a Ctrl-C: how many trials the storage keeps, where, and what the same command does."""
     if state["study"] is None:
+        if state["had_storage"]:
+            return (f"pa10-dnbs: interrupted before this run's first trial; {where_kept} keeps the trials it held: "
+                    "run the same command to resume")
         return "pa10-dnbs: interrupted before the first trial; no trial kept: run the same command to start"
     n = len(completed(state["study"]))
     if state["phase"] == "done":
