@@ -163,21 +163,7 @@ def _run(args, argv, env, rng, base: Path, load: list) -> int:
         show(f"{row['try']:>3} {row['delay_s']:>8.2f} {row['rc']:>4} {row['exit_s']:>6.2f} {len(row['left']):>4} "
              f"{'yes' if row['traceback'] else 'no':>3} "
              f"{'-' if row['resumed'] is None else ('yes' if row['resumed'] else 'NO'):>7}  {row['line'][:90]}")
-    hit = [r for r in rows if not r["finished_before_sigint"]]
-    resumed = [r for r in hit if r["resumed"] is not None]
-    summary = {
-        "tries": len(rows), "interrupted": len(hit), "finished_before_sigint": len(rows) - len(hit),
-        "all_rc_130": all(r["rc"] == 130 for r in hit), "rc_counts": _counts(r["rc"] for r in hit),
-        "max_exit_s": max((r["exit_s"] for r in hit), default=None), "hangs": sum(r["hang"] for r in rows),
-        "tries_with_leftovers": sum(bool(r["left"]) for r in rows), "tracebacks": sum(r["traceback"] for r in rows),
-        "not_one_line": sum(r["stderr_lines"] != 1 for r in hit),
-        "resumes_tried": len(resumed), "resumes_ok": sum(bool(r["resumed"]) for r in resumed)}
-    line = (f"{summary['interrupted']} of {summary['tries']} tries interrupted ({summary['finished_before_sigint']} "
-            f"finished first); rc 130: {'all' if summary['all_rc_130'] else summary['rc_counts']}; max exit "
-            f"{summary['max_exit_s']} s; hangs {summary['hangs']}; tries with processes left "
-            f"{summary['tries_with_leftovers']}; tracebacks {summary['tracebacks']}; not one line "
-            f"{summary['not_one_line']}; resumed {summary['resumes_ok']}/{summary['resumes_tried']} "
-            f"(every {args.resume_every}th try)")
+    summary, line = summarize(rows, args.resume_every)
     show(line)
     if args.out is not None:
         args.out.parent.mkdir(parents=True, exist_ok=True)
@@ -190,6 +176,33 @@ def _run(args, argv, env, rng, base: Path, load: list) -> int:
     ok = (summary["all_rc_130"] and not summary["hangs"] and not summary["tries_with_leftovers"]
           and not summary["tracebacks"] and summary["resumes_ok"] == summary["resumes_tried"])
     return 0 if ok else 1
+
+
+def shell_rc(rc: int) -> int:
+    """The exit status a shell shows: 128 + N for a process ended by signal N (Popen's -N)."""
+    return 128 - rc if rc < 0 else rc
+
+
+def summarize(rows: list[dict], resume_every: int) -> tuple[dict, str]:
+    """The summary of the tries and its line. A try ended by the SIGINT itself (rc -2: it came while the
+    interpreter was finishing, after the command's work and output were complete) is 130 to a shell; counted
+    so, and shown apart in ``rc_counts``."""
+    hit = [r for r in rows if not r["finished_before_sigint"]]
+    resumed = [r for r in hit if r["resumed"] is not None]
+    summary = {
+        "tries": len(rows), "interrupted": len(hit), "finished_before_sigint": len(rows) - len(hit),
+        "all_rc_130": all(shell_rc(r["rc"]) == 130 for r in hit), "rc_counts": _counts(r["rc"] for r in hit),
+        "max_exit_s": max((r["exit_s"] for r in hit), default=None), "hangs": sum(r["hang"] for r in rows),
+        "tries_with_leftovers": sum(bool(r["left"]) for r in rows), "tracebacks": sum(r["traceback"] for r in rows),
+        "not_one_line": sum(r["stderr_lines"] != 1 for r in hit),
+        "resumes_tried": len(resumed), "resumes_ok": sum(bool(r["resumed"]) for r in resumed)}
+    line = (f"{summary['interrupted']} of {summary['tries']} tries interrupted ({summary['finished_before_sigint']} "
+            f"finished first); shell status 130: {'all' if summary['all_rc_130'] else 'NOT all'} (rc "
+            f"{summary['rc_counts']}); max exit {summary['max_exit_s']} s; hangs {summary['hangs']}; tries with "
+            f"processes left {summary['tries_with_leftovers']}; tracebacks {summary['tracebacks']}; not one line "
+            f"{summary['not_one_line']}; resumed {summary['resumes_ok']}/{summary['resumes_tried']} "
+            f"(every {resume_every}th try)")
+    return summary, line
 
 
 def _counts(values) -> dict:
