@@ -6,9 +6,9 @@ terminal's Ctrl-C does) at a seeded random moment between start-up and the end o
 the seconds from the signal to the exit, the exit code, the processes of that group or with that folder on
 their command line still alive one second later, and whether stderr holds a traceback. Every --resume-every'th
 interrupted try then runs the same command again and checks that it completes (rc 0, tune.json holding
---trials trials). Prints a table and a summary line; --out writes both as JSON (docs/tuning.md, "Interrupting").
+--trials trials). Prints a table and a summary line; --out writes both, as Markdown (FILE.md) or JSON (docs/tuning.md, "Interrupting").
 
-    .venv/bin/python scripts/interrupt_tune.py --tries 50 --seed 0 --out benchmarks/interrupt_tune.json
+    .venv/bin/python scripts/interrupt_tune.py --tries 50 --seed 0 --out benchmarks/interrupt_tune.md
 """
 from __future__ import annotations
 
@@ -114,7 +114,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--duration", type=float, default=1.0, help="--duration of each tune [s] (default 1)")
     p.add_argument("--resume-every", type=int, default=5, metavar="K",
                    help="run the same command again after every K-th try, to completion (default 5; 1: every try)")
-    p.add_argument("--out", type=Path, default=None, metavar="FILE", help="write the table and summary as JSON")
+    p.add_argument("--out", type=Path, default=None, metavar="FILE",
+                   help="write the table and summary: Markdown if FILE ends in .md, else JSON")
     args = p.parse_args(argv)
     if args.tries < 1 or args.resume_every < 1 or args.trials < 1 or not args.duration > 0:
         p.error("--tries, --resume-every, --trials must be >= 1 and --duration > 0")
@@ -167,15 +168,34 @@ def _run(args, argv, env, rng, base: Path, load: list) -> int:
     show(line)
     if args.out is not None:
         args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text(json.dumps({
+        record = {
             "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
             "command": "python scripts/interrupt_tune.py " + " ".join(argv if argv is not None else sys.argv[1:]),
             "tune_command": " ".join(tune_command(Path("DIR"), args.trials, args.duration)[1:]),
             "uninterrupted_s": round(full_s, 2), "load_at_start": load, "cpus": os.cpu_count(),
-            "summary": summary, "summary_line": line, "table": table, "rows": rows}, indent=1) + "\n")
+            "summary": summary, "summary_line": line, "table": table, "rows": rows}
+        args.out.write_text(markdown(record) if args.out.suffix == ".md" else json.dumps(record, indent=1) + "\n")
     ok = (summary["all_rc_130"] and not summary["hangs"] and not summary["tries_with_leftovers"]
           and not summary["tracebacks"] and summary["resumes_ok"] == summary["resumes_tried"])
     return 0 if ok else 1
+
+
+def markdown(record: dict) -> str:
+    """The record as a page: when, what, how busy the machine was, the summary, the printed table."""
+    out = [f"# Ctrl-C of `pa10-dnbs tune` at random moments ({record['date']})", "",
+           f"- command: `{record['command']}`", f"- each try: `python {record['tune_command']}`",
+           f"- uninterrupted run: {record['uninterrupted_s']} s; load average at the start (1, 5, 15 min): "
+           f"{', '.join(f'{x:.2f}' for x in record['load_at_start'])} on {record['cpus']} CPUs"]
+    out += [f"- {note}" for note in record.get("notes", [])]
+    out += ["", "**" + record["summary_line"] + "**", "", "```text", *record["table"], "```", ""]
+    for title, earlier in record.get("earlier", {}).items():
+        out += [f"## {title}", "", f"- command: `{earlier['command']}`",
+                f"- load average at the start: {', '.join(f'{x:.2f}' for x in earlier['load_at_start'])}"]
+        out += [f"- {note}" for note in earlier.get("notes", [])]
+        out += ["", "**" + earlier["summary_line"] + "**", ""]
+        if earlier.get("table"):
+            out += ["```text", *earlier["table"], "```", ""]
+    return "\n".join(out)
 
 
 def shell_rc(rc: int) -> int:
