@@ -9,7 +9,8 @@ def _quiet_start_of_the_command() -> None:
     exit 130, not an import traceback (pa10_dnbs/interrupt.py). Any other importer keeps its own SIGINT."""
     import sys
 
-    if (sys.argv[:1] and sys.argv[0].endswith("pa10-dnbs")) or getattr(sys, "orig_argv", [])[1:3] == ["-m", "pa10_dnbs.cli"]:
+    command = getattr(sys, "orig_argv", [])[1:3] == ["-m", "pa10_dnbs.cli"]   # python -m pa10_dnbs.cli
+    if command or (sys.argv[:1] and sys.argv[0].endswith("pa10-dnbs")):       # the console script
         from .interrupt import quiet_start
 
         quiet_start()

@@ -6,7 +6,8 @@ terminal's Ctrl-C does) at a seeded random moment between start-up and the end o
 the seconds from the signal to the exit, the exit code, the processes of that group or with that folder on
 their command line still alive one second later, and whether stderr holds a traceback. Every --resume-every'th
 interrupted try then runs the same command again and checks that it completes (rc 0, tune.json holding
---trials trials). Prints a table and a summary line; --out writes both, as Markdown (FILE.md) or JSON (docs/tuning.md, "Interrupting").
+--trials trials). Prints a table and a summary line; --out writes both, as Markdown (FILE.md) or JSON
+(docs/tuning.md, "Interrupting").
 
     .venv/bin/python scripts/interrupt_tune.py --tries 50 --seed 0 --out benchmarks/interrupt_tune.md
 """
