@@ -3,12 +3,15 @@
     .venv/bin/python scripts/arm_collection.py --install            # the pinned collection (131 MB), once
     .venv/bin/python scripts/arm_collection.py                      # every arm, both modes, 20 s runs
     .venv/bin/python scripts/arm_collection.py --arms ur5,so101 --duration 5 --out /tmp/collection.json
+    .venv/bin/python scripts/arm_collection.py --study --arms ur5                 # + the study on its arm file
 
 Each (arm, mode) runs DNBS, PID and CTC in-process (pa10_dnbs/study/collection.py) in a pool of ``--jobs``
 processes. The table goes to ``--out`` (benchmarks/arm_collection.json) and beside it as markdown (.md),
 rewritten after every row, so Ctrl-C (exit 130) keeps the completed rows. The collection is not in
 requirements.txt: it is the benchmark's choice (131 MB that no test needs), pinned in ONE place,
 requirements-collection.txt, which ``--install`` installs. Exit 2 with one line when it is not installed.
+``--study`` then runs every study scenario x DNBS and PID x 3 seeds on each accepted arm file (about a minute
+per arm on 2 cores at 20 s) and adds a second table: where DNBS's worst seed is below PID's best.
 """
 from __future__ import annotations
 
@@ -24,7 +27,7 @@ sys.path.insert(0, str(ROOT))
 from pa10_dnbs.atomic_file import atomic_path, write_json  # noqa: E402
 from pa10_dnbs.interrupt import EXIT_INTERRUPTED  # noqa: E402
 from pa10_dnbs.study.collection import (ARMS, COLLECTION_VERSION, MODES, arm_file, collection_root,  # noqa: E402
-                                        markdown_table, run_row)
+                                        markdown_table, run_row, study_summary, study_table)
 
 REQUIREMENTS = ROOT / "requirements-collection.txt"
 
@@ -36,6 +39,8 @@ def _args(argv):
     ap.add_argument("--duration", type=float, default=20.0, help="s per run (the window is [10, 20) s at 20 s)")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
     ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "arm_collection.json")
+    ap.add_argument("--study", action="store_true", help="also the study (8 scenarios x DNBS, PID x 3 seeds) of "
+                    "every accepted arm file")
     ap.add_argument("--install", action="store_true", help="pip install requirements-collection.txt, then exit")
     return ap.parse_args(argv)
 
@@ -78,7 +83,7 @@ def main(argv=None) -> int:
         a.out.parent.mkdir(parents=True, exist_ok=True)
         write_json(a.out, {"meta": meta, "rows": rows}, indent=1)
         with atomic_path(a.out.with_suffix(".md")) as tmp:
-            tmp.write_text(markdown_table(rows))
+            tmp.write_text(markdown_table(rows) + ("\n" + study_table(rows) if study_table(rows) else ""))
 
     def on_done(key, row) -> None:
         done[key] = row
@@ -91,6 +96,14 @@ def main(argv=None) -> int:
     try:
         with Executor(min(a.jobs, len(tasks))) as ex:
             ex.run(run_row, tasks, on_done)
+        if a.study:
+            for k in arms:
+                row = done.get((k, "arm_file"))
+                if row is None or row["status"] != "accepted":
+                    continue
+                row["study"] = study_summary(k, a.duration, a.jobs)
+                print(f"{k} arm_file: study done ({row['study']['wall_time_s']} s)", flush=True)
+                write()
     except KeyboardInterrupt:
         write()
         print(f"arm_collection: interrupted: {len(done)} of {len(tasks)} rows kept in {a.out}", file=sys.stderr)

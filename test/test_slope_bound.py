@@ -88,6 +88,7 @@ def test_the_rule_leaves_ranges_within_10x_as_they_were():
     assert rt["torque_gain_nms_per_rad"] == pytest.approx(k_u)
     assert rt["alpha_gain_per_s"] == pytest.approx(np.clip(k_u / (8 * np.array([0.8, 1.5])), 5, 20))
     assert frag["dnbs"]["alpha_net"]["error_scale_rad"] == [E1_BASE, E1_BASE]
+    assert frag["dnbs"]["remedies"]["slope_bound"]["enabled"] is False  # the presets run without it
     assert frag["dnbs"]["torque_net"]["error_scale_rad_s"] == pytest.approx(10.0 / k_u)
 
 

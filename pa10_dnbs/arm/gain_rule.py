@@ -16,11 +16,13 @@ the heaviest, J_heavy = 1 / min_q (M + J_r)^-1_jj:
   below the slowest inner loop (measured: without this the SO-101's alpha weights ran to 700 and every joint
   diverged; s^2 was not enough on the SO-101 and the Panda without rotor inertia, s^3 was; slowing E2 as well
   cost 10-50 % of RMS on every bare arm and let the Kinova's joint 4 pass 1 rad);
-- DNBS slope bound: the torque network's slope in x1, x2 and alpha stays within f = min(SLOPE_FRACTION,
+- DNBS slope bound, on where the arm's largest range exceeds RATIO_SAFE (within it the rule's gains keep the
+  margin without it, and the Panda preset's payload runs would touch the box: its bits would change): the
+  torque network's slope in x1, x2 and alpha stays within f = min(SLOPE_FRACTION,
   FIGURE_MAX / figure - 1) of the linear term's own gain in that input (figure: the coupled figure of k_u), so
   the loop's gains stay within (1 +- f) of the linear term's and the coupled figure below FIGURE_MAX < 2
-  (without it the network's weights of alpha and x2 grew to 15-60 on the Panda without rotor inertia, and its
-  position slope turned a 3.5e-5 kg m^2 SO-101 wrist unstable);
+  (with the alpha networks at E1_BASE, the Panda without rotor inertia grew torque weights of alpha and x2 of
+  15-60; test_slope_bound.py has a joint that diverges without the bound and not with it);
 - PID: Kd = k_u, Kp = k_a k_u, Ki = Kp k_a / 4 (the outer pair critically damped).
 
 The model enters here only (plant/inertia_sweep.py reads M(q) once, before the run): at run time every
@@ -81,7 +83,8 @@ def gain_rule(arm: Arm, sweep: InertiaSweep, dt_s: float) -> dict:
                  "torque_net": {"output_scale_nm": tau.tolist(), "error_scale_rad_s": (tau / k_u).tolist()},
                  "remedies": {"robust_term": {"alpha_gain_per_s": k_a.tolist(),
                                               "torque_gain_nms_per_rad": k_u.tolist()},
-                              "slope_bound": {"enabled": True, "fraction": [fraction] * arm.n_joints}}},
+                              "slope_bound": {"enabled": bool(slow.max() > 1.0),
+                                              "fraction": [fraction] * arm.n_joints}}},
         "pid": {"kp": kp.tolist(), "ki": (kp * k_a / 4.0).tolist(), "kd": k_u.tolist()},
     }
 

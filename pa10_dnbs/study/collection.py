@@ -155,15 +155,62 @@ def _cell(row: dict, field: str, fmt: str) -> str:
 
 def markdown_table(rows: list[dict]) -> str:
     """The table of docs/arms.md: one line per (arm, mode); ``!`` marks a diverged run."""
-    out = ["| arm | mode | result | RMS [10, 20) s [rad] DNBS / PID / CTC | settled [s] | torque variation | "
+    out = ["| arm | mode | result | RMS over the window [rad] DNBS / PID / CTC | settled [s] | torque variation | "
            "steps at limit after 0.2 s | targets missed |",
            "|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if r["status"] != "accepted":
-            out.append(f"| {r['arm']} | {r['mode']} | {r['status']}: {r['reason'].replace('|', '/')} | | | | | |")
+            reason = r["reason"].replace("|", "/")
+            root = collection_root()
+            if root is not None:
+                reason = reason.replace(str(root) + "/", "")
+            out.append(f"| {r['arm']} | {r['mode']} | {r['status']}: {reason} | | | | | |")
             continue
         missed = [t for t, ok in targets(r).items() if not ok]
         out.append(f"| {r['arm']} | {r['mode']} | accepted ({r['n_joints']} joints) | {_cell(r, 'rms_rad', '{:.1e}')} | "
                    f"{_cell(r, 'settled_s', '{:.2f}')} | {_cell(r, 'torque_variation', '{:.1f}')} | "
                    f"{_cell(r, 'steps_at_limit_after_startup', '{:d}')} | {'; '.join(missed) or 'none'} |")
     return "\n".join(out) + "\n"
+
+
+STUDY_CONTROLLERS = ("dnbs", "pid")
+STUDY_SEEDS = 3
+
+
+def study_summary(key: str, duration_s: float, jobs: int) -> dict:
+    """Every study scenario x DNBS and PID x STUDY_SEEDS seeds on ``key``'s arm file (study/runner.py): per
+    scenario DNBS's worst seed and PID's best seed (worst joint's RMS [rad]) and DNBS's diverged runs."""
+    from ..config import default_config_path, load_config
+    from .runner import run_study
+    from .scenarios import SCENARIOS
+
+    with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
+        cfg = load_config(default_config_path(), arm=str(arm_file(key)))
+    t0 = time.perf_counter()
+    rows = run_study(cfg, list(SCENARIOS), STUDY_CONTROLLERS, STUDY_SEEDS, duration_s, workers=jobs)
+    out = {"seeds": STUDY_SEEDS, "scenarios": {}, "wall_time_s": round(time.perf_counter() - t0, 1)}
+    for sc in SCENARIOS:
+        d = [r for r in rows if r["scenario"] == sc and r["controller"] == "dnbs"]
+        p = [r for r in rows if r["scenario"] == sc and r["controller"] == "pid"]
+        dw = max((r["worst_rms_error_rad"] if r["worst_rms_error_rad"] is not None else math.inf) for r in d)
+        pb = min((r["worst_rms_error_rad"] if r["worst_rms_error_rad"] is not None else math.inf) for r in p)
+        out["scenarios"][sc] = {"dnbs_worst_rad": dw if math.isfinite(dw) else None,
+                                "pid_best_rad": pb if math.isfinite(pb) else None,
+                                "dnbs_below_pid": dw < pb, "dnbs_diverged": sum(r["diverged"] for r in d)}
+    return out
+
+
+def study_table(rows: list[dict]) -> str:
+    """One line per arm with a study: in how many scenarios DNBS's worst seed is below PID's best."""
+    out = ["| arm (arm file) | scenarios where DNBS's worst seed < PID's best | DNBS runs diverged | "
+           "scenarios where not | DNBS worst RMS over the scenarios [rad] |", "|---|---|---|---|---|"]
+    for r in rows:
+        st = r.get("study")
+        if not st:
+            continue
+        sc = st["scenarios"]
+        below = [k for k, v in sc.items() if v["dnbs_below_pid"]]
+        worst = max((v["dnbs_worst_rad"] or math.inf) for v in sc.values())
+        out.append(f"| {r['arm']} | {len(below)} of {len(sc)} | {sum(v['dnbs_diverged'] for v in sc.values())} of "
+                   f"{len(sc) * st['seeds']} | {', '.join(k for k in sc if k not in below) or '-'} | {_g(worst)} |")
+    return "\n".join(out) + "\n" if len(out) > 2 else ""

@@ -1,0 +1,63 @@
+"""The collection benchmark's parts (pa10_dnbs/study/collection.py, scripts/arm_collection.py) on small fixtures:
+a row of an accepted arm, a refused arm's one line, the targets and the table, the script's bad flags. The
+collection itself (131 MB) is not needed here."""
+from pathlib import Path
+
+import pytest
+
+from pa10_dnbs.study.collection import ARMS, arm_file, markdown_table, run_row, targets
+from script_module import load_script
+
+FIXTURES = Path(__file__).resolve().parent / "fixtures" / "urdf_intake"
+PRESETS = Path(__file__).resolve().parent.parent / "urdf"
+
+
+def test_a_row_of_an_accepted_arm_has_every_controller_and_its_targets():
+    row = run_row("iiwa", "arm_file", str(PRESETS / "iiwa" / "arm.yaml"), 0.4)
+    assert row["status"] == "accepted" and row["n_joints"] == 7
+    for kind in ("dnbs", "pid", "ctc"):
+        f = row[kind]
+        assert f["rms_rad"] is not None and f["rms_rad"] < 0.2 and not f["diverged"]
+        assert f["steps_at_limit_after_startup"] >= 0
+    t = targets(row)
+    assert set(t) == {"DNBS settles by 0.5 s", "DNBS RMS <= 2e-5 rad", "DNBS torque variation <= 10",
+                      "DNBS 0 steps at a limit after 0.2 s", "DNBS never diverges"}
+    assert t["DNBS never diverges"] is True
+    assert "| iiwa | arm_file | accepted (7 joints) |" in markdown_table([row])
+
+
+def test_a_refused_arm_is_a_row_with_its_one_line():
+    bad = FIXTURES / "negative_inertia.urdf"
+    row = run_row("bad", "bare", str(bad), 0.4)
+    assert row["status"] == "refused" and str(bad.name) in row["reason"] and "\n" not in row["reason"]
+    assert targets(row) == {}
+    assert "| bad | bare | refused: " in markdown_table([row])
+
+
+def test_bare_targets_flag_a_diverged_dnbs_and_a_pid_ahead():
+    fig = lambda rms, settled=0.2, diverged=False: {"rms_rad": rms, "settled_s": settled,  # noqa: E731
+                                                    "torque_variation": 1.0, "steps_at_limit_after_startup": 0,
+                                                    "max_abs_error_rad": 0.1, "diverged": diverged}
+    row = {"arm": "x", "mode": "bare", "status": "accepted", "reason": "", "n_joints": 2,
+           "dnbs": fig(2.0, None, True), "pid": fig(1e-3), "ctc": fig(1e-5)}
+    t = targets(row)
+    assert t["CTC <= 1e-4 rad"] and not t["DNBS never diverges"] and not t["aim: DNBS ahead of PID"]
+    assert "2.0e+00!" in markdown_table([row])  # a diverged run is marked
+
+
+def test_every_arm_has_its_arm_file_with_sources():
+    import yaml
+    for key in ARMS:
+        raw = yaml.safe_load(arm_file(key).read_text())
+        assert raw["name"] == key and "rotor_inertia_kgm2" in raw
+        assert set(raw["sources"]) >= {"urdf", "rotor_inertia_kgm2"}
+
+
+@pytest.mark.parametrize("argv, needle", [(["--arms", "nope"], "unknown 'nope'"),
+                                          (["--duration", "-1"], "--duration"), (["--jobs", "0"], "--jobs")])
+def test_the_script_refuses_bad_flags_with_one_line(argv, needle, capsys, tmp_path):
+    script = load_script("arm_collection")
+    assert script.main(argv + ["--out", str(tmp_path / "t.json")]) == 2
+    err = capsys.readouterr().err
+    assert needle in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "t.json").exists()
