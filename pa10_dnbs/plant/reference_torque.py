@@ -14,17 +14,19 @@ from .from_config import open_client
 from .pybullet_plant import PlantParams, PyBulletArmPlant
 
 SAMPLE_STEP_S = 0.05  # the reference is sampled every 50 ms
+HORIZON_S = 60.0      # at most this much of the run is checked (eq. 27's envelope is full well before)
 
 
 class ReferenceTorque:
     """peak(fragment) -> (n,) the largest |tau_j| [N m] along a ``reference`` fragment (amplitude_rad,
-    envelope_rate_per_s3, frequency_rad_s, centre_rad) over ``duration_s``. Holds one PyBullet client: close()."""
+    envelope_rate_per_s3, frequency_rad_s, centre_rad) over ``duration_s`` (at most HORIZON_S). Holds one PyBullet client: close()."""
 
     def __init__(self, arm: Arm, duration_s: float, dt_s: float, gravity_mps2: float = 9.81):
         self._client = open_client()
         self._plant = PyBulletArmPlant(self._client, arm, PlantParams(gravity_mps2=gravity_mps2))
         self._dt = dt_s
-        self._steps = np.arange(0, int(round(duration_s / dt_s)) + 1, max(1, int(round(SAMPLE_STEP_S / dt_s))))
+        horizon = min(duration_s, HORIZON_S)
+        self._steps = np.arange(0, int(round(horizon / dt_s)) + 1, max(1, int(round(SAMPLE_STEP_S / dt_s))))
         self._lower, self._upper = arm.lower_rad, arm.upper_rad
 
     def peak(self, fragment: dict) -> np.ndarray:
