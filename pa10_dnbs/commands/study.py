@@ -12,8 +12,8 @@ from ..config import ConfigError, default_config_path, load_config
 from ..interrupt import EXIT_INTERRUPTED, say
 from ..report.outputs import atomic_output_dir, check_output_dir
 from ..report.progress import ProgressBar
-from ..sim.closed_loop import CONTROLLERS
 from ..run_size import check_run_size, say_note
+from ..sim.closed_loop import CONTROLLERS
 from ..study.runner import run_study
 from ..study.scenarios import SCENARIOS
 from .name_list import name_list
