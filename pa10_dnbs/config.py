@@ -130,7 +130,10 @@ SCHEMA: dict[str, Any] = {
         },
     },
     "pid": {"kp": Joints(NONNEG), "ki": Joints(NONNEG), "kd": Joints(NONNEG), "anti_windup": Flag()},
-    "ctc": {"kp_per_s2": Joints(NONNEG), "kd_per_s": Joints(NONNEG)},
+    # on_saturation: what CTC does past a torque limit (sim/computed_torque.py); the rule layer gives
+    # scale_feedback (derived_settings.RULE_DEFAULTS), the presets' arm files clip
+    "ctc": {"kp_per_s2": Joints(NONNEG), "kd_per_s": Joints(NONNEG),
+            "on_saturation": Text(("scale_feedback", "clip"))},
     "guards": {
         "position_margin_rad": NONNEG,
         "max_speed_rad_s": Joints(POS),
@@ -232,7 +235,8 @@ def _read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict:
     if not isinstance(raw, dict):
         return raw
     arm = raw.get("arm")
-    if isinstance(arm, str) and ("/" in arm or arm.endswith((".yaml", ".yml", ".urdf"))):
+    is_path = isinstance(arm, str) and ("/" in arm or arm.endswith((".yaml", ".yml", ".urdf")))
+    if is_path and not arm.startswith("package://"):
         raw["arm"] = str((path.parent / arm).resolve())  # a path is relative to the file that names it
     if "extends" not in raw:
         return raw
@@ -273,8 +277,9 @@ def load_config(path: str | Path, arm: str | Path | None = None) -> dict:
                        "rotor_inertia_kgm2": the_arm.rotor_inertia_kgm2.tolist(),
                        "viscous_nms_per_rad": the_arm.viscous_nms_per_rad.tolist(),
                        "coulomb_nm": the_arm.coulomb_nm.tolist()}}
-    merged = _merge(_merge(facts, the_arm.settings), raw)
-    from .derived_settings import GAIN_KEYS, REFERENCE_KEYS, derived_gains, derived_reference
+    from .derived_settings import GAIN_KEYS, REFERENCE_KEYS, RULE_DEFAULTS, derived_gains, derived_reference
+
+    merged = _merge(_merge(_merge(RULE_DEFAULTS, facts), the_arm.settings), raw)
 
     if any(_get(merged, key) is None for key in REFERENCE_KEYS):
         merged = _merge(derived_reference(the_arm, merged), merged)

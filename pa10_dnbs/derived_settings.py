@@ -21,6 +21,11 @@ GAIN_KEYS = ("dnbs.alpha_net.error_scale_rad", "dnbs.torque_net.output_scale_nm"
              "dnbs.remedies.robust_term.torque_gain_nms_per_rad", "dnbs.remedies.slope_bound.enabled",
              "dnbs.remedies.slope_bound.fraction", "pid.kp", "pid.ki", "pid.kd")
 DERIVED_KEYS = REFERENCE_KEYS + GAIN_KEYS
+#: The rule layer's fixed values: the lowest layer of load_config, under the arm file's settings and the config
+#: files (so an arm file can set them; config/default.yaml must not, or no arm file could).
+#: ctc.on_saturation: computed torque scales its feedback to stay within the limits (sim/computed_torque.py);
+#: the PA10, iiwa and Panda arm files pin ``clip``, the law their published numbers were made with.
+RULE_DEFAULTS = {"ctc": {"on_saturation": "scale_feedback"}}
 
 
 def derived_reference(arm: Arm, cfg: dict | None = None, report: bool = True) -> dict:

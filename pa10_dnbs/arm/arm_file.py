@@ -21,12 +21,13 @@ from ..kinematics.urdf_chain import UrdfChain
 from ..paths import share_path
 from .arm import Arm
 from .chain_select import actuated_joints
+from .package_uri import is_package_uri, resolve_package_uri
 from .plant_urdf import plant_urdf
 
 DEFAULT_ARM = "pa10"
 FACTS = ("torque_limit_nm", "rotor_inertia_kgm2", "viscous_nms_per_rad", "coulomb_nm")
-KEYS = {"name", "description", "urdf", "tip_link", "joints", "exclude_joints", "keep_gripper", "flange_link",
-        "sources", "settings", *FACTS}
+KEYS = {"name", "description", "urdf", "urdf_install", "tip_link", "joints", "exclude_joints", "keep_gripper",
+        "flange_link", "sources", "settings", *FACTS}
 
 
 class ArmError(ConfigError):
@@ -44,6 +45,14 @@ def arm_file_path(spec: str | Path) -> Path:
     text = str(spec)
     if not text:
         raise ArmError("arm: empty (a preset name or the path of an arm file or URDF)")
+    if is_package_uri(text):
+        try:
+            path = resolve_package_uri(text)
+        except ValueError as exc:  # PackageNotFound too
+            raise ArmError(f"arm: {exc}") from None
+        if not path.is_file():
+            raise ArmError(f"arm: {text}: file not found: {path}")
+        return path.resolve()
     if "/" not in text and not text.endswith((".yaml", ".yml", ".urdf")):
         path = share_path("urdf", text, "arm.yaml")
         if not path.is_file():
@@ -83,7 +92,7 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
     for key in ("name", "urdf"):
         if not isinstance(raw.get(key), str) or not raw[key]:
             raise ArmError(f"{path}: {key}: expected a non-empty string")
-    urdf = (path.parent / raw["urdf"]).resolve() if not bare else path
+    urdf = path if bare else _urdf_path(path, raw)
     if not urdf.is_file():
         raise ArmError(f"{path}: urdf: file not found: {urdf}")
     try:
@@ -152,6 +161,20 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
                rotor_inertia_kgm2=facts["rotor_inertia_kgm2"], viscous_nms_per_rad=facts["viscous_nms_per_rad"],
                coulomb_nm=facts["coulomb_nm"], sources=dict(sources), settings=settings, chain=chain,
                plant_urdf=cleaned)
+
+
+def _urdf_path(path: Path, raw: dict) -> Path:
+    """The file an arm file's ``urdf`` names: relative to the arm file, or a ``package://`` URI (package_uri.py;
+    ``urdf_install`` says how to install the package when it is not)."""
+    hint = raw.get("urdf_install")
+    if hint is not None and not (isinstance(hint, str) and hint.strip()):
+        raise ArmError(f"{path}: urdf_install: expected a non-empty string (how to install the urdf's package)")
+    if not is_package_uri(raw["urdf"]):
+        return (path.parent / raw["urdf"]).resolve()
+    try:
+        return resolve_package_uri(raw["urdf"], hint)
+    except ValueError as exc:  # PackageNotFound too
+        raise ArmError(f"{path}: urdf: {exc}") from None
 
 
 def _names(path: Path, raw: dict, key: str) -> tuple[str, ...] | None:

@@ -105,7 +105,8 @@ def _controllers(cfg: dict, controller: str, plant) -> GuardedControllers:
     """The joints' controllers behind their state guards (the nodes' own code), or computed torque."""
     if controller == "ctc":
         c = cfg["ctc"]
-        ctc = ComputedTorqueController(plant, c["kp_per_s2"], c["kd_per_s"], cfg["plant"]["torque_limit_nm"])
+        ctc = ComputedTorqueController(plant, c["kp_per_s2"], c["kd_per_s"], cfg["plant"]["torque_limit_nm"],
+                                      c["on_saturation"])
         return GuardedControllers(ctc, build_state_guard(cfg), cfg["guards"]["on_bad_state"])
     return build_guarded_controllers(cfg, controller)
 
