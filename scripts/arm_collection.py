@@ -6,7 +6,7 @@
     .venv/bin/python scripts/arm_collection.py --study --arms ur5                 # + the study on its arm file
 
 Each (arm, mode) runs DNBS, PID and CTC in-process (pa10_dnbs/study/collection.py) in a pool of ``--jobs``
-processes. The table goes to ``--out`` (benchmarks/arm_collection.json) and beside it as markdown (.md),
+processes. The table goes to ``--out`` (benchmarks/collection/arm_collection.json) and beside it as markdown (.md),
 rewritten after every row, so Ctrl-C (exit 130) keeps the completed rows. The collection is not in
 requirements.txt: it is the benchmark's choice (131 MB that no test needs), pinned in ONE place,
 requirements-collection.txt, which ``--install`` installs. Exit 2 with one line when it is not installed.
@@ -38,7 +38,7 @@ def _args(argv):
     ap.add_argument("--modes", default=",".join(MODES), help="bare, arm_file or both")
     ap.add_argument("--duration", type=float, default=20.0, help="s per run (the window is [10, 20) s at 20 s)")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
-    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "arm_collection.json")
+    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "collection" / "arm_collection.json")
     ap.add_argument("--study", action="store_true", help="also the study (8 scenarios x DNBS, PID x 3 seeds) of "
                     "every accepted arm file")
     ap.add_argument("--install", action="store_true", help="pip install requirements-collection.txt, then exit")
