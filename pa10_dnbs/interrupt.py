@@ -25,7 +25,7 @@ EXIT_INTERRUPTED = 130   # 128 + SIGINT, as a shell reports a command ended by C
 POLL_S = 0.1            # how often a waiting executor looks at a deferred Ctrl-C
 
 _second_line = "pa10-dnbs: interrupted again: stopped at once"
-_state = {"deferred": 0, "requested": False, "raised": False}
+_state = {"deferred": 0, "requested": False, "raised": False, "cleanup": None}
 
 
 def ignore_sigint() -> None:
@@ -49,10 +49,12 @@ def sigint_blocked():
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
-def on_second_sigint(line: str) -> None:
-    """The line a second Ctrl-C prints (what stays where); set by a command once it knows."""
+def on_second_sigint(line: str, cleanup=None) -> None:
+    """The line a second Ctrl-C prints (what stays where); set by a command once it knows. ``cleanup()``: run
+    first (after the children are killed), e.g. to remove a half-written output folder; its errors are ignored."""
     global _second_line
     _second_line = line
+    _state["cleanup"] = cleanup
 
 
 def child_pids(parent: int | None = None) -> list[int]:
@@ -92,6 +94,9 @@ def kill_children(wait_s: float = 2.0) -> None:
 
 def _second(signum, frame) -> None:
     kill_children()
+    if _state.get("cleanup") is not None:
+        with contextlib.suppress(Exception):
+            _state["cleanup"]()
     with contextlib.suppress(Exception):
         os.write(2, ("\n" + _second_line + "\n").encode())
     os._exit(EXIT_INTERRUPTED)
@@ -145,12 +150,12 @@ def two_stage_sigint():
         yield
         return
     _second_line = "pa10-dnbs: interrupted again: stopped at once"
-    _state.update(deferred=0, requested=False, raised=False)
+    _state.update(deferred=0, requested=False, raised=False, cleanup=None)
     try:
         yield
     finally:
         signal.signal(signal.SIGINT, previous)
-        _state.update(deferred=0, requested=False, raised=False)
+        _state.update(deferred=0, requested=False, raised=False, cleanup=None)
 
 
 def quiet_start() -> object:

@@ -31,11 +31,15 @@ class Command:
     """``pa10-dnbs ARGS`` (or ``python SCRIPT ARGS``) in its own process group (a terminal's foreground job)."""
 
     def __init__(self, *args, script: str | None = None):
-        self.args = [sys.executable, *(["-m", "pa10_dnbs.cli"] if script is None else [script]), *map(str, args)]
+        self.args = self.argv(*args, script=script)
         self.proc = subprocess.Popen(self.args, cwd=REPO, env=dict(os.environ, PYTHONPATH=str(REPO)),
                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                      start_new_session=True)
         self.t_sigint = None
+
+    @staticmethod
+    def argv(*args, script: str | None = None) -> list[str]:
+        return [sys.executable, *(["-m", "pa10_dnbs.cli"] if script is None else [script]), *map(str, args)]
 
     def ctrl_c(self) -> None:
         assert self.proc.poll() is None, "the command ended before its Ctrl-C:\n" + self.proc.stderr.read()
@@ -175,7 +179,7 @@ def test_tune_second_ctrl_c_ends_at_once_and_leaves_nothing(tmp_path):
     resumes(out)   # whatever the second Ctrl-C cut short, the storage still opens and the tune completes
 
 
-def test_study_ctrl_c_at_start_up_and_mid_run_stops_the_workers_and_writes_nothing(tmp_path):
+def test_study_ctrl_c_at_start_up_and_before_a_run_ends_stops_the_workers_and_writes_nothing(tmp_path):
     args = ("study", "--scenarios", "nominal,coulomb", "--controllers", "pid", "--seeds", 4, "--duration", 10,
             "--jobs", 2, "--no-progress")
     c = Command(*args, "--out", tmp_path / "s0")
@@ -195,9 +199,41 @@ def test_study_ctrl_c_at_start_up_and_mid_run_stops_the_workers_and_writes_nothi
     finally:
         c.kill()
     assert rc == 130 and seconds < BOUND_S, (rc, seconds)
-    assert re.fullmatch(r"pa10-dnbs: interrupted after \d of 8 runs; nothing written to \S+/s1 \(a study is "
-                        r"written whole, at its end\): run the same command again", one_line(err)), err
+    assert re.fullmatch(r"pa10-dnbs: interrupted after 0 of 8 runs; nothing written to \S+/s1: run the same "
+                        r"command again", one_line(err)), err   # 10 s runs: none finished 0.2 s in
     assert sorted(p.name for p in tmp_path.iterdir()) == []   # no output, no partial folder
+
+
+def test_study_ctrl_c_mid_run_keeps_the_completed_runs_marked_partial_and_a_rerun_is_refused(tmp_path):
+    out = tmp_path / "s"
+    args = ("study", "--scenarios", "nominal", "--controllers", "pid", "--seeds", 40, "--duration", 5, "--jobs", 2,
+            "--no-progress", "--out", out)
+    c = Command(*args)
+    try:
+        wait_until(lambda: len(child_pids(c.proc.pid)) == 2, "two pool workers", proc=c)
+        time.sleep(1.0)   # a 5 s run takes ~0.2 s: some are complete, most are not
+        c.ctrl_c()
+        rc, seconds, err = c.end()
+    finally:
+        c.kill()
+    assert rc == 130 and seconds < BOUND_S, (rc, seconds)
+    m = re.fullmatch(r"pa10-dnbs: interrupted after (\d+) of 40 runs; kept their rows in (\S+)/study\.partial\.md "
+                     r"\(and \.json\), marked partial: rerun with --force for the whole study", one_line(err))
+    assert m and 1 <= int(m[1]) < 40 and m[2] == str(out), err
+    kept = int(m[1])
+    assert sorted(p.name for p in out.iterdir()) == ["interrupted.json", "study.partial.json", "study.partial.md"]
+    data = json.loads((out / "study.partial.json").read_text())
+    assert data["interrupted"] is True and data["completed"] == kept == len(data["rows"]) and data["total"] == 40
+    assert len(data["missing"]) == 40 - kept and all(r["worst_rms_error_rad"] > 0 for r in data["rows"])
+    assert sorted(r["seed"] for r in data["rows"]) == sorted({r["seed"] for r in data["rows"]})
+    md = (out / "study.partial.md").read_text()
+    assert "PARTIAL" in md and f"after {kept} of 40 runs" in md and md.count("| nominal | pid |") == kept
+    assert json.loads((out / "interrupted.json").read_text())["completed"] == kept
+    r = subprocess.run(Command.argv(*args), cwd=REPO, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and one_line(r.stderr) == (
+        f"pa10-dnbs: error: output directory exists: {out} holds the partial outputs of an interrupted run "
+        f"({kept} of 40 done; use --force to replace it with a complete run)"), r.stderr
+    assert (out / "study.partial.json").read_text() == json.dumps(data, indent=2) + "\n"   # untouched
 
 
 def test_study_ctrl_c_while_it_writes_its_outputs_leaves_neither_them_nor_a_partial_folder(tmp_path):
@@ -215,18 +251,68 @@ def test_study_ctrl_c_while_it_writes_its_outputs_leaves_neither_them_nor_a_part
     assert list(tmp_path.iterdir()) == []
 
 
-def test_simulate_all_ctrl_c_mid_run_writes_nothing_and_says_so(tmp_path):
-    c = Command("simulate", "--controller", "all", "--duration", 20, "--no-figures", "--no-progress",
+def test_simulate_all_ctrl_c_in_its_first_run_writes_nothing_and_says_so(tmp_path):
+    c = Command("simulate", "--controller", "all", "--duration", 600, "--no-figures", "--no-progress",
                 "--out", tmp_path / "r")
     try:
-        time.sleep(2.0)
+        wait_until(lambda: c.proc.stdout.readline().startswith("dnbs.kernel"), "the kernel chosen", proc=c)
+        time.sleep(0.5)   # a 600 s DNBS run takes ~20 s
         c.ctrl_c()
         rc, seconds, err = c.end()
     finally:
         c.kill()
     assert rc == 130 and seconds < BOUND_S, (rc, seconds)
-    assert one_line(err).startswith("pa10-dnbs: interrupted before it wrote anything"), err
+    assert one_line(err) == (f"pa10-dnbs: interrupted during the dnbs run (0 of 3 controllers finished); nothing "
+                             f"written to {tmp_path / 'r'}: run the same command again"), err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_simulate_all_ctrl_c_keeps_the_finished_controllers_marked_partial_and_a_rerun_is_refused(tmp_path):
+    out = tmp_path / "r"
+    args = ("simulate", "--controller", "all", "--duration", 60, "--no-figures", "--no-progress", "--out", out)
+    c = Command(*args)
+    try:
+        wait_until(lambda: c.proc.stdout.readline().startswith("dnbs: worst-joint RMS"), "the DNBS run's end",
+                   proc=c)
+        c.ctrl_c()   # the PID run (~2 s) has just begun
+        rc, seconds, err = c.end()
+    finally:
+        c.kill()
+    assert rc == 130 and seconds < BOUND_S, (rc, seconds)
+    assert one_line(err) == (f"pa10-dnbs: interrupted during the pid run; kept the 1 finished of 3 controllers "
+                             f"(dnbs) in {out}/report.md, marked partial (not run: pid, ctc): rerun with --force "
+                             "for the whole comparison"), err
+    assert sorted(p.name for p in out.iterdir()) == ["dnbs", "interrupted.json", "report.md"]   # no summary.json
+    assert sorted(p.name for p in (out / "dnbs").iterdir()) == ["checkpoints", "metrics.json", "timeseries.npz"]
+    assert json.loads((out / "dnbs" / "metrics.json").read_text())["duration_s"] == 60
+    mark = json.loads((out / "interrupted.json").read_text())
+    assert mark["interrupted"] is True and (mark["completed"], mark["total"], mark["missing"]) == (1, 3, ["pid", "ctc"])
+    report = (out / "report.md").read_text()
+    assert report.startswith("# ") and "PARTIAL" in report.splitlines()[0] and "did not run: pid, ctc" in report
+    assert "1 of 3 controllers" in report and "**DNBS**" in report and "**PID**" not in report
+    r = subprocess.run(Command.argv(*args), cwd=REPO, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and "holds the partial outputs of an interrupted run (1 of 3 done; use --force" \
+        in one_line(r.stderr), r.stderr
+
+
+def test_a_partial_output_is_refused_without_force_and_replaced_with_it(tmp_path):
+    from pa10_dnbs.output_lock import release_all
+    from pa10_dnbs.report.outputs import OutputExistsError, atomic_output_dir, check_output_dir
+    from pa10_dnbs.report.partial import partial_mark, write_partial_mark
+
+    out = tmp_path / "o"
+    out.mkdir()
+    write_partial_mark(out, "cmd", 2, 5, ["a", "b", "c"])
+    try:
+        with pytest.raises(OutputExistsError, match=r"holds the partial outputs of an interrupted run \(2 of 5"):
+            check_output_dir(out, force=False)
+        with atomic_output_dir(out, force=True) as tmp:
+            (tmp / "whole.txt").write_text("x")
+    finally:
+        release_all()
+    assert partial_mark(out) is None and sorted(p.name for p in out.iterdir()) == ["whole.txt"]
+    (out / "interrupted.json").write_text('{"interrupted": false}')
+    assert partial_mark(out) is None   # only a true mark counts
 
 
 def test_equal_budget_ctrl_c_mid_tune_exits_130_with_the_tunes_line_and_the_same_command_finishes(tmp_path):
@@ -326,6 +412,8 @@ def _running(c: Command) -> None:
 @pytest.mark.graph
 @pytest.mark.parametrize("presses", [1, 2])
 def test_launch_ctrl_c_once_or_twice_stops_every_node_and_writes_nothing(tmp_path, domain, monkeypatch, presses):
+    """Once: the nodes stop within their graces (SIGINT 5 s, SIGTERM 3 s: launch/processes.py). Twice, 0.2 s
+    apart: at once (every node SIGKILLed, its shared-memory files removed, launch/graph_run.py)."""
     from graph_harness import assert_no_leftovers
 
     from pa10_dnbs.launch.shm_cleanup import shm_files
@@ -336,14 +424,19 @@ def test_launch_ctrl_c_once_or_twice_stops_every_node_and_writes_nothing(tmp_pat
     try:
         _running(c)
         nodes = child_pids(c.proc.pid)
-        for _ in range(presses):
+        for i in range(presses):
+            if i:
+                time.sleep(0.2)
             c.ctrl_c()
-            time.sleep(0.05)
-        rc, seconds, err = c.end(bound_s=20.0)   # the nodes' own graces: SIGINT 5 s, SIGTERM 3 s (launch/processes.py)
+        rc, seconds, err = c.end(bound_s=20.0 if presses == 1 else 5.0)
     finally:
         c.kill()
     print(f"launch: {presses} Ctrl-C, exit after {seconds:.2f} s")
-    assert rc == 130 and seconds < 20.0, (rc, seconds, err)
+    assert rc == 130 and seconds < (20.0 if presses == 1 else 2.5), (rc, seconds, err)
     assert "Traceback" not in err and "interrupted" in err, err
+    if presses == 2:
+        line = one_line(err)
+        assert re.fullmatch(rf"pa10-dnbs launch: interrupted again: killed the \d+ of its {len(nodes)} processes still running at once, "
+                            rf"removed \d+ shared-memory files from /dev/shm; nothing written to \S+/run", line), line
     assert_no_leftovers(nodes, shm_before)
-    assert not (tmp_path / "run").exists()
+    assert list(tmp_path.iterdir()) == []   # neither the output nor its half-written folder

@@ -167,7 +167,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
             try:
                 used = tmp / "config_used.yaml"
                 used.write_text(yaml.safe_dump(plain(cfg), sort_keys=False))
-                result = run_graph(dataclasses.replace(opt, config_path=used), tmp, say=lambda s: print(s, flush=True))
+                result = run_graph(dataclasses.replace(opt, config_path=used), tmp, say=lambda s: print(s, flush=True),
+                                   on_hard_stop=lambda: _hard_stop_cleanup(tmp, out))
                 stats = result.stats
                 if record is None:
                     run, missing = load_wire_run(result.wire_file, controller, joint_names,
@@ -237,6 +238,12 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
               f"compression {bag_compression})")
     print(f"wrote {out}/report.md")
     return 0 if m["all_finite"] and m["torques_within_limits"] else 1
+
+
+def _hard_stop_cleanup(tmp: Path, out: Path) -> str:
+    """A second Ctrl-C (launch/graph_run.py): the half-written output folder goes; what to add to the line."""
+    shutil.rmtree(tmp, ignore_errors=True)
+    return f"; nothing written to {out}"
 
 
 def _keep_logs(exc: GraphFailure, tmp: Path, out: Path) -> GraphFailure:

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+import shutil
 from pathlib import Path
 
 from ..accel.choice import resolve_kernel
@@ -11,7 +12,10 @@ from ..controller_factory import load_reference_trajectory
 from ..core.checkpoint import load_joint_checkpoints, save_checkpoint
 from ..number_text import interval
 from ..report.metrics_file import metrics_dict, metrics_settings
-from ..report.outputs import atomic_output_dir, check_output_dir, write_report
+from ..interrupt import EXIT_INTERRUPTED, on_second_sigint, say
+from ..report.markdown import report_markdown
+from ..report.outputs import atomic_output_dir, check_output_dir, write_report, write_run
+from ..report.partial import partial_banner, write_partial_mark
 from ..run_size import check_run_size, say_note
 from ..sim.closed_loop import simulate
 
@@ -58,15 +62,27 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
         cfg = resolve_kernel(cfg, say=print)  # dnbs.kernel: auto -> c or numpy, said in one line
     settings = metrics_settings(cfg, duration_s)
     runs, metrics = [], []
-    for kind in kinds:
-        run = simulate(cfg, kind, duration_s, progress=progress, init_states=init_states if kind == "dnbs" else None,
-                       engine=engine, trajectory=traj)
-        runs.append(run)
-        extra = {"warm_start_from": str(Path(init_from).resolve())} if init_states is not None and kind == "dnbs" else {}
-        if engine != "pybullet":
-            extra["engine"] = engine
-        metrics.append(metrics_dict(run, settings, source="in-process", config_file=str(config_path.resolve()),
-                                    seed=cfg["simulation"]["seed"], limit_hits=run.extra["limit_hits"], **extra))
+    try:
+        for kind in kinds:
+            run = simulate(cfg, kind, duration_s, progress=progress,
+                           init_states=init_states if kind == "dnbs" else None, engine=engine, trajectory=traj)
+            extra = ({"warm_start_from": str(Path(init_from).resolve())}
+                     if init_states is not None and kind == "dnbs" else {})
+            if engine != "pybullet":
+                extra["engine"] = engine
+            metrics.append(metrics_dict(run, settings, source="in-process", config_file=str(config_path.resolve()),
+                                        seed=cfg["simulation"]["seed"], limit_hits=run.extra["limit_hits"], **extra))
+            runs.append(run)
+            print(_summary_line(metrics[-1]), flush=True)   # as each controller finishes
+    except KeyboardInterrupt:
+        del metrics[len(runs):]   # a controller interrupted between its metrics and its run
+        if not runs:
+            say(f"pa10-dnbs: interrupted during the {kinds[0]} run (0 of {len(kinds)} controllers finished); "
+                f"nothing written to {out}: run the same command again")
+            return EXIT_INTERRUPTED
+        if len(runs) < len(kinds):
+            return _keep_partial(out, force, runs, metrics, kinds, the_arm, n_steps, controller, duration_s)
+        # every run had finished: the whole output is written below, as without the Ctrl-C
     notes = [f"config: `{config_path}`", f"arm: {the_arm.name} ({the_arm.description}), `{the_arm.file}`",
              "source: in-process simulation (no ROS)"]
     if engine != "pybullet":
@@ -88,16 +104,6 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
             if run.controller == "dnbs":
                 _save_checkpoints(tmp / "checkpoints" if len(runs) == 1 else tmp / "dnbs" / "checkpoints",
                                   run.extra["controllers"], n_steps - 1, the_arm.joint_names)
-    for m in metrics:
-        settle = m["worst_settling_time_s"]
-        print(f"{m['controller']}: worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over "
-              f"{interval(m['window_s'])} s; "
-              f"settled (|e| < {m['settle_band_rad']:g} rad) "
-              + (f"after {settle:.3f} s" if settle is not None else "never")
-              + f"; max |e| {m['worst_max_abs_error_run_rad']:.4f} rad; torque variation "
-              f"{m['worst_torque_variation']:.2f}; {m['real_time_factor']:.1f}x real time"
-              + (f"; DIVERGED: non-finite from step {m['diverged']['step']} ({m['diverged']['time_s']:.3f} s), "
-                 f"joint {m['diverged']['joint']}" if m.get("diverged") else ""))
     print(f"wrote {out}/report.md")
     ok = all(m["all_finite"] and m["torques_within_limits"] for m in metrics)
     return 0 if ok else 1
@@ -108,3 +114,43 @@ def _save_checkpoints(directory: Path, controllers, last_step: int, joint_names:
     directory.mkdir(parents=True, exist_ok=True)
     for row, joint in enumerate(controllers.joints):
         save_checkpoint(directory / f"{joint_names[joint]}.npz", controllers.state_dict(row), last_step)
+
+
+def _summary_line(m: dict) -> str:
+    """One controller's result in a line (printed as it finishes)."""
+    settle = m["worst_settling_time_s"]
+    return (f"{m['controller']}: worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over "
+            f"{interval(m['window_s'])} s; "
+            f"settled (|e| < {m['settle_band_rad']:g} rad) "
+            + (f"after {settle:.3f} s" if settle is not None else "never")
+            + f"; max |e| {m['worst_max_abs_error_run_rad']:.4f} rad; torque variation "
+            f"{m['worst_torque_variation']:.2f}; {m['real_time_factor']:.1f}x real time"
+            + (f"; DIVERGED: non-finite from step {m['diverged']['step']} ({m['diverged']['time_s']:.3f} s), "
+               f"joint {m['diverged']['joint']}" if m.get("diverged") else ""))
+
+
+def _keep_partial(out: Path, force: bool, runs, metrics: list[dict], kinds: tuple[str, ...], the_arm, n_steps: int,
+                  controller: str, duration_s: float) -> int:
+    """After a Ctrl-C with some controllers finished: their folders (data and metrics, no figures) and a report
+    marked partial naming the controllers that did not run (report/partial.py), into ``out``; one line; 130.
+    A second Ctrl-C meanwhile removes the half-written folder and ends at once."""
+    missing = list(kinds[len(runs):])
+    command = f"pa10-dnbs simulate --controller {controller} --duration {duration_s:g} --out {out}"
+    with atomic_output_dir(out, force) as tmp:
+        on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; nothing written to {out}",
+                         cleanup=lambda: shutil.rmtree(tmp, ignore_errors=True))
+        for run, m in zip(runs, metrics):
+            write_run(tmp / run.controller, run, m, figures=False)
+            if run.controller == "dnbs":
+                _save_checkpoints(tmp / "dnbs" / "checkpoints", run.extra["controllers"], n_steps - 1,
+                                  the_arm.joint_names)
+        title = f"{the_arm.description}: closed-loop run, PARTIAL (interrupted)"
+        text = report_markdown(metrics, [], title, [f"did not run: {', '.join(missing)}",
+                                                    "figures not drawn (an interrupted run)"])
+        banner = partial_banner(len(runs), len(kinds), "controllers")
+        (tmp / "report.md").write_text(text.replace(f"# {title}\n\n", f"# {title}\n\n{banner}\n\n", 1))
+        write_partial_mark(tmp, command, len(runs), len(kinds), missing)
+    say(f"pa10-dnbs: interrupted during the {missing[0]} run; kept the {len(runs)} finished of {len(kinds)} "
+        f"controllers ({', '.join(r.controller for r in runs)}) in {out}/report.md, marked partial (not run: "
+        f"{', '.join(missing)}): rerun with --force for the whole comparison")
+    return EXIT_INTERRUPTED

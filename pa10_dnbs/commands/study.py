@@ -5,15 +5,18 @@ import json
 import math
 import os
 import shlex
+import shutil
+from itertools import product
 from pathlib import Path
 
 from ..accel.choice import resolve_kernel
 from ..config import ConfigError, default_config_path, load_config
-from ..interrupt import EXIT_INTERRUPTED, say
+from ..interrupt import EXIT_INTERRUPTED, on_second_sigint, say
 from ..report.outputs import atomic_output_dir, check_output_dir
 from ..report.progress import ProgressBar
 from ..run_size import check_run_size, say_note
 from ..sim.closed_loop import CONTROLLERS
+from ..study.partial_summary import write_partial_study
 from ..study.runner import run_study
 from ..study.scenarios import SCENARIOS
 from .name_list import name_list
@@ -53,25 +56,40 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
         done.append(row)
         bar.update(len(done) * steps_per_run, row["worst_max_abs_error_run_rad"])
 
-    try:
-        rows = run_study(cfg, scen, ctrl, seeds, duration_s, workers, on_done=finished, scheduler=scheduler)
-    except KeyboardInterrupt:   # the workers are stopped (study/executor.py); nothing of this study is written
-        bar.close()
-        say(f"pa10-dnbs: interrupted after {len(done)} of {n} runs; nothing written to {out} (a study is written "
-            "whole, at its end): run the same command again")
-        return EXIT_INTERRUPTED
-    bar.close()
     command = (f"pa10-dnbs study --scenarios {','.join(scen)} --controllers {','.join(ctrl)} --seeds {seeds} "
                f"--duration {duration_s:g} --out {shlex.quote(str(out))}"
                + (f" --config {shlex.quote(str(config_path))}" if config_path != default_config_path() else "")
                + (f" --arm {shlex.quote(str(arm))}" if arm is not None else ""))
+    head = {"config_file": str(config_path.resolve()), "arm": cfg["arm"], "duration_s": duration_s}
+    try:
+        rows = run_study(cfg, scen, ctrl, seeds, duration_s, workers, on_done=finished, scheduler=scheduler)
+    except KeyboardInterrupt:   # the workers are stopped (study/executor.py); the completed runs are kept
+        bar.close()
+        return _keep_partial(out, force, done, list(product(scen, ctrl, range(seeds))), command, head)
+    bar.close()
     with atomic_output_dir(out, force) as tmp:
-        (tmp / "study.json").write_text(json.dumps({"config_file": str(config_path.resolve()), "arm": cfg["arm"],
-                                                    "duration_s": duration_s,
-                                                    "rows": rows}, indent=2) + "\n")
+        (tmp / "study.json").write_text(json.dumps({**head, "rows": rows}, indent=2) + "\n")
         (tmp / "study.md").write_text(study_markdown(rows, command, duration_s,
                                                      {k: v.description for k, v in SCENARIOS.items()}))
         study_figure(rows, tmp / "study.png")
     diverged = sum(r["diverged"] for r in rows)
     print(f"{n} runs, {diverged} diverged; wrote {out}/study.md")
     return 0
+
+
+def _keep_partial(out: Path, force: bool, done: list[dict], all_runs: list, command: str, head: dict) -> int:
+    """After a Ctrl-C: the completed runs' rows into ``out``, marked partial (study/partial_summary.py); one line
+    saying what is where; exit 130. Nothing completed: nothing written. A second Ctrl-C meanwhile removes the
+    half-written folder and ends at once."""
+    n = len(all_runs)
+    kept = len({(r["scenario"], r["controller"], r["seed"]) for r in done})
+    if not kept:
+        say(f"pa10-dnbs: interrupted after 0 of {n} runs; nothing written to {out}: run the same command again")
+        return EXIT_INTERRUPTED
+    with atomic_output_dir(out, force) as tmp:
+        on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; nothing written to {out}",
+                         cleanup=lambda: shutil.rmtree(tmp, ignore_errors=True))
+        write_partial_study(tmp, done, all_runs, command, head)
+    say(f"pa10-dnbs: interrupted after {kept} of {n} runs; kept their rows in {out}/study.partial.md (and .json), "
+        f"marked partial: rerun with --force for the whole study")
+    return EXIT_INTERRUPTED

@@ -14,6 +14,7 @@ network namespaces and the children's environment: ``netns.py``; options and res
 from __future__ import annotations
 
 import json
+import os
 import signal
 import time
 from pathlib import Path
@@ -22,7 +23,7 @@ from .domain_ids import lease_domain
 from .graph_options import GraphFailure, GraphOptions, GraphResult, loop_reliability
 from .netns import in_netns, node_env, parse_netns
 from .node_specs import LIVE_VIEW, graph_topics, node_commands
-from .processes import ManagedProcess, stop_all
+from .processes import ManagedProcess, kill_now, stop_all
 from .shm_cleanup import remove_stale, shm_files
 from .supervision import Restarter, StopRequest, catch_signals, wait_ready, watch
 
@@ -33,11 +34,13 @@ __all__ = ["GraphFailure", "GraphOptions", "GraphResult", "LIVE_VIEW", "graph_to
            "node_commands", "parse_netns", "run_graph"]
 
 
-def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
+def run_graph(opt: GraphOptions, workdir: Path, say=print, on_hard_stop=None) -> GraphResult:
     """Run the graph; logs go to ``workdir/logs``, the wire record to ``workdir/wire.npz`` (or, with
     ``opt.record_bag``, everything into the bag). Raises GraphFailure.
 
     The launcher itself never joins DDS: the observer is one of its child processes.
+    A second Ctrl-C (or SIGTERM) while the first is handled ends at once (:func:`_hard_stop`); ``on_hard_stop()``
+    then runs last (the caller removes its half-written output) and returns what to add to the line.
     """
     lease = lease_domain() if opt.domain_id is None else None  # held until the run is over
     domain = opt.domain_id if lease is None else lease.domain_id
@@ -53,6 +56,7 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
     procs: list[ManagedProcess] = []
     failure: str | None = None
     stop = StopRequest()
+    stop.hard_stop = lambda: _hard_stop(procs, shm_before, lease, opt, on_hard_stop)
     previous = catch_signals(stop)
     try:
         for name, argv in node_commands(opt, stats_file, wire_file):
@@ -107,3 +111,28 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print) -> GraphResult:
     return GraphResult(stats=stats, exit_codes=codes, domain_id=domain, wall_total_s=time.monotonic() - t_start,
                        wire_file=wire_file if opt.record_bag is None else None, bag=opt.record_bag,
                        restarts=restarts, controllers=controllers)
+
+
+def _hard_stop(procs: list[ManagedProcess], shm_before: set[str], lease, opt: GraphOptions, on_hard_stop) -> None:
+    """A second Ctrl-C: SIGKILL every node (and whatever it started) and reap it, remove the shared-memory files
+    they left, drop the domain lease, one line, exit 130 (no grace, no report)."""
+    killed = kill_now(procs)
+    removed = remove_stale(shm_files() - shm_before)
+    if lease is not None:
+        lease.release()
+    extra = ""
+    if on_hard_stop is not None:
+        try:
+            extra = on_hard_stop() or ""
+        except Exception:  # noqa: BLE001 - the process ends now whatever the clean-up met
+            pass
+    bag = (f"; the bag {opt.record_bag} was cut short (its recorder was killed): it may not be readable"
+           if opt.record_bag is not None else "")
+    line = (f"\npa10-dnbs launch: interrupted again: killed the {killed} of its {len(procs)} processes still running "
+            f"at once, removed "
+            f"{len(removed)} shared-memory files from /dev/shm{extra}{bag}\n")
+    try:
+        os.write(2, line.encode())
+    except OSError:
+        pass
+    os._exit(130)

@@ -124,3 +124,45 @@ def stop_all(procs: list[ManagedProcess], grace_int_s: float = 5.0, grace_term_s
         p.proc.wait()
         p.close_log()
     return {p.name: p.returncode for p in procs}
+
+
+def _descendants(pids: set[int]) -> set[int]:
+    """``pids`` and every living process below them (from /proc; a node's own children, if it started any)."""
+    parent_of = {}
+    for name in os.listdir("/proc"):
+        if name.isdigit():
+            try:
+                with open(f"/proc/{name}/stat") as f:
+                    stat = f.read()
+            except OSError:
+                continue
+            parent_of[int(name)] = int(stat[stat.rfind(")") + 2:].split()[1])
+    found, grew = set(pids), True
+    while grew:
+        more = {pid for pid, ppid in parent_of.items() if ppid in found and pid not in found}
+        found |= more
+        grew = bool(more)
+    return found
+
+
+def kill_now(procs: list[ManagedProcess], wait_s: float = 2.0) -> int:
+    """SIGKILL every child and whatever it started, then reap the children (at most ``wait_s``); no grace, no
+    logs closed: for a second Ctrl-C, whose process ends right after. Safe inside a signal handler that
+    interrupted ``stop_all`` (it reaps with ``os.waitpid``, not with Popen's lock). Returns how many were killed."""
+    targets = _descendants({p.pid for p in procs if p.proc.returncode is None})
+    for pid in targets:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
+    pending = {p.pid for p in procs if p.proc.returncode is None}
+    deadline = time.monotonic() + wait_s
+    while pending and time.monotonic() < deadline:
+        for pid in list(pending):
+            try:
+                if os.waitpid(pid, os.WNOHANG)[0] == pid:
+                    pending.discard(pid)
+            except ChildProcessError:   # reaped already
+                pending.discard(pid)
+        time.sleep(0.005)
+    return len(targets)

@@ -21,14 +21,20 @@ OBSERVER_CATCH_UP_S = 10.0  # wall time the observer has after the plant's end t
 
 class StopRequest:
     """Set by SIGINT or SIGTERM; the launcher's loops check it (no exception at an arbitrary point,
-    so a signal can neither orphan a child being started nor interrupt the shutdown)."""
+    so a signal can neither orphan a child being started nor interrupt the shutdown).
+
+    A second signal while the first is handled (a second Ctrl-C during the nodes' graces) calls ``hard_stop``
+    (set by the launcher once its children exist: it kills them, cleans up and ends the process at once)."""
 
     def __init__(self):
         self.signal_name: str | None = None
+        self.hard_stop = None
 
     def __call__(self, signum, _frame):
         if self.signal_name is None:
             self.signal_name = signal.Signals(signum).name
+        elif self.hard_stop is not None:
+            self.hard_stop()
 
 
 def catch_signals(stop: StopRequest) -> dict:

@@ -4,13 +4,17 @@ from __future__ import annotations
 import numpy as np
 
 from ..arm import Arm, arm_of
+from ..interrupt import deferred
 from .pybullet_plant import PlantParams, PyBulletArmPlant
 from .quiet_stdout import quiet_c_stdout
 
 
 def open_client(gui: bool = False):
-    """A private PyBullet client (pybullet_utils BulletClient): DIRECT unless the GUI is asked for."""
-    with quiet_c_stdout():
+    """A private PyBullet client (pybullet_utils BulletClient): DIRECT unless the GUI is asked for.
+
+    A Ctrl-C meanwhile is raised once the client is whole (``interrupt.deferred``): one interrupted inside its
+    ``__init__`` leaves an object whose ``__del__`` prints a traceback when it is collected."""
+    with deferred(), quiet_c_stdout():
         import pybullet
         from pybullet_utils.bullet_client import BulletClient
 

@@ -20,6 +20,7 @@ from .arm_figure import arm_figure
 from .figures import error_figure, startup_figure, torque_figure, tracking_figure
 from .finite_view import until_step
 from .markdown import report_markdown
+from .partial import partial_mark
 
 
 class OutputExistsError(FileExistsError):
@@ -35,6 +36,10 @@ def check_output_dir(out: Path, force: bool, flag: str = "--out") -> None:
     check_creatable(out, flag)
     lock_output(out)
     if out.exists() and not force:
+        if (mark := partial_mark(out)) is not None:
+            raise OutputExistsError(f"output directory exists: {out} holds the partial outputs of an interrupted "
+                                    f"run ({mark.get('completed')} of {mark.get('total')} done; use --force to "
+                                    "replace it with a complete run)")
         raise OutputExistsError(f"output directory exists: {out} (use --force to replace it)")
 
 
