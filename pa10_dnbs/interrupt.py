@@ -15,6 +15,7 @@ A terminal's Ctrl-C sends SIGINT to every process of the foreground group: the c
 """
 from __future__ import annotations
 
+import atexit
 import contextlib
 import os
 import signal
@@ -177,9 +178,28 @@ def end_quiet_start(previous) -> None:
             signal.signal(signal.SIGINT, previous)
 
 
+def _hold_sigint_to_the_end() -> None:
+    """The last exit function (registered when this module loads, before the command's libraries register
+    theirs; they run in reverse order): once the command has returned (:func:`quiet_end`) and every exit function
+    has run, SIGINT is ignored. The interpreter then resets the handlers it set to the default (``_PySignal_Fini``,
+    which leaves an ignored signal ignored) and frees its modules, tens of milliseconds in which a Ctrl-C would end
+    the process by the signal itself, without a line (any thread takes a process's signal, so blocking it in this
+    one is not enough). Ignored, the command's own exit code stands: its work and its output are complete, as its
+    lines said."""
+    if _state.get("ended"):
+        with contextlib.suppress(ValueError):
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+atexit.register(_hold_sigint_to_the_end)
+
+
 def quiet_end() -> None:
-    """Once the command has returned: a SIGINT while the interpreter exits ends it at once with one line and exit
-    130 instead of a traceback from the interpreter's own clean-up."""
+    """Once the command has returned: a SIGINT while Python code still runs (threads joined, exit functions)
+    ends it at once with one line and exit 130 instead of a traceback from the interpreter's own clean-up; after
+    the exit functions it is ignored (:func:`_hold_sigint_to_the_end`) and the command's exit code stands."""
+    _state["ended"] = True
+
     def stop(signum, frame):
         for stream in (sys.stdout, sys.stderr):
             with contextlib.suppress(Exception):

@@ -94,7 +94,8 @@ def _interrupt(proc: subprocess.Popen, cmd: list[str], delay_s: float, t0: float
     return {"delay_s": round(delay_s, 3), "finished_before_sigint": finished_first,
             "ran_s": round(t_sig - t0, 3) if finished_first else None, "rc": proc.returncode,
             "exit_s": round(exit_s, 3), "hang": hang, "left": left, "traceback": "Traceback" in err_text,
-            "stderr_lines": len(lines), "line": lines[-1] if lines else ""}
+            "stderr_lines": len(lines), "line": lines[-1] if lines else "",
+            "output_complete": (Path(cmd[-1]) / "tune.json").is_file()}
 
 
 def resume(cmd: list[str], env: dict, out: Path, trials: int) -> bool:
@@ -205,21 +206,26 @@ def shell_rc(rc: int) -> int:
 
 
 def summarize(rows: list[dict], resume_every: int) -> tuple[dict, str]:
-    """The summary of the tries and its line. A try ended by the SIGINT itself (rc -2: it came while the
-    interpreter was finishing, after the command's work and output were complete) is 130 to a shell; counted
-    so, and shown apart in ``rc_counts``."""
+    """The summary of the tries and its line. A SIGINT that came as the finished tune exited (its work and
+    output complete, ``tune.json`` written) leaves the tune's own exit code, 0, and no line
+    (``interrupt._hold_sigint_to_the_end``): counted as right (``after_finish``), shown apart in ``rc_counts``.
+    A try ended by the SIGINT itself (rc -2; before that fix, in the same window) is 130 to a shell."""
     hit = [r for r in rows if not r["finished_before_sigint"]]
     resumed = [r for r in hit if r["resumed"] is not None]
+    after = [r for r in hit if r["rc"] == 0 and r.get("output_complete") and not r["stderr_lines"]]
     summary = {
         "tries": len(rows), "interrupted": len(hit), "finished_before_sigint": len(rows) - len(hit),
-        "all_rc_130": all(shell_rc(r["rc"]) == 130 for r in hit), "rc_counts": _counts(r["rc"] for r in hit),
+        "all_rc_130": all(shell_rc(r["rc"]) == 130 or r in after for r in hit), "after_finish": len(after),
+        "rc_counts": _counts(r["rc"] for r in hit),
         "max_exit_s": max((r["exit_s"] for r in hit), default=None), "hangs": sum(r["hang"] for r in rows),
         "tries_with_leftovers": sum(bool(r["left"]) for r in rows), "tracebacks": sum(r["traceback"] for r in rows),
-        "not_one_line": sum(r["stderr_lines"] != 1 for r in hit),
+        "not_one_line": sum(r["stderr_lines"] != 1 for r in hit if r not in after),
         "resumes_tried": len(resumed), "resumes_ok": sum(bool(r["resumed"]) for r in resumed)}
     line = (f"{summary['interrupted']} of {summary['tries']} tries interrupted ({summary['finished_before_sigint']} "
-            f"finished first); shell status 130: {'all' if summary['all_rc_130'] else 'NOT all'} (rc "
-            f"{summary['rc_counts']}); max exit {summary['max_exit_s']} s; hangs {summary['hangs']}; tries with "
+            f"finished first); shell status 130: {'all' if summary['all_rc_130'] else 'NOT all'}"
+            + (f" but {summary['after_finish']} that came as the finished tune exited (its rc 0 stands, no line)"
+               if summary["after_finish"] else "")
+            + f" (rc {summary['rc_counts']}); max exit {summary['max_exit_s']} s; hangs {summary['hangs']}; tries with "
             f"processes left {summary['tries_with_leftovers']}; tracebacks {summary['tracebacks']}; not one line "
             f"{summary['not_one_line']}; resumed {summary['resumes_ok']}/{summary['resumes_tried']} "
             f"(every {resume_every}th try)")

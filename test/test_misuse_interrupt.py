@@ -334,6 +334,30 @@ def test_equal_budget_ctrl_c_mid_tune_exits_130_with_the_tunes_line_and_the_same
     assert r.returncode == 0 and (out / "comparison.md").exists(), r.stderr
 
 
+def test_ctrl_c_as_a_finished_command_exits_keeps_its_exit_code_or_says_one_line(tmp_path):
+    """The interpreter's own clean-up after a command's last line: a Ctrl-C there once ended the process by the
+    signal itself, without a line (39 of 40 such tries); now its exit code stands, or one line and 130."""
+    import random
+
+    rng = random.Random(1)
+    for i in range(6):
+        c = Command("simulate", "--controller", "pid", "--duration", 0.2, "--no-figures", "--no-progress",
+                    "--out", tmp_path / f"o{i}")
+        try:
+            wait_until(lambda: c.proc.stdout.readline().startswith("wrote"), "its last line", proc=c)
+            time.sleep(rng.uniform(0.0, 0.08))
+            if c.proc.poll() is None:
+                c.ctrl_c()
+            _, err = c.proc.communicate(timeout=BOUND_S)
+        finally:
+            c.kill()
+        assert "Traceback" not in err, err
+        assert c.proc.returncode == 0 and not err.strip() or c.proc.returncode == 130 and one_line(err) == (
+            "pa10-dnbs: interrupted while exiting, after the command had finished (the lines above say what it "
+            "wrote)"), (c.proc.returncode, err)
+        assert (tmp_path / f"o{i}" / "report.md").is_file()
+
+
 def _sigint_disposition(_):
     return signal.getsignal(signal.SIGINT) == signal.SIG_IGN
 
