@@ -6,12 +6,13 @@
     .venv/bin/python scripts/arm_collection.py --study --arms ur5                 # + the study on its arm file
 
 Each (arm, mode) runs DNBS, PID and CTC in-process (pa10_dnbs/study/collection.py) in a pool of ``--jobs``
-processes. The table goes to ``--out`` (benchmarks/collection/arm_collection.json) and beside it as markdown (.md),
-rewritten after every row, so Ctrl-C (exit 130) keeps the completed rows. The collection is not in
-requirements.txt: it is the benchmark's choice (131 MB that no test needs), pinned in ONE place,
-requirements-collection.txt, which ``--install`` installs. Exit 2 with one line when it is not installed.
-``--study`` then runs every study scenario x DNBS and PID x 3 seeds on each accepted arm file (about a minute
-per arm on 2 cores at 20 s) and adds a second table: where DNBS's worst seed is below PID's best.
+processes. The table goes to ``--out`` (benchmarks/collection/arm_collection.json) and beside it as markdown
+(.md: the full table, the study's, and the README's one line per arm), rewritten after every row, so Ctrl-C
+(exit 130) keeps the completed rows. The collection is not in requirements.txt: it is the benchmark's choice
+(131 MB that no test needs), pinned in ONE place, requirements-collection.txt, which ``--install`` installs.
+Exit 2 with one line when it is not installed. ``--study`` then runs every study scenario x DNBS and PID x 3
+seeds on each accepted arm file (about a minute per arm on 2 cores at 20 s) and adds a second table: where
+DNBS's worst seed is below PID's best.
 """
 from __future__ import annotations
 
@@ -27,7 +28,7 @@ sys.path.insert(0, str(ROOT))
 from pa10_dnbs.atomic_file import atomic_path, write_json  # noqa: E402
 from pa10_dnbs.interrupt import EXIT_INTERRUPTED  # noqa: E402
 from pa10_dnbs.study.collection import (ARMS, COLLECTION_VERSION, MODES, arm_file, collection_root,  # noqa: E402
-                                        markdown_table, run_row, study_summary, study_table)
+                                        compact_table, markdown_table, run_row, study_summary, study_table)
 
 REQUIREMENTS = ROOT / "requirements-collection.txt"
 
@@ -83,7 +84,8 @@ def main(argv=None) -> int:
         a.out.parent.mkdir(parents=True, exist_ok=True)
         write_json(a.out, {"meta": meta, "rows": rows}, indent=1)
         with atomic_path(a.out.with_suffix(".md")) as tmp:
-            tmp.write_text(markdown_table(rows) + ("\n" + study_table(rows) if study_table(rows) else ""))
+            tmp.write_text(markdown_table(rows) + ("\n" + study_table(rows) if study_table(rows) else "")
+                           + "\nOne line per arm (the README's table):\n\n" + compact_table(rows))
 
     def on_done(key, row) -> None:
         done[key] = row

@@ -61,3 +61,19 @@ def test_the_script_refuses_bad_flags_with_one_line(argv, needle, capsys, tmp_pa
     err = capsys.readouterr().err
     assert needle in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "t.json").exists()
+
+
+def test_the_readme_table_has_one_line_per_arm_with_both_modes():
+    from pa10_dnbs.study.collection import compact_table
+    fig = lambda rms, settled, diverged=False: {"rms_rad": rms, "settled_s": settled,  # noqa: E731
+                                                "torque_variation": 1.0, "steps_at_limit_after_startup": 0,
+                                                "max_abs_error_rad": 0.1, "diverged": diverged}
+    rows = [{"arm": "a", "mode": "bare", "status": "accepted", "reason": "", "n_joints": 2,
+             "dnbs": fig(3e-3, None), "pid": fig(2.0, None, True), "ctc": fig(1e-5, 0.1)},
+            {"arm": "a", "mode": "arm_file", "status": "accepted", "reason": "", "n_joints": 2,
+             "dnbs": fig(1e-5, 0.12), "pid": fig(1e-3, 0.3), "ctc": fig(1e-5, 0.1)},
+            {"arm": "b", "mode": "bare", "status": "refused", "reason": "no effort"}]
+    lines = compact_table(rows).splitlines()
+    assert len(lines) == 4
+    assert lines[2] == "| a | 3.0e-03 / 2.0e+00! / 1.0e-05 | 1.0e-05 / 1.0e-03 / 1.0e-05 | never / 0.12 |"
+    assert lines[3] == "| b | refused | - | - / - |"

@@ -173,6 +173,29 @@ def markdown_table(rows: list[dict]) -> str:
     return "\n".join(out) + "\n"
 
 
+def compact_table(rows: list[dict]) -> str:
+    """The README's table: one line per arm, the worst joint's RMS [rad] DNBS / PID / CTC bare and with the arm
+    file, and DNBS's settling time [s] in each mode (``!``: diverged)."""
+    out = ["| arm | bare: RMS DNBS / PID / CTC [rad] | arm file: RMS DNBS / PID / CTC [rad] | DNBS settled [s] "
+           "bare / arm file |", "|---|---|---|---|"]
+    for key in dict.fromkeys(r["arm"] for r in rows):
+        by = {r["mode"]: r for r in rows if r["arm"] == key}
+
+        def rms(mode):
+            r = by.get(mode)
+            if r is None:
+                return "-"
+            return _cell(r, "rms_rad", "{:.1e}") if r["status"] == "accepted" else "refused"
+
+        def settled(mode):
+            r = by.get(mode)
+            if r is None or r["status"] != "accepted" or "error" in r.get("dnbs", {}):
+                return "-"
+            return _g(r["dnbs"].get("settled_s"), "{:.2f}") if r["dnbs"].get("settled_s") is not None else "never"
+        out.append(f"| {key} | {rms('bare')} | {rms('arm_file')} | {settled('bare')} / {settled('arm_file')} |")
+    return "\n".join(out) + "\n"
+
+
 STUDY_CONTROLLERS = ("dnbs", "pid")
 STUDY_SEEDS = 3
 
