@@ -280,7 +280,7 @@ def test_simulate_all_ctrl_c_keeps_the_finished_controllers_marked_partial_and_a
         c.kill()
     assert rc == 130 and seconds < BOUND_S, (rc, seconds)
     assert one_line(err) == (f"pa10-dnbs: interrupted during the pid run; kept the 1 finished of 3 controllers "
-                             f"(dnbs) in {out}/report.md, marked partial (not run: pid, ctc): rerun with --force "
+                             f"(dnbs) in {out}/report.md, marked partial (not complete: pid, ctc): rerun with --force "
                              "for the whole comparison"), err
     assert sorted(p.name for p in out.iterdir()) == ["dnbs", "interrupted.json", "report.md"]   # no summary.json
     assert sorted(p.name for p in (out / "dnbs").iterdir()) == ["checkpoints", "metrics.json", "timeseries.npz"]
@@ -288,7 +288,8 @@ def test_simulate_all_ctrl_c_keeps_the_finished_controllers_marked_partial_and_a
     mark = json.loads((out / "interrupted.json").read_text())
     assert mark["interrupted"] is True and (mark["completed"], mark["total"], mark["missing"]) == (1, 3, ["pid", "ctc"])
     report = (out / "report.md").read_text()
-    assert report.startswith("# ") and "PARTIAL" in report.splitlines()[0] and "did not run: pid, ctc" in report
+    assert report.startswith("# ") and "PARTIAL" in report.splitlines()[0]
+    assert "not complete (stopped or never started): pid, ctc" in report
     assert "1 of 3 controllers" in report and "**DNBS**" in report and "**PID**" not in report
     r = subprocess.run(Command.argv(*args), cwd=REPO, capture_output=True, text=True, timeout=120)
     assert r.returncode == 2 and "holds the partial outputs of an interrupted run (1 of 3 done; use --force" \
@@ -460,7 +461,7 @@ def test_launch_ctrl_c_once_or_twice_stops_every_node_and_writes_nothing(tmp_pat
     assert "Traceback" not in err and "interrupted" in err, err
     if presses == 2:
         line = one_line(err)
-        assert re.fullmatch(rf"pa10-dnbs launch: interrupted again: killed the \d+ of its {len(nodes)} processes still running at once, "
-                            rf"removed \d+ shared-memory files from /dev/shm; nothing written to \S+/run", line), line
+        assert re.fullmatch(rf"pa10-dnbs launch: interrupted again: killed the \d+ of its {len(nodes)} processes "
+                            rf"still running at once, removed \d+ shared-memory files from /dev/shm; nothing written to \S+/run", line), line
     assert_no_leftovers(nodes, shm_before)
     assert list(tmp_path.iterdir()) == []   # neither the output nor its half-written folder

@@ -132,7 +132,7 @@ def _summary_line(m: dict) -> str:
 def _keep_partial(out: Path, force: bool, runs, metrics: list[dict], kinds: tuple[str, ...], the_arm, n_steps: int,
                   controller: str, duration_s: float) -> int:
     """After a Ctrl-C with some controllers finished: their folders (data and metrics, no figures) and a report
-    marked partial naming the controllers that did not run (report/partial.py), into ``out``; one line; 130.
+    marked partial naming the controllers not complete (report/partial.py), into ``out``; one line; 130.
     A second Ctrl-C meanwhile removes the half-written folder and ends at once."""
     missing = list(kinds[len(runs):])
     command = f"pa10-dnbs simulate --controller {controller} --duration {duration_s:g} --out {out}"
@@ -145,12 +145,13 @@ def _keep_partial(out: Path, force: bool, runs, metrics: list[dict], kinds: tupl
                 _save_checkpoints(tmp / "dnbs" / "checkpoints", run.extra["controllers"], n_steps - 1,
                                   the_arm.joint_names)
         title = f"{the_arm.description}: closed-loop run, PARTIAL (interrupted)"
-        text = report_markdown(metrics, [], title, [f"did not run: {', '.join(missing)}",
-                                                    "figures not drawn (an interrupted run)"])
+        notes = [f"not complete (stopped or never started): {', '.join(missing)}",
+                 "figures not drawn (an interrupted run)"]
+        text = report_markdown(metrics, [], title, notes)
         banner = partial_banner(len(runs), len(kinds), "controllers")
         (tmp / "report.md").write_text(text.replace(f"# {title}\n\n", f"# {title}\n\n{banner}\n\n", 1))
         write_partial_mark(tmp, command, len(runs), len(kinds), missing)
     say(f"pa10-dnbs: interrupted during the {missing[0]} run; kept the {len(runs)} finished of {len(kinds)} "
-        f"controllers ({', '.join(r.controller for r in runs)}) in {out}/report.md, marked partial (not run: "
+        f"controllers ({', '.join(r.controller for r in runs)}) in {out}/report.md, marked partial (not complete: "
         f"{', '.join(missing)}): rerun with --force for the whole comparison")
     return EXIT_INTERRUPTED

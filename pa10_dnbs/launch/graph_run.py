@@ -128,9 +128,8 @@ def _hard_stop(procs: list[ManagedProcess], shm_before: set[str], lease, opt: Gr
             pass
     bag = (f"; the bag {opt.record_bag} was cut short (its recorder was killed): it may not be readable"
            if opt.record_bag is not None else "")
-    line = (f"\npa10-dnbs launch: interrupted again: killed the {killed} of its {len(procs)} processes still running "
-            f"at once, removed "
-            f"{len(removed)} shared-memory files from /dev/shm{extra}{bag}\n")
+    line = (f"\npa10-dnbs launch: interrupted again: killed the {killed} of its {len(procs)} processes still "
+            f"running at once, removed {len(removed)} shared-memory files from /dev/shm{extra}{bag}\n")
     try:
         os.write(2, line.encode())
     except OSError:

@@ -34,5 +34,5 @@ def partial_mark(out: Path) -> dict | None:
 def partial_banner(completed: int, total: int, unit: str) -> str:
     """The first lines of a partial report (Markdown)."""
     return (f"**PARTIAL: interrupted (Ctrl-C) after {completed} of {total} {unit}.** Only the completed {unit} "
-            f"are here; the rest did not run (`{PARTIAL_FILE}` lists them). Not a complete result: rerun the "
-            "command with `--force` to replace this folder with a complete one.")
+            f"are here; the others were stopped or never started (`{PARTIAL_FILE}` lists them). Not a complete "
+            "result: rerun the command with `--force` to replace this folder with a complete one.")

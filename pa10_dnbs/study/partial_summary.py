@@ -1,7 +1,7 @@
 """An interrupted study's outputs: the completed runs' rows, marked partial (report/partial.py).
 
 ``study.partial.json`` (the rows, as in study.json, plus ``interrupted``, ``completed``, ``total``, ``missing``),
-``study.partial.md`` (one line per completed run, the runs that did not run) and ``interrupted.json``. No
+``study.partial.md`` (one line per completed run, then the runs not complete) and ``interrupted.json``. No
 study.json / study.md / study.png: their medians, worst cases and targets need every run.
 """
 from __future__ import annotations
@@ -38,6 +38,7 @@ def write_partial_study(directory: Path, rows: list[dict], all_runs: list[tuple[
     lines += [f"| {r['scenario']} | {r['controller']} | {r['seed']} | {_fmt(r['worst_rms_error_rad'], '.3e')} | "
               f"{_fmt(r['worst_settling_time_s'], '.3f')} | {_fmt(r['worst_max_abs_error_run_rad'], '.4f')} | "
               f"{_fmt(r['worst_torque_variation'], '.2f')} | {'yes' if r['diverged'] else 'no'} |" for r in kept]
-    lines += ["", f"Did not run ({len(missing)}): " + (", ".join(missing) if missing else "none"), ""]
+    lines += ["", f"Not complete (stopped or never started, {len(missing)}): "
+              + (", ".join(missing) if missing else "none"), ""]
     (directory / "study.partial.md").write_text("\n".join(lines))
     write_partial_mark(directory, command, len(kept), total, missing)
