@@ -373,8 +373,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"pa10-dnbs: error: {exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
-        print("pa10-dnbs: interrupted before it wrote anything (outputs are written whole, at the end): run the "
-              "same command again", file=sys.stderr)
+        print(interrupt.written_line() or "pa10-dnbs: interrupted before it wrote anything (outputs are written "
+              "whole, at the end): run the same command again", file=sys.stderr)
         return 130
     finally:
         if argv is None:   # this process is the command (not a caller's in-process run): Ctrl-C while it exits

@@ -12,6 +12,9 @@ A terminal's Ctrl-C sends SIGINT to every process of the foreground group: the c
   only noted, and :func:`check` raises KeyboardInterrupt at the next safe point (the executor checks every
   ``POLL_S``), never inside a SQL statement (an interrupted cursor prints SQLAlchemy's traceback and can leave
   the connection unusable). Pure computation may run :func:`immediate` inside it.
+- The end: once a command's outputs are in place (:func:`outputs_written`) a Ctrl-C says where they are; after it
+  returned (:func:`quiet_end`) one line; once the interpreter finalizes, SIGINT is ignored and the command's exit
+  code stands (:func:`_hold_sigint_to_the_end`).
 """
 from __future__ import annotations
 
@@ -151,7 +154,7 @@ def two_stage_sigint():
         yield
         return
     _second_line = "pa10-dnbs: interrupted again: stopped at once"
-    _state.update(deferred=0, requested=False, raised=False, cleanup=None)
+    _state.update(deferred=0, requested=False, raised=False, cleanup=None, written=None)
     try:
         yield
     finally:
@@ -194,23 +197,41 @@ def _hold_sigint_to_the_end() -> None:
 atexit.register(_hold_sigint_to_the_end)
 
 
+AFTER_LINE = ("pa10-dnbs: interrupted while exiting, after the command had finished (the lines above say what it "
+              "wrote)")
+
+
+def _after_output(signum, frame) -> None:
+    """A Ctrl-C once the command's outputs are in place: the line that says so (``outputs_written``), 130."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    kill_children(0.5)
+    with contextlib.suppress(Exception):
+        os.write(2, ((_state.get("written") or AFTER_LINE) + "\n").encode())
+    os._exit(EXIT_INTERRUPTED)
+
+
+def outputs_written(line: str) -> None:
+    """A command's outputs are in place: a Ctrl-C from now on ends it at once with ``line`` (what was written
+    where), not with a line that says nothing was written. Outside the main thread: only the line is kept."""
+    _state["written"] = line
+    with contextlib.suppress(ValueError):
+        signal.signal(signal.SIGINT, _after_output)
+
+
+def written_line() -> str | None:
+    """The line of :func:`outputs_written` if the command has called it (cli.py's fallback for a Ctrl-C)."""
+    return _state.get("written")
+
+
 def quiet_end() -> None:
     """Once the command has returned: a SIGINT while Python code still runs (threads joined, exit functions)
     ends it at once with one line and exit 130 instead of a traceback from the interpreter's own clean-up; after
     the exit functions it is ignored (:func:`_hold_sigint_to_the_end`) and the command's exit code stands."""
     _state["ended"] = True
-
-    def stop(signum, frame):
-        for stream in (sys.stdout, sys.stderr):
-            with contextlib.suppress(Exception):
-                stream.flush()
-        kill_children(0.5)
-        with contextlib.suppress(Exception):
-            os.write(2, b"pa10-dnbs: interrupted while exiting, after the command had finished (the lines "
-                     b"above say what it wrote)\n")
-        os._exit(EXIT_INTERRUPTED)
     with contextlib.suppress(ValueError):
-        signal.signal(signal.SIGINT, stop)
+        signal.signal(signal.SIGINT, _after_output)
 
 
 def say(line: str) -> None:

@@ -19,7 +19,7 @@ import pytest
 
 from script_module import load_script
 
-from pa10_dnbs.interrupt import child_pids
+from pa10_dnbs.interrupt import AFTER_LINE, child_pids
 from pa10_dnbs.tune.tuner import refusal
 
 REPO = Path(__file__).resolve().parent.parent
@@ -353,10 +353,33 @@ def test_ctrl_c_as_a_finished_command_exits_keeps_its_exit_code_or_says_one_line
         finally:
             c.kill()
         assert "Traceback" not in err, err
-        assert c.proc.returncode == 0 and not err.strip() or c.proc.returncode == 130 and one_line(err) == (
-            "pa10-dnbs: interrupted while exiting, after the command had finished (the lines above say what it "
-            "wrote)"), (c.proc.returncode, err)
-        assert (tmp_path / f"o{i}" / "report.md").is_file()
+        out = tmp_path / f"o{i}"
+        assert c.proc.returncode == 0 and not err.strip() or c.proc.returncode == 130 and one_line(err) in (
+            AFTER_LINE, f"pa10-dnbs: interrupted as it finished: {out} is written whole ({out}/report.md)"), \
+            (c.proc.returncode, err)
+        assert (out / "report.md").is_file()
+
+
+def test_a_ctrl_c_after_the_outputs_are_written_says_so_not_that_nothing_was_written(monkeypatch, capsys):
+    """The CLI's fallback for a Ctrl-C that reached no command's own handling: once a command has said its
+    outputs are in place (interrupt.outputs_written), that line, not 'interrupted before it wrote anything'."""
+    import argparse
+
+    from pa10_dnbs import cli
+    from pa10_dnbs.interrupt import outputs_written
+
+    def command(args, written):
+        if written:
+            outputs_written("pa10-dnbs: interrupted as it finished: runs/x is written whole (runs/x/report.md)")
+        raise KeyboardInterrupt
+
+    for written in (True, False):
+        parser = argparse.ArgumentParser()
+        parser.set_defaults(func=lambda args: command(args, written))
+        monkeypatch.setattr(cli, "build_parser", lambda: parser)
+        assert cli.main([]) == 130
+        line = one_line(capsys.readouterr().err)
+        assert ("runs/x is written whole" in line) == written and ("before it wrote anything" in line) != written, line
 
 
 def _sigint_disposition(_):

@@ -17,6 +17,7 @@ from ..bag.bag_writer import COMPRESSIONS, check_bag_path
 from ..config import ConfigError, default_config_path, load_config
 from ..controller_factory import load_reference_trajectory
 from ..core.checkpoint import checkpoint_dir, load_joint_checkpoints
+from ..interrupt import outputs_written
 from ..launch.fault_flags import apply_fault_flags, faults_active, plain
 from ..launch.fault_report import fault_note, fault_report
 from ..launch.graph_run import GraphFailure, GraphOptions, loop_reliability, parse_netns, run_graph
@@ -222,6 +223,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         if record is not None and (record / "metadata.yaml").is_file():
             print(f"pa10-dnbs launch: the bag recorded so far is closed and readable: {record}", file=sys.stderr)
         return 130 if exc.interrupted else 1
+    outputs_written(f"pa10-dnbs: interrupted as it finished: {out} is written whole ({out}/report.md)")
     m = metrics
     print(f"{controller} ({mode}): worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over "
           f"{interval(m['window_s'])} s, "

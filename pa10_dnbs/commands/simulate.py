@@ -12,7 +12,7 @@ from ..controller_factory import load_reference_trajectory
 from ..core.checkpoint import load_joint_checkpoints, save_checkpoint
 from ..number_text import interval
 from ..report.metrics_file import metrics_dict, metrics_settings
-from ..interrupt import EXIT_INTERRUPTED, on_second_sigint, say
+from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, on_second_sigint, outputs_written, say
 from ..report.markdown import report_markdown
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report, write_run
 from ..report.partial import partial_banner, write_partial_mark
@@ -104,6 +104,7 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
             if run.controller == "dnbs":
                 _save_checkpoints(tmp / "checkpoints" if len(runs) == 1 else tmp / "dnbs" / "checkpoints",
                                   run.extra["controllers"], n_steps - 1, the_arm.joint_names)
+    outputs_written(f"pa10-dnbs: interrupted as it finished: {out} is written whole ({out}/report.md)")
     print(f"wrote {out}/report.md")
     ok = all(m["all_finite"] and m["torques_within_limits"] for m in metrics)
     return 0 if ok else 1
@@ -151,7 +152,10 @@ def _keep_partial(out: Path, force: bool, runs, metrics: list[dict], kinds: tupl
         banner = partial_banner(len(runs), len(kinds), "controllers")
         (tmp / "report.md").write_text(text.replace(f"# {title}\n\n", f"# {title}\n\n{banner}\n\n", 1))
         write_partial_mark(tmp, command, len(runs), len(kinds), missing)
-    say(f"pa10-dnbs: interrupted during the {missing[0]} run; kept the {len(runs)} finished of {len(kinds)} "
-        f"controllers ({', '.join(r.controller for r in runs)}) in {out}/report.md, marked partial (not complete: "
-        f"{', '.join(missing)}): rerun with --force for the whole comparison")
+    line = (f"pa10-dnbs: interrupted during the {missing[0]} run; kept the {len(runs)} finished of {len(kinds)} "
+            f"controllers ({', '.join(r.controller for r in runs)}) in {out}/report.md, marked partial (not complete: "
+            f"{', '.join(missing)}): rerun with --force for the whole comparison")
+    outputs_written(line)   # a Ctrl-C from here says this line, not "nothing written"
+    say(line)
+    outputs_written(AFTER_LINE)
     return EXIT_INTERRUPTED

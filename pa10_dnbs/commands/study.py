@@ -11,7 +11,7 @@ from pathlib import Path
 
 from ..accel.choice import resolve_kernel
 from ..config import ConfigError, default_config_path, load_config
-from ..interrupt import EXIT_INTERRUPTED, on_second_sigint, say
+from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, on_second_sigint, outputs_written, say
 from ..report.outputs import atomic_output_dir, check_output_dir
 from ..report.progress import ProgressBar
 from ..run_size import check_run_size, say_note
@@ -72,6 +72,7 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
         (tmp / "study.md").write_text(study_markdown(rows, command, duration_s,
                                                      {k: v.description for k, v in SCENARIOS.items()}))
         study_figure(rows, tmp / "study.png")
+    outputs_written(f"pa10-dnbs: interrupted as it finished: {out} is written whole ({out}/study.md)")
     diverged = sum(r["diverged"] for r in rows)
     print(f"{n} runs, {diverged} diverged; wrote {out}/study.md")
     return 0
@@ -90,6 +91,9 @@ def _keep_partial(out: Path, force: bool, done: list[dict], all_runs: list, comm
         on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; nothing written to {out}",
                          cleanup=lambda: shutil.rmtree(tmp, ignore_errors=True))
         write_partial_study(tmp, done, all_runs, command, head)
-    say(f"pa10-dnbs: interrupted after {kept} of {n} runs; kept their rows in {out}/study.partial.md (and .json), "
-        f"marked partial: rerun with --force for the whole study")
+    line = (f"pa10-dnbs: interrupted after {kept} of {n} runs; kept their rows in {out}/study.partial.md (and "
+            ".json), marked partial: rerun with --force for the whole study")
+    outputs_written(line)   # a Ctrl-C from here says this line, not "nothing written"
+    say(line)
+    outputs_written(AFTER_LINE)
     return EXIT_INTERRUPTED
