@@ -441,6 +441,54 @@ def test_study_on_a_cluster_ctrl_c_cancels_its_tasks(tmp_path):
     assert re.fullmatch(r"pa10-dnbs: interrupted after \d+ of 16 runs; nothing written to .*", one_line(err)), err
 
 
+STUCK_NODES = """
+import sys, time, types
+from pathlib import Path
+from pa10_dnbs.launch.graph_run import _hard_stop
+from pa10_dnbs.launch.processes import ManagedProcess, stop_all
+from pa10_dnbs.launch.shm_cleanup import shm_files
+from pa10_dnbs.launch.supervision import StopRequest, catch_signals
+
+stuck = [sys.executable, "-c", "import signal, time; [signal.signal(s, signal.SIG_IGN) for s in (signal.SIGINT, "
+         "signal.SIGTERM, signal.SIGUSR1)]; print('READY', flush=True); time.sleep(120)"]
+before = shm_files()   # only what appears from here may go (another run's files are none of this test's)
+procs = [ManagedProcess(f"node{i}", stuck, {}, Path(sys.argv[1]) / f"node{i}.log") for i in range(3)]
+stop = StopRequest()
+stop.hard_stop = lambda: _hard_stop(procs, before, None, types.SimpleNamespace(record_bag=None), None)
+catch_signals(stop)
+while not all(p.saw("READY") for p in procs):
+    time.sleep(0.02)
+print("PIDS", *[p.pid for p in procs], flush=True)
+while not stop.signal_name:
+    time.sleep(0.02)
+stop_all(procs)   # SIGINT, 5 s, SIGUSR1 + SIGTERM, 3 s, SIGKILL: ignored by these nodes until the SIGKILL
+print("GRACEFUL", flush=True)
+"""
+
+
+def test_launch_second_ctrl_c_kills_nodes_that_ignore_the_first_at_once(tmp_path):
+    """Nodes that ignore SIGINT, SIGUSR1 and SIGTERM (a stuck teardown): the first Ctrl-C would wait 5 + 3 s for them
+    (launch/processes.py); the second kills them at once: the launcher's own stop logic, real processes."""
+    c = Command(STUCK_NODES, tmp_path, script="-c")
+    try:
+        pids = []
+        for line in c.proc.stdout:
+            if line.startswith("PIDS"):
+                pids = [int(x) for x in line.split()[1:]]
+                break
+        assert len(pids) == 3, c.proc.stderr.read()
+        c.ctrl_c()
+        time.sleep(0.2)
+        c.ctrl_c()
+        rc, seconds, err = c.end(bound_s=5.0)
+    finally:
+        c.kill()
+    assert rc == 130 and seconds < 1.5, (rc, seconds, err)
+    assert one_line(err) == ("pa10-dnbs launch: interrupted again: killed the 3 of its 3 processes still running at "
+                             "once, removed 0 shared-memory files from /dev/shm"), err
+    assert not [p for p in pids if os.path.exists(f"/proc/{p}")], pids
+
+
 def _launch(out: Path, domain: int) -> Command:
     """``pa10-dnbs launch`` (lockstep, 60 s: it runs until the Ctrl-C) in its own process group."""
     from graph_harness import ros_env
@@ -485,6 +533,7 @@ def test_launch_ctrl_c_once_or_twice_stops_every_node_and_writes_nothing(tmp_pat
     if presses == 2:
         line = one_line(err)
         assert re.fullmatch(rf"pa10-dnbs launch: interrupted again: killed the \d+ of its {len(nodes)} processes "
-                            rf"still running at once, removed \d+ shared-memory files from /dev/shm; nothing written to \S+/run", line), line
+                            rf"still running at once, removed \d+ shared-memory files from /dev/shm; nothing written "
+                            rf"to \S+/run", line), line
     assert_no_leftovers(nodes, shm_before)
     assert list(tmp_path.iterdir()) == []   # neither the output nor its half-written folder
