@@ -10,10 +10,10 @@ from ..arm import arm_of
 from ..config import ConfigError, default_config_path, load_config
 from ..controller_factory import load_reference_trajectory
 from ..core.checkpoint import load_joint_checkpoints, save_checkpoint
-from ..number_text import interval
-from ..report.metrics_file import metrics_dict, metrics_settings
 from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, on_second_sigint, outputs_written, say
+from ..number_text import interval
 from ..report.markdown import report_markdown
+from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report, write_run
 from ..report.partial import partial_banner, write_partial_mark
 from ..run_size import check_run_size, say_note
