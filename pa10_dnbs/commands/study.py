@@ -16,6 +16,7 @@ from ..report.outputs import atomic_output_dir, check_output_dir
 from ..report.progress import ProgressBar
 from ..run_size import check_run_size, say_note
 from ..sim.closed_loop import CONTROLLERS
+from ..study.feasibility import infeasible_scenarios
 from ..study.partial_summary import write_partial_study
 from ..study.runner import run_study
 from ..study.scenarios import SCENARIOS
@@ -44,6 +45,13 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
     check_run_size("--duration", duration_s, n_steps, len(cfg["plant"]["torque_limit_nm"]), at_once=at_once,
                    total_runs=n_runs, say=say_note)
     check_output_dir(out, force)
+    infeasible = infeasible_scenarios(cfg, scen, duration_s)   # before any run: one line each, not run
+    for line in infeasible.values():
+        print(f"study: {line}")
+    if len(infeasible) == len(scen):
+        raise ConfigError(f"--scenarios: every scenario chosen is infeasible on arm {cfg['arm']} (lines above): "
+                          "nothing to run")
+    asked, scen = scen, [s for s in scen if s not in infeasible]
     if "dnbs" in ctrl:
         cfg = resolve_kernel(cfg, say=print)  # once here, not in each worker
     n = len(scen) * len(ctrl) * seeds
@@ -56,11 +64,12 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
         done.append(row)
         bar.update(len(done) * steps_per_run, row["worst_max_abs_error_run_rad"])
 
-    command = (f"pa10-dnbs study --scenarios {','.join(scen)} --controllers {','.join(ctrl)} --seeds {seeds} "
+    command = (f"pa10-dnbs study --scenarios {','.join(asked)} --controllers {','.join(ctrl)} --seeds {seeds} "
                f"--duration {duration_s:g} --out {shlex.quote(str(out))}"
                + (f" --config {shlex.quote(str(config_path))}" if config_path != default_config_path() else "")
                + (f" --arm {shlex.quote(str(arm))}" if arm is not None else ""))
-    head = {"config_file": str(config_path.resolve()), "arm": cfg["arm"], "duration_s": duration_s}
+    head = {"config_file": str(config_path.resolve()), "arm": cfg["arm"], "duration_s": duration_s,
+            **({"infeasible": infeasible} if infeasible else {})}
     try:
         rows = run_study(cfg, scen, ctrl, seeds, duration_s, workers, on_done=finished, scheduler=scheduler)
     except KeyboardInterrupt:   # the workers are stopped (study/executor.py); the completed runs are kept
@@ -70,11 +79,13 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
     with atomic_output_dir(out, force) as tmp:
         (tmp / "study.json").write_text(json.dumps({**head, "rows": rows}, indent=2) + "\n")
         (tmp / "study.md").write_text(study_markdown(rows, command, duration_s,
-                                                     {k: v.description for k, v in SCENARIOS.items()}))
+                                                     {k: v.description for k, v in SCENARIOS.items()}, infeasible))
         study_figure(rows, tmp / "study.png")
     outputs_written(f"pa10-dnbs: interrupted as it finished: {out} is written whole ({out}/study.md)")
     diverged = sum(r["diverged"] for r in rows)
-    print(f"{n} runs, {diverged} diverged; wrote {out}/study.md")
+    print(f"{n} runs, {diverged} diverged"
+          + (f"; {len(infeasible)} scenario(s) infeasible on this arm, not run" if infeasible else "")
+          + f"; wrote {out}/study.md")
     return 0
 
 

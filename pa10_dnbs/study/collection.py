@@ -202,17 +202,24 @@ STUDY_SEEDS = 3
 
 def study_summary(key: str, duration_s: float, jobs: int) -> dict:
     """Every study scenario x DNBS and PID x STUDY_SEEDS seeds on ``key``'s arm file (study/runner.py): per
-    scenario DNBS's worst seed and PID's best seed (worst joint's RMS [rad]) and DNBS's diverged runs."""
+    scenario DNBS's worst seed and PID's best seed (worst joint's RMS [rad]) and DNBS's diverged runs; a scenario
+    the arm cannot track (study/feasibility.py) is not run: its entry holds its one line under ``infeasible``."""
     from ..config import default_config_path, load_config
+    from .feasibility import infeasible_scenarios
     from .runner import run_study
     from .scenarios import SCENARIOS
 
     with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
         cfg = load_config(default_config_path(), arm=str(arm_file(key)))
     t0 = time.perf_counter()
-    rows = run_study(cfg, list(SCENARIOS), STUDY_CONTROLLERS, STUDY_SEEDS, duration_s, workers=jobs)
+    infeasible = infeasible_scenarios(cfg, list(SCENARIOS), duration_s)
+    feasible = [sc for sc in SCENARIOS if sc not in infeasible]
+    rows = run_study(cfg, feasible, STUDY_CONTROLLERS, STUDY_SEEDS, duration_s, workers=jobs) if feasible else []
     out = {"seeds": STUDY_SEEDS, "scenarios": {}, "wall_time_s": round(time.perf_counter() - t0, 1)}
     for sc in SCENARIOS:
+        if sc in infeasible:
+            out["scenarios"][sc] = {"infeasible": infeasible[sc]}
+            continue
         d = [r for r in rows if r["scenario"] == sc and r["controller"] == "dnbs"]
         p = [r for r in rows if r["scenario"] == sc and r["controller"] == "pid"]
         dw = max((r["worst_rms_error_rad"] if r["worst_rms_error_rad"] is not None else math.inf) for r in d)
@@ -223,17 +230,29 @@ def study_summary(key: str, duration_s: float, jobs: int) -> dict:
     return out
 
 
+def _infeasible_note(line: str) -> str:
+    """'payload_5kg (joint4 needs 31.2 N m, limit 30)' from a feasibility line."""
+    import re
+
+    m = re.match(r"(\S+): infeasible on arm \S+: joint (\S+) needs (\S+) N m .*its limit is (\S+) N m", line)
+    return f"{m[1]} ({m[2]} needs {m[3]} N m, limit {m[4]})" if m else line.split(":")[0]
+
+
 def study_table(rows: list[dict]) -> str:
-    """One line per arm with a study: in how many scenarios DNBS's worst seed is below PID's best."""
-    out = ["| arm (arm file) | scenarios where DNBS's worst seed < PID's best | DNBS runs diverged | "
-           "scenarios where not | DNBS worst RMS over the scenarios [rad] |", "|---|---|---|---|---|"]
+    """One line per arm with a study: in how many feasible scenarios DNBS's worst seed is below PID's best, and
+    the scenarios the arm cannot track (not run: the joint, the torque it needs and its limit)."""
+    out = ["| arm (arm file) | feasible scenarios where DNBS's worst seed < PID's best | DNBS runs diverged | "
+           "feasible scenarios where not | DNBS worst RMS over the feasible scenarios [rad] | "
+           "infeasible for the arm (not run) |", "|---|---|---|---|---|---|"]
     for r in rows:
         st = r.get("study")
         if not st:
             continue
-        sc = st["scenarios"]
+        sc = {k: v for k, v in st["scenarios"].items() if "infeasible" not in v}
+        bad = [v["infeasible"] for v in st["scenarios"].values() if "infeasible" in v]
         below = [k for k, v in sc.items() if v["dnbs_below_pid"]]
-        worst = max((v["dnbs_worst_rad"] or math.inf) for v in sc.values())
+        worst = max(((v["dnbs_worst_rad"] or math.inf) for v in sc.values()), default=None)
         out.append(f"| {r['arm']} | {len(below)} of {len(sc)} | {sum(v['dnbs_diverged'] for v in sc.values())} of "
-                   f"{len(sc) * st['seeds']} | {', '.join(k for k in sc if k not in below) or '-'} | {_g(worst)} |")
+                   f"{len(sc) * st['seeds']} | {', '.join(k for k in sc if k not in below) or '-'} | {_g(worst)} | "
+                   f"{'; '.join(_infeasible_note(b) for b in bad) or '-'} |")
     return "\n".join(out) + "\n" if len(out) > 2 else ""

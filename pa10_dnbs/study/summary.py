@@ -51,7 +51,10 @@ def checks(rows: list[dict]) -> list[tuple[str, bool, str]]:
     return out
 
 
-def study_markdown(rows: list[dict], command: str, duration_s: float, descriptions: dict[str, str]) -> str:
+def study_markdown(rows: list[dict], command: str, duration_s: float, descriptions: dict[str, str],
+                   infeasible: dict[str, str] | None = None) -> str:
+    """study.md; ``infeasible``: {scenario: its line} of the scenarios the arm cannot track (study/feasibility.py),
+    each a section that says so instead of comparing controllers."""
     scenarios = list(dict.fromkeys(r["scenario"] for r in rows))
     controllers = list(dict.fromkeys(r["controller"] for r in rows))
     n_seeds = len(set(r["seed"] for r in rows))
@@ -78,8 +81,12 @@ def study_markdown(rows: list[dict], command: str, duration_s: float, descriptio
                          f"{_fmt(_worst(_values(rows, s, c, 'worst_torque_variation')), '.2f')} | "
                          f"{sum(_values(rows, s, c, 'diverged'))} of {len(rms)} |")
         lines.append("")
+    for s, line in (infeasible or {}).items():
+        lines += [f"## {s}", "", descriptions.get(s, ""), "",
+                  f"**Not run**: {line.split(': ', 1)[-1]}", ""]
     lines += ["## Targets", "", "| target | met | figures |", "|---|---|---|"]
     lines += [f"| {t} | {'yes' if ok else '**no**'} | {f} |" for t, ok, f in checks(rows)]
+    lines += [f"| {s}: DNBS RMS below PID's | n/a: infeasible | not run (see {s} above) |" for s in infeasible or {}]
     return "\n".join(lines) + "\n"
 
 
