@@ -12,7 +12,8 @@ processes. The table goes to ``--out`` (benchmarks/collection/arm_collection.jso
 (131 MB that no test needs), pinned in ONE place, requirements-collection.txt, which ``--install`` installs.
 Exit 2 with one line when it is not installed. ``--study`` then runs every study scenario x DNBS and PID x 3
 seeds on each accepted arm file (about a minute per arm on 2 cores at 20 s) and adds a second table: where
-DNBS's worst seed is below PID's best.
+DNBS's worst seed is below PID's best, and which scenarios are beyond the arm's torque limits (named with the
+joint, the torque it needs and its limit; not run: study/feasibility.py).
 """
 from __future__ import annotations
 
