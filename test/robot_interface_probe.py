@@ -31,6 +31,8 @@ def main():
     seen, clocks = {}, []
 
     def on_state(msg: JointState):
+        if not clocks:  # answer nothing before the latched /clock 0 is in: the robot's first step would publish
+            return      # /clock 1 ms, and a late clock reader gets only that (the robot re-sends its state)
         stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
         k = round(stamp / 1e6)
         if k in seen:
