@@ -10,18 +10,18 @@ from pathlib import Path
 
 import numpy as np
 
-from ..arm import arm_of
 from ..arm.gain_rule import report_rule
 from ..arm.summary import arm_line
-from ..config import default_config_path, load_config
+from ..config import default_config_path
+from ..run_settings import build_settings
 
 
 def run_arm_info(config_path: Path | None, arm: str | None) -> int:
     """Print the arm's facts, sources, inertia sweep and gains; returns 0 (bad input raises ConfigError)."""
     from ..derived_settings import derived_gains, inertia_sweep_along
 
-    cfg = load_config(Path(config_path) if config_path else default_config_path(), arm=arm)
-    the_arm = arm_of(cfg)
+    settings = build_settings(Path(config_path) if config_path else default_config_path(), arm=arm)
+    the_arm, cfg = settings.arm, settings.to_config()  # the rule's functions read the config's mapping
     print(arm_line(the_arm).replace("; ", ";\n  "))
     print("sources:")
     for key, text in the_arm.sources.items():

@@ -26,7 +26,6 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from trajectory_msgs.msg import JointTrajectory
 
-from ..arm import arm_of
 from ..live.schemas import live_channels
 from ..live.server import LiveServer, LiveServerError
 from ..live.view import LiveView
@@ -63,15 +62,15 @@ class LiveObserverNode(Node):
             raise ParameterError(f"parameter port must be in 0..65535, got {p['port']}")
         if not 0 < p["display_hz"] <= 1000:
             raise ParameterError(f"parameter display_hz must be in (0, 1000] frames per second, got {p['display_hz']}")
-        cfg = load_node_config(p["config_file"])
+        settings = load_node_config(p["config_file"])
         ns = self.get_namespace()
         arm = ArmTopics(ns if ns != "/" else DEFAULT_NS)
         try:
             self.server = LiveServer(live_channels(arm), host=p["host"], port=p["port"])
         except LiveServerError as exc:
             raise ParameterError(str(exc)) from None
-        self.view = LiveView(self.server, cfg["plant"]["torque_limit_nm"], cfg["simulation"]["dt_s"],
-                             display_hz=p["display_hz"], joint_names=arm_of(cfg).joint_names, arm=arm)
+        self.view = LiveView(self.server, settings.plant.torque_limit_nm, settings.simulation.dt_s,
+                             display_hz=p["display_hz"], joint_names=settings.arm.joint_names, arm=arm)
         self.arm = arm
         feed = self.view.on_message
         # a node of its own, never added to the executor (and free of the launcher's name remapping)
@@ -84,7 +83,7 @@ class LiveObserverNode(Node):
                                  raw=True)
         self.create_subscription(DiagnosticArray, DIAGNOSTICS, lambda d: feed(DIAGNOSTICS, d), diagnostics_qos(),
                                  raw=True)
-        for j in arm_of(cfg).joint_names:
+        for j in settings.arm.joint_names:
             t = arm.reference(j)
             self.create_subscription(JointTrajectory, t, lambda d, t=t: feed(t, d), reference_qos(),
                                      raw=True)

@@ -15,7 +15,9 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 
-from ..config import ConfigError, default_config_path, load_config
+from ..config import ConfigError, default_config_path
+from ..run_settings import build_settings
+from ..settings import Settings
 
 
 class ParameterError(ValueError):
@@ -91,11 +93,12 @@ def cli_parameter(argv, name: str) -> str | None:
     return None
 
 
-def load_node_config(path: str) -> dict:
-    """The numeric config (config/*.yaml) a node runs with; '' means the shipped default. A bad file is a
-    ParameterError (parameter config_file)."""
+def load_node_config(path: str) -> Settings:
+    """The settings a node runs with, built once from its config file (the launcher's config_used.yaml, every
+    value resolved; '' means the shipped default) and the arm it names. A bad file is a ParameterError
+    (parameter config_file)."""
     try:
-        return load_config(path or default_config_path())
+        return build_settings(path or default_config_path())
     except ConfigError as exc:
         raise ParameterError(f"parameter config_file: {exc}") from None
 

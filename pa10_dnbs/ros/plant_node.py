@@ -44,9 +44,10 @@ from ..loop.effort_gate import EffortGate
 from ..loop.endpoint_match import MatchWait
 from ..loop.plant_timing import PlantTiming
 from ..loop.scheduling import apply_fifo, check_priority
-from ..plant.from_config import open_client, plant_from_config
+from ..plant.from_config import open_client, plant_from_settings
 from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, check_clock_hz
 from ..wire.robot_interface import default_state_topic, parse_robot_command
+from ..settings import Settings
 from .diagnostics import DiagnosticsReporter
 from .params import CONFIG_FILE, RT_PRIORITY, Param, ParameterError, check_choice, declare, load_node_config
 from .plant_lockstep import run_lockstep
@@ -127,23 +128,23 @@ class PlantNode(Node):
         except ValueError as exc:
             raise ParameterError(f"parameter {exc}") from None
         self.p = p
-        cfg = load_node_config(p["config_file"])
-        self.dt = cfg["simulation"]["dt_s"]
+        settings = load_node_config(p["config_file"])
+        self.dt = settings.simulation.dt_s
         try:
             check_clock_hz(p["clock_hz"], self.dt)
         except ValueError as exc:
             raise ParameterError(f"parameter clock_hz {exc}") from None
-        duration = p["duration_s"] if p["duration_s"] > 0 else cfg["simulation"]["duration_s"]
+        duration = p["duration_s"] if p["duration_s"] > 0 else settings.simulation.duration_s
         self.n_steps = int(round(duration / self.dt))
         self.clock_ = StepClock(self.dt)
-        self.plant = self._open_plant(cfg)
+        self.plant = self._open_plant(settings)
         n = self.plant.n_joints
         self.get_logger().info(arm_line(self.plant.arm))
         self.gate = EffortGate(n, p["on_missing_effort"])
         self.gate.bin_steps = max(1, int(round(60.0 / self.dt)))  # realtime on-time fraction per simulated minute
         # realtime: latest value only (depth 1), a late reader skips stale states. lockstep: a deep
         # history, so a recorder that falls behind for a while still gets every message.
-        self.wire = self._make_wire(cfg, realtime)
+        self.wire = self._make_wire(settings, realtime)
         self.timing = PlantTiming(self.n_steps, n)
         self.cpu = CpuMeter()
         self.resends = [0] * n
@@ -162,15 +163,15 @@ class PlantNode(Node):
             print(self.rt_message, flush=True)
         announce_ready("plant")
 
-    def _open_plant(self, cfg: dict):
+    def _open_plant(self, settings: Settings):
         """The physics: the PyBullet plant of the config's arm, at its initial state."""
         self._client = open_client()
-        return plant_from_config(cfg, self._client)
+        return plant_from_settings(settings, self._client)
 
     def _close_plant(self) -> None:
         self._client.disconnect()
 
-    def _make_wire(self, cfg: dict, realtime: bool):
+    def _make_wire(self, settings: Settings, realtime: bool):
         """The per-joint topics (``plant_wire.py``), or with ``interface:=standard`` the standard robot interface
         (``plant_standard_wire.py``): there the plant waits for every command (no effort timeout)."""
         p = self.p
@@ -180,9 +181,9 @@ class PlantNode(Node):
             except ValueError as exc:
                 raise ParameterError(f"parameter robot_command: {exc}") from None
             p["effort_timeout_s"] = math.inf  # a robot in lockstep waits for its command (docs/your_robot.md)
-            return StandardPlantWire(self, cfg, self.clock_, p["robot_state_topic"] or default_state_topic(command),
+            return StandardPlantWire(self, settings, self.clock_, p["robot_state_topic"] or default_state_topic(command),
                                      command, p["clock_hz"], self.n_steps, lambda: self.gate.step)
-        return PlantWire(self, cfg, self.clock_, p["reliability"],
+        return PlantWire(self, settings, self.clock_, p["reliability"],
                          state_depth=1 if realtime else record_qos().depth,
                          effort_depth=1 if realtime else p["effort_queue_depth"], clock_hz=p["clock_hz"],
                          last_step=self.n_steps)

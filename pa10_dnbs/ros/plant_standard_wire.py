@@ -22,11 +22,11 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
-from ..arm import arm_of
 from ..loop.endpoint_match import Need
 from ..wire import joint_state_cdr
 from ..wire.clock_schedule import ClockSchedule
 from ..wire.robot_interface import JointMatcher, RobotCommand
+from ..settings import Settings
 from .plant_wire import CLOCK_CDR
 from .polled import PolledSubscription, SubscriptionWaitSet
 from .wire import CLOCK, StepClock, record_qos
@@ -41,12 +41,12 @@ def robot_qos(reliability: str = "reliable", depth: int = ROBOT_QOS_DEPTH) -> Qo
 
 
 class StandardPlantWire:
-    def __init__(self, node, cfg: dict, clock: StepClock, state_topic: str, command: RobotCommand, clock_hz: float,
+    def __init__(self, node, settings: Settings, clock: StepClock, state_topic: str, command: RobotCommand, clock_hz: float,
                  last_step: int, current_step):
         """``current_step()``: the plant's current step (what a Float64MultiArray command answers)."""
         self.node = node
         self.clock = clock
-        arm = arm_of(cfg)
+        arm = settings.arm
         self.joint_names = arm.joint_names
         n = len(self.joint_names)
         self.command = command
@@ -63,7 +63,7 @@ class StandardPlantWire:
                                                robot_qos(depth=100), raw=not forward)
         self._wait_set = SubscriptionWaitSet(node, [self._command_sub])
         self.state_links = [None] * n  # no state faults are injected on this interface
-        self._limits = np.array(cfg["plant"]["torque_limit_nm"], dtype=float).tolist()
+        self._limits = np.array(settings.plant.torque_limit_nm, dtype=float).tolist()
         self.waits = 0
         self.wakeups_with_efforts = 0
         self.malformed = np.zeros(n, dtype=np.int64)

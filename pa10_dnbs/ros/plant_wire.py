@@ -26,11 +26,11 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 
-from ..arm import arm_of
-from ..faults.faulty_link import links_from_config
+from ..faults.faulty_link import faulty_link
 from ..loop.endpoint_match import Need
 from ..wire import joint_state_cdr
 from ..wire.clock_schedule import ClockSchedule
+from ..settings import Settings
 from .polled import PolledSubscription, SubscriptionWaitSet
 from .wire import (CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, StepClock, description_qos, effort_topic, loop_qos,
                    record_qos, state_topic)  # relative names
@@ -40,13 +40,13 @@ CLOCK_CDR = struct.Struct("<HHiI")  # rosgraph_msgs/Clock: encapsulation (little
 
 
 class PlantWire:
-    def __init__(self, node, cfg: dict, clock: StepClock, reliability: str, state_depth: int, effort_depth: int,
+    def __init__(self, node, settings: Settings, clock: StepClock, reliability: str, state_depth: int, effort_depth: int,
                  clock_hz: float, last_step: int):
         """``reliability`` and the depths: QoS of the per-joint state and effort topics; ``clock_hz``: /clock
         rate [Hz of simulated time] (0: no /clock); ``last_step``: the run's last state (it carries a /clock)."""
         self.node = node
         self.clock = clock
-        arm = arm_of(cfg)
+        arm = settings.arm
         self.joint_names = names = arm.joint_names
         n = len(names)
         self.state_qos = loop_qos(reliability, depth=state_depth)
@@ -62,9 +62,9 @@ class PlantWire:
         # the URDF, latched, as robot_state_publisher offers it (Foxglove and the recorder read it)
         self._description_pub = node.create_publisher(String, ROBOT_DESCRIPTION, description_qos())
         self._description_pub.publish(String(data=arm.urdf_text()))
-        self.state_links = [links_from_config(cfg, "state", i, self._state_pubs[i].publish, arm.upper_rad[i])
+        self.state_links = [faulty_link(settings.faults, "state", i, self._state_pubs[i].publish, arm.upper_rad[i])
                             for i in range(n)]
-        self.torque_limit = np.array(cfg["plant"]["torque_limit_nm"], dtype=float)
+        self.torque_limit = np.array(settings.plant.torque_limit_nm, dtype=float)
         self._limits = self.torque_limit.tolist()
         self._state_layouts = [joint_state_cdr.OneJointLayout(j, ("position", "velocity")) for j in names]
         self._effort_layouts = [joint_state_cdr.OneJointLayout(j, ("effort",)) for j in names]

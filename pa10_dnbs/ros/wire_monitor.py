@@ -20,7 +20,6 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
-from ..arm import arm_of
 from ..wire.wire_record import WireRecord
 from ..wire import joint_state_cdr, trajectory_cdr
 from ..loop.scheduling import apply_batch, apply_fifo
@@ -50,10 +49,10 @@ class WireMonitorNode(Node):
             raise ParameterError("parameter out_file is required")
         if not p["poll_period_s"] > 0:
             raise ParameterError(f"parameter poll_period_s must be > 0 s, got {p['poll_period_s']}")
-        cfg = load_node_config(p["config_file"])
-        dt_s = cfg["simulation"]["dt_s"]
-        duration = p["duration_s"] if p["duration_s"] > 0 else cfg["simulation"]["duration_s"]
-        self.joint_names = names = arm_of(cfg).joint_names
+        settings = load_node_config(p["config_file"])
+        dt_s = settings.simulation.dt_s
+        duration = p["duration_s"] if p["duration_s"] > 0 else settings.simulation.duration_s
+        self.joint_names = names = settings.arm.joint_names
         self.record = WireRecord(int(round(duration / dt_s)), dt_s, len(names))
         self.out_file = p["out_file"]
         self.clock = StepClock(dt_s)
