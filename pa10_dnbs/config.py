@@ -215,12 +215,12 @@ def check_value(key: str, value: Any, spec: Any, n: int | None) -> Any:
 
 def validate(raw: Any, n_joints: int) -> dict:
     """Validate a parsed, merged config document for an arm of ``n_joints`` joints."""
-    cfg = check_value("", raw, SCHEMA, n_joints)
-    sim = cfg["simulation"]
+    checked = check_value("", raw, SCHEMA, n_joints)
+    sim = checked["simulation"]
     if sim["window_s"][1] > sim["duration_s"] + 1e-12:
         raise ConfigError(f"simulation.window_s: ends at {sim['window_s'][1]:g} s, after "
                           f"simulation.duration_s = {sim['duration_s']:g} s")
-    return cfg
+    return checked
 
 
 def _read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict:

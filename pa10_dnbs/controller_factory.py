@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .core.controller_bank import ControllerBank
 from .core.dnbs_controller import DNBSControllers, DNBSParams, NetworkParams, Remedies
 from .core.pid_controller import PIDControllers, PIDParams
 from .core.joint_trajectory import JointTrajectory
@@ -61,7 +62,7 @@ def pid_params(settings: Settings) -> PIDParams:
                      anti_windup=pid.anti_windup)
 
 
-def build_controllers(settings: Settings, kind: str, joints=None):
+def build_controllers(settings: Settings, kind: str, joints=None) -> ControllerBank:
     """Controllers of joint indices ``joints`` (0..n-1; all of the arm's when None), one per row, in that order.
 
     ``dnbs.kernel: c`` steps a DNBS bank with the compiled kernel (the same bits; KernelBuildError when it

@@ -12,7 +12,7 @@ from pathlib import Path
 from .arm import DEFAULT_ARM, Arm, load_arm
 from .config import checked_with_placeholders, layered, load_config, merged, missing, validate
 from .derived_settings import GAIN_KEYS, REFERENCE_KEYS, RULE_DEFAULTS, derived_gains, derived_reference
-from .settings import Settings
+from .settings import ReferenceSettings, RunSettings, Settings
 
 
 def document_arm(document: dict, arm: str | Path | None = None) -> Arm:
@@ -34,7 +34,8 @@ def with_rules(the_arm: Arm, document: dict, report: bool = True) -> Settings:
         tree = merged(derived_reference(the_arm, tree, report=report), tree)
     if missing(tree, GAIN_KEYS):
         checked = checked_with_placeholders(tree, GAIN_KEYS, the_arm.n_joints)
-        tree = merged(derived_gains(the_arm, checked, report=report), tree)
+        reference, run = ReferenceSettings.of(checked["reference"]), RunSettings.of(checked["simulation"])
+        tree = merged(derived_gains(the_arm, reference, run, report=report), tree)
     return Settings.of(validate(tree, the_arm.n_joints), the_arm)
 
 

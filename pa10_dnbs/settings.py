@@ -306,9 +306,9 @@ class Settings:
         validate(self.to_config(), self.arm.n_joints)
 
     @classmethod
-    def of(cls, cfg: dict, arm: Arm) -> "Settings":
+    def of(cls, mapping: dict, arm: Arm) -> "Settings":
         """From a validated config mapping for ``arm``."""
-        return cls(arm=arm, **{k: c.of(cfg[k]) for k, c in SECTIONS.items()})
+        return cls(arm=arm, **{k: c.of(mapping[k]) for k, c in SECTIONS.items()})
 
     def to_config(self) -> dict:
         """The config mapping these settings are (``arm``: the arm file's path), as config_used.yaml holds it."""

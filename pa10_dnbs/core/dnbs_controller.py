@@ -179,7 +179,10 @@ def max_slope(exponents: np.ndarray, input_scale, p: int) -> float:
 
 
 class DNBSControllers:
-    """The DNBS controllers of joints ``joints`` (indices 0..6), one per row; see the module docstring."""
+    """The DNBS controllers of joints ``joints`` (indices 0..n-1 of the arm), one per row; see the module
+    docstring. A :class:`~pa10_dnbs.core.controller_bank.ControllerBank` that learns."""
+
+    learns = True
 
     def __init__(self, params: DNBSParams, seed: int, joints):
         joints = [int(j) for j in joints]
@@ -377,6 +380,10 @@ class DNBSControllers:
             n = self.n_joints
             self.ekf_resets["alpha"] += bad[:n]
             self.ekf_resets["torque"] += bad[n:]
+
+    def counters(self, row: int = 0) -> dict[str, int]:
+        """Row ``row``'s EKF resets (``ekf_resets_alpha``, ``ekf_resets_torque``), for the run's report."""
+        return {f"ekf_resets_{k}": int(v[row]) for k, v in self.ekf_resets.items()}
 
     def state_dict(self, row: int = 0) -> dict[str, np.ndarray]:
         """Row ``row``'s weights (L,), covariances (L, L), initial weights and counters (for np.savez), after

@@ -25,12 +25,12 @@ def _series(topic: str, field: str, j: int, label: str, colour: str) -> dict:
 
 
 def _plot(title: str, paths: list[dict], y_min=None, y_max=None) -> dict:
-    cfg = {"foxglovePanelTitle": title, "paths": paths, "showXAxisLabels": True, "showYAxisLabels": True,
+    panel = {"foxglovePanelTitle": title, "paths": paths, "showXAxisLabels": True, "showYAxisLabels": True,
            "showLegend": True, "legendDisplay": "floating", "showPlotValuesInLegend": True, "isSynced": True,
            "xAxisVal": "timestamp", "followingViewWidth": 10, "sidebarDimension": 240}
     if y_min is not None:
-        cfg["minYValue"], cfg["maxYValue"] = y_min, y_max
-    return cfg
+        panel["minYValue"], panel["maxYValue"] = y_min, y_max
+    return panel
 
 
 def layout(joint_names, torque_limit_nm, root_frame: str = "base_link", arm: ArmTopics = ArmTopics(),

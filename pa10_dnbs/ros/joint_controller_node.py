@@ -109,7 +109,7 @@ class JointControllerNode(Node):
         controller = self.loop_.controller
         print(f"CONTROLLER joint_controller {p['joint']}: {type(controller).__name__}", flush=True)
         self.checkpoint = Path(p["checkpoint_file"]) if p["checkpoint_file"] else None
-        if self.checkpoint is not None and not hasattr(controller, "state_dict"):
+        if self.checkpoint is not None and not controller.learns:
             raise ParameterError(f"checkpoint_file: the {p['controller']} controller has no learned state to save")
         self.checkpoint_every = max(1, int(round(settings.checkpoint.period_s / settings.simulation.dt_s)))
         self.checkpoint_phase = checkpoint_phase(index, arm.n_joints, self.checkpoint_every)
@@ -256,8 +256,7 @@ class JointControllerNode(Node):
         loop = self.loop_
         c = {f"bad_states_{k}": v for k, v in loop.bad_states.items()}
         c["nonfinite_torques"] = loop.nonfinite_torques
-        resets = getattr(loop.controller, "ekf_resets", {})
-        c.update({f"ekf_resets_{k}": int(v[0]) for k, v in resets.items()})
+        c.update(loop.controller.counters(0))
         c.update({"malformed_states": self.malformed, "malformed_references": self.malformed_references, "states": self.states_received, "efforts": self.efforts_sent,
                   "duplicate_states": loop.duplicates, "last_step": loop.last_step,
                   "held_until_matched": self.held_answers})
