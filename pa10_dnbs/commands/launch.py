@@ -20,6 +20,7 @@ from ..interrupt import outputs_written
 from ..launch.fault_flags import apply_fault_flags, faults_active, plain
 from ..launch.fault_report import fault_note, fault_report
 from ..launch.graph_run import GraphFailure, GraphOptions, loop_reliability, parse_netns, run_graph
+from ..launch.params_file import write_params_file
 from ..launch.realtime_advice import ON_TIME_TARGET, injected_misses, realtime_hint
 from ..live.options import check_live_options
 from ..loop.scheduling import DEFAULT_RT_PRIORITY, check_priority, granted_priority
@@ -169,7 +170,9 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
             try:
                 used = tmp / "config_used.yaml"
                 used.write_text(yaml.safe_dump(plain(settings.to_config()), sort_keys=False))
-                result = run_graph(dataclasses.replace(opt, config_path=used), tmp, say=lambda s: print(s, flush=True),
+                ros_params = write_params_file(tmp / "ros_params.yaml", settings, controller, namespace)
+                result = run_graph(dataclasses.replace(opt, config_path=used, params_file=ros_params), tmp,
+                                   say=lambda s: print(s, flush=True),
                                    on_hard_stop=lambda: _hard_stop_cleanup(tmp, out))
                 stats = result.stats
                 if record is None:

@@ -80,8 +80,9 @@ def controller_command(opt: GraphOptions, workdir: Path, joint: str, incarnation
         params["checkpoint_file"] = str(workdir / "checkpoints" / f"{joint}.npz")
         if opt.init_from is not None:
             params["init_file"] = str(opt.init_from / f"{joint}.npz")
+    files = ["--params-file", str(opt.params_file)] if opt.params_file is not None else []
     return [sys.executable, "-m", "pa10_dnbs.ros.joint_controller_node"] + _ros_args(f"joint_controller_{joint}",
-                                                                                    params, opt.namespace)
+                                                                                    params, opt.namespace) + files
 
 
 def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[tuple[str, list[str]]]:

@@ -54,7 +54,7 @@ from ..loop.endpoint_match import MatchWait, Need
 from ..loop.joint_loop import JointLoop
 from ..loop.scheduling import apply_batch, apply_fifo, check_priority, policy_name
 from .params import (CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, check_choice, cli_parameter,
-                     declare, load_node_config)
+                     declare, gain_params, load_node_config, settings_with_gains)
 from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node
 from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
@@ -66,7 +66,8 @@ FAULT_KEYS = ("bad_states_nonfinite", "bad_states_position", "bad_states_speed",
 
 PARAMS = {
     "config_file": CONFIG_FILE,
-    "joint": Param("", "the joint: s1, s2, s3, e1, e2, w1 or w2 (required; names the node joint_controller_<joint>)"),
+    "joint": Param("", "the joint: one of the arm's actuated joints (required; names the node "
+                       "joint_controller_<joint>)"),
     "controller": Param("dnbs", "dnbs or pid"),
     "reliability": Param("reliable", "state/effort QoS: reliable or best_effort"),
     "queue_depth": Param(10, "keep_last depth of the state subscription and effort publisher [messages]", 1),
@@ -102,6 +103,8 @@ class JointControllerNode(Node):
         self.p = p
         self.joint = p["joint"]
         index = arm.index(self.joint)
+        # its gains: read-only parameters (the launcher's params file, else the config's values)
+        settings = settings_with_gains(settings, index, declare(self, gain_params(settings, p["controller"], index)))
         self.clock_ = StepClock(settings.simulation.dt_s)
         # a bank of this one joint behind its state guard, as the in-process simulation runs all the arm's
         self.loop_ = JointLoop(build_guarded_controllers(settings, p["controller"], [index]),
