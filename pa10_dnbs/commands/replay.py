@@ -25,7 +25,7 @@ def run_replay(bag_path: Path, rate: float, topics: list[str] | None, start_offs
     process with the player node's exit code (as every node, without an rclpy teardown: ros/runtime.py).
 
     ``namespace``: publish the arm's topics under this namespace instead of the recorded one (None: as recorded).
-    ``live_port``: also serve the live view on ``live_host``:``live_port`` (0: a free port); its Table 2 limits
+    ``live_port``: also serve the live view on ``live_host``:``live_port`` (0: a free port); its torque limits
     and step come from ``config_path``, else the config stored in the bag, else the shipped default.
     """
     if not (math.isfinite(rate) and rate > 0):

@@ -5,7 +5,7 @@ graph's time) as the graph's next step. Its command goes out as soon as every co
 state that comes before that is the deadline: the efforts still missing are held or zeroed (``on_missing_effort``)
 and counted as misses of that tick (the effort gate's realtime accounting, so ``on_time_fraction`` says how often
 every answer beat the robot's next state), and that command still goes out, late, before the new state is
-forwarded. One wait set over the seven effort subscriptions and the robot's state subscription: the bus wakes
+forwarded. One wait set over the effort subscriptions (one per joint) and the robot's state subscription: the bus wakes
 for whichever comes. No new state within ``robot_timeout_s``: a stale robot (``RobotFault``).
 """
 from __future__ import annotations

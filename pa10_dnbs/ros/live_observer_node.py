@@ -7,7 +7,7 @@ default, also when it runs at the root), and the Foxglove channels carry the res
 (a best-effort reader sends no acknowledgements the plant's writer would have
 to track) on a subscription that no executor spins: DDS keeps the newest
 state and the display timer takes it, so the 1 kHz messages cost no Python
-callback. The seven reference topics and /robot_description are subscribed
+callback. Every joint's reference topic and /robot_description are subscribed
 reliably (transient-local, so batches and the URDF sent before it matched
 still arrive), /diagnostics too. Serves the live view on ``host``:``port``
 (0: a free port), one frame per 1 / ``display_hz`` s of wall time. Prints

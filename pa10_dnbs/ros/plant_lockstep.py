@@ -1,6 +1,6 @@
 """The plant's lockstep loop: step as soon as every joint has answered, resend and time out otherwise.
 
-One wait set over the seven effort subscriptions: the plant sleeps until
+One wait set over the effort subscriptions (one per joint): the plant sleeps until
 some effort is queued (or a resend / timeout is due), takes every effort
 that is there, steps as many times as complete steps allow (a player
 re-driving the plant from a bag sends efforts ahead) and publishes each new

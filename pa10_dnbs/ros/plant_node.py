@@ -1,4 +1,4 @@
-"""plant_node: the PyBullet PA10 plant on the wire.
+"""plant_node: the PyBullet plant of the arm on the ROS graph.
 
 Before step 0, the start handshake (``wait_for_graph``, ``ros/ready.py``): its own endpoints matched, /clock
 at time 0 out, and every node of ``ready_nodes`` ready on the ``ready`` topic (one timeout, naming the nodes
@@ -23,7 +23,7 @@ paces the steps (``mode``):
 deadline (``plant_realtime.py``). The plant itself runs on wall time (no use_sim_time).
 
 Defensive: a non-finite effort counts as missing (hold or zero, counted), an
-out-of-range one is saturated at Table 2 and counted. Faults configured in
+out-of-range one is saturated at its torque limit and counted. Faults configured in
 ``faults.state`` are injected on each joint's state link. Fault counters go
 to /diagnostics every second; timing figures and counters go to
 ``stats_file`` (JSON, ``plant_stats.py``) at exit.

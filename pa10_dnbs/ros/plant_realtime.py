@@ -12,7 +12,7 @@ zeroed and counted as misses (``EffortGate.take_deadline``), and the physics
 steps with exactly those torques. What only observers read of state k
 (joint_states, and /clock every 10th state at 100 Hz, with up to nine
 subscribers) goes out at the deadline, before the physics step: not in the
-window in which the seven controllers need the CPU. Then the plant sleeps until the next
+window in which the joint controllers need the CPU. Then the plant sleeps until the next
 tick's start; a start later than ``late_tolerance`` of the tick is counted
 and the schedule shifts (no catch-up). Misses and late starts are warned
 about at most once per ``warn_period_s`` (``loop/miss_warnings.py``).

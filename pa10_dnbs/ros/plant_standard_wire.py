@@ -103,7 +103,7 @@ class StandardPlantWire:
         return list(range(len(self.joint_names))) if ready else []
 
     def take_efforts(self, joints=None) -> list[tuple[int, int, float, int]]:
-        """Every queued command as (joint, step, torque [N m], received [ns]) per joint, saturated at Table 2."""
+        """Every queued command as (joint, step, torque [N m], received [ns]) per joint, saturated at the torque limit."""
         out = []
         while (got := self._command_sub.take()) is not None:
             data, received_ns = got

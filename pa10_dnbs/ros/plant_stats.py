@@ -61,7 +61,7 @@ def plant_stats(node) -> dict:
         "on_missing_effort": p["on_missing_effort"], "effort_timeout_s": p["effort_timeout_s"],
         "rt_priority": p["rt_priority"], "rt_priority_applied": node.rt_applied,
         "cpu": node.cpu.report(),
-        # one wait set over the seven effort subscriptions: how often the plant blocked / woke with efforts
+        # one wait set over the effort subscriptions (one per joint): how often the plant blocked / woke with efforts
         "effort_waits_per_step": wire.waits / k if k else None,
         "effort_wakeups_per_step": wire.wakeups_with_efforts / k if k else None,
         "limit_hits": node.plant.limit_hits.tolist(), "joints": joints,

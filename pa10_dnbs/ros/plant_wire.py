@@ -4,14 +4,14 @@ Names relative to the node's namespace (/pa10 by default, wire/topics.py).
 Publishes robot_description (the URDF, transient-local), /clock (with the
 states ``ClockSchedule`` picks: one per 1 / clock_hz of simulated time, and
 the last; none with clock_hz 0),
-joint_states (all 7: position, velocity, and as effort the torque applied
+joint_states (every joint: position, velocity, and as effort the torque applied
 over the step that led to this state) and per joint <joint>/state
 (that joint only, stamped k T), through each joint's fault-injecting state
-link when ``faults.state`` configures one. The seven <joint>/effort
+link when ``faults.state`` configures one. The <joint>/effort
 subscriptions are polled (``polled.py``): the plant blocks on one wait set
 over them and takes every effort that is there at once, so it wakes once
 per batch of efforts, not once per effort. Decoded efforts come out
-saturated at Table 2 (counted) with their reception time; undecodable ones
+saturated at the torque limit (counted) with their reception time; undecodable ones
 are counted and dropped.
 """
 from __future__ import annotations
@@ -112,7 +112,7 @@ class PlantWire:
     # ------------------------------------------------------------- in
     @property
     def effort_subscriptions(self) -> list:
-        """The seven polled effort subscriptions, in joint order (the joint bus's paced loop waits on them)."""
+        """The polled effort subscriptions, one per joint in joint order (the joint bus's paced loop waits on them)."""
         return list(self._effort_subs)
 
     def wait(self, timeout_s: float) -> list[int]:
@@ -124,7 +124,7 @@ class PlantWire:
 
     def take_efforts(self, joints=None) -> list[tuple[int, int, float, int]]:
         """Every queued effort (of ``joints``, default all) as (joint, step, torque [N m], received [ns]),
-        saturated at Table 2."""
+        saturated at the torque limit."""
         out = []
         for joint in (range(len(self._effort_subs)) if joints is None else joints):
             sub, layout = self._effort_subs[joint], self._effort_layouts[joint]
@@ -137,7 +137,7 @@ class PlantWire:
                     self.malformed[joint] += 1
                     continue
                 lim = self._limits[joint]
-                if math.isfinite(u) and abs(u) > lim:  # out of range: counted, saturated at Table 2
+                if math.isfinite(u) and abs(u) > lim:  # out of range: counted, saturated at the torque limit
                     self.out_of_range[joint] += 1
                     u = lim if u > 0 else -lim
                 out.append((joint, self.clock.step_of_sec_nanosec(sec, nanosec), u, received_ns))

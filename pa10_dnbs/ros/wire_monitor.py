@@ -1,6 +1,6 @@
 """wire_monitor node: collects what travels on the wire, for metrics and reports.
 
-Subscribes to /joint_states and the seven reference topics and, at exit,
+Subscribes to /joint_states and every joint's reference topic and, at exit,
 writes what it received to ``out_file`` (npz): state k from /joint_states
 stamped k, the torque applied over step k from the effort field of
 /joint_states stamped k+1, x_d(k) from the reference batches. Prints
