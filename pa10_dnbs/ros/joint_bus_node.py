@@ -32,7 +32,7 @@ from .plant_node import PlantNode
 from .joint_bus_paced import run_paced
 from .robot_link import RemoteRobot
 from .runtime import stop_requested
-from .wire import CLOCK
+from .endpoints import CLOCK
 
 PARAMS = {k: v for k, v in PLANT_PARAMS.items() if k != "interface"} | {
     "robot_timeout_s": Param(1.0, "wall time without a new state from the robot that makes it stale [s]", 0.0),

@@ -20,9 +20,9 @@ HOUSEKEEPING_S = 0.05  # wall seconds between turns of the executor (timers, ser
 
 def run_paced(node, executor, stop) -> None:
     """Run ``node`` (a JointBusNode) behind a paced robot until its last step or ``stop``."""
-    robot, gate, wire = node.robot, node.gate, node.wire
+    robot, gate, endpoints = node.robot, node.gate, node.endpoints
     n = robot.n_joints
-    waits = SubscriptionWaitSet(node, list(wire.effort_subscriptions) + [robot.subscription])
+    waits = SubscriptionWaitSet(node, list(endpoints.effort_subscriptions) + [robot.subscription])
     clock = time.monotonic
     node.publish_state(0)
     sent = False  # the command answering the current state went out

@@ -57,7 +57,7 @@ from .params import (CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterErro
                      declare, gain_params, load_node_config, settings_with_gains)
 from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node
-from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
+from .endpoints import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
 from .wall_timer import wall_timer
 
 FAULT_KEYS = ("bad_states_nonfinite", "bad_states_position", "bad_states_speed", "nonfinite_torques",

@@ -34,7 +34,7 @@ from ..loop.scheduling import apply_batch, apply_fifo
 from .params import CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, declare, load_node_config
 from .runtime import announce_ready, exit_process, run_node
 from ..wire.topics import DEFAULT_NS, DIAGNOSTICS, ArmTopics
-from .wire import description_qos, reference_qos
+from .endpoints import description_qos, reference_qos
 from .wall_timer import wall_timer
 
 

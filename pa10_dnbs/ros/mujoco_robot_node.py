@@ -30,10 +30,10 @@ from ..plant.engines import open_plant
 from ..wire import joint_state_cdr
 from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, ClockSchedule, check_clock_hz
 from .params import CONFIG_FILE, Param, ParameterError, check_choice, declare
-from .plant_wire import CLOCK_CDR
+from .plant_endpoints import CLOCK_CDR
 from .polled import PolledSubscription, SubscriptionWaitSet
 from .runtime import announce_ready
-from .wire import CLOCK
+from .endpoints import CLOCK
 
 PARAMS = {
     "config_file": CONFIG_FILE,

@@ -46,7 +46,7 @@ from .params import (CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterErro
 from .polled import Inbox
 from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node, spin_until
-from .wire import CLOCK, TF, TF_STATIC
+from .endpoints import CLOCK, TF, TF_STATIC
 from .wall_timer import wall_timer
 
 # types whose CDR body starts with a stamp (header.stamp, or the Clock's time)

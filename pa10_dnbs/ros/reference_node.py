@@ -42,7 +42,7 @@ from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
 from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node
-from .wire import CLOCK, StepClock, record_qos, reference_qos, reference_topic
+from .endpoints import CLOCK, StepClock, record_qos, reference_qos, reference_topic
 
 
 FAULT_KEYS = ("clock_backwards",)

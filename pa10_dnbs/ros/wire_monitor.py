@@ -28,7 +28,7 @@ from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
 from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node, spin_until
-from .wire import JOINT_STATES, StepClock, record_qos, reference_qos, reference_topic
+from .endpoints import JOINT_STATES, StepClock, record_qos, reference_qos, reference_topic
 
 
 PARAMS = {

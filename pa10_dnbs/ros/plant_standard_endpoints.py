@@ -1,13 +1,13 @@
 """The plant's wire in the standard robot interface (``interface:=standard``): the PyBullet plant as a robot
-the joint bus drives (docs/your_robot.md), instead of the per-joint topics of ``plant_wire.py``.
+the joint bus drives (docs/your_robot.md), instead of the per-joint topics of ``plant_endpoints.py``.
 
 Publishes every joint's state as one ``sensor_msgs/JointState`` (name, position [rad], velocity [rad/s], and as
 effort the torque applied over the step before [N m]; stamped with the robot's time k T) on ``state_topic``,
-and /clock (``ClockSchedule``, latched at time 0, as ``plant_wire.py``). Takes commands in the form of
+and /clock (``ClockSchedule``, latched at time 0, as ``plant_endpoints.py``). Takes commands in the form of
 ``RobotCommand``: a JointState of efforts stamped with the state it answers (matched by joint name), or a
 Float64MultiArray in the arm's joint order (no stamp: it answers the current step). A command gives every
 joint's effort at once: the plant's lockstep and realtime loops run unchanged on top. Same methods as
-``PlantWire``; no per-joint topics, no joint_states of its own (the bus publishes the graph's).
+``PlantEndpoints``; no per-joint topics, no joint_states of its own (the bus publishes the graph's).
 """
 from __future__ import annotations
 
@@ -27,9 +27,9 @@ from ..wire import joint_state_cdr
 from ..wire.clock_schedule import ClockSchedule
 from ..wire.robot_interface import JointMatcher, RobotCommand
 from ..settings import Settings
-from .plant_wire import CLOCK_CDR
+from .plant_endpoints import CLOCK_CDR
 from .polled import PolledSubscription, SubscriptionWaitSet
-from .wire import CLOCK, StepClock, record_qos
+from .endpoints import CLOCK, StepClock, record_qos
 
 ROBOT_QOS_DEPTH = 10  # the standard topics: reliable, volatile, keep-last 10 (matches a best-effort reader too)
 
@@ -40,7 +40,7 @@ def robot_qos(reliability: str = "reliable", depth: int = ROBOT_QOS_DEPTH) -> Qo
                       durability=DurabilityPolicy.VOLATILE)
 
 
-class StandardPlantWire:
+class StandardPlantEndpoints:
     def __init__(self, node, settings: Settings, clock: StepClock, state_topic: str, command: RobotCommand, clock_hz: float,
                  last_step: int, current_step):
         """``current_step()``: the plant's current step (what a Float64MultiArray command answers)."""

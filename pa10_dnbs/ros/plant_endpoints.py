@@ -32,14 +32,14 @@ from ..wire import joint_state_cdr
 from ..wire.clock_schedule import ClockSchedule
 from ..settings import Settings
 from .polled import PolledSubscription, SubscriptionWaitSet
-from .wire import (CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, StepClock, description_qos, effort_topic, loop_qos,
+from .endpoints import (CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, StepClock, description_qos, effort_topic, loop_qos,
                    record_qos, state_topic)  # relative names
 
 
 CLOCK_CDR = struct.Struct("<HHiI")  # rosgraph_msgs/Clock: encapsulation (little-endian CDR), sec, nanosec
 
 
-class PlantWire:
+class PlantEndpoints:
     def __init__(self, node, settings: Settings, clock: StepClock, reliability: str, state_depth: int, effort_depth: int,
                  clock_hz: float, last_step: int):
         """``reliability`` and the depths: QoS of the per-joint state and effort topics; ``clock_hz``: /clock
