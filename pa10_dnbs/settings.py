@@ -257,7 +257,8 @@ class MetricsSettings(_Section):
 
 @dataclass(frozen=True)
 class LinkFaultSettings(_Section):
-    """Faults on one direction of each joint's link: drop and corrupt fractions, delay and jitter (ms)."""
+    """Faults on the states sent to the controllers (``faults.state``; per joint: drop and corrupt fractions,
+    delay and jitter in ms, and what a corrupted value becomes)."""
 
     KEY = "faults.state"
     drop_fraction: Joints
@@ -268,13 +269,20 @@ class LinkFaultSettings(_Section):
 
 
 @dataclass(frozen=True)
+class EffortLinkFaultSettings(LinkFaultSettings):
+    """Faults on the efforts sent back (``faults.effort``); the same keys as the states'."""
+
+    KEY = "faults.effort"
+
+
+@dataclass(frozen=True)
 class FaultSettings(_Section):
     """``faults``: the injected faults of a graph run (seed, both link directions, controller kill times s)."""
 
     KEY = "faults"
     seed: int
     state: LinkFaultSettings
-    effort: LinkFaultSettings
+    effort: EffortLinkFaultSettings
     kill_controller_at_s: Joints
 
 
