@@ -355,7 +355,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="keep_last depth of each publisher, at least (default 1000)")
     _add_live_args(rp)
     rp.add_argument("--config", type=Path, default=None,
-                    help="with --live: config for the Table 2 limits (default: the one stored in the bag)")
+                    help="with --live: config for the torque limits (default: the one stored in the bag)")
     rp.set_defaults(func=_replay)
     return parser
 

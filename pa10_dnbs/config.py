@@ -166,8 +166,10 @@ def _number(key: str, value: Any, spec: Num) -> float | int:
     return int(value) if spec.integer else float(value)
 
 
-def _check(key: str, value: Any, spec: Any, n: int) -> Any:
-    """``value`` checked against ``spec`` (``n``: the arm's number of joints, the length of every Joints list)."""
+def check_value(key: str, value: Any, spec: Any, n: int | None) -> Any:
+    """``value`` checked against ``spec`` (``n``: the arm's number of joints, the length of every Joints list;
+    None: any length). Lists may be tuples (typed settings hold tuples). Returns the value normalised (numbers
+    as float or int, lists as tuples)."""
     if isinstance(spec, dict):
         if not isinstance(value, dict):
             raise ConfigError(f"{key or '<root>'}: expected a mapping, got {type(value).__name__}")
@@ -178,21 +180,21 @@ def _check(key: str, value: Any, spec: Any, n: int) -> Any:
         missing = sorted(set(spec) - set(value))
         if missing:
             raise ConfigError(f"{key + '.' if key else ''}{missing[0]}: missing key")
-        return {k: _check(f"{key}.{k}" if key else k, value[k], spec[k], n) for k in spec}
+        return {k: check_value(f"{key}.{k}" if key else k, value[k], spec[k], n) for k in spec}
     if isinstance(spec, Num):
         return _number(key, value, spec)
     if isinstance(spec, Joints):
-        if isinstance(value, list):
-            if len(value) != n:
+        if isinstance(value, (list, tuple)):
+            if n is not None and len(value) != n:
                 raise ConfigError(f"{key}: expected {n} values (one per joint of the arm), got {len(value)}")
             return tuple(_number(f"{key}[{i}]", v, spec.num) for i, v in enumerate(value))
-        return (_number(key, value, spec.num),) * n
+        return (_number(key, value, spec.num),) * (1 if n is None else n)
     if isinstance(spec, tuple):
-        if not isinstance(value, list) or len(value) != len(spec):
+        if not isinstance(value, (list, tuple)) or len(value) != len(spec):
             raise ConfigError(f"{key}: expected a list of {len(spec)} numbers, got {value!r}")
         return tuple(_number(f"{key}[{i}]", v, s) for i, (v, s) in enumerate(zip(value, spec)))
     if isinstance(spec, Pair):
-        if not isinstance(value, list) or len(value) != 2:
+        if not isinstance(value, (list, tuple)) or len(value) != 2:
             raise ConfigError(f"{key}: expected [t0, t1], got {value!r}")
         t0, t1 = (_number(f"{key}[{i}]", v, NONNEG) for i, v in enumerate(value))
         if t1 <= t0:
@@ -213,12 +215,12 @@ def _check(key: str, value: Any, spec: Any, n: int) -> Any:
 
 def validate(raw: Any, n_joints: int) -> dict:
     """Validate a parsed, merged config document for an arm of ``n_joints`` joints."""
-    cfg = _check("", raw, SCHEMA, n_joints)
-    sim = cfg["simulation"]
+    checked = check_value("", raw, SCHEMA, n_joints)
+    sim = checked["simulation"]
     if sim["window_s"][1] > sim["duration_s"] + 1e-12:
         raise ConfigError(f"simulation.window_s: ends at {sim['window_s'][1]:g} s, after "
                           f"simulation.duration_s = {sim['duration_s']:g} s")
-    return cfg
+    return checked
 
 
 def _read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict:
@@ -257,36 +259,55 @@ def _merge(base: dict, over: dict) -> dict:
     return out
 
 
-def load_config(path: str | Path, arm: str | Path | None = None) -> dict:
-    """Read and validate a YAML config file (and the one it ``extends``) for an arm. Raises ConfigError (naming
-    the key or file).
+def load_config(path: str | Path) -> dict:
+    """The config document at ``path`` (merged over the file its ``extends`` names), parsed and validated as far
+    as a config alone can be: a mapping of known keys, each value given of its kind and within its bounds (a
+    per-joint list of any length: its length is the arm's, checked when the arm's settings are built). Raises
+    ConfigError naming the key or file. An ``arm`` path is made absolute (relative to the file naming it).
 
-    ``arm``: a preset's name or the path of an arm file or URDF (``--arm``); None: the config's ``arm`` key.
-    Layers, each over the one before: what the rule of docs/arms.md derives from the arm's model (computed
-    only for the keys nobody else gives), the arm's facts (``plant``: torque limits, rotor inertia, friction)
-    and its ``settings``, then the config files. The result's ``arm`` is the arm file's absolute path.
-    """
-    from .arm import DEFAULT_ARM, load_arm  # the arm package reads config_error only: no cycle
-
+    The settings of a run are built from it, the arm file and the rules (``run_settings.build_settings``)."""
     raw = _read_yaml(Path(path))
     if not isinstance(raw, dict):
         raise ConfigError(f"{path}: expected a mapping of config sections")
-    the_arm = load_arm(arm if arm is not None else raw.get("arm", DEFAULT_ARM))
-    raw = dict(raw, arm=str(the_arm.file))
-    facts = {"plant": {"torque_limit_nm": the_arm.torque_limit_nm.tolist(),
-                       "rotor_inertia_kgm2": the_arm.rotor_inertia_kgm2.tolist(),
-                       "viscous_nms_per_rad": the_arm.viscous_nms_per_rad.tolist(),
-                       "coulomb_nm": the_arm.coulomb_nm.tolist()}}
-    from .derived_settings import GAIN_KEYS, REFERENCE_KEYS, RULE_DEFAULTS, derived_gains, derived_reference
+    _check_given("", raw, SCHEMA)
+    return raw
 
-    merged = _merge(_merge(_merge(RULE_DEFAULTS, facts), the_arm.settings), raw)
 
-    if any(_get(merged, key) is None for key in REFERENCE_KEYS):
-        merged = _merge(derived_reference(the_arm, merged), merged)
-    if any(_get(merged, key) is None for key in GAIN_KEYS):
-        checked = _check("", _merge(_placeholders(GAIN_KEYS, the_arm.n_joints), merged), SCHEMA, the_arm.n_joints)
-        merged = _merge(derived_gains(the_arm, checked), merged)
-    return validate(merged, the_arm.n_joints)
+def _check_given(key: str, value: Any, spec: Any) -> None:
+    """The keys ``value`` gives checked against ``spec`` (missing keys are left to the arm and the rules)."""
+    if isinstance(spec, dict):
+        if not isinstance(value, dict):
+            raise ConfigError(f"{key or '<root>'}: expected a mapping, got {type(value).__name__}")
+        unknown = sorted(set(value) - set(spec))
+        if unknown:
+            raise ConfigError(f"{key + '.' if key else ''}{unknown[0]}: unknown key "
+                              f"(allowed: {', '.join(sorted(spec))})")
+        for k, v in value.items():
+            _check_given(f"{key}.{k}" if key else k, v, spec[k])
+    elif value is not None:
+        check_value(key, value, spec, None)
+
+
+def layered(document: dict, arm_facts: dict, arm_settings: dict) -> dict:
+    """The config of an arm before its derived values: the arm's facts (``plant``, over the rules' fixed
+    values), its ``settings``, then the config document, each over the one before."""
+    return _merge(_merge(arm_facts, arm_settings), document)
+
+
+def missing(tree: dict, keys: tuple[str, ...]) -> bool:
+    """Whether any of the dotted ``keys`` is not given in ``tree``."""
+    return any(_get(tree, key) is None for key in keys)
+
+
+def checked_with_placeholders(tree: dict, keys: tuple[str, ...], n_joints: int) -> dict:
+    """``tree`` checked for an arm of ``n_joints`` joints, with ones standing in for the ``keys`` it lacks (so
+    the rest can be checked before a rule gives their values)."""
+    return check_value("", _merge(_placeholders(keys, n_joints), tree), SCHEMA, n_joints)
+
+
+def merged(base: dict, over: dict) -> dict:
+    """``base`` with ``over``'s keys replacing its own, mappings merged key by key."""
+    return _merge(base, over)
 
 
 def _get(tree: dict, dotted: str):

@@ -13,6 +13,7 @@ import numpy as np
 from .arm import Arm
 from .arm.gain_rule import SWEEP_STEP_S, gain_rule, report_rule
 from .arm.reference_rule import reference_rule
+from .settings import ReferenceSettings, RunSettings
 
 REFERENCE_KEYS = tuple(f"reference.{k}" for k in ("amplitude_rad", "envelope_rate_per_s3", "frequency_rad_s",
                                                    "centre_rad"))
@@ -28,17 +29,17 @@ DERIVED_KEYS = REFERENCE_KEYS + GAIN_KEYS
 RULE_DEFAULTS = {"ctc": {"on_saturation": "scale_feedback"}}
 
 
-def derived_reference(arm: Arm, cfg: dict | None = None, report: bool = True) -> dict:
+def derived_reference(arm: Arm, tree: dict | None = None, report: bool = True) -> dict:
     """The ``reference`` fragment of the reference rule, made feasible (reference_rule.feasible_reference: the
-    torque it asks along ``cfg``'s simulation.duration_s, inverse dynamics with gravity, within the limits);
-    ``report``: its lines on stderr. ``cfg``: the config so far (unchecked; the defaults where it gives none)."""
+    torque it asks along ``tree``'s simulation.duration_s, inverse dynamics with gravity, within the limits);
+    ``report``: its lines on stderr. ``tree``: the config so far (unchecked; the defaults where it gives none)."""
     import sys
 
     from .arm.reference_rule import feasible_reference
     from .plant.reference_torque import ReferenceTorque
 
     fragment = reference_rule(arm.lower_rad, arm.upper_rad)
-    sim, plant = (cfg or {}).get("simulation", {}), (cfg or {}).get("plant", {})
+    sim, plant = (tree or {}).get("simulation", {}), (tree or {}).get("plant", {})
     try:
         duration, dt = float(sim.get("duration_s", 20.0)), float(sim.get("dt_s", 0.001))
         gravity = float(plant.get("gravity_mps2", 9.81))
@@ -58,26 +59,26 @@ def derived_reference(arm: Arm, cfg: dict | None = None, report: bool = True) ->
     return {"reference": fragment}
 
 
-def inertia_sweep_along(arm: Arm, cfg: dict):
-    """The arm's effective inertias along the config's reference (checked), every 20 ms over
-    simulation.duration_s (an InertiaSweep)."""
+def inertia_sweep_along(arm: Arm, reference: ReferenceSettings, run: RunSettings):
+    """The arm's effective inertias along ``reference``, every 20 ms over the run's duration_s (an
+    InertiaSweep)."""
     from .core.reference import Reference
     from .plant.inertia_sweep import inertia_sweep
 
-    r, sim = cfg["reference"], cfg["simulation"]
-    dt = sim["dt_s"]
-    ref = Reference(r["amplitude_rad"], r["envelope_rate_per_s3"], r["frequency_rad_s"], dt_s=dt,
-                    centre_rad=r["centre_rad"])
-    steps = np.arange(0, int(round(sim["duration_s"] / dt)) + 1, max(1, int(round(SWEEP_STEP_S / dt))))
+    dt = run.dt_s
+    ref = Reference(reference.amplitude_rad, reference.envelope_rate_per_s3, reference.frequency_rad_s, dt_s=dt,
+                    centre_rad=reference.centre_rad)
+    steps = np.arange(0, int(round(run.duration_s / dt)) + 1, max(1, int(round(SWEEP_STEP_S / dt))))
     return inertia_sweep(arm, ref.position(steps))
 
 
-def derived_gains(arm: Arm, cfg: dict, report: bool = True, sweep=None) -> dict:
-    """The gain rule's fragment for a config whose reference and simulation sections are checked (``sweep``:
+def derived_gains(arm: Arm, reference: ReferenceSettings, run: RunSettings, report: bool = True,
+                  sweep=None) -> dict:
+    """The gain rule's fragment (a config fragment) for the arm along ``reference`` over ``run`` (``sweep``:
     :func:`inertia_sweep_along`'s, computed when None). ``report``: print the derivation (one line per joint)
     and any warning on stderr."""
-    dt = cfg["simulation"]["dt_s"]
-    sweep = inertia_sweep_along(arm, cfg) if sweep is None else sweep
+    dt = run.dt_s
+    sweep = inertia_sweep_along(arm, reference, run) if sweep is None else sweep
     fragment = gain_rule(arm, sweep, dt)
     if report:
         report_rule(arm, sweep, fragment, dt)

@@ -24,27 +24,27 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from pa10_dnbs.cli_values import OneLineParser, number_in, whole_in  # noqa: E402
-from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
+from pa10_dnbs.config import default_config_path  # noqa: E402
 from pa10_dnbs.paths import share_path  # noqa: E402
 from pa10_dnbs.report.metrics_file import metrics_dict, metrics_settings  # noqa: E402
 from pa10_dnbs.sim.closed_loop import simulate  # noqa: E402
-from pa10_dnbs.study.scenarios import scenario_config  # noqa: E402
+from pa10_dnbs.study.scenarios import scenario_settings  # noqa: E402
+from pa10_dnbs.run_settings import build_settings  # noqa: E402
+from pa10_dnbs.settings import replace_in  # noqa: E402
 
 
 def _set(path: str, value):
-    def edit(cfg):
-        node = cfg
-        *keys, last = path.split(".")
-        for k in keys:
-            node = node[k]
-        node[last] = value
+    def edit(settings):
+        return replace_in(settings, path, value)
     return edit
 
 
-def _with(**settings):
-    def edit(cfg):
-        for name, kv in settings.items():
-            cfg["dnbs"]["remedies"][name].update(kv)
+def _with(**remedies):
+    def edit(settings):
+        for name, kv in remedies.items():
+            for key, value in kv.items():
+                settings = replace_in(settings, f"dnbs.remedies.{name}.{key}", value)
+        return settings
     return edit
 
 
@@ -69,11 +69,11 @@ def _run(args) -> dict:
     variant, scenario, duration, window = args
     spec = VARIANTS[variant][1]
     preset, edit = spec if isinstance(spec, tuple) else (spec, spec)
-    base = load_config(share_path("config", "paper.yaml") if preset == "paper" else default_config_path())
+    base = build_settings(share_path("config", "paper.yaml") if preset == "paper" else default_config_path())
     if callable(edit):
-        edit(base)
-    cfg, dist = scenario_config(base, scenario, base["simulation"]["seed"])
-    cfg["simulation"]["window_s"] = window
+        base = edit(base)
+    cfg, dist = scenario_settings(base, scenario, base.simulation.seed)
+    cfg = replace_in(cfg, "simulation.window_s", window)
     run = simulate(cfg, "dnbs", duration, disturbances=dist)
     m = metrics_dict(run, metrics_settings(cfg, duration))
     return {"variant": variant, "scenario": scenario, **{k: m[k] for k in (

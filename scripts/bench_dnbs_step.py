@@ -26,11 +26,12 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from pa10_dnbs.arm import arm_of  # noqa: E402
-from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
+from pa10_dnbs.config import default_config_path  # noqa: E402
+from pa10_dnbs.run_settings import build_settings  # noqa: E402
+from pa10_dnbs.settings import replace_in  # noqa: E402
 from pa10_dnbs.controller_factory import build_guarded_controllers, build_reference  # noqa: E402
 from pa10_dnbs.core.reference import ReferenceSample  # noqa: E402
-from pa10_dnbs.plant.from_config import open_client, plant_from_config  # noqa: E402
+from pa10_dnbs.plant.from_config import open_client, plant_from_settings  # noqa: E402
 from pa10_dnbs.sim.closed_loop import simulate  # noqa: E402
 
 
@@ -63,7 +64,7 @@ def _dnbs_pass(cfg, run, rows, kernel: str = "numpy"):
     """One pass of a fresh DNBS bank of joints ``rows`` over the run's states: (seconds per part, the bank).
 
     kernel "c" (the compiled step, one call for the whole training): only the answer and the training."""
-    cfg = {**cfg, "dnbs": {**cfg["dnbs"], "kernel": kernel}}
+    cfg = replace_in(cfg, "dnbs.kernel", kernel)
     guarded = build_guarded_controllers(cfg, "dnbs", rows)
     c = guarded.controllers
     ekf_update, ekf_guard = _Timed(c.ekf.update), _Timed(c._guard)
@@ -88,7 +89,7 @@ def _dnbs_pass(cfg, run, rows, kernel: str = "numpy"):
 
 def _pid_pass(cfg, run) -> float:
     guarded = build_guarded_controllers(cfg, "pid")
-    refs = _references(cfg, run.n_steps, list(range(arm_of(cfg).n_joints)))
+    refs = _references(cfg, run.n_steps, list(range(cfg.arm.n_joints)))
     t = time.perf_counter()
     for k in range(run.n_steps):
         guarded.step(run.position_rad[k], run.velocity_rad_s[k], refs[k])
@@ -98,7 +99,7 @@ def _pid_pass(cfg, run) -> float:
 def _plant_pass(cfg, run) -> float:
     client = open_client()
     try:
-        plant = plant_from_config(cfg, client)
+        plant = plant_from_settings(cfg, client)
         t = time.perf_counter()
         for k in range(run.n_steps):
             plant.state  # noqa: B018  (read as the loop reads it)
@@ -116,7 +117,7 @@ def main() -> int:
     ap.add_argument("--target", type=float, default=1.5, help="a DNBS/PID run ratio to show the budget of")
     ap.add_argument("--kernels", default="numpy,c", help="DNBS kernels to time (numpy: parts of the step; c: compiled)")
     args = ap.parse_args()
-    cfg = load_config(default_config_path())
+    cfg = build_settings(default_config_path())
     run = simulate(cfg, "dnbs", args.duration)
     n = run.n_steps
     print(f"per 1 ms step, best of {args.repeat} passes over {n} states of a default DNBS run; "
@@ -124,7 +125,7 @@ def main() -> int:
     us = lambda s: s / n * 1e6  # noqa: E731
     plant = min(us(_plant_pass(cfg, run)) for _ in range(args.repeat))
     pid = min(us(_pid_pass(cfg, run)) for _ in range(args.repeat))
-    joint_names = arm_of(cfg).joint_names
+    joint_names = cfg.arm.joint_names
     nj = len(joint_names)
     one_rows = (0, nj - 1)  # the first and the last joint, each alone as in its node
     print(f"  plant (PyBullet step, state, torques)   {plant:6.1f} us")

@@ -39,8 +39,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_record  # noqa: E402
 
-from pa10_dnbs.arm import arm_of  # noqa: E402
-from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
+from pa10_dnbs.config import default_config_path  # noqa: E402
+from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.launch.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
 from pa10_dnbs.launch.realtime_advice import ON_TIME_TARGET  # noqa: E402
 from pa10_dnbs.loop.scheduling import DEFAULT_RT_PRIORITY, check_priority, granted_priority  # noqa: E402
@@ -123,7 +123,7 @@ def main() -> int:
     args = ap.parse_args()
     record = bench_record.Record.start("bench_graph")
     args.config = args.config.resolve()
-    args.joint_names = arm_of(load_config(args.config)).joint_names  # a bad config fails here, not in every run
+    args.joint_names = build_settings(args.config).arm.joint_names  # a bad config fails here, not in every run
     check_priority(args.rt_priority)
     if args.sched_batch and args.rt_priority:
         print("--sched-batch: every node but the plant under SCHED_BATCH, so no SCHED_FIFO (--rt-priority 0)",

@@ -34,8 +34,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from pa10_dnbs.arm import arm_of  # noqa: E402
-from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
+from pa10_dnbs.config import default_config_path  # noqa: E402
+from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.launch.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
 
 
@@ -99,7 +99,7 @@ def one_run(mode: str, duration: float, reliability: str | None) -> tuple[dict, 
         client = LiveClient() if mode == "live" else None
         r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         try:
-            joints = arm_of(load_config(default_config_path())).joint_names
+            joints = build_settings(default_config_path()).arm.joint_names
             res = run_graph(GraphOptions(config_path=default_config_path(), mode="lockstep", joint_names=joints,
                                          duration_s=duration, reliability=reliability,
                                          record_bag=bag, bag_compression="none" if mode == "record-none" else "zstd",

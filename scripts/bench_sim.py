@@ -32,7 +32,9 @@ import bench_record  # noqa: E402
 import numpy as np  # noqa: E402
 
 from pa10_dnbs.accel.choice import auto_kernel  # noqa: E402
-from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
+from pa10_dnbs.config import default_config_path  # noqa: E402
+from pa10_dnbs.run_settings import build_settings  # noqa: E402
+from pa10_dnbs.settings import replace_in  # noqa: E402
 from pa10_dnbs.report.metrics_file import metrics_dict, metrics_settings  # noqa: E402
 from pa10_dnbs.sim.closed_loop import simulate  # noqa: E402
 
@@ -54,9 +56,9 @@ def main() -> int:
     bench_record.add_argument(ap)
     args = ap.parse_args()
     record = bench_record.Record.start("bench_sim")
-    cfg = load_config(default_config_path())
+    settings = build_settings(default_config_path())
     kernels = [k.strip() for k in args.kernels.split(",") if k.strip()]
-    print(f"in-process closed loop, {args.duration:g} s simulated, T = {cfg['simulation']['dt_s'] * 1e3:g} ms, "
+    print(f"in-process closed loop, {args.duration:g} s simulated, T = {settings.simulation.dt_s * 1e3:g} ms, "
           f"{args.repeat} interleaved runs per controller; load average {_load()}")
     if "auto" in kernels:
         print(auto_kernel().line)
@@ -65,10 +67,10 @@ def main() -> int:
     last = {}
     for _ in range(args.repeat):
         for label, (kind, kernel) in runs.items():
-            run_cfg = copy.deepcopy(cfg)
+            run_settings = settings
             if kernel:
-                run_cfg["dnbs"]["kernel"] = kernel
-            run = simulate(run_cfg, kind, args.duration)
+                run_settings = replace_in(settings, "dnbs.kernel", kernel)
+            run = simulate(run_settings, kind, args.duration)
             per_step[label].append(run.wall_time_s / run.n_steps * 1e6)
             last[label] = run
     for label, us in per_step.items():
@@ -93,7 +95,7 @@ def main() -> int:
                    for f in ("position_rad", "velocity_rad_s", "torque_nm"))
         print(f"the kernels' last runs are bit-identical (positions, velocities, torques): {'yes' if same else 'NO'}")
         figures["kernels_bit_identical"] = same
-    m = metrics_dict(last[f"dnbs/{kernels[0]}"], metrics_settings(cfg, args.duration))
+    m = metrics_dict(last[f"dnbs/{kernels[0]}"], metrics_settings(settings, args.duration))
     print("DNBS, default config, cold start (worst joint):")
     for key, must, aim in TARGETS:
         v = m[key]

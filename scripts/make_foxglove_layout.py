@@ -16,8 +16,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from pa10_dnbs.arm import arm_of  # noqa: E402
-from pa10_dnbs.config import default_config_path, load_config  # noqa: E402
+from pa10_dnbs.config import default_config_path  # noqa: E402
+from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.live.layout import layout_json  # noqa: E402
 from pa10_dnbs.arm import DEFAULT_ARM  # noqa: E402
 from pa10_dnbs.wire.topics import arm_topics, default_namespace  # noqa: E402
@@ -30,9 +30,9 @@ def main() -> int:
     ap.add_argument("--namespace", default=None, help="the arm's namespace (default /<arm name>, /pa10)")
     ap.add_argument("--out", type=Path, default=ROOT / "config" / "foxglove_layout.json")
     args = ap.parse_args()
-    cfg = load_config(args.config, arm=args.arm)
-    arm = arm_of(cfg)
-    text = layout_json(arm.joint_names, cfg["plant"]["torque_limit_nm"], arm.chain.root_link,
+    settings = build_settings(args.config, arm=args.arm)
+    arm = settings.arm
+    text = layout_json(arm.joint_names, settings.plant.torque_limit_nm, arm.chain.root_link,
                        arm_topics(args.namespace or default_namespace(arm.name)),
                        "PA10-7CE" if arm.name == DEFAULT_ARM else arm.description)
     args.out.write_text(text)

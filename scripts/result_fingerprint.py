@@ -35,7 +35,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from pa10_dnbs.accel.choice import KERNELS, auto_kernel  # noqa: E402
-from pa10_dnbs.config import load_config  # noqa: E402
+from pa10_dnbs.run_settings import build_settings  # noqa: E402
+from pa10_dnbs.settings import replace_in  # noqa: E402
 from pa10_dnbs.controller_factory import dnbs_params  # noqa: E402
 from pa10_dnbs.core.dnbs_controller import DNBSControllers, Remedies  # noqa: E402
 from pa10_dnbs.core.reference import ReferenceSample  # noqa: E402
@@ -66,9 +67,8 @@ def run_arrays(run) -> list[np.ndarray]:
 
 def closed_loop(config: Path, duration_s: float, disturbances: Disturbances | None = None,
                 kernel: str = "auto") -> list[np.ndarray]:
-    cfg = load_config(config)
-    cfg["dnbs"]["kernel"] = kernel
-    return run_arrays(simulate(cfg, "dnbs", duration_s, disturbances=disturbances))
+    settings = replace_in(build_settings(config), "dnbs.kernel", kernel)
+    return run_arrays(simulate(settings, "dnbs", duration_s, disturbances=disturbances))
 
 
 def banks(params, steps: int = 400, seed: int = 1, kernel: str = "numpy") -> list[np.ndarray]:
@@ -104,7 +104,7 @@ def banks(params, steps: int = 400, seed: int = 1, kernel: str = "numpy") -> lis
 
 def fingerprints(kernel: str = "auto") -> dict[str, str]:
     default = share_path("config", "default.yaml")
-    p = dnbs_params(load_config(default))
+    p = dnbs_params(build_settings(default))
     scenarios = {
         "default": lambda: closed_loop(default, 3.0, kernel=kernel),
         "paper": lambda: closed_loop(share_path("config", "paper.yaml"), 3.0, kernel=kernel),

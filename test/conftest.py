@@ -2,12 +2,12 @@
 the session's /dev/shm cleanup."""
 from __future__ import annotations
 
-import copy
 import os
 
 import pytest
 
-from pa10_dnbs.config import default_config_path, load_config
+from pa10_dnbs.config import default_config_path
+from pa10_dnbs.run_settings import build_settings
 
 LOCKSTEP_DURATION_S = 3.0
 
@@ -31,13 +31,13 @@ def pytest_unconfigure(config):
 
 @pytest.fixture(scope="session")
 def _default_cfg():
-    return load_config(default_config_path())
+    return build_settings(default_config_path())
 
 
 @pytest.fixture
 def cfg(_default_cfg):
-    """A fresh deep copy of the validated default config (tests may edit it)."""
-    return copy.deepcopy(_default_cfg)
+    """The default settings (frozen: a test changes a copy, ``replace_in``)."""
+    return _default_cfg
 
 
 @pytest.fixture

@@ -20,7 +20,7 @@ def main() -> int:
     import rclpy
     from sensor_msgs.msg import JointState
 
-    from pa10_dnbs.ros.wire import effort_topic, loop_qos, state_topic
+    from pa10_dnbs.ros.endpoints import effort_topic, loop_qos, state_topic
 
     rclpy.init(signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     node = rclpy.create_node("effort_hold_probe", namespace="/pa10")  # the arm's namespace: relative names resolve

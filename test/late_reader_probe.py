@@ -21,12 +21,12 @@ def main() -> int:
     from rosgraph_msgs.msg import Clock
 
     from pa10_dnbs.ros.reference_node import CLOCK_DEPTH
-    from pa10_dnbs.ros.wire import record_qos
+    from pa10_dnbs.ros.endpoints import record_qos
 
     rclpy.init(signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     writer_node, early_node, late_node = (rclpy.create_node(f"late_reader_probe_{k}") for k in ("w", "e", "l"))
     got = {"early": [], "late": []}
-    pub = writer_node.create_publisher(Clock, "/probe/clock", record_qos())  # as plant_wire's /clock
+    pub = writer_node.create_publisher(Clock, "/probe/clock", record_qos())  # as plant_endpoints's /clock
     early_node.create_subscription(Clock, "/probe/clock", lambda m: got["early"].append(m.clock.nanosec),
                                    record_qos(CLOCK_DEPTH))
     ex = SingleThreadedExecutor()

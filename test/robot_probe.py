@@ -26,13 +26,12 @@ def main() -> int:
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import JointState
 
-    from pa10_dnbs.config import default_config_path, load_config
+    from pa10_dnbs.config import default_config_path
     from pa10_dnbs.plant.from_config import initial_state
+    from pa10_dnbs.run_settings import build_settings
 
-    cfg = load_config(default_config_path(), arm=arm_name)
-    from pa10_dnbs.arm import arm_of
-
-    names = list(arm_of(cfg).joint_names)
+    cfg = build_settings(default_config_path(), arm=arm_name)
+    names = list(cfg.arm.joint_names)
     q0, _ = initial_state(cfg)
     rclpy.init(signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     node = rclpy.create_node("robot_probe")

@@ -67,9 +67,9 @@ def test_a_checkpoint_taken_between_answer_and_learn_holds_the_training(cfg):
 
 
 def test_joint_loop_answers_before_training_and_a_resent_state_trains_nothing(cfg):
-    loop = JointLoop(build_guarded_controllers(cfg, "dnbs", [0]), cfg["reference"]["preview_steps"])
+    loop = JointLoop(build_guarded_controllers(cfg, "dnbs", [0]), cfg.reference.preview_steps)
     ref = build_reference(cfg)
-    n = 40 + cfg["reference"]["preview_steps"]
+    n = 40 + cfg.reference.preview_steps
     loop.add_reference(0, ref.position(np.arange(n))[:, 0].tolist(), ref.velocity(np.arange(n))[:, 0].tolist())
     ctrl = loop.controller
     [(step, u)] = loop.on_state(0, 0.01, 0.0)
@@ -81,9 +81,9 @@ def test_joint_loop_answers_before_training_and_a_resent_state_trains_nothing(cf
 
 
 def test_pid_has_nothing_to_learn(cfg):
-    loop = JointLoop(build_guarded_controllers(cfg, "pid", [0]), cfg["reference"]["preview_steps"])
+    loop = JointLoop(build_guarded_controllers(cfg, "pid", [0]), cfg.reference.preview_steps)
     loop.add_reference(0, [0.0] * 200, [0.0] * 200)
     [(_, u)] = loop.on_state(0, 0.001, 0.0)  # an error small enough not to saturate (no integration stop)
     assert not loop.learning_pending  # the node does not yield for it
     loop.learn()
-    assert np.isfinite(u) and abs(u) < cfg["plant"]["torque_limit_nm"][0] and loop.controller.integral[0] != 0.0
+    assert np.isfinite(u) and abs(u) < cfg.plant.torque_limit_nm[0] and loop.controller.integral[0] != 0.0

@@ -9,7 +9,8 @@ from cli_runner import run_cli
 from pa10_dnbs.arm import ArmError, load_arm, preset_names
 from pa10_dnbs.arm.gain_rule import RHO
 from pa10_dnbs.arm.reference_rule import reference_rule
-from pa10_dnbs.config import ConfigError, default_config_path, load_config
+from pa10_dnbs.config import ConfigError, default_config_path
+from pa10_dnbs.run_settings import build_settings
 
 # the PA10's Table 1, typed in from the paper (not read from the code)
 TABLE1_C = [math.pi / 2, math.pi / 3] * 3 + [math.pi / 2]
@@ -69,7 +70,7 @@ def test_the_reference_rule_gives_table1_on_the_pa10_and_stays_inside_any_arm_li
     r = reference_rule(pa10.lower_rad, pa10.upper_rad)
     assert r["amplitude_rad"] == TABLE1_C and r["envelope_rate_per_s3"] == TABLE1_D
     assert r["frequency_rad_s"] == TABLE1_W and r["centre_rad"] == [0.0] * 7
-    assert load_config(default_config_path())["reference"]["amplitude_rad"] == tuple(TABLE1_C)
+    assert build_settings(default_config_path()).reference.amplitude_rad == tuple(TABLE1_C)
     panda = load_arm("panda")   # joint 4 lives in [-3.07, -0.07], joint 6 in [-0.02, 3.75]
     r = reference_rule(panda.lower_rad, panda.upper_rad)
     for lo, hi, c, x0 in zip(panda.lower_rad, panda.upper_rad, r["amplitude_rad"], r["centre_rad"]):
@@ -78,28 +79,28 @@ def test_the_reference_rule_gives_table1_on_the_pa10_and_stays_inside_any_arm_li
 
 def test_the_gain_rule_keeps_every_loop_inside_its_discrete_time_margin(capsys):
     """The rule's gains: T k_u / J_light = RHO on every joint, and the coupled figure well below 2."""
-    cfg = load_config(default_config_path(), arm="iiwa")
+    cfg = build_settings(default_config_path(), arm="iiwa")
     err = capsys.readouterr().err
     assert "gains by the rule of docs/arms.md" in err and "a1" in err
     figure = float(err.split("(figure ")[1].split()[0])
     assert RHO <= figure < 1.0
-    k_u = np.array(cfg["dnbs"]["remedies"]["robust_term"]["torque_gain_nms_per_rad"])
-    assert np.array_equal(np.array(cfg["pid"]["kd"]), k_u)
-    assert np.all(np.array(cfg["dnbs"]["torque_net"]["output_scale_nm"]) == load_arm("iiwa").torque_limit_nm)
+    k_u = np.array(cfg.dnbs.remedies.robust_term.torque_gain_nms_per_rad)
+    assert np.array_equal(np.array(cfg.pid.kd), k_u)
+    assert np.all(np.array(cfg.dnbs.torque_net.output_scale_nm) == load_arm("iiwa").torque_limit_nm)
 
 
 def test_the_pa10_settings_come_from_its_arm_file_and_nothing_is_derived(capsys):
-    cfg = load_config(default_config_path())
+    cfg = build_settings(default_config_path())
     assert capsys.readouterr().err == ""
-    assert cfg["dnbs"]["remedies"]["robust_term"]["torque_gain_nms_per_rad"] == (400, 400, 120, 120, 3, 3, 3)
-    assert cfg["pid"]["kp"] == (25500, 25500, 10200, 10200, 766, 766, 766)
+    assert cfg.dnbs.remedies.robust_term.torque_gain_nms_per_rad == (400, 400, 120, 120, 3, 3, 3)
+    assert cfg.pid.kp == (25500, 25500, 10200, 10200, 766, 766, 766)
 
 
 def test_a_config_value_beats_the_arm_file_and_the_rule(tmp_path):
     p = tmp_path / "mine.yaml"
     p.write_text(f"extends: {default_config_path()}\npid:\n  kd: 7.0\n")
-    assert load_config(p, arm="iiwa")["pid"]["kd"] == (7.0,) * 7
-    assert load_config(p)["pid"]["kd"] == (7.0,) * 7
+    assert build_settings(p, arm="iiwa").pid.kd == (7.0,) * 7
+    assert build_settings(p).pid.kd == (7.0,) * 7
 
 
 @pytest.mark.parametrize("change, facts, message", [
@@ -134,15 +135,15 @@ def _apply(text, changes):
 
 def test_an_unknown_preset_names_the_presets():
     with pytest.raises(ConfigError, match=r"no arm called 'ur5' \(presets: .*iiwa.*pa10"):
-        load_config(default_config_path(), arm="ur5")
+        build_settings(default_config_path(), arm="ur5")
 
 
 def test_an_arm_of_three_joints_from_a_bare_urdf_runs_every_controller(tmp_path):
     """A bare URDF: joints from the chain, limits from <limit effort>, no rotor inertia (the rule warns where
     the effective inertia varies much); every per-joint list has three values."""
     (tmp_path / "three.urdf").write_text(three_link_urdf())
-    cfg = load_config(default_config_path(), arm=tmp_path / "three.urdf")
-    assert len(cfg["pid"]["kp"]) == 3 and cfg["plant"]["torque_limit_nm"] == (50.0, 50.0, 50.0)
+    cfg = build_settings(default_config_path(), arm=tmp_path / "three.urdf")
+    assert len(cfg.pid.kp) == 3 and cfg.plant.torque_limit_nm == (50.0, 50.0, 50.0)
     out = tmp_path / "out"
     r = run_cli("simulate", "--arm", tmp_path / "three.urdf", "--controller", "all", "--duration", "3",
                 "--out", out, "--no-figures")

@@ -1,17 +1,18 @@
 """scripts/bench_dnbs_step.py: its timing wrappers change nothing the controller computes, and its parts add up."""
 from __future__ import annotations
 
+from pa10_dnbs.run_settings import build_settings
 import numpy as np
 from script_module import load_script
 
 
 def test_timed_pass_trains_the_bank_as_a_plain_pass_and_its_parts_add_up():
-    from pa10_dnbs.config import default_config_path, load_config
+    from pa10_dnbs.config import default_config_path
     from pa10_dnbs.controller_factory import build_guarded_controllers
     from pa10_dnbs.sim.closed_loop import simulate
 
     bench = load_script("bench_dnbs_step")
-    cfg = load_config(default_config_path())
+    cfg = build_settings(default_config_path())
     run = simulate(cfg, "dnbs", 0.3)
     rows = [0, 3, 6]
     parts, timed = bench._dnbs_pass(cfg, run, rows)

@@ -4,7 +4,7 @@ import pytest
 
 from cli_runner import run_cli
 
-from pa10_dnbs.study.scenarios import SCENARIOS, scenario_config
+from pa10_dnbs.study.scenarios import SCENARIOS, scenario_settings
 
 ROW_KEYS = {"scenario", "controller", "seed", "worst_rms_error_rad", "worst_settling_time_s",
             "worst_max_abs_error_run_rad", "worst_torque_variation", "diverged"}
@@ -39,10 +39,10 @@ def test_small_study_writes_rows_table_and_figure(tmp_path):
 
 
 def test_scenarios_change_what_they_name(cfg):
-    names = {n: scenario_config(cfg, n, 3) for n in SCENARIOS}
-    assert names["payload_5kg"][0]["plant"]["payload_kg"] == 5.0 and names["nominal"][0]["plant"]["payload_kg"] == 0
-    assert names["coulomb"][0]["plant"]["coulomb_nm"][0] == pytest.approx(0.05 * 232)
-    assert names["fast_reference"][0]["reference"]["frequency_rad_s"][0] == pytest.approx(1.5 * 0.285)
+    names = {n: scenario_settings(cfg, n, 3) for n in SCENARIOS}
+    assert names["payload_5kg"][0].plant.payload_kg == 5.0 and names["nominal"][0].plant.payload_kg == 0
+    assert names["coulomb"][0].plant.coulomb_nm[0] == pytest.approx(0.05 * 232)
+    assert names["fast_reference"][0].reference.frequency_rad_s[0] == pytest.approx(1.5 * 0.285)
     assert names["delay_1_tick"][1].torque_delay_steps == 1 and names["encoder_noise"][1].seed == 3
-    assert all(c["simulation"]["seed"] == 3 for c, _ in names.values())
-    assert cfg["plant"]["payload_kg"] == 0.0  # the caller's config is left alone
+    assert all(c.simulation.seed == 3 for c, _ in names.values())
+    assert cfg.plant.payload_kg == 0.0  # the caller's config is left alone

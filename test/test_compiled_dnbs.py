@@ -4,7 +4,6 @@ Each test runs the same inputs through a ``DNBSControllers`` bank and a ``Compil
 and asserts equal bits (torques, alpha, weights, covariances, counters), not closeness: the kernel is an
 implementation of the reference, not an approximation of it.
 """
-import copy
 import os
 import subprocess
 import sys
@@ -20,28 +19,24 @@ from pa10_dnbs.config import default_config_path
 from pa10_dnbs.controller_factory import build_controllers, build_guarded_controllers, build_reference
 from pa10_dnbs.core.dnbs_controller import DNBSControllers
 from pa10_dnbs.run_data import RunData
+from pa10_dnbs.settings import replace_in
 from pa10_dnbs.sim.closed_loop import simulate
 
 
 def _kernels(cfg):
-    """(cfg on the numpy reference, cfg on the compiled kernel): explicit both, as the default is auto."""
-    ref, c = copy.deepcopy(cfg), copy.deepcopy(cfg)
-    ref["dnbs"]["kernel"], c["dnbs"]["kernel"] = "numpy", "c"
-    return ref, c
+    """(settings on the numpy reference, on the compiled kernel): explicit both, as the default is auto."""
+    return replace_in(cfg, "dnbs.kernel", "numpy"), replace_in(cfg, "dnbs.kernel", "c")
 
 
 def _every_remedy(cfg):
     """Every remedy on, eta < 1, a wider torque network (max degree 3: L = 20, another padded width)."""
-    d = cfg["dnbs"]
-    rem = d["remedies"]
-    for name in ("dead_zone", "e_modification", "projection"):
-        rem[name]["enabled"] = True
-    rem["dead_zone"]["alpha_rad"], rem["dead_zone"]["torque_rad_s"] = [1e-3] * 7, [2e-3] * 7
-    rem["e_modification"]["sigma"] = 1e-3
-    rem["projection"]["weight_bound"] = 0.5
-    d["alpha_net"]["eta"], d["torque_net"]["eta"] = [0.7] * 7, [0.9] * 7
-    d["torque_net"]["max_degree"] = 3
-    d["torque_net"]["input_scale"] = [3.0, 3.0, 3.0]
+    for key, value in (("remedies.dead_zone.enabled", True), ("remedies.e_modification.enabled", True),
+                       ("remedies.projection.enabled", True), ("remedies.dead_zone.alpha_rad", (1e-3,) * 7),
+                       ("remedies.dead_zone.torque_rad_s", (2e-3,) * 7), ("remedies.e_modification.sigma", 1e-3),
+                       ("remedies.projection.weight_bound", 0.5), ("alpha_net.eta", (0.7,) * 7),
+                       ("torque_net.eta", (0.9,) * 7), ("torque_net.max_degree", 3),
+                       ("torque_net.input_scale", (3.0, 3.0, 3.0))):
+        cfg = replace_in(cfg, f"dnbs.{key}", value)
     return cfg
 
 
@@ -69,10 +64,11 @@ def test_every_branch_of_the_step_gives_the_same_bits(cfg, variant):
     if variant == "every_remedy":
         cfg = _every_remedy(cfg)
     if variant == "printed_sign":
-        cfg["dnbs"]["e2_sign"] = "printed"
+        cfg = replace_in(cfg, "dnbs.e2_sign", "printed")
     if variant == "slope_bound":  # per-weight bounds (2n, W), tight enough to act
-        cfg["dnbs"]["remedies"]["slope_bound"] = {"enabled": True, "fraction": [0.02] * 7}
-    cfg["dnbs"]["remedies"]["learning_ramp"]["ramp_s"] = 0.3  # the ramp ends inside the run
+        cfg = replace_in(cfg, "dnbs.remedies.slope_bound.enabled", True)
+        cfg = replace_in(cfg, "dnbs.remedies.slope_bound.fraction", (0.02,) * 7)
+    cfg = replace_in(cfg, "dnbs.remedies.learning_ramp.ramp_s", 0.3)  # the ramp ends inside the run
     numpy_cfg, c_cfg = _kernels(cfg)
     ref = build_reference(cfg)
     ref_bank, c_bank = build_guarded_controllers(numpy_cfg, "dnbs"), build_guarded_controllers(c_cfg, "dnbs")
@@ -84,7 +80,7 @@ def test_every_branch_of_the_step_gives_the_same_bits(cfg, variant):
     x2 = ref.velocity(k) + 0.5 * rng.normal(size=(n, 7))
     x2[200:230, 1] = 1e3      # implausible speed: an untrusted row, not trained
     x1[400, 5] = np.nan        # a non-finite state
-    limit = np.asarray(cfg["plant"]["torque_limit_nm"])
+    limit = np.asarray(cfg.plant.torque_limit_nm)
     saturated = 0
     for step in range(n):
         if step == 600:  # a broken network: the guard resets it, in both
@@ -162,7 +158,7 @@ def test_auto_without_a_compiler_runs_numpy_says_so_in_one_line_and_gives_the_sa
     monkeypatch.setenv("CC", "no-such-compiler-pa10")
     said = []
     resolved = resolve_kernel(cfg, say=said.append)
-    assert cfg["dnbs"]["kernel"] == "auto" and resolved["dnbs"]["kernel"] == "numpy"
+    assert cfg.dnbs.kernel == "auto" and resolved.dnbs.kernel == "numpy"
     assert len(said) == 1 and "\n" not in said[0]
     assert said[0].startswith("dnbs.kernel: auto -> numpy") and "no-such-compiler-pa10" in said[0]
     assert type(build_controllers(cfg, "dnbs")) is DNBSControllers  # auto, unresolved: the same answer
@@ -184,7 +180,7 @@ def test_auto_without_a_compiler_runs_numpy_says_so_in_one_line_and_gives_the_sa
 def test_auto_picks_the_compiled_step_where_it_builds(cfg, new_process):
     said = []
     resolved = resolve_kernel(cfg, say=said.append)
-    assert resolved["dnbs"]["kernel"] == "c"
+    assert resolved.dnbs.kernel == "c"
     assert len(said) == 1 and said[0].startswith("dnbs.kernel: auto -> c") and str(new_process) in said[0]
     assert len(list(new_process.glob("libdnbs_kernel-*.so"))) == 1  # built into this (empty) cache
     assert isinstance(build_controllers(cfg, "dnbs"), CompiledDNBSControllers)

@@ -1,3 +1,4 @@
+import dataclasses
 """Config validation: every bad value is rejected with the key named."""
 import copy
 import math
@@ -5,7 +6,8 @@ import math
 import pytest
 import yaml
 
-from pa10_dnbs.config import ConfigError, default_config_path, load_config
+from pa10_dnbs.config import ConfigError, default_config_path
+from pa10_dnbs.run_settings import build_settings
 
 
 def _write(tmp_path, raw):
@@ -20,17 +22,17 @@ def raw():
 
 
 def test_default_config_is_valid():
-    cfg = load_config(default_config_path())
-    assert cfg["simulation"]["dt_s"] == 0.001
-    assert len(cfg["dnbs"]["torque_net"]["eta"]) == 7
+    cfg = build_settings(default_config_path())
+    assert cfg.simulation.dt_s == 0.001
+    assert len(cfg.dnbs.torque_net.eta) == 7
 
 
 @pytest.mark.parametrize("kernel", ["auto", "numpy", "c"])
 def test_every_dnbs_kernel_setting_loads_and_auto_is_the_default(tmp_path, raw, kernel):
-    assert load_config(default_config_path())["dnbs"]["kernel"] == "auto"
+    assert build_settings(default_config_path()).dnbs.kernel == "auto"
     d = copy.deepcopy(raw)
     d["dnbs"]["kernel"] = kernel
-    assert load_config(_write(tmp_path, d))["dnbs"]["kernel"] == kernel
+    assert build_settings(_write(tmp_path, d)).dnbs.kernel == kernel
 
 
 @pytest.mark.parametrize("path,value,match", [
@@ -59,37 +61,37 @@ def test_bad_values_name_the_key(tmp_path, raw, path, value, match):
         node = node[k]
     node[path[-1]] = value
     with pytest.raises(ConfigError, match=match):
-        load_config(_write(tmp_path, d))
+        build_settings(_write(tmp_path, d))
 
 
 def test_unknown_and_missing_keys(tmp_path, raw):
     d = copy.deepcopy(raw)
     d["dnbs"]["torque_net"]["etta"] = 1.0
     with pytest.raises(ConfigError, match=r"dnbs\.torque_net\.etta: unknown key"):
-        load_config(_write(tmp_path, d))
+        build_settings(_write(tmp_path, d))
     d = copy.deepcopy(raw)
     del d["plant"]["gravity_mps2"]
     with pytest.raises(ConfigError, match=r"plant\.gravity_mps2: missing key"):
-        load_config(_write(tmp_path, d))
+        build_settings(_write(tmp_path, d))
 
 
 def test_missing_arm_and_missing_file(tmp_path, raw):
     d = copy.deepcopy(raw)
     d["arm"] = "nowhere/arm.yaml"
     with pytest.raises(ConfigError, match=r"arm: file not found: .*nowhere/arm\.yaml"):
-        load_config(_write(tmp_path, d))
+        build_settings(_write(tmp_path, d))
     d["arm"] = "no_such_arm"
     with pytest.raises(ConfigError, match=r"arm: no arm called 'no_such_arm' \(presets: .*pa10"):
-        load_config(_write(tmp_path, d))
+        build_settings(_write(tmp_path, d))
     with pytest.raises(ConfigError, match="config file not found"):
-        load_config(tmp_path / "absent.yaml")
+        build_settings(tmp_path / "absent.yaml")
 
 
 def test_not_yaml(tmp_path):
     p = tmp_path / "bad.yaml"
     p.write_text("simulation: [unclosed\n")
     with pytest.raises(ConfigError, match="not valid YAML"):
-        load_config(p)
+        build_settings(p)
 
 
 def test_extends_merges_over_the_base_and_resolves_paths_where_they_are_written(tmp_path):
@@ -97,13 +99,12 @@ def test_extends_merges_over_the_base_and_resolves_paths_where_they_are_written(
     p = tmp_path / "sub" / "mine.yaml"
     p.write_text(f"extends: {default_config_path()}\nsimulation:\n  seed: 11\ndnbs:\n  remedies:\n"
                  "    robust_term: {enabled: false}\n")
-    cfg = load_config(p)
-    base = load_config(default_config_path())
-    assert cfg["simulation"]["seed"] == 11 and cfg["simulation"]["dt_s"] == base["simulation"]["dt_s"]
-    assert cfg["dnbs"]["remedies"]["robust_term"]["enabled"] is False
-    assert cfg["dnbs"]["remedies"]["robust_term"]["alpha_gain_per_s"] == base["dnbs"]["remedies"]["robust_term"][
-        "alpha_gain_per_s"]
-    assert cfg["arm"] == base["arm"]
+    cfg = build_settings(p)
+    base = build_settings(default_config_path())
+    assert cfg.simulation.seed == 11 and cfg.simulation.dt_s == base.simulation.dt_s
+    assert cfg.dnbs.remedies.robust_term.enabled is False
+    assert cfg.dnbs.remedies.robust_term.alpha_gain_per_s == base.dnbs.remedies.robust_term.alpha_gain_per_s
+    assert cfg.arm == base.arm
 
 
 def test_extends_errors(tmp_path):
@@ -111,16 +112,16 @@ def test_extends_errors(tmp_path):
     a.write_text("extends: b.yaml\n")
     b.write_text("extends: a.yaml\n")
     with pytest.raises(ConfigError, match="circular"):
-        load_config(a)
+        build_settings(a)
     a.write_text("extends: nowhere.yaml\n")
     with pytest.raises(ConfigError, match="config file not found: .*nowhere.yaml"):
-        load_config(a)
+        build_settings(a)
 
 
 def test_shipped_presets_are_valid():
     from pa10_dnbs.paths import share_path
 
-    assert load_config(share_path("config", "compiled.yaml"))["dnbs"]["kernel"] == "c"
-    paper = load_config(share_path("config", "paper.yaml"))
-    on = [name for name, r in paper["dnbs"]["remedies"].items() if r["enabled"]]
+    assert build_settings(share_path("config", "compiled.yaml")).dnbs.kernel == "c"
+    paper = build_settings(share_path("config", "paper.yaml"))
+    on = [f.name for f in dataclasses.fields(paper.dnbs.remedies) if getattr(paper.dnbs.remedies, f.name).enabled]
     assert on == ["anti_windup"]  # the paper's law as the project first ran it

@@ -36,9 +36,11 @@ def test_launcher_does_not_load_rclpy():
 LAYERS = [
     {"__init__", "paths", "atomic_file", "run_data", "core", "wire", "kinematics", "faults",  # numpy-only data and maths
      "config_error", "interrupt", "cli_values", "output_lock", "number_text", "run_size"},
-    {"arm", "config", "derived_settings", "plant", "loop", "accel",  # arms, config, physics, loop logic, compiled step
-     "trajectory_file"},
-    {"controller_factory"},
+    {"arm", "config"},                                                         # an arm's files; a config file
+    {"settings"},                                                              # a run's typed settings
+    {"plant", "loop", "accel", "trajectory_file"},                             # physics, loop logic, compiled step
+    {"derived_settings", "run_settings"},                                      # the rules; settings built once
+    {"controller_factory", "controller_gains"},                               # what a joint runs; its gains
     {"sim", "bag", "report", "live"},                                          # in-process runs, bags, outputs, live view
     {"study", "tune"},                                                         # robustness study, tuning: sim runs
     {"ros"},                                                                   # the nodes (rclpy)

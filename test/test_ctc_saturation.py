@@ -12,9 +12,10 @@ import pytest
 import yaml
 
 from cli_runner import run_cli
-from pa10_dnbs.config import default_config_path, load_config
+from pa10_dnbs.config import default_config_path
 from pa10_dnbs.core.reference import ReferenceSample
 from pa10_dnbs.plant.engines import open_plant
+from pa10_dnbs.run_settings import build_settings
 from pa10_dnbs.sim.closed_loop import simulate
 from pa10_dnbs.sim.computed_torque import ComputedTorqueController
 
@@ -31,9 +32,9 @@ def _xarm7_file(tmp_path, mode: str | None) -> str:
     return str(path)
 
 
-def _cfg(arm) -> dict:
+def _cfg(arm):
     with contextlib.redirect_stderr(io.StringIO()):
-        return load_config(default_config_path(), arm=arm)
+        return build_settings(default_config_path(), arm=arm)
 
 
 def test_on_a_light_coupled_arm_clipping_diverges_and_scaling_the_feedback_tracks(tmp_path):
@@ -53,8 +54,8 @@ def test_clip_is_the_textbook_law_bit_for_bit_and_scale_feedback_only_differs_wh
     cfg = _cfg(_xarm7_file(tmp_path, "clip"))
     plant, close = open_plant(cfg)
     try:
-        lim = np.asarray(cfg["plant"]["torque_limit_nm"])
-        kp, kd = np.asarray(cfg["ctc"]["kp_per_s2"]), np.asarray(cfg["ctc"]["kd_per_s"])
+        lim = np.asarray(cfg.plant.torque_limit_nm)
+        kp, kd = np.asarray(cfg.ctc.kp_per_s2), np.asarray(cfg.ctc.kd_per_s)
         clip = ComputedTorqueController(plant, kp, kd, lim, "clip")
         scale = ComputedTorqueController(plant, kp, kd, lim, "scale_feedback")
         rng = np.random.default_rng(3)
@@ -83,10 +84,10 @@ def test_clip_is_the_textbook_law_bit_for_bit_and_scale_feedback_only_differs_wh
 
 
 def test_the_key_comes_from_the_rule_layer_the_presets_clip_and_a_bad_value_is_one_line(tmp_path):
-    assert _cfg(str(XARM7))["ctc"]["on_saturation"] == "scale_feedback"  # a bare URDF: the rule layer
+    assert _cfg(str(XARM7)).ctc.on_saturation == "scale_feedback"  # a bare URDF: the rule layer
     for preset in ("pa10", "iiwa", "panda"):
-        assert _cfg(preset)["ctc"]["on_saturation"] == "clip", preset  # their published numbers
-    assert _cfg(_xarm7_file(tmp_path, "clip"))["ctc"]["on_saturation"] == "clip"  # an arm file sets it
+        assert _cfg(preset).ctc.on_saturation == "clip", preset  # their published numbers
+    assert _cfg(_xarm7_file(tmp_path, "clip")).ctc.on_saturation == "clip"  # an arm file sets it
     bad = tmp_path / "bad.yaml"
     bad.write_text(f"extends: {default_config_path()}\nctc: {{on_saturation: scale}}\n")
     r = run_cli("simulate", "--config", bad, "--arm", "pa10", "--duration", "0.01", "--out", tmp_path / "o")

@@ -8,23 +8,23 @@ import copy
 
 import numpy as np
 import pytest
-
-from pa10_dnbs.config import load_config
 from pa10_dnbs.controller_factory import build_controllers, build_reference
 from pa10_dnbs.core.reference import ReferenceSample
 from pa10_dnbs.paths import share_path
+from pa10_dnbs.run_settings import build_settings
+from pa10_dnbs.settings import replace_in
 
 J, FV, G, DT = 1.5, 10.0, 20.0, 1e-3  # kg m^2, N m s/rad, N m, s
 
 
 @pytest.fixture(scope="module")
 def paper_cfg():
-    return load_config(share_path("config", "paper.yaml"))
+    return build_settings(share_path("config", "paper.yaml"))
 
 
 def _single_joint_run(cfg, e2_sign: str, seconds: float = 6.0):
     cfg = copy.deepcopy(cfg)
-    cfg["dnbs"]["e2_sign"] = e2_sign
+    cfg = replace_in(cfg, "dnbs.e2_sign", e2_sign)
     ctrl = build_controllers(cfg, "dnbs", [0])
     ref = build_reference(cfg)
     q, qd = 0.1, 0.0
@@ -103,9 +103,9 @@ def test_same_seed_same_weights_different_joint_different_weights(cfg):
 
 
 def _edit(cfg, **remedies):
-    cfg = copy.deepcopy(cfg)
     for name, settings in remedies.items():
-        cfg["dnbs"]["remedies"][name].update(settings)
+        for key, value in settings.items():
+            cfg = replace_in(cfg, f"dnbs.remedies.{name}.{key}", value)
     return cfg
 
 
@@ -129,8 +129,8 @@ def test_paper_law_has_no_linear_term(paper_cfg):
 def test_robust_term_is_lewis_kv_r(cfg):
     """With zero weights the torque is k_u (x_d_dot + k_a e1 - x2): Kv r of Lewis et al., r = e_dot + k_a e."""
     cfg = copy.deepcopy(cfg)
-    cfg["dnbs"]["alpha_net"]["init_weight_std"] = (0.0,) * 7
-    cfg["dnbs"]["torque_net"]["init_weight_std"] = (0.0,) * 7
+    cfg = replace_in(cfg, "dnbs.alpha_net.init_weight_std", (0.0,) * 7)
+    cfg = replace_in(cfg, "dnbs.torque_net.init_weight_std", (0.0,) * 7)
     ctrl = build_controllers(cfg, "dnbs", [1])
     ref = ReferenceSample(np.array([0.12]), np.array([0.5]), np.array([0.121]))
     u = ctrl.step(np.array([0.1]), np.array([0.3]), ref)

@@ -64,14 +64,14 @@ def _args(*argv):
 
 
 def test_flags_override_the_chosen_joints(cfg):
-    assert not faults_active(cfg)
+    assert not faults_active(cfg.faults)
     out = apply_fault_flags(cfg, _args("--fault-joints", "s2,w1", "--drop-efforts", "0.01", "--corrupt-states",
-                                       "inf:0.5", "--kill", "e1@5", "--fault-seed", "7"), JOINT_NAMES)
-    f = out["faults"]
-    assert f["effort"]["drop_fraction"] == (0.0, 0.01, 0.0, 0.0, 0.0, 0.01, 0.0)
-    assert f["state"]["corrupt_kind"] == "inf" and f["state"]["corrupt_fraction"][1] == 0.5
-    assert f["kill_controller_at_s"][3] == 5.0 and f["seed"] == 7 and faults_active(out)
-    assert not faults_active(cfg)  # the input config is left alone
+                                       "inf:0.5", "--kill", "e1@5", "--fault-seed", "7"))
+    f = out.faults
+    assert f.effort.drop_fraction == (0.0, 0.01, 0.0, 0.0, 0.0, 0.01, 0.0)
+    assert f.state.corrupt_kind == "inf" and f.state.corrupt_fraction[1] == 0.5
+    assert f.kill_controller_at_s[3] == 5.0 and f.seed == 7 and faults_active(out.faults)
+    assert not faults_active(cfg.faults)  # the input settings are left alone
 
 
 @pytest.mark.parametrize("argv, flag", [
@@ -80,4 +80,4 @@ def test_flags_override_the_chosen_joints(cfg):
     (("--delay-efforts", "-1"), "--delay-efforts"), (("--kill", "e1@-2"), "--kill")])
 def test_bad_flags_name_themselves(cfg, argv, flag):
     with pytest.raises(ConfigError, match=flag):
-        apply_fault_flags(cfg, _args(*argv), JOINT_NAMES)
+        apply_fault_flags(cfg, _args(*argv))

@@ -10,6 +10,8 @@ import pytest
 import yaml
 
 from graph_harness import assert_no_leftovers, exit_codes
+from pa10_dnbs.run_settings import build_settings
+from pa10_dnbs.settings import replace_in
 from pa10_dnbs.sim.closed_loop import simulate
 from pa10_dnbs.run_data import RunData
 
@@ -124,7 +126,7 @@ def test_the_nodes_on_the_compiled_kernel_give_the_numpy_bits(_default_cfg, tmp_
     logs = sorted((out / "logs").glob("joint_controller_*.log"))
     assert len(logs) == 7 and all("CompiledDNBSControllers" in log.read_text() for log in logs)
     wire = RunData.load_npz(out / "timeseries.npz")
-    local = simulate({**_default_cfg, "dnbs": {**_default_cfg["dnbs"], "kernel": "numpy"}}, "dnbs", 1.0)
+    local = simulate(replace_in(_default_cfg, "dnbs.kernel", "numpy"), "dnbs", 1.0)
     assert type(local.extra["controllers"]).__name__ == "DNBSControllers"
     for field in ("torque_nm", "position_rad", "velocity_rad_s"):
         a, b = getattr(local, field), getattr(wire, field)
@@ -138,7 +140,7 @@ def test_the_iiwa_graph_is_its_in_process_run_named_after_its_joints(tmp_path, d
 
     from pa10_dnbs.arm import load_arm
     from pa10_dnbs.bag.bag_reader import Bag
-    from pa10_dnbs.config import default_config_path, load_config
+    from pa10_dnbs.config import default_config_path
 
     iiwa = load_arm("iiwa")
     out, bag = tmp_path / "run", tmp_path / "bag"
@@ -156,7 +158,7 @@ def test_the_iiwa_graph_is_its_in_process_run_named_after_its_joints(tmp_path, d
     m = json.loads((out / "metrics.json").read_text())
     assert all(j["effort_timeouts"] == 0 for j in m["timing"]["joints"]), m["timing"]["joints"]
     wire = RunData.load_npz(out / "timeseries.npz")
-    local = simulate(load_config(default_config_path(), arm="iiwa"), "dnbs", 1.0)
+    local = simulate(build_settings(default_config_path(), arm="iiwa"), "dnbs", 1.0)
     assert tuple(wire.joint_names) == iiwa.joint_names
     for field in ("position_rad", "velocity_rad_s", "reference_rad", "torque_nm"):
         a, b = getattr(local, field), getattr(wire, field)

@@ -12,10 +12,10 @@ import pytest
 import yaml
 
 from graph_harness import REPO, Launcher, Proc, assert_no_leftovers, exit_codes
-from pa10_dnbs.config import load_config
 from pa10_dnbs.controller_factory import build_reference, switchable_reference
 from pa10_dnbs.core.joint_trajectory import trajectory_from_lists
 from pa10_dnbs.run_data import RunData
+from pa10_dnbs.run_settings import build_settings
 from pa10_dnbs.trajectory_file import read_trajectory
 
 pytestmark = pytest.mark.graph  # starts ROS processes
@@ -102,7 +102,7 @@ def test_a_trajectory_sent_while_running_is_tracked_and_wrong_ones_change_nothin
     import pa10_dnbs.sim.closed_loop as closed_loop
 
     monkeypatch.setattr(closed_loop, "build_reference", lambda cfg, trajectory=None: expected)
-    local = closed_loop.simulate(load_config(out / "config_used.yaml"), "dnbs", DURATION_S)
+    local = closed_loop.simulate(build_settings(out / "config_used.yaml"), "dnbs", DURATION_S)
     for field in ("position_rad", "velocity_rad_s", "reference_rad", "torque_nm"):
         a, b = getattr(local, field), getattr(run, field)
         assert np.array_equal(a, b), f"{field}: max diff {np.abs(a - b).max()}"

@@ -22,7 +22,22 @@ class Constant:
     def __init__(self, u):
         self.u, self.trained = u, []
 
+    learns = False  # a ControllerBank that does not learn (core/controller_bank.py)
+    learning_pending = False
+
+    def learn(self):
+        pass
+
+    def state_dict(self, row=0):
+        return {}
+
+    def counters(self, row=0):
+        return {}
+
     def step(self, x1, x2, ref, active=None):
+        return self.answer(x1, x2, ref, active)
+
+    def answer(self, x1, x2, ref, active=None):
         assert np.all(np.isfinite(x1)) and np.all(np.isfinite(x2))  # never fed an untrusted state
         self.trained.append(1.0 if active is None else float(active[0]))
         return np.array([self.u])

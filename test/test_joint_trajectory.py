@@ -5,7 +5,6 @@ import json
 import numpy as np
 import pytest
 
-from pa10_dnbs.arm import arm_of
 from pa10_dnbs.config import ConfigError
 from pa10_dnbs.controller_factory import build_reference, switchable_reference
 from pa10_dnbs.core.joint_trajectory import (JointTrajectory, QuinticSpline, TrajectoryError, check_trajectory,
@@ -73,7 +72,7 @@ def test_last_point_is_held_with_zero_velocity_and_acceleration():
 
 
 def test_a_file_trajectory_starts_from_eq27_at_step_0_and_passes_every_point(cfg):
-    traj = load_trajectory_file(EXAMPLE, arm_of(cfg))
+    traj = load_trajectory_file(EXAMPLE, cfg.arm)
     ref = build_reference(cfg, traj)
     eq27 = build_reference(cfg)
     assert np.array_equal(ref.position(0), eq27.position(0)) and np.array_equal(ref.velocity(0), eq27.velocity(0))
@@ -87,7 +86,7 @@ def test_a_file_trajectory_starts_from_eq27_at_step_0_and_passes_every_point(cfg
 
 
 def test_a_trajectory_sent_while_running_splices_in_continuously(cfg):
-    arm = arm_of(cfg)
+    arm = cfg.arm
     ref = switchable_reference(cfg, build_reference(cfg))
     eq27 = build_reference(cfg)
     t = [0.8, 1.6, 2.4, 3.2, 4.0]
@@ -148,7 +147,7 @@ BAD = [
 
 @pytest.mark.parametrize("change,message", BAD)
 def test_a_wrong_trajectory_is_refused_in_one_line_and_nothing_changes(cfg, change, message):
-    arm = arm_of(cfg)
+    arm = cfg.arm
     ref = switchable_reference(cfg, build_reference(cfg))
     before = ref.position(np.arange(2000, 7000))
     kw = {"times": [1.0, 2.0], "positions": np.full((2, len(change.get("names", NAMES))), 0.1), **change}
@@ -180,7 +179,7 @@ def test_every_point_in_the_past_is_refused(cfg):
 
 
 def test_files_yaml_and_json_and_their_mistakes(cfg, tmp_path):
-    arm = arm_of(cfg)
+    arm = cfg.arm
     doc = {"joint_names": list(NAMES), "points": [
         {"time_from_start": {"sec": 1, "nanosec": 500000000}, "positions": [0.1] * 7},
         {"time_from_start": 2.0, "positions": [0.2] * 7, "velocities": []}]}

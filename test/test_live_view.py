@@ -256,7 +256,7 @@ def test_layout_file_is_current_and_uses_only_served_channels(_default_cfg):
 
     path = Path(__file__).resolve().parents[1] / "config" / "foxglove_layout.json"
     chain = UrdfChain(URDF.read_text())
-    assert path.read_text() == layout_json(JOINT_NAMES, _default_cfg["plant"]["torque_limit_nm"], chain.root_link), \
+    assert path.read_text() == layout_json(JOINT_NAMES, _default_cfg.plant.torque_limit_nm, chain.root_link), \
         "config/foxglove_layout.json is stale: run scripts/make_foxglove_layout.py"
     lay = json.loads(path.read_text())
     assert sorted(_leaves(lay["layout"])) == sorted(lay["configById"])

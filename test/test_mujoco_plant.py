@@ -10,6 +10,7 @@ from pa10_dnbs.arm import load_arm
 from pa10_dnbs.plant.from_config import open_client
 from pa10_dnbs.plant.mujoco_plant import MuJoCoArmPlant
 from pa10_dnbs.plant.pybullet_plant import PlantParams, PyBulletArmPlant
+from pa10_dnbs.run_settings import build_settings
 from test_arms import three_link_urdf, write_arm
 
 # Two engines' rigid-body algorithms (PyBullet's CRBA / RNEA, MuJoCo's) on the same URDF: the same numbers to
@@ -150,10 +151,10 @@ def test_a_short_closed_loop_follows_pybullets_run():
     """DNBS on the PA10 for 1 s on both engines: the same controllers and gains, trajectories within 2e-3 rad (2 %
     of the 0.1 rad start offset; measured 5.1e-4, in the transient) and 1e-4 rad after 0.5 s. The engines differ
     where friction is discretised: MuJoCo's damping is implicit in its step, the PyBullet plant's explicit."""
-    from pa10_dnbs.config import default_config_path, load_config
+    from pa10_dnbs.config import default_config_path
     from pa10_dnbs.sim.closed_loop import simulate
 
-    cfg = load_config(default_config_path(), arm="pa10")
+    cfg = build_settings(default_config_path(), arm="pa10")
     pb, mj = (simulate(cfg, "dnbs", 1.0, engine=e) for e in ("pybullet", "mujoco"))
     assert np.abs(pb.position_rad - mj.position_rad).max() < 2e-3
     assert np.abs(pb.position_rad - mj.position_rad)[500:].max() < 1e-4

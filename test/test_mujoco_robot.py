@@ -12,8 +12,9 @@ import pytest
 from graph_harness import REPO, Proc, assert_no_leftovers
 from pa10_dnbs.arm import load_arm
 from pa10_dnbs.loop.robot_stepper import RobotStepper
-from pa10_dnbs.config import default_config_path, load_config
+from pa10_dnbs.config import default_config_path
 from pa10_dnbs.plant.engines import open_plant
+from pa10_dnbs.run_settings import build_settings
 from robot_interface_probe import effort
 
 STEPS = 300
@@ -79,7 +80,7 @@ def test_the_robot_node_answers_lockstep_bit_for_bit_and_stops_on_sigint(domain,
     summary = robot.wait_for(r"mujoco_robot: (\d+) steps", 1)
     assert int(summary.group(1)) == STEPS, robot.output
     got = json.loads(out.read_text())
-    plant, _ = open_plant(load_config(default_config_path(), arm="iiwa"), "mujoco")  # the configured start
+    plant, _ = open_plant(build_settings(default_config_path(), arm="iiwa"), "mujoco")  # the configured start
     for k in range(STEPS + 1):
         state = got["states"][str(k)]
         q, qd = plant.state

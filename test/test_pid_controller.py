@@ -4,6 +4,8 @@ import pytest
 
 from pa10_dnbs.controller_factory import build_controllers
 from pa10_dnbs.core.reference import ReferenceSample
+from pa10_dnbs.run_settings import build_settings
+from pa10_dnbs.settings import replace_in
 
 
 def _ref(x, v):
@@ -19,10 +21,9 @@ def test_gains_are_the_shipped_ones(cfg):
 
 
 def test_the_rule_of_thumb_gains_stay_available(cfg):
-    from pa10_dnbs.config import load_config
     from pa10_dnbs.paths import share_path
 
-    p = build_controllers(load_config(share_path("config", "pa10_pid_rule_of_thumb.yaml")), "pid").params
+    p = build_controllers(build_settings(share_path("config", "pa10_pid_rule_of_thumb.yaml")), "pid").params
     assert p.kp.tolist() == [2000, 2000, 800, 800, 60, 60, 60]
     assert p.kd.tolist() == [200, 200, 60, 60, 3, 3, 3]
     assert p.ki.tolist() == (5 * p.kp).tolist()
@@ -47,7 +48,7 @@ def test_anti_windup_holds_the_integral_of_a_saturated_row_only(cfg):
     plain PID does, and after the error reverses the wound-up PID stays saturated far longer."""
     ref = ReferenceSample(np.array([10.0, 0.001]), np.zeros(2), np.array([10.0, 0.001]))
     guarded = build_controllers(cfg, "pid", [4, 5])
-    cfg["pid"]["anti_windup"] = False
+    cfg = replace_in(cfg, "pid.anti_windup", False)
     plain = build_controllers(cfg, "pid", [4, 5])
     for _ in range(500):
         assert np.array_equal(guarded.step(np.zeros(2), np.zeros(2), ref), plain.step(np.zeros(2), np.zeros(2), ref))

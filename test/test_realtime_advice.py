@@ -1,8 +1,9 @@
 """The launcher's advice after a realtime run that missed deadlines (launch/realtime_advice.py)."""
 from pa10_dnbs.arm import load_arm
-from pa10_dnbs.config import default_config_path, load_config
+from pa10_dnbs.config import default_config_path
 from pa10_dnbs.launch.fault_flags import apply_fault_flags
 from pa10_dnbs.launch.realtime_advice import ON_TIME_TARGET, injected_misses, realtime_hint
+from pa10_dnbs.run_settings import build_settings
 
 
 def test_the_target_is_the_benchmarks_99_percent():
@@ -25,11 +26,11 @@ def test_injected_effort_drops_are_named_not_blamed_on_the_cpu():
     """A realtime run with --drop-efforts misses ticks by design: the hint says so instead of 'a lower --rtf'."""
     from pa10_dnbs.cli import build_parser
 
-    cfg = load_config(default_config_path())
-    assert injected_misses(cfg) == []
+    cfg = build_settings(default_config_path())
+    assert injected_misses(cfg.faults) == []
     args = build_parser().parse_args(["launch", "--mode", "realtime", "--drop-efforts", "0.05", "--out", "x"])
-    faulty = apply_fault_flags(cfg, args, load_arm("pa10").joint_names)
-    assert injected_misses(faulty) == ["efforts dropped"]
-    line = realtime_hint(0.5, priority_applied=True, injected=injected_misses(faulty))
+    faulty = apply_fault_flags(cfg, args)
+    assert injected_misses(faulty.faults) == ["efforts dropped"]
+    line = realtime_hint(0.5, priority_applied=True, injected=injected_misses(faulty.faults))
     assert "efforts dropped" in line and "by design" in line
     assert "lower --rtf" not in line and "CPU each tick" not in line

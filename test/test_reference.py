@@ -8,7 +8,7 @@ from pa10_dnbs.controller_factory import build_reference
 
 def test_values_match_eq27(cfg):
     ref = build_reference(cfg)
-    c, d, w = (np.array(cfg["reference"][k]) for k in ("amplitude_rad", "envelope_rate_per_s3", "frequency_rad_s"))
+    c, d, w = (np.array(getattr(cfg.reference, k)) for k in ("amplitude_rad", "envelope_rate_per_s3", "frequency_rad_s"))
     for k in (0, 1, 1234, 7000, 19999):
         t = k * 1e-3
         np.testing.assert_allclose(ref.position(k), c * (1 - np.exp(-d * t**3)) * np.sin(w * t), rtol=1e-14, atol=0)

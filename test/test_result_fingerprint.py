@@ -1,6 +1,7 @@
 """scripts/result_fingerprint.py: the same run gives the same fingerprint, and one changed bit changes it."""
 from __future__ import annotations
 
+from pa10_dnbs.run_settings import build_settings
 import dataclasses
 
 import numpy as np
@@ -20,10 +21,10 @@ def test_digest_sees_one_ulp_the_order_and_the_shape():
 
 
 def test_banks_are_deterministic_and_sensitive_to_one_ulp_of_a_parameter():
-    from pa10_dnbs.config import default_config_path, load_config
+    from pa10_dnbs.config import default_config_path
     from pa10_dnbs.controller_factory import dnbs_params
 
-    p = dataclasses.replace(dnbs_params(load_config(default_config_path())), remedies=fp.ALL_REMEDIES)
+    p = dataclasses.replace(dnbs_params(build_settings(default_config_path())), remedies=fp.ALL_REMEDIES)
     once = fp.digest(fp.banks(p, steps=60))
     assert fp.digest(fp.banks(p, steps=60)) == once
     scale = p.torque_net.output_scale.copy()
@@ -33,10 +34,10 @@ def test_banks_are_deterministic_and_sensitive_to_one_ulp_of_a_parameter():
 
 
 def test_the_bank_of_seven_equals_the_banks_of_one_in_the_scenarios():
-    from pa10_dnbs.config import default_config_path, load_config
+    from pa10_dnbs.config import default_config_path
     from pa10_dnbs.controller_factory import dnbs_params
 
-    p = dataclasses.replace(dnbs_params(load_config(default_config_path())), remedies=fp.ALL_REMEDIES)
+    p = dataclasses.replace(dnbs_params(build_settings(default_config_path())), remedies=fp.ALL_REMEDIES)
     rows7, rows1, *_ = fp.banks(p, steps=250)  # past the EKF reset at step 211
     assert rows7[:, :7].tobytes() == rows1.tobytes()
 
@@ -44,8 +45,8 @@ def test_the_bank_of_seven_equals_the_banks_of_one_in_the_scenarios():
 def test_the_compiled_kernel_gives_the_banks_fingerprint():
     """``--kernel c``: the bank scenarios (every remedy, untrusted rows, saturation, an EKF reset at step 211)
     have the numpy reference's fingerprint."""
-    from pa10_dnbs.config import default_config_path, load_config
+    from pa10_dnbs.config import default_config_path
     from pa10_dnbs.controller_factory import dnbs_params
 
-    p = dataclasses.replace(dnbs_params(load_config(default_config_path())), remedies=fp.ALL_REMEDIES)
+    p = dataclasses.replace(dnbs_params(build_settings(default_config_path())), remedies=fp.ALL_REMEDIES)
     assert fp.digest(fp.banks(p, steps=250, kernel="c")) == fp.digest(fp.banks(p, steps=250))

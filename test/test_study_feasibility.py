@@ -9,7 +9,8 @@ import pytest
 
 from cli_runner import run_cli
 
-from pa10_dnbs.config import default_config_path, load_config
+from pa10_dnbs.config import default_config_path
+from pa10_dnbs.run_settings import build_settings
 from pa10_dnbs.study.collection import study_table
 from pa10_dnbs.study.feasibility import infeasible_scenarios, scenario_peak_torque
 from pa10_dnbs.study.scenarios import SCENARIOS
@@ -25,7 +26,7 @@ def strong(tmp_path_factory):
 
 
 def _cfg(arm):
-    return load_config(default_config_path(), arm=str(arm))
+    return build_settings(default_config_path(), arm=str(arm))
 
 
 def test_a_weak_arm_is_told_a_5kg_payload_is_infeasible_naming_joint_torque_and_limit():

@@ -10,8 +10,7 @@ import optuna
 import pytest
 
 from cli_runner import run_cli
-
-from pa10_dnbs.config import load_config
+from pa10_dnbs.run_settings import build_settings
 from pa10_dnbs.tune import objective as obj
 from pa10_dnbs.tune.space import SPACES, Param, apply, on_bound, settings_fragment, start_values
 
@@ -36,9 +35,9 @@ def test_the_start_point_is_the_config_itself(cfg, controller):
 
 def test_pid_bandwidth_damping_and_integral_scale_the_gains(cfg):
     frag = settings_fragment("pid", cfg, {"bandwidth": 2.0, "damping": 0.5, "integral": 3.0})["pid"]
-    assert frag["kp"][0] == pytest.approx(4 * cfg["pid"]["kp"][0])
-    assert frag["kd"][2] == pytest.approx(1.0 * cfg["pid"]["kd"][2])      # d w = 0.5 x 2
-    assert frag["ki"][6] == pytest.approx(3.0 * 8 * cfg["pid"]["ki"][6])
+    assert frag["kp"][0] == pytest.approx(4 * cfg.pid.kp[0])
+    assert frag["kd"][2] == pytest.approx(1.0 * cfg.pid.kd[2])      # d w = 0.5 x 2
+    assert frag["ki"][6] == pytest.approx(3.0 * 8 * cfg.pid.ki[6])
     dn = settings_fragment("dnbs", cfg, {"torque_gain": 2.0, "ekf_q": 10.0, "ramp_s": 0.0})["dnbs"]
     assert dn["remedies"]["robust_term"]["torque_gain_nms_per_rad"][0] == 2 * 400.0
     assert dn["alpha_net"]["q"][0] == dn["torque_net"]["q"][3] == pytest.approx(0.1)
@@ -114,8 +113,8 @@ def test_a_short_tune_writes_settings_simulate_takes(tmp_path):
     assert trials[0][2] == {"bandwidth": 1.0, "damping": 1.0, "integral": 1.0}   # the search starts at the arm's
     best = min(trials, key=lambda t: t[3])
     assert info["best_trial"] == best[0] and info["best_objective"] == best[3]
-    tuned = load_config(out / "tuned.yaml")
-    base = load_config(info["options"]["config_file"])
+    tuned = build_settings(out / "tuned.yaml")
+    base = build_settings(info["options"]["config_file"])
     assert tuned == apply(base, settings_fragment("pid", base, best[2]))
     assert len(info["held_out"]["tuned"]) == 8 and {r["seed"] for r in info["held_out"]["start"]} == {100}
     md = (out / "tune.md").read_text()

@@ -3,7 +3,7 @@
 The library goes to ``$PA10_DNBS_CACHE`` (default ``$XDG_CACHE_HOME/pa10_dnbs``, else
 ``~/.cache/pa10_dnbs``), named by a hash of the source and the compiler command, so an edited source
 or other flags build anew (earlier builds stay, ~40 kB each: another checkout may still use one). It is
-compiled to a temporary file and renamed into place: processes that start together (the seven joint
+compiled to a temporary file and renamed into place: processes that start together (the joint
 controllers) never load a half-written library.
 
     python -m pa10_dnbs.accel.build     # builds if needed, prints the library's path

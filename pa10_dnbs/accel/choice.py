@@ -4,16 +4,16 @@
 numpy reference, said in one line; both give the same result bits (test/test_compiled_dnbs.py), so the
 choice changes only the speed. ``c`` fails (KernelBuildError, exit 2) where it cannot build; ``numpy``
 never builds anything. Commands resolve ``auto`` once, before any controller exists: the launcher
-writes the resolved kernel into config_used.yaml, so the seven joint controllers all run what it chose
+writes the resolved kernel into config_used.yaml, so every joint controller runs what it chose
 and none of them builds.
 """
 from __future__ import annotations
 
-import copy
 import functools
 from dataclasses import dataclass
 from typing import Callable
 
+from ..settings import Settings, replace_in
 from .build import KernelBuildError, library_path
 
 KERNELS = ("auto", "numpy", "c")
@@ -40,17 +40,15 @@ def auto_kernel() -> KernelChoice:
     return KernelChoice("c", f"dnbs.kernel: auto -> c, the compiled step ({library_path()}; the same bits as numpy)")
 
 
-def resolve_kernel(cfg: dict, say: Callable[[str], None] | None = None) -> dict:
-    """``cfg`` with ``dnbs.kernel`` as a run uses it: ``auto`` replaced by ``c`` or ``numpy`` (a copy; the
+def resolve_kernel(settings: Settings, say: Callable[[str], None] | None = None) -> Settings:
+    """``settings`` with ``dnbs.kernel`` as a run uses it: ``auto`` replaced by ``c`` or ``numpy`` (a copy; the
     one line passed to ``say``); ``c`` built here first (KernelBuildError if it cannot be); ``numpy`` as is."""
-    kernel = cfg["dnbs"]["kernel"]
+    kernel = settings.dnbs.kernel
     if kernel == "c":
         library_path()
     if kernel != "auto":
-        return cfg
+        return settings
     choice = auto_kernel()
     if say is not None:
         say(choice.line)
-    cfg = copy.deepcopy(cfg)
-    cfg["dnbs"]["kernel"] = choice.kernel
-    return cfg
+    return replace_in(settings, "dnbs.kernel", choice.kernel)

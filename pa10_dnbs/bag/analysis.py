@@ -121,8 +121,9 @@ def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None, progress=No
     return rec
 
 
-def robot_chain(bag: Bag, cfg: dict) -> UrdfChain | None:
-    """The arm's kinematics for the 3D figure: the bag's robot_description, else the config's arm's URDF."""
+def robot_chain(bag: Bag, arm_file) -> UrdfChain | None:
+    """The arm's kinematics for the 3D figure: the bag's robot_description, else the URDF of ``arm_file`` (the
+    run's config's ``arm``; None: no figure)."""
     topic = bag_arm(bag).robot_description
     if topic in bag.topics:
         for _, msgtype, _, data in bag.messages([topic]):
@@ -130,9 +131,11 @@ def robot_chain(bag: Bag, cfg: dict) -> UrdfChain | None:
                 return UrdfChain(get_typestore(Stores.ROS2_JAZZY).deserialize_cdr(data, msgtype).data)
             except Exception:
                 raise BagError(f"{bag.path}: {topic} does not hold a readable URDF") from None
+    if arm_file is None:
+        return None
     try:
-        from ..arm import arm_of
+        from ..arm import load_arm
 
-        return arm_of(cfg).chain
+        return load_arm(arm_file).chain
     except (KeyError, TypeError, ValueError):  # a config from elsewhere: no arm file here
         return None

@@ -6,21 +6,22 @@ from pathlib import Path
 
 from ..bag.analysis import bag_arm, bag_joint_names, robot_chain, run_info, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
-from ..config import default_config_path, load_config
+from ..config import default_config_path
 from ..number_text import interval
 from ..output_lock import lock_output
-from ..report.metrics_file import metrics_dict, metrics_settings
+from ..report.metrics_file import DEFAULT_METRICS, metrics_dict, window_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..report.progress import ProgressBar
+from ..run_settings import build_settings
 
 
 def _run_config(info: dict, config_path: Path | None, bag: Bag) -> tuple[dict, str]:
     if config_path is not None:
-        return load_config(config_path), str(Path(config_path).resolve())
+        return build_settings(config_path).to_config(), str(Path(config_path).resolve())
     cfg = info.get("config")
     if cfg is None:
         path = default_config_path()
-        return load_config(path), f"{path} (the bag carries no config)"
+        return build_settings(path).to_config(), f"{path} (the bag carries no config)"
     try:
         float(cfg["simulation"]["dt_s"]), list(cfg["simulation"]["window_s"]), list(cfg["plant"]["torque_limit_nm"])
     except (KeyError, TypeError, ValueError):
@@ -85,14 +86,16 @@ def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None
             raise BagError(f"{bag.path}: the bag's arm has {len(joints)} joints ({', '.join(joints)}), the config's "
                            f"{len(cfg['plant']['torque_limit_nm'])}: pass the run's --config")
         run = rec.run_data(controller, joints, cfg["plant"]["torque_limit_nm"], math.nan)
-        metrics = metrics_dict(run, metrics_settings(cfg, rec.n * dt), source="bag", bag=str(bag.path.resolve()), mode=info.get("mode"),
+        stored = cfg.get("metrics") or DEFAULT_METRICS
+        measured = window_settings(cfg["simulation"]["window_s"], stored["settle_band_rad"], stored["startup_s"], rec.n * dt)
+        metrics = metrics_dict(run, measured, source="bag", bag=str(bag.path.resolve()), mode=info.get("mode"),
                                seed=cfg["simulation"].get("seed"), malformed_messages=rec.malformed)
         notes = [f"bag: `{bag.path}` ({bag.message_count} messages on {len(bag.topics)} topics; {bag.crc_note()})",
                  f"config: {cfg_note}",
                  f"source: rebuilt from the bag's {bag_arm(bag).joint_states} and reference topics ({info.get('mode', '?')} run)"]
         if truncated:
             notes.append(truncated)
-        chain = robot_chain(bag, cfg)
+        chain = robot_chain(bag, cfg.get("arm"))
         with atomic_output_dir(out, force) as tmp:
             write_report(tmp, [run], [metrics], title="Run from a bag", notes=notes, chain=chain,
                          figures=figures)

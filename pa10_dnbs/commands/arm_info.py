@@ -10,29 +10,29 @@ from pathlib import Path
 
 import numpy as np
 
-from ..arm import arm_of
 from ..arm.gain_rule import report_rule
 from ..arm.summary import arm_line
-from ..config import default_config_path, load_config
+from ..config import default_config_path
+from ..run_settings import build_settings
 
 
 def run_arm_info(config_path: Path | None, arm: str | None) -> int:
     """Print the arm's facts, sources, inertia sweep and gains; returns 0 (bad input raises ConfigError)."""
     from ..derived_settings import derived_gains, inertia_sweep_along
 
-    cfg = load_config(Path(config_path) if config_path else default_config_path(), arm=arm)
-    the_arm = arm_of(cfg)
+    settings = build_settings(Path(config_path) if config_path else default_config_path(), arm=arm)
+    the_arm, run = settings.arm, settings.simulation
     print(arm_line(the_arm).replace("; ", ";\n  "))
     print("sources:")
     for key, text in the_arm.sources.items():
         print(f"  {key}: {text}")
-    sweep = inertia_sweep_along(the_arm, cfg)
-    rule = derived_gains(the_arm, cfg, report=False, sweep=sweep)
-    report_rule(the_arm, sweep, rule, cfg["simulation"]["dt_s"], stream=None)
-    run_ku = np.array(cfg["dnbs"]["remedies"]["robust_term"]["torque_gain_nms_per_rad"])
+    sweep = inertia_sweep_along(the_arm, settings.reference, run)
+    rule = derived_gains(the_arm, settings.reference, run, report=False, sweep=sweep)
+    report_rule(the_arm, sweep, rule, run.dt_s, stream=None)
+    run_ku = np.array(settings.dnbs.remedies.robust_term.torque_gain_nms_per_rad)
     rule_ku = np.array(rule["dnbs"]["remedies"]["robust_term"]["torque_gain_nms_per_rad"])
     same = np.allclose(run_ku, rule_ku, rtol=1e-12)
     print("runs with: the rule's gains" if same else
           "runs with: its own k_u [N m s/rad] " + ", ".join(f"{n} {k:g}" for n, k in zip(the_arm.joint_names, run_ku))
-          + f" (T k_u / J_light {', '.join(f'{x:.2f}' for x in cfg['simulation']['dt_s'] * run_ku / sweep.light_kgm2)})")
+          + f" (T k_u / J_light {', '.join(f'{x:.2f}' for x in run.dt_s * run_ku / sweep.light_kgm2)})")
     return 0

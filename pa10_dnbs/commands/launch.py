@@ -10,7 +10,6 @@ from pathlib import Path
 import yaml
 
 from ..accel.choice import resolve_kernel
-from ..arm import arm_of
 from ..bag.analysis import bag_arm, bag_joint_names, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
 from ..bag.bag_writer import COMPRESSIONS, check_bag_path
@@ -21,6 +20,7 @@ from ..interrupt import outputs_written
 from ..launch.fault_flags import apply_fault_flags, faults_active, plain
 from ..launch.fault_report import fault_note, fault_report
 from ..launch.graph_run import GraphFailure, GraphOptions, loop_reliability, parse_netns, run_graph
+from ..launch.params_file import write_params_file
 from ..launch.realtime_advice import ON_TIME_TARGET, injected_misses, realtime_hint
 from ..live.options import check_live_options
 from ..loop.scheduling import DEFAULT_RT_PRIORITY, check_priority, granted_priority
@@ -28,6 +28,7 @@ from ..number_text import interval
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_creatable, check_output_dir, write_report
 from ..output_lock import lock_output
+from ..run_settings import document_arm, with_rules
 from ..run_size import check_run_size, say_note
 from ..wire.wire_record import load_wire_run
 from ..wire.steps import StepClock
@@ -70,13 +71,14 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     eq. 27 (docs/trajectories.md); checked here first (a bad file: ConfigError, nothing written).
     """
     config_path = Path(config_path).resolve() if config_path else default_config_path()
-    cfg = load_config(config_path, arm=arm)
-    the_arm = arm_of(cfg)
+    document = load_config(config_path)  # the settings, built once: config file(s), arm file, rules
+    the_arm = document_arm(document, arm)
+    settings = with_rules(the_arm, document)
     joint_names = the_arm.joint_names
     if namespace is None:
         namespace = default_namespace(the_arm.name)
     if fault_args is not None:
-        cfg = apply_fault_flags(cfg, fault_args, joint_names)
+        settings = apply_fault_flags(settings, fault_args)
     try:
         check_namespace(namespace)
     except ValueError as exc:
@@ -85,7 +87,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         raise ConfigError(f"--restart: expected resume or fresh, got {restart!r}")
     namespaces = parse_netns(netns or [])
     if duration_s is None:
-        duration_s = cfg["simulation"]["duration_s"]
+        duration_s = settings.simulation.duration_s
     if not (math.isfinite(duration_s) and duration_s > 0):
         raise ConfigError(f"--duration: must be a positive finite number of seconds, got {duration_s}")
     own_robot = plant == "mujoco"
@@ -107,7 +109,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         check_priority(rt_priority)
     except ValueError:
         raise ConfigError(f"--rt-priority: must be 0 (off) or 1..99, got {rt_priority}") from None
-    dt = cfg["simulation"]["dt_s"]
+    dt = settings.simulation.dt_s
     try:
         check_clock_hz(clock_hz, dt)
         if clock_hz == 0:
@@ -120,7 +122,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     check_run_size("--duration", duration_s, n_steps, len(joint_names), graph=True, say=say_note,
                    wall_s=n_steps * dt / real_time_factor if mode == "realtime" else None)
     if trajectory is not None:  # the file read and checked as the reference node will: one line, exit 2
-        load_reference_trajectory(cfg, trajectory)
+        load_reference_trajectory(settings, trajectory)
         trajectory = Path(trajectory).resolve()
     if bag_compression not in COMPRESSIONS:
         raise ConfigError(f"--bag-compression: expected one of {', '.join(COMPRESSIONS)}, got {bag_compression!r}")
@@ -147,9 +149,9 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         check_creatable(record, "--record")
         lock_output(record, "bag")
         check_bag_path(record, force)
-    if controller == "dnbs":  # auto resolved (and c built) once here, before the seven controllers start; the
+    if controller == "dnbs":  # auto resolved (and c built) once here, before the joint controllers start; the
         # nodes read the resolved kernel from config_used.yaml (KernelBuildError if c cannot be built)
-        cfg = resolve_kernel(cfg, say=lambda line: print(f"launch: {line}", flush=True))
+        settings = resolve_kernel(settings, say=lambda line: print(f"launch: {line}", flush=True))
     opt = GraphOptions(config_path=config_path, mode=mode, controller=controller, duration_s=n_steps * dt,
                        domain_id=domain_id, reliability=reliability, effort_timeout_s=effort_timeout_s,
                        on_missing_effort=on_missing_effort, progress=progress, dt_s=dt, record_bag=record,
@@ -160,35 +162,37 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                        clock_hz=clock_hz, joint_names=joint_names, trajectory_file=trajectory,
                        **robot_fields)
     reliability = loop_reliability(opt)
-    settings = metrics_settings(cfg, n_steps * dt)
-    window = settings["window_s"]
+    measured = metrics_settings(settings, n_steps * dt)
+    window = measured["window_s"]
 
     try:
         with atomic_output_dir(out, force) as tmp:
             try:
                 used = tmp / "config_used.yaml"
-                used.write_text(yaml.safe_dump(plain(cfg), sort_keys=False))
-                result = run_graph(dataclasses.replace(opt, config_path=used), tmp, say=lambda s: print(s, flush=True),
+                used.write_text(yaml.safe_dump(plain(settings.to_config()), sort_keys=False))
+                ros_params = write_params_file(tmp / "ros_params.yaml", settings, controller, namespace)
+                result = run_graph(dataclasses.replace(opt, config_path=used, params_file=ros_params), tmp,
+                                   say=lambda s: print(s, flush=True),
                                    on_hard_stop=lambda: _hard_stop_cleanup(tmp, out))
                 stats = result.stats
                 if record is None:
                     run, missing = load_wire_run(result.wire_file, controller, joint_names,
-                                                 cfg["plant"]["torque_limit_nm"], stats["wall_time_s"])
+                                                 settings.plant.torque_limit_nm, stats["wall_time_s"])
                     source = (f"the wire monitor's record of {ArmTopics(namespace).joint_states} "
                               "and the reference topics")
                 else:
-                    run, missing = _bag_run(record, dt, n_steps, controller, cfg, stats["wall_time_s"],
+                    run, missing = _bag_run(record, dt, n_steps, controller, settings.plant.torque_limit_nm, stats["wall_time_s"],
                                             lockstep_stats=stats if mode == "lockstep" else None, clock_hz=clock_hz)
                     source = f"the bag's {ArmTopics(namespace).joint_states} and reference topics ({record})"
                 if missing:
                     raise GraphFailure(f"the record of the run is incomplete: {missing}")
                 metrics = metrics_dict(
-                    run, settings, source="ros-graph", mode=mode, config_file=str(config_path),
-                    seed=cfg["simulation"]["seed"], reliability=reliability, domain_id=result.domain_id,
+                    run, measured, source="ros-graph", mode=mode, config_file=str(config_path),
+                    seed=settings.simulation.seed, reliability=reliability, domain_id=result.domain_id,
                     wall_time_total_s=result.wall_total_s, limit_hits=stats["limit_hits"],
                     timing=timing_summary(stats, result.controllers, sched_batch),
                     node_exit_codes=result.exit_codes, bag=str(record) if record else None,
-                    faults=fault_report(cfg, stats, result),
+                    faults=fault_report(settings, stats, result),
                     **({"warm_start_from": str(init_from)} if init_from is not None else {}))
                 notes = [f"config: `{config_path}`",
                          f"arm: {the_arm.name} ({the_arm.description}), `{the_arm.file}`",
@@ -206,13 +210,13 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                                  "docs/your_robot.md)")
                 if init_from is not None:
                     notes.append(f"DNBS warm-started from the checkpoints in `{init_from}` (not a cold start)")
-                if faults_active(cfg) or result.restarts:
+                if faults_active(settings.faults) or result.restarts:
                     notes.append(fault_note(metrics["faults"]))
                 elif mode == "lockstep" and (nondeterministic := _unforced_timeouts(stats, effort_timeout_s)):
                     notes.append(nondeterministic)
                     print(f"pa10-dnbs launch: warning: {nondeterministic}", file=sys.stderr, flush=True)
-                if tuple(window) != tuple(cfg["simulation"]["window_s"]):
-                    notes.append(f"run shorter than the configured window {interval(cfg['simulation']['window_s'])} s: "
+                if tuple(window) != tuple(settings.simulation.window_s):
+                    notes.append(f"run shorter than the configured window {interval(settings.simulation.window_s)} s: "
                                  "metrics over the second half instead")
                 write_report(tmp, [run], [metrics], title=f"{the_arm.description}: node graph run ({mode})",
                              notes=notes, chain=the_arm.chain, figures=figures)
@@ -233,7 +237,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         print(f"realtime --rtf {t['target_real_time_factor']:g}: every effort before the deadline on "
               f"{100 * t['on_time_fraction']:.2f} % of ticks, late tick starts {t['late_start_ticks']}")
         if t["on_time_fraction"] < ON_TIME_TARGET:
-            print(realtime_hint(t["target_real_time_factor"], t["rt_priority_applied"], injected_misses(cfg)))
+            print(realtime_hint(t["target_real_time_factor"], t["rt_priority_applied"], injected_misses(settings.faults)))
     if record is not None:
         size = sum(f.stat().st_size for f in record.iterdir())
         print(f"recorded {record} ({size / 1e6:.1f} MB, {size / 1e6 / (n_steps * dt):.2f} MB per simulated second, "
@@ -262,7 +266,7 @@ def _keep_logs(exc: GraphFailure, tmp: Path, out: Path) -> GraphFailure:
     return GraphFailure(f"{message}\nthe nodes' logs and command lines are kept in {kept / 'logs'}")
 
 
-def _bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, cfg: dict, wall_time_s: float,
+def _bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, torque_limit_nm, wall_time_s: float,
              lockstep_stats: dict | None, clock_hz: float = DEFAULT_CLOCK_HZ):
     """(RunData, what is missing or None) rebuilt from the bag just recorded; a bad bag is a failed run.
 
@@ -300,7 +304,7 @@ def _bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, cfg: dict
         lost = expected - seen
         if lost:
             problems.append(f"{topic} lacks {len(lost)} steps (first {min(lost)})")
-    run = rec.run_data(controller, joint_names, cfg["plant"]["torque_limit_nm"], wall_time_s)
+    run = rec.run_data(controller, joint_names, torque_limit_nm, wall_time_s)
     return run, "; ".join(problems) or None
 
 

@@ -8,11 +8,12 @@ from pathlib import Path
 
 from ..bag.analysis import bag_joint_names, run_info
 from ..bag.bag_reader import Bag, BagError
-from ..config import ConfigError, default_config_path, load_config
+from ..config import ConfigError, default_config_path
 from ..live.options import check_live_options
 from ..live.schemas import live_channels
 from ..live.server import LiveServer, LiveServerError
 from ..live.view import LiveView
+from ..run_settings import build_settings
 from ..wire.topics import ArmTopics, check_namespace, find_arm
 
 
@@ -24,7 +25,7 @@ def run_replay(bag_path: Path, rate: float, topics: list[str] | None, start_offs
     process with the player node's exit code (as every node, without an rclpy teardown: ros/runtime.py).
 
     ``namespace``: publish the arm's topics under this namespace instead of the recorded one (None: as recorded).
-    ``live_port``: also serve the live view on ``live_host``:``live_port`` (0: a free port); its Table 2 limits
+    ``live_port``: also serve the live view on ``live_host``:``live_port`` (0: a free port); its torque limits
     and step come from ``config_path``, else the config stored in the bag, else the shipped default.
     """
     if not (math.isfinite(rate) and rate > 0):
@@ -80,10 +81,10 @@ def run_replay(bag_path: Path, rate: float, topics: list[str] | None, start_offs
 def _live_config(bag: Bag, config_path: Path | None) -> dict:
     """The config for the live view: ``config_path``, else the one stored in the bag, else the default."""
     if config_path is not None:
-        return load_config(config_path)
+        return build_settings(config_path).to_config()
     stored = run_info(bag).get("config")
     try:
         float(stored["simulation"]["dt_s"]), list(stored["plant"]["torque_limit_nm"])
         return stored
     except (KeyError, TypeError, ValueError):
-        return load_config(default_config_path())
+        return build_settings(default_config_path()).to_config()

@@ -14,8 +14,8 @@ import subprocess
 import sys
 from pathlib import Path
 
-from ..arm import arm_of
-from ..config import ConfigError, default_config_path, load_config
+from ..config import ConfigError, default_config_path
+from ..run_settings import build_settings
 from ..launch.shm_cleanup import remove_stale, shm_files
 from ..wire.clock_schedule import check_clock_hz
 
@@ -26,20 +26,20 @@ def robot_argv(config_path: Path | None, arm: str | None, mode: str, duration_s:
                command_topic: str, clock_hz: float) -> list[str]:
     """The node's argv after every check (ConfigError naming the flag or key)."""
     config_path = Path(config_path) if config_path else default_config_path()
-    cfg = load_config(config_path, arm=arm)
+    settings = build_settings(config_path, arm=arm)
     if mode not in ROBOT_MODES:
         raise ConfigError(f"--mode: must be one of {', '.join(ROBOT_MODES)}, got {mode!r}")
     duration_s = 0.0 if duration_s is None else duration_s
     if not (math.isfinite(duration_s) and duration_s >= 0):
         raise ConfigError(f"--duration: must be >= 0 seconds (0: until Ctrl-C), got {duration_s}")
     try:
-        check_clock_hz(clock_hz, cfg["simulation"]["dt_s"])
+        check_clock_hz(clock_hz, settings.simulation.dt_s)
     except ValueError as exc:
         raise ConfigError(f"--clock-hz: {exc}") from None
     for flag, topic in (("--state-topic", state_topic), ("--command-topic", command_topic)):
         if not topic or " " in topic:
             raise ConfigError(f"{flag}: expected a topic name, got {topic!r}")
-    params = {"config_file": config_path.resolve(), "arm": arm_of(cfg).file, "mode": mode, "duration_s": duration_s,
+    params = {"config_file": config_path.resolve(), "arm": settings.arm.file, "mode": mode, "duration_s": duration_s,
               "state_topic": state_topic, "command_topic": command_topic, "clock_hz": float(clock_hz)}
     args = [sys.executable, "-m", "pa10_dnbs.ros.mujoco_robot_node", "--ros-args", "-r", "__node:=mujoco_robot"]
     for k, v in params.items():

@@ -6,7 +6,6 @@ import shutil
 from pathlib import Path
 
 from ..accel.choice import resolve_kernel
-from ..arm import arm_of
 from ..config import ConfigError, default_config_path, load_config
 from ..controller_factory import load_reference_trajectory
 from ..core.checkpoint import load_joint_checkpoints, save_checkpoint
@@ -16,6 +15,7 @@ from ..report.markdown import report_markdown
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report, write_run
 from ..report.partial import partial_banner, write_partial_mark
+from ..run_settings import document_arm, with_rules
 from ..run_size import check_run_size, say_note
 from ..sim.closed_loop import simulate
 
@@ -35,16 +35,17 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
     output directory, or a directory of ``<joint>.npz``); the report says so.
     """
     config_path = Path(config_path) if config_path else default_config_path()
-    cfg = load_config(config_path, arm=arm)
-    the_arm = arm_of(cfg)
+    document = load_config(config_path)  # the settings, built once: config file(s), arm file, rules
+    the_arm = document_arm(document, arm)
+    settings = with_rules(the_arm, document)
     if duration_s is None:
-        duration_s = cfg["simulation"]["duration_s"]
+        duration_s = settings.simulation.duration_s
     if not (math.isfinite(duration_s) and duration_s > 0):
         raise ConfigError(f"--duration: must be a positive finite number of seconds, got {duration_s}")
-    n_steps = int(round(duration_s / cfg["simulation"]["dt_s"]))
+    n_steps = int(round(duration_s / settings.simulation.dt_s))
     if n_steps < 2:
         raise ConfigError(f"--duration: {duration_s} s is shorter than two steps")
-    duration_s = n_steps * cfg["simulation"]["dt_s"]
+    duration_s = n_steps * settings.simulation.dt_s
     kinds = CHOICES[controller]
     check_run_size("--duration", duration_s, n_steps, len(the_arm.joint_names), kept_runs=len(kinds),
                    total_runs=len(kinds), say=say_note)
@@ -56,22 +57,22 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
             init_states = load_joint_checkpoints(init_from, the_arm.joint_names)
         except ValueError as exc:
             raise ConfigError(f"--init-from: {exc}") from None
-    traj = load_reference_trajectory(cfg, trajectory) if trajectory is not None else None
+    traj = load_reference_trajectory(settings, trajectory) if trajectory is not None else None
     check_output_dir(out, force)
     if "dnbs" in kinds:
-        cfg = resolve_kernel(cfg, say=print)  # dnbs.kernel: auto -> c or numpy, said in one line
-    settings = metrics_settings(cfg, duration_s)
+        settings = resolve_kernel(settings, say=print)  # dnbs.kernel: auto -> c or numpy, said in one line
+    measured = metrics_settings(settings, duration_s)
     runs, metrics = [], []
     try:
         for kind in kinds:
-            run = simulate(cfg, kind, duration_s, progress=progress,
+            run = simulate(settings, kind, duration_s, progress=progress,
                            init_states=init_states if kind == "dnbs" else None, engine=engine, trajectory=traj)
             extra = ({"warm_start_from": str(Path(init_from).resolve())}
                      if init_states is not None and kind == "dnbs" else {})
             if engine != "pybullet":
                 extra["engine"] = engine
-            metrics.append(metrics_dict(run, settings, source="in-process", config_file=str(config_path.resolve()),
-                                        seed=cfg["simulation"]["seed"], limit_hits=run.extra["limit_hits"], **extra))
+            metrics.append(metrics_dict(run, measured, source="in-process", config_file=str(config_path.resolve()),
+                                        seed=settings.simulation.seed, limit_hits=run.extra["limit_hits"], **extra))
             runs.append(run)
             print(_summary_line(metrics[-1]), flush=True)   # as each controller finishes
     except KeyboardInterrupt:
@@ -94,8 +95,8 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
     if "ctc" in kinds:
         notes.append("CTC: centralized computed torque with the plant's own model (the reference a decentralized "
                      "controller is compared to; in-process only)")
-    if tuple(settings["window_s"]) != tuple(cfg["simulation"]["window_s"]):
-        notes.append(f"run shorter than the configured window {interval(cfg['simulation']['window_s'])} s: "
+    if tuple(measured["window_s"]) != tuple(settings.simulation.window_s):
+        notes.append(f"run shorter than the configured window {interval(settings.simulation.window_s)} s: "
                      f"metrics over the second half instead")
     with atomic_output_dir(out, force) as tmp:
         write_report(tmp, runs, metrics, title=f"{the_arm.description}: closed-loop run", notes=notes,

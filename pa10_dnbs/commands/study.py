@@ -14,6 +14,7 @@ from ..config import ConfigError, default_config_path, load_config
 from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, on_second_sigint, outputs_written, say
 from ..report.outputs import atomic_output_dir, check_output_dir
 from ..report.progress import ProgressBar
+from ..run_settings import document_arm, with_rules
 from ..run_size import check_run_size, say_note
 from ..sim.closed_loop import CONTROLLERS
 from ..study.feasibility import infeasible_scenarios
@@ -39,23 +40,24 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
     if workers is not None and workers < 1:
         raise ConfigError(f"--jobs: must be >= 1, got {workers}")
     config_path = Path(config_path) if config_path else default_config_path()
-    cfg = load_config(config_path, arm=arm)
-    n_runs, n_steps = len(scen) * len(ctrl) * seeds, int(round(duration_s / cfg["simulation"]["dt_s"]))
+    document = load_config(config_path)  # the settings, built once: config file(s), arm file, rules
+    settings = with_rules(document_arm(document, arm), document)
+    n_runs, n_steps = len(scen) * len(ctrl) * seeds, int(round(duration_s / settings.simulation.dt_s))
     at_once = 1 if scheduler is not None else min(n_runs, workers or os.cpu_count() or 1)
-    check_run_size("--duration", duration_s, n_steps, len(cfg["plant"]["torque_limit_nm"]), at_once=at_once,
+    check_run_size("--duration", duration_s, n_steps, settings.n_joints, at_once=at_once,
                    total_runs=n_runs, say=say_note)
     check_output_dir(out, force)
-    infeasible = infeasible_scenarios(cfg, scen, duration_s)   # before any run: one line each, not run
+    infeasible = infeasible_scenarios(settings, scen, duration_s)   # before any run: one line each, not run
     for line in infeasible.values():
         print(f"study: {line}")
     if len(infeasible) == len(scen):
-        raise ConfigError(f"--scenarios: every scenario chosen is infeasible on arm {cfg['arm']} (lines above): "
+        raise ConfigError(f"--scenarios: every scenario chosen is infeasible on arm {settings.arm.file} (lines above): "
                           "nothing to run")
     asked, scen = scen, [s for s in scen if s not in infeasible]
     if "dnbs" in ctrl:
-        cfg = resolve_kernel(cfg, say=print)  # once here, not in each worker
+        settings = resolve_kernel(settings, say=print)  # once here, not in each worker
     n = len(scen) * len(ctrl) * seeds
-    dt = cfg["simulation"]["dt_s"]
+    dt = settings.simulation.dt_s
     steps_per_run = int(round(duration_s / dt))
     bar = ProgressBar(n * steps_per_run, dt, f"study ({n} runs)", enabled=None if progress else False)
     done = []
@@ -68,10 +70,10 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
                f"--duration {duration_s:g} --out {shlex.quote(str(out))}"
                + (f" --config {shlex.quote(str(config_path))}" if config_path != default_config_path() else "")
                + (f" --arm {shlex.quote(str(arm))}" if arm is not None else ""))
-    head = {"config_file": str(config_path.resolve()), "arm": cfg["arm"], "duration_s": duration_s,
+    head = {"config_file": str(config_path.resolve()), "arm": str(settings.arm.file), "duration_s": duration_s,
             **({"infeasible": infeasible} if infeasible else {})}
     try:
-        rows = run_study(cfg, scen, ctrl, seeds, duration_s, workers, on_done=finished, scheduler=scheduler)
+        rows = run_study(settings, scen, ctrl, seeds, duration_s, workers, on_done=finished, scheduler=scheduler)
     except KeyboardInterrupt:   # the workers are stopped (study/executor.py); the completed runs are kept
         bar.close()
         return _keep_partial(out, force, done, list(product(scen, ctrl, range(seeds))), command, head)

@@ -16,7 +16,7 @@ import sys
 import time
 from pathlib import Path
 
-from ..arm import arm_of, preset_names
+from ..arm import load_arm, preset_names
 from ..atomic_file import atomic_path
 from ..config import ConfigError, default_config_path, load_config
 from ..interrupt import EXIT_INTERRUPTED, check, deferred, immediate, on_second_sigint, say
@@ -29,6 +29,7 @@ from .name_list import name_list
 from ..tune.report import held_out_table, held_out_verdict, tune_figures, tune_markdown, tuned_yaml
 from ..tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 from ..tune.space import select, start_values
+from ..run_settings import document_arm, with_rules
 from ..tune.tuner import TrialProgress, TuneSpec, completed, held_out, open_storage, open_study, optimize
 
 HELD_OUT_SEED0 = 100   # held-out seeds are 100, 101, ...: never a training seed (0 .. --seeds - 1)
@@ -59,9 +60,10 @@ def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, co
         raise ConfigError(f"--out: {out} exists and is not a directory")
     check_creatable(out, "--out")
     config_path = Path(config_path) if config_path else default_config_path()
-    base_cfg = load_config(config_path, arm=arm)
-    the_arm = arm_of(base_cfg)
-    n_steps = int(round(duration_s / base_cfg["simulation"]["dt_s"]))
+    document = load_config(config_path)  # the settings, built once: config file(s), arm file, rules
+    the_arm = document_arm(document, arm)
+    base = with_rules(the_arm, document)
+    n_steps = int(round(duration_s / base.simulation.dt_s))
     if n_steps < 2:
         raise ConfigError(f"--duration: {duration_s} s is shorter than two steps")
     runs_per_trial = len(train) * seeds
@@ -69,7 +71,7 @@ def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, co
     check_run_size("--duration", duration_s, n_steps, len(the_arm.joint_names), at_once=at_once,
                    total_runs=runs_per_trial * trials, say=say_note)
     spec = TuneSpec(the_arm.name, controller, param_list, train, list(range(seeds)), duration_s,
-                    str(config_path.resolve()), seed, start_values(controller, base_cfg))
+                    str(config_path.resolve()), seed, start_values(controller, base))
     command = _command(controller, trials, out, arm, config_path, storage, seed, scenarios, seeds, held_out_seeds,
                        duration_s, params)
     lock_output(out)  # a second tune into DIR at once is refused (the same command later resumes)
@@ -82,7 +84,7 @@ def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, co
         with deferred():   # a Ctrl-C stops the tune between two storage operations, never inside one
             with immediate():   # seconds of imports on a busy machine: a Ctrl-C stops them at once
                 import optuna  # noqa: F401
-            return _tune(state, spec, base_cfg, trials, out, storage, jobs, scheduler, train, seeds, held_out_seeds,
+            return _tune(state, spec, base, trials, out, storage, jobs, scheduler, train, seeds, held_out_seeds,
                          controller, the_arm, config_path, command, progress)
     except KeyboardInterrupt:
         if state["bar"] is not None:
@@ -108,7 +110,7 @@ def _interrupted_line(state: dict, trials: int, where_kept: str) -> str:
             "reports were all written: run the same command to finish them")
 
 
-def _tune(state, spec, base_cfg, trials, out, storage, jobs, scheduler, train, seeds, held_out_seeds, controller,
+def _tune(state, spec, base, trials, out, storage, jobs, scheduler, train, seeds, held_out_seeds, controller,
           the_arm, config_path, command, progress) -> int:
     """The search, the held-out runs and the reports; ``state`` says how far it got (for an interruption)."""
     with Executor(jobs, scheduler) as ex:   # an unreachable scheduler stops here, before any storage is touched
@@ -122,21 +124,21 @@ def _tune(state, spec, base_cfg, trials, out, storage, jobs, scheduler, train, s
         state["study"], state["phase"] = study, "trials"
         t0 = time.monotonic()
         bar = state["bar"] = TrialProgress(study, trials, f"tune {controller} on {the_arm.name}", progress)
-        optimize(study, spec, base_cfg, trials, ex, bar)
+        optimize(study, spec, base, trials, ex, bar)
         bar.close()
         state["bar"], state["phase"] = None, "reports"
         trials_done = completed(study)
         best = min(trials_done, key=lambda t: t.value)
         start = next((t for t in trials_done if t.user_attrs.get("start")), None)
         held_scen, held_seeds = list(SCENARIOS), list(range(HELD_OUT_SEED0, HELD_OUT_SEED0 + held_out_seeds))
-        held = held_out(base_cfg, spec, best.params, held_scen, held_seeds, ex) if held_out_seeds else None
+        held = held_out(base, spec, best.params, held_scen, held_seeds, ex) if held_out_seeds else None
         where = ex.where
     wall = time.monotonic() - t0
     check()
     out.mkdir(parents=True, exist_ok=True)
-    arm_value = the_arm.name if the_arm.name in preset_names() and arm_of({"arm": the_arm.name}).file == the_arm.file \
+    arm_value = the_arm.name if the_arm.name in preset_names() and load_arm(the_arm.name).file == the_arm.file \
         else str(the_arm.file)
-    _write(out / "tuned.yaml", tuned_yaml(spec, base_cfg, best.params, arm_value, config_path, [
+    _write(out / "tuned.yaml", tuned_yaml(spec, base, best.params, arm_value, config_path, [
         f"{controller} on {the_arm.name} tuned by: {command}",
         f"trial {best.number} of study {spec.study_name}, objective {best.value:.4f} (docs/tuning.md)",
         f"run it: pa10-dnbs simulate --config {out / 'tuned.yaml'} --controller {controller} --out DIR"]))

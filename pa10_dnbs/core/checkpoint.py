@@ -5,7 +5,7 @@ a temporary sibling and renamed, so a process killed mid-write leaves the
 previous checkpoint intact. The archive is built in memory and written in
 one call (~0.3 ms of CPU, against ~0.5 ms for ``np.savez`` on the file).
 Periodic saves of the joints are spread over the period
-(``checkpoint_phase``): seven controllers saving on one step put a few ms
+(``checkpoint_phase``): the joint controllers all saving on one step put a few ms
 of CPU into one tick.
 """
 from __future__ import annotations

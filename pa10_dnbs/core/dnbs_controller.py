@@ -3,13 +3,13 @@
 Joint i's controller (the i-th of the bank's n joints) reads only its own
 angle x1 [rad], velocity x2 [rad/s] and reference; its two networks are rows
 i (alpha) and n + i (torque) of one EKF bank. A joint-controller node holds
-one joint; the in-process simulation holds all seven. The arithmetic of a
+one joint; the in-process simulation holds all the arm's joints. The arithmetic of a
 row does not depend on the other rows, so both agree bit for bit
 (test/test_dnbs_controller.py checks it).
 
 Per joint, at step k:
     alpha = A w1^T S1(z1) + x_d_dot + k_a e1    z1 = [x1, x_d(k+2)]     virtual control [rad/s]
-    u     = U w2^T S2(z2) + k_u e2              z2 = [x1, x2, alpha]    torque [N m], clipped to Table 2
+    u     = U w2^T S2(z2) + k_u e2              z2 = [x1, x2, alpha]    torque [N m], clipped to the limits
     e1 = x_d(k) - x1,   e2 = alpha - x2
 Both HONNs (w1, w2) are trained every step by an EKF with learning rate
 eta in (0, 1] (eq. 7) on the dimensionless errors e1/E1 and e2/E2. A [rad/s]
@@ -162,7 +162,7 @@ def _per_joint(value, n: int) -> np.ndarray:
 
 def initial_weights(seed: int, joint: int, n_alpha: int, n_torque: int, std_alpha: float, std_torque: float):
     """Joint ``joint``'s random initial weights (the paper: "initialized in a random way"), seeded by
-    (seed, joint): the same in a bank of one as in a bank of seven."""
+    (seed, joint): the same in a bank of one as in a bank of all the arm's joints."""
     rng = np.random.default_rng((seed, joint))
     return rng.normal(0.0, std_alpha, n_alpha), rng.normal(0.0, std_torque, n_torque)
 
@@ -179,7 +179,10 @@ def max_slope(exponents: np.ndarray, input_scale, p: int) -> float:
 
 
 class DNBSControllers:
-    """The DNBS controllers of joints ``joints`` (indices 0..6), one per row; see the module docstring."""
+    """The DNBS controllers of joints ``joints`` (indices 0..n-1 of the arm), one per row; see the module
+    docstring. A :class:`~pa10_dnbs.core.controller_bank.ControllerBank` that learns."""
+
+    learns = True
 
     def __init__(self, params: DNBSParams, seed: int, joints):
         joints = [int(j) for j in joints]
@@ -243,7 +246,7 @@ class DNBSControllers:
         self._z2 = np.empty((n, 3))
         self._ones = np.ones(n)
         self.alpha = np.zeros(n)                 # last virtual control [rad/s]
-        self.torque_unsaturated = np.zeros(n)    # last torque before the Table 2 clip [N m]
+        self.torque_unsaturated = np.zeros(n)    # last torque before the torque-limit clip [N m]
         self.steps = 0                           # steps trained
         self._pending = None                     # (e1, e2, u, active) of an answer not yet trained on
         self.ekf_resets = {"alpha": np.zeros(n, dtype=np.int64), "torque": np.zeros(n, dtype=np.int64)}
@@ -377,6 +380,10 @@ class DNBSControllers:
             n = self.n_joints
             self.ekf_resets["alpha"] += bad[:n]
             self.ekf_resets["torque"] += bad[n:]
+
+    def counters(self, row: int = 0) -> dict[str, int]:
+        """Row ``row``'s EKF resets (``ekf_resets_alpha``, ``ekf_resets_torque``), for the run's report."""
+        return {f"ekf_resets_{k}": int(v[row]) for k, v in self.ekf_resets.items()}
 
     def state_dict(self, row: int = 0) -> dict[str, np.ndarray]:
         """Row ``row``'s weights (L,), covariances (L, L), initial weights and counters (for np.savez), after

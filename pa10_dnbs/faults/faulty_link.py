@@ -43,10 +43,11 @@ class FaultyLink:
             self._line.close()
 
 
-def links_from_config(cfg: dict, direction: str, joint: int, publish, limit: float) -> FaultyLink | None:
-    """The link of joint ``joint`` for ``direction`` 'state' or 'effort', or None when it has no faults."""
-    faults = LinkFaults.from_config(cfg["faults"][direction], joint)
-    if not faults.active:
+def faulty_link(faults, direction: str, joint: int, publish, limit: float) -> FaultyLink | None:
+    """The link of joint ``joint`` for ``direction`` 'state' or 'effort', or None when it has no faults
+    (``faults``: a run's fault settings, ``settings.faults``)."""
+    link = LinkFaults.of(getattr(faults, direction), joint)
+    if not link.active:
         return None
-    seed = (cfg["faults"]["seed"], joint, 0 if direction == "state" else 1)
-    return FaultyLink(faults, seed, publish, limit)
+    seed = (faults.seed, joint, 0 if direction == "state" else 1)
+    return FaultyLink(link, seed, publish, limit)

@@ -34,11 +34,12 @@ class LinkFaults:
         return bool(self.drop_fraction or self.delay_s or self.jitter_s or self.corrupt_fraction)
 
     @classmethod
-    def from_config(cls, section: dict, joint: int) -> "LinkFaults":
-        """From ``cfg['faults']['state' | 'effort']`` (validated) for joint index ``joint``."""
-        return cls(drop_fraction=section["drop_fraction"][joint], delay_s=section["delay_ms"][joint] / 1e3,
-                   jitter_s=section["jitter_ms"][joint] / 1e3, corrupt_fraction=section["corrupt_fraction"][joint],
-                   corrupt_kind=section["corrupt_kind"])
+    def of(cls, link, joint: int) -> "LinkFaults":
+        """From the settings of one link direction (``settings.faults.state`` or ``.effort``: per-joint
+        drop_fraction, delay_ms, jitter_ms, corrupt_fraction and a corrupt_kind) for joint index ``joint``."""
+        return cls(drop_fraction=link.drop_fraction[joint], delay_s=link.delay_ms[joint] / 1e3,
+                   jitter_s=link.jitter_ms[joint] / 1e3, corrupt_fraction=link.corrupt_fraction[joint],
+                   corrupt_kind=link.corrupt_kind)
 
 
 class Fate(NamedTuple):

@@ -6,10 +6,11 @@ default). Errors name the flag (ConfigError, exit code 2).
 from __future__ import annotations
 
 import argparse
-import copy
+from dataclasses import fields
 
 from ..config import ConfigError
 from ..faults.link_faults import CORRUPT_KINDS
+from ..settings import FaultSettings, Settings, replace_in
 
 LINK_FLAGS = {  # flag dest -> (direction, key)
     "drop_states": ("state", "drop_fraction"), "drop_efforts": ("effort", "drop_fraction"),
@@ -52,10 +53,10 @@ def _set(section: dict, key: str, joints: list[int], value) -> None:
     section[key] = tuple(values)
 
 
-def apply_fault_flags(cfg: dict, args: argparse.Namespace, joint_names: tuple[str, ...]) -> dict:
-    """A copy of ``cfg`` with the fault flags of ``args`` applied (``joint_names``: the arm's, chain order)."""
-    cfg = copy.deepcopy(cfg)
-    faults = cfg["faults"]
+def apply_fault_flags(settings: Settings, args: argparse.Namespace) -> Settings:
+    """``settings`` with the fault flags of ``args`` applied (validated again)."""
+    joint_names = settings.arm.joint_names
+    faults = settings.to_config()["faults"]
     if args.fault_joints:
         names = [n.strip() for n in args.fault_joints.split(",") if n.strip()]
         bad = [n for n in names if n not in joint_names]
@@ -100,13 +101,14 @@ def apply_fault_flags(cfg: dict, args: argparse.Namespace, joint_names: tuple[st
         if args.fault_seed < 0:
             raise ConfigError(f"--fault-seed: expected an integer >= 0, got {args.fault_seed}")
         faults["seed"] = args.fault_seed
-    return cfg
+    return replace_in(settings, "faults", FaultSettings.of(faults))
 
 
-def faults_active(cfg: dict) -> bool:
-    f = cfg["faults"]
-    links = any(any(v) for d in ("state", "effort") for k, v in f[d].items() if k != "corrupt_kind")
-    return links or any(t >= 0 for t in f["kill_controller_at_s"])
+def faults_active(faults: FaultSettings) -> bool:
+    """Whether any fault is injected (``settings.faults``)."""
+    links = any(any(getattr(link, f.name)) for link in (faults.state, faults.effort) for f in fields(link)
+                if f.name != "corrupt_kind")
+    return links or any(t >= 0 for t in faults.kill_controller_at_s)
 
 
 def plain(obj):

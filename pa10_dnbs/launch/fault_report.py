@@ -6,14 +6,15 @@ from .fault_flags import plain
 
 
 
-def fault_report(cfg: dict, plant_stats: dict, result) -> dict:
+def fault_report(settings, plant_stats: dict, result) -> dict:
     """{'configured': the faults section, 'joints': per joint plant + controller counters, 'restarts': [...]}."""
     joints = []
     for pj in plant_stats["joints"]:
         name = pj["name"]
         ctrl = result.controllers.get(name)
         joints.append({"name": name, "plant": {k: pj.get(k) for k in REPORT_KEYS}, "controller": ctrl})
-    return {"configured": plain(cfg["faults"]), "guards": plain(cfg["guards"]), "joints": joints,
+    used = settings.to_config()
+    return {"configured": plain(used["faults"]), "guards": plain(used["guards"]), "joints": joints,
             "restarts": result.restarts}
 
 

@@ -46,6 +46,7 @@ class GraphOptions:
     clock_hz: float = DEFAULT_CLOCK_HZ  # /clock rate [Hz of simulated time]; every node but the plant uses it
     joint_names: tuple[str, ...] = ()   # the arm's actuated joints, chain order: one controller process each
     trajectory_file: Path | None = None  # --trajectory: the reference node follows it from step 0 (not eq. 27)
+    params_file: Path | None = None  # the run's ROS params file (launch/params_file.py): the controllers' gains
     robot: str = ""                     # '' = the project's plant; 'external': the joint bus to a running robot
     robot_command: str = "joint_state"  # external: joint_state or forward:<controller> (docs/your_robot.md)
     robot_state_topic: str = ""         # external: the robot's JointState topic; '' = the command form's default
@@ -70,8 +71,8 @@ def loop_reliability(opt: GraphOptions) -> str:
     """QoS reliability of the per-joint state/effort topics: as given, else the run's default.
 
     Realtime: best effort, the sensor-data convention (a late sample is overwritten, not re-sent). Lockstep:
-    best effort too while the loop stays on one host and nothing records it: at most one state and seven
-    efforts are in flight, the shared-memory queues never overflow, and a sample lost anyway is re-requested
+    best effort too while the loop stays on one host and nothing records it: at most one state and one effort per
+    joint are in flight, the shared-memory queues never overflow, and a sample lost anyway is re-requested
     by the plant's resend (0.25 s), so the run stays the in-process run bit for bit; it saves the
     acknowledgements of reliable writers (lockstep 12 % faster here, docs/timing.md). Reliable when a bag
     records the run (the bag must hold every message, and a recorder that falls behind would lose best-effort

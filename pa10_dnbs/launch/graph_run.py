@@ -1,6 +1,6 @@
 """Run the whole node graph once: start, wait until ready, run, stop, collect.
 
-Nine node processes (reference, seven joint controllers, plant) and one
+The node processes (reference, one controller per joint, plant) and one
 observer that records what they send (the wire monitor, or with a bag the
 recorder), on a private ROS_DOMAIN_ID with
 discovery limited to this host. The launcher only supervises: it never joins

@@ -80,8 +80,9 @@ def controller_command(opt: GraphOptions, workdir: Path, joint: str, incarnation
         params["checkpoint_file"] = str(workdir / "checkpoints" / f"{joint}.npz")
         if opt.init_from is not None:
             params["init_file"] = str(opt.init_from / f"{joint}.npz")
+    files = ["--params-file", str(opt.params_file)] if opt.params_file is not None else []
     return [sys.executable, "-m", "pa10_dnbs.ros.joint_controller_node"] + _ros_args(f"joint_controller_{joint}",
-                                                                                    params, opt.namespace)
+                                                                                    params, opt.namespace) + files
 
 
 def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[tuple[str, list[str]]]:
@@ -93,27 +94,27 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
         return _ros_args(node, {**params, "sched_batch": str(opt.sched_batch).lower(), "use_sim_time": "true",
                                 "rt_priority": opt.rt_priority}, opt.namespace)
 
-    cfg = str(opt.config_path)
+    config_file = str(opt.config_path)
     if opt.record_bag is None:
         cmds = [("wire_monitor", py + ["pa10_dnbs.ros.wire_monitor"] + ros("wire_monitor", {
-                    "config_file": cfg, "duration_s": opt.duration_s, "out_file": str(wire_file)}))]
+                    "config_file": config_file, "duration_s": opt.duration_s, "out_file": str(wire_file)}))]
     else:  # the recorder is the observer: the run is rebuilt from the bag
         end_ns = int(round(opt.duration_s / opt.dt_s)) * int(round(opt.dt_s * 1e9))
         custom = [f"controller={opt.controller}", f"mode={opt.mode}", f"duration_s={opt.duration_s!r}",
-                  f"reliability={loop_reliability(opt)}", f"config_file={cfg}", f"clock_hz={opt.clock_hz!r}",
+                  f"reliability={loop_reliability(opt)}", f"config_file={config_file}", f"clock_hz={opt.clock_hz!r}",
                   f"namespace={opt.namespace}"]
         cmds = [("recorder", py + ["pa10_dnbs.ros.recorder_node"] + ros("recorder", {
-            "config_file": cfg, "bag": str(opt.record_bag), "force": str(opt.force_bag).lower(),
+            "config_file": config_file, "bag": str(opt.record_bag), "force": str(opt.force_bag).lower(),
             "topics": _yaml_list(graph_topics(opt.joint_names, opt.namespace)), "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns,
             "compression": opt.bag_compression}))]
     if opt.live_port is not None:  # display only: started after the observer, never waited for by the plant
         cmds.append((LIVE_VIEW, py + ["pa10_dnbs.ros.live_observer_node"] + ros(LIVE_VIEW, {
-            "config_file": cfg, "host": opt.live_host, "port": opt.live_port, "display_hz": opt.live_hz})))
+            "config_file": config_file, "host": opt.live_host, "port": opt.live_port, "display_hz": opt.live_hz})))
     # realtime: smaller reference batches, so that decoding one (in each controller) never costs a tick its
     # deadline; lockstep keeps 100 points per message (fewer messages, and timing does not matter there)
     batch = REALTIME_REFERENCE_BATCH if opt.mode == "realtime" else 100
     cmds.append(("reference", py + ["pa10_dnbs.ros.reference_node"] + ros(
-        "reference", {"config_file": cfg, "duration_s": opt.duration_s, "batch_steps": batch,
+        "reference", {"config_file": config_file, "duration_s": opt.duration_s, "batch_steps": batch,
                       "lookahead_steps": reference_lookahead(opt),
                       "reference_subscribers": 2,  # the joint's controller and the observer
                       **({"trajectory_file": str(opt.trajectory_file)} if opt.trajectory_file else {})})))
@@ -134,7 +135,7 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
                  "robot_command_topic": opt.robot_command_topic or "''", "robot_timeout_s": opt.robot_timeout_s}
     cmds.append((plant, py + [module] + _ros_args(plant, {
         **extra, "ready_nodes": _yaml_list(ready), "settle_s": 0.0,
-        "config_file": cfg, "mode": opt.mode, "duration_s": opt.duration_s, "reliability": loop_reliability(opt),
+        "config_file": config_file, "mode": opt.mode, "duration_s": opt.duration_s, "reliability": loop_reliability(opt),
         "effort_timeout_s": opt.effort_timeout_s, "on_missing_effort": opt.on_missing_effort,
         "real_time_factor": opt.real_time_factor, "deadline_fraction": opt.deadline_fraction,
         "rt_priority": opt.rt_priority,

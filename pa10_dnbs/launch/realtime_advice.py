@@ -6,15 +6,15 @@ ON_TIME_TARGET = 0.99  # ticks with every effort before the deadline that make a
 MISSING_BY_DESIGN = ("drop_fraction", "delay_ms", "jitter_ms")
 
 
-def injected_misses(cfg: dict) -> list[str]:
-    """The injected faults of ``cfg`` that lose or delay messages ('efforts dropped', ...), or []."""
+def injected_misses(faults) -> list[str]:
+    """The injected faults (``settings.faults``) that lose or delay messages ('efforts dropped', ...), or []."""
     words = {"drop_fraction": "dropped", "delay_ms": "delayed", "jitter_ms": "jittered"}
     out = []
     for direction in ("state", "effort"):
         for key in MISSING_BY_DESIGN:
-            if any(cfg["faults"][direction][key]):
+            if any(getattr(getattr(faults, direction), key)):
                 out.append(f"{direction}s {words[key]}")
-    if any(t >= 0 for t in cfg["faults"]["kill_controller_at_s"]):
+    if any(t >= 0 for t in faults.kill_controller_at_s):
         out.append("a controller killed")
     return out
 

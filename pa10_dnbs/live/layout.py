@@ -1,9 +1,9 @@
-"""The Foxglove layout of the live view (config/foxglove_layout.json), built from the joints and Table 2.
+"""The Foxglove layout of the live view (config/foxglove_layout.json), built from the joints and their torque limits.
 
 Written in the layout JSON the Foxglove app exports and imports (``configById``
 panel settings + a ``layout`` split tree): a 3D panel with the URDF arm from
-<ns>/robot_description posed by /tf, a plot of the seven tracking errors, a plot
-of the seven torques as fractions of their Table 2 limits with the limits at
+<ns>/robot_description posed by /tf, a plot of every joint's tracking error, a plot
+of every joint's torque as a fraction of its limit with the limits at
 -1 and 1, and the /diagnostics summary and detail panels. The same layout
 works for a live connection and for a recorded bag (which holds /tf and the
 URDF, but no <ns>/tracking: its plots then stay empty; see docs/live_view.md).
@@ -25,12 +25,12 @@ def _series(topic: str, field: str, j: int, label: str, colour: str) -> dict:
 
 
 def _plot(title: str, paths: list[dict], y_min=None, y_max=None) -> dict:
-    cfg = {"foxglovePanelTitle": title, "paths": paths, "showXAxisLabels": True, "showYAxisLabels": True,
+    panel = {"foxglovePanelTitle": title, "paths": paths, "showXAxisLabels": True, "showYAxisLabels": True,
            "showLegend": True, "legendDisplay": "floating", "showPlotValuesInLegend": True, "isSynced": True,
            "xAxisVal": "timestamp", "followingViewWidth": 10, "sidebarDimension": 240}
     if y_min is not None:
-        cfg["minYValue"], cfg["maxYValue"] = y_min, y_max
-    return cfg
+        panel["minYValue"], panel["maxYValue"] = y_min, y_max
+    return panel
 
 
 def layout(joint_names, torque_limit_nm, root_frame: str = "base_link", arm: ArmTopics = ArmTopics(),
@@ -39,7 +39,7 @@ def layout(joint_names, torque_limit_nm, root_frame: str = "base_link", arm: Arm
     errors = [_series(arm.tracking, "error_rad", j, name, COLOURS[j % len(COLOURS)]) for j, name in enumerate(joint_names)]
     torques = [_series(arm.tracking, "torque_over_limit", j, f"{name} (limit {lim:g} N m)", COLOURS[j % len(COLOURS)])
                for j, (name, lim) in enumerate(zip(joint_names, torque_limit_nm))]
-    torques += [_series(arm.tracking, "torque_fraction_limits", i, f"Table 2 limit ({sign})", LIMIT_COLOUR)
+    torques += [_series(arm.tracking, "torque_fraction_limits", i, f"torque limit ({sign})", LIMIT_COLOUR)
                 for i, sign in enumerate(("-", "+"))]
     three_d = {
         "foxglovePanelTitle": f"{title} (URDF from {arm.robot_description}, posed by /tf)",
@@ -59,7 +59,7 @@ def layout(joint_names, torque_limit_nm, root_frame: str = "base_link", arm: Arm
     config = {
         "3D!arm": three_d,
         "Plot!errors": _plot(f"Tracking error e = x_d - x [rad] ({arm.tracking})", errors),
-        "Plot!torques": _plot("Torque / Table 2 limit (limits at -1 and +1)", torques, -1.1, 1.1),
+        "Plot!torques": _plot("Torque / torque limit (limits at -1 and +1)", torques, -1.1, 1.1),
         "DiagnosticSummary!pa10": {"topicToRender": DIAGNOSTICS, "minLevel": 0, "pinnedIds": [],
                                    "hardwareIdFilter": "", "sortByLevel": True},
         "DiagnosticStatusPanel!pa10": {"topicToRender": DIAGNOSTICS, "collapsedSections": [],

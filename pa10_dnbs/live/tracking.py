@@ -18,7 +18,7 @@ SCHEMA_NAME = "pa10_dnbs/Tracking"
 _ARRAY = {"type": "array", "items": {"type": ["number", "null"]}}
 SCHEMA = {
     "title": SCHEMA_NAME,
-    "description": "Tracking error and torque of the seven joints at one displayed step (order of joint_names).",
+    "description": "Tracking error and torque of every joint at one displayed step (order of joint_names).",
     "type": "object",
     "properties": {
         "timestamp": {"type": "object", "description": "simulated time k T of the state",
@@ -29,10 +29,10 @@ SCHEMA = {
         "abs_error_rad": {**_ARRAY, "description": "|e| [rad]"},
         "position_rad": {**_ARRAY, "description": "x1(k) [rad]"},
         "reference_rad": {**_ARRAY, "description": "x_d(k) [rad]"},
-        "torque_nm": {**_ARRAY, "description": "torque applied over step k-1, after the Table 2 saturation [N m]"},
-        "torque_limit_nm": {**_ARRAY, "description": "Table 2 torque limit [N m]"},
+        "torque_nm": {**_ARRAY, "description": "torque applied over step k-1, after the torque-limit saturation [N m]"},
+        "torque_limit_nm": {**_ARRAY, "description": "the joint's torque limit [N m]"},
         "torque_over_limit": {**_ARRAY, "description": "torque_nm / torque_limit_nm (the limits are -1 and 1)"},
-        "torque_fraction_limits": {**_ARRAY, "description": "[-1, 1]: the Table 2 limits on torque_over_limit"},
+        "torque_fraction_limits": {**_ARRAY, "description": "[-1, 1]: the torque limits on torque_over_limit"},
         "worst_abs_error_rad": {"type": ["number", "null"],
                                 "description": "largest |e| over the frames shown so far [rad]"},
     },

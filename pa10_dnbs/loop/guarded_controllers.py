@@ -16,15 +16,15 @@ import math
 
 import numpy as np
 
+from ..core.controller_bank import ControllerBank
 from ..core.reference import ReferenceSample
 from ..core.state_guard import OK, REASONS, StateGuard
 
 
 class GuardedControllers:
-    """``controllers`` (a DNBS or PID bank with ``step(x1, x2, ref, active)``; a learning one also with
-    ``answer`` and ``learn``, see DNBSControllers) behind ``guard``."""
+    """``controllers`` (a ControllerBank: DNBS, PID or computed torque) behind ``guard``."""
 
-    def __init__(self, controllers, guard: StateGuard | None, on_bad_state: str = "hold"):
+    def __init__(self, controllers: ControllerBank, guard: StateGuard | None, on_bad_state: str = "hold"):
         if on_bad_state not in ("hold", "zero"):
             raise ValueError(f"on_bad_state must be 'hold' or 'zero', got {on_bad_state!r}")
         self.controllers = controllers
@@ -34,9 +34,9 @@ class GuardedControllers:
         self.bad_states = {r: np.zeros(n, dtype=np.int64) for r in REASONS}
         self.nonfinite_torques = np.zeros(n, dtype=np.int64)
         self.last_torque = np.zeros(n)
-        self._answer = getattr(controllers, "answer", controllers.step)
+        self._answer = controllers.answer
         # learn(): train on the last answer (a no-op for a controller that does not learn, or when done)
-        self.learn = getattr(controllers, "learn", _nothing)
+        self.learn = controllers.learn
 
     def step(self, x1: np.ndarray, x2: np.ndarray, ref: ReferenceSample) -> np.ndarray:
         """Torques (n,) [N m], always finite, for states x1 (n,) [rad], x2 (n,) [rad/s]; trains the controllers."""
@@ -80,6 +80,3 @@ class GuardedControllers:
         self.last_torque = u
         return u
 
-
-def _nothing() -> None:
-    """``learn`` of a controller that does not learn."""

@@ -89,7 +89,7 @@ class JointLoop:
     @property
     def learning_pending(self) -> bool:
         """True when the last answer has not been trained on yet (a PID controller never has any)."""
-        return getattr(self.controller, "learning_pending", False)
+        return self.controller.learning_pending
 
     def learn(self) -> None:
         """Train the controller on its last answer: call it after publishing what ``on_state`` or

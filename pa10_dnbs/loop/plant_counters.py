@@ -9,9 +9,9 @@ COUNTER_KEYS = FAULT_KEYS + ("missed_ticks", "resent_states")
 REPORT_KEYS = COUNTER_KEYS + ("timeout_ranges", "injected_state_faults")
 
 
-def plant_counters(gate, wire, resends, i: int) -> dict:
-    """COUNTER_KEYS of joint ``i`` from the effort gate (timeouts, non-finite, misses), the wire (out of range,
-    malformed) and the resend counts."""
-    values = (gate.timeouts[i], gate.nonfinite[i], wire.out_of_range[i], wire.malformed[i], gate.misses[i],
+def plant_counters(gate, endpoints, resends, i: int) -> dict:
+    """COUNTER_KEYS of joint ``i`` from the effort gate (timeouts, non-finite, misses), the plant's endpoints
+    (out of range, malformed) and the resend counts."""
+    values = (gate.timeouts[i], gate.nonfinite[i], endpoints.out_of_range[i], endpoints.malformed[i], gate.misses[i],
               resends[i])
     return {k: int(v) for k, v in zip(COUNTER_KEYS, values)}

@@ -9,7 +9,7 @@ thread's share of the CPU (same weight as the default policy) and only
 stops its wake-ups from preempting the running thread. The launcher's
 ``--sched-batch`` gives it to every node but the plant: the plant is the
 loop's clock, the others are work its messages trigger, and a controller
-woken by its state no longer interrupts the plant between two of its seven
+woken by its state no longer interrupts the plant between two of its
 state publishes (docs/timing.md, "SCHED_BATCH for everything but the plant":
 why it is opt-in).
 

@@ -4,29 +4,28 @@ from __future__ import annotations
 
 from typing import Callable
 
-from ..arm import Arm, arm_of
-from .from_config import initial_state, open_client, plant_from_config, plant_params
+from ..settings import Settings
+from .from_config import initial_state, open_client, plant_from_settings, plant_params
 
 ENGINES = ("pybullet", "mujoco")
 DEFAULT_ENGINE = "pybullet"
 
 
-def open_plant(cfg: dict, engine: str = DEFAULT_ENGINE, arm: Arm | None = None) -> tuple[object, Callable[[], None]]:
-    """(the arm's plant on ``engine``, reset to the configured initial state; the call that releases it).
+def open_plant(settings: Settings, engine: str = DEFAULT_ENGINE) -> tuple[object, Callable[[], None]]:
+    """(the settings' arm on ``engine``, reset to the configured initial state; the call that releases it).
 
-    ``cfg``: a validated config (its ``plant`` section and ``simulation.dt_s``); ``arm``: the config's own
-    when None. ValueError naming the engine when it is not one of ``ENGINES``."""
+    ValueError naming the engine when it is not one of ``ENGINES``."""
     if engine == "pybullet":
         client = open_client()
         try:
-            return plant_from_config(cfg, client, arm), client.disconnect
+            return plant_from_settings(settings, client), client.disconnect
         except BaseException:
             client.disconnect()
             raise
     if engine == "mujoco":
         from .mujoco_plant import MuJoCoArmPlant
 
-        plant = MuJoCoArmPlant(arm_of(cfg) if arm is None else arm, plant_params(cfg))
-        plant.reset(*initial_state(cfg))
+        plant = MuJoCoArmPlant(settings.arm, plant_params(settings))
+        plant.reset(*initial_state(settings))
         return plant, plant.close
     raise ValueError(f"engine: must be one of {', '.join(ENGINES)}, got {engine!r}")

@@ -1,10 +1,10 @@
-"""Build the PyBullet plant and its initial state from a validated config dict."""
+"""Build the PyBullet plant and its initial state from a run's typed settings."""
 from __future__ import annotations
 
 import numpy as np
 
-from ..arm import Arm, arm_of
 from ..interrupt import deferred
+from ..settings import Settings
 from .pybullet_plant import PlantParams, PyBulletArmPlant
 from .quiet_stdout import quiet_c_stdout
 
@@ -21,38 +21,36 @@ def open_client(gui: bool = False):
         return BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
 
 
-def plant_from_config(cfg: dict, client, arm: Arm | None = None) -> PyBulletArmPlant:
-    """The arm's plant with ``cfg['plant']`` parameters, reset to the configured initial state (``arm``: the
-    config's own when None)."""
-    arm = arm_of(cfg) if arm is None else arm
-    plant = PyBulletArmPlant(client, arm, plant_params(cfg))
-    q0, qd0 = initial_state(cfg)
+def plant_from_settings(settings: Settings, client) -> PyBulletArmPlant:
+    """The settings' arm on PyBullet with ``settings.plant``, reset to the configured initial state."""
+    plant = PyBulletArmPlant(client, settings.arm, plant_params(settings))
+    q0, qd0 = initial_state(settings)
     plant.reset(q0, qd0)
     return plant
 
 
-def plant_params(cfg: dict) -> PlantParams:
-    """The plant's parameters of a validated config (``plant`` section, ``simulation.dt_s``): either engine's."""
-    p = cfg["plant"]
+def plant_params(settings: Settings) -> PlantParams:
+    """The plant's parameters (``plant`` section, ``simulation.dt_s``): either engine's."""
+    p = settings.plant
     return PlantParams(
-        dt_s=cfg["simulation"]["dt_s"],
-        gravity_mps2=p["gravity_mps2"],
-        rotor_inertia_kgm2=p["rotor_inertia_kgm2"],
-        viscous_nms_per_rad=p["viscous_nms_per_rad"],
-        coulomb_nm=p["coulomb_nm"],
-        coulomb_smoothing_rad_s=p["coulomb_smoothing_rad_s"],
-        torque_limit_nm=p["torque_limit_nm"],
-        payload_kg=p["payload_kg"],
-        link_mass_scale=p["link_mass_scale"],
+        dt_s=settings.simulation.dt_s,
+        gravity_mps2=p.gravity_mps2,
+        rotor_inertia_kgm2=p.rotor_inertia_kgm2,
+        viscous_nms_per_rad=p.viscous_nms_per_rad,
+        coulomb_nm=p.coulomb_nm,
+        coulomb_smoothing_rad_s=p.coulomb_smoothing_rad_s,
+        torque_limit_nm=p.torque_limit_nm,
+        payload_kg=p.payload_kg,
+        link_mass_scale=p.link_mass_scale,
     )
 
 
-def initial_state(cfg: dict) -> tuple[np.ndarray, np.ndarray]:
+def initial_state(settings: Settings) -> tuple[np.ndarray, np.ndarray]:
     """x1(0) = x_d(0) + offset (x_d(0) = the reference's centre for eq. 27: 0 on the PA10), x2(0) = the
     configured velocity; (n,) each."""
-    sim = cfg["simulation"]
-    q0 = np.array(sim["initial_position_offset_rad"], float)
-    centre = np.array(cfg["reference"]["centre_rad"], float)
+    sim = settings.simulation
+    q0 = np.array(sim.initial_position_offset_rad, float)
+    centre = np.array(settings.reference.centre_rad, float)
     if np.any(centre != 0.0):
         q0 = centre + q0
-    return q0, np.array(sim["initial_velocity_rad_s"], float)
+    return q0, np.array(sim.initial_velocity_rad_s, float)

@@ -87,7 +87,7 @@ def error_figure(runs: list[RunData], path: Path, window_s: tuple[float, float] 
 
 
 def torque_figure(run: RunData, path: Path) -> None:
-    """Applied torque per joint with its limits (dotted; the PA10's are the paper's Table 2)."""
+    """Applied torque per joint with its limits (dotted)."""
     s = _stride(run.n_steps)
     t = run.time_s[::s]
     fig, axes = _grid(f"Applied torques ({run.controller.upper()}) and torque limits", len(run.joint_names))

@@ -7,7 +7,7 @@ from ..core.metrics import divergence, joint_metrics, run_metrics
 from ..run_data import RunData
 
 # metrics settings of configs written before the ``metrics`` section existed (bags of earlier runs)
-_DEFAULT_SETTINGS = {"settle_band_rad": 0.01, "startup_s": 0.2}
+DEFAULT_METRICS = {"settle_band_rad": 0.01, "startup_s": 0.2}
 
 
 def effective_window(duration_s: float, window_s: tuple[float, float]) -> tuple[float, float]:
@@ -17,11 +17,18 @@ def effective_window(duration_s: float, window_s: tuple[float, float]) -> tuple[
     return (duration_s / 2.0, duration_s)
 
 
-def metrics_settings(cfg: dict, duration_s: float) -> dict:
-    """window_s (the config's, or the second half of a shorter run), settle_band_rad [rad], startup_s [s]."""
-    m = cfg.get("metrics") or _DEFAULT_SETTINGS
-    return {"window_s": tuple(effective_window(duration_s, tuple(cfg["simulation"]["window_s"]))),
-            "settle_band_rad": float(m["settle_band_rad"]), "startup_s": float(m["startup_s"])}
+def metrics_settings(settings, duration_s: float) -> dict:
+    """window_s (the settings' window, or the second half of a shorter run), settle_band_rad [rad], startup_s
+    [s]. ``settings``: a run's :class:`~pa10_dnbs.settings.Settings`."""
+    m = settings.metrics
+    return window_settings(settings.simulation.window_s, m.settle_band_rad, m.startup_s, duration_s)
+
+
+def window_settings(window_s, settle_band_rad: float, startup_s: float, duration_s: float) -> dict:
+    """What :func:`metrics_dict` takes: the window [t0, t1] s (or the second half of a run shorter than it),
+    settle_band_rad [rad], startup_s [s]."""
+    return {"window_s": tuple(effective_window(duration_s, tuple(window_s))),
+            "settle_band_rad": float(settle_band_rad), "startup_s": float(startup_s)}
 
 
 def _worst_settling(values: list) -> float | None:

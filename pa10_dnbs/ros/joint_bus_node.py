@@ -23,16 +23,16 @@ from __future__ import annotations
 import time
 from typing import NoReturn
 
-from ..arm import arm_of
 from ..wire.robot_interface import default_state_topic, parse_robot_command
 from ..wire.steps import NS_PER_S
+from ..settings import Settings
 from .params import Param, ParameterError
 from .plant_node import PARAMS as PLANT_PARAMS
 from .plant_node import PlantNode
 from .joint_bus_paced import run_paced
 from .robot_link import RemoteRobot
 from .runtime import stop_requested
-from .wire import CLOCK
+from .endpoints import CLOCK
 
 PARAMS = {k: v for k, v in PLANT_PARAMS.items() if k != "interface"} | {
     "robot_timeout_s": Param(1.0, "wall time without a new state from the robot that makes it stale [s]", 0.0),
@@ -43,7 +43,7 @@ class JointBusNode(PlantNode):
     NODE_NAME = "joint_bus"
     PARAMS = PARAMS
 
-    def _open_plant(self, cfg: dict) -> RemoteRobot:
+    def _open_plant(self, settings: Settings) -> RemoteRobot:
         """The robot, once its first state is in (it sets whether the bus publishes /clock)."""
         p = self.p
         if not p["robot_timeout_s"] > 0:
@@ -52,7 +52,7 @@ class JointBusNode(PlantNode):
             command = parse_robot_command(p["robot_command"], p["robot_command_topic"] or None)
         except ValueError as exc:
             raise ParameterError(f"parameter robot_command: {exc}") from None
-        robot = RemoteRobot(self, arm_of(cfg), self.clock_.dt_ns, p["robot_state_topic"] or default_state_topic(command),
+        robot = RemoteRobot(self, settings.arm, self.clock_.dt_ns, p["robot_state_topic"] or default_state_topic(command),
                             command, p["robot_timeout_s"], stopped=stop_requested)
         self.robot = robot
         print(f"JOINT BUS {robot.state_topic} -> {command.topic} ({command.form}), joints "

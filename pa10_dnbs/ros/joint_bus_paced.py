@@ -5,7 +5,7 @@ graph's time) as the graph's next step. Its command goes out as soon as every co
 state that comes before that is the deadline: the efforts still missing are held or zeroed (``on_missing_effort``)
 and counted as misses of that tick (the effort gate's realtime accounting, so ``on_time_fraction`` says how often
 every answer beat the robot's next state), and that command still goes out, late, before the new state is
-forwarded. One wait set over the seven effort subscriptions and the robot's state subscription: the bus wakes
+forwarded. One wait set over the effort subscriptions (one per joint) and the robot's state subscription: the bus wakes
 for whichever comes. No new state within ``robot_timeout_s``: a stale robot (``RobotFault``).
 """
 from __future__ import annotations
@@ -20,9 +20,9 @@ HOUSEKEEPING_S = 0.05  # wall seconds between turns of the executor (timers, ser
 
 def run_paced(node, executor, stop) -> None:
     """Run ``node`` (a JointBusNode) behind a paced robot until its last step or ``stop``."""
-    robot, gate, wire = node.robot, node.gate, node.wire
+    robot, gate, endpoints = node.robot, node.gate, node.endpoints
     n = robot.n_joints
-    waits = SubscriptionWaitSet(node, list(wire.effort_subscriptions) + [robot.subscription])
+    waits = SubscriptionWaitSet(node, list(endpoints.effort_subscriptions) + [robot.subscription])
     clock = time.monotonic
     node.publish_state(0)
     sent = False  # the command answering the current state went out

@@ -42,11 +42,10 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
-from ..arm import arm_of
 from ..atomic_file import write_json
 from ..controller_factory import CONTROLLER_KINDS, build_guarded_controllers
 from ..core.checkpoint import checkpoint_due, checkpoint_phase, load_checkpoint, save_checkpoint
-from ..faults.faulty_link import links_from_config
+from ..faults.faulty_link import faulty_link
 from ..wire import joint_state_cdr
 from ..wire.trajectory_cdr import decode_first_joint
 from .diagnostics import DiagnosticsReporter, status, status_name
@@ -55,10 +54,10 @@ from ..loop.endpoint_match import MatchWait, Need
 from ..loop.joint_loop import JointLoop
 from ..loop.scheduling import apply_batch, apply_fifo, check_priority, policy_name
 from .params import (CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, check_choice, cli_parameter,
-                     declare, load_node_config)
+                     declare, gain_params, load_node_config, settings_with_gains)
 from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node
-from .wire import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
+from .endpoints import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
 from .wall_timer import wall_timer
 
 FAULT_KEYS = ("bad_states_nonfinite", "bad_states_position", "bad_states_speed", "nonfinite_torques",
@@ -67,7 +66,8 @@ FAULT_KEYS = ("bad_states_nonfinite", "bad_states_position", "bad_states_speed",
 
 PARAMS = {
     "config_file": CONFIG_FILE,
-    "joint": Param("", "the joint: s1, s2, s3, e1, e2, w1 or w2 (required; names the node joint_controller_<joint>)"),
+    "joint": Param("", "the joint: one of the arm's actuated joints (required; names the node "
+                       "joint_controller_<joint>)"),
     "controller": Param("dnbs", "dnbs or pid"),
     "reliability": Param("reliable", "state/effort QoS: reliable or best_effort"),
     "queue_depth": Param(10, "keep_last depth of the state subscription and effort publisher [messages]", 1),
@@ -97,22 +97,24 @@ class JointControllerNode(Node):
         except ValueError as exc:
             raise ParameterError(f"parameter {exc}") from None
         check_choice("controller", p["controller"], CONTROLLER_KINDS)
-        cfg = load_node_config(p["config_file"])
-        arm = arm_of(cfg)
+        settings = load_node_config(p["config_file"])
+        arm = settings.arm
         check_choice("joint", p["joint"], arm.joint_names)
         self.p = p
         self.joint = p["joint"]
         index = arm.index(self.joint)
-        self.clock_ = StepClock(cfg["simulation"]["dt_s"])
+        # its gains: read-only parameters (the launcher's params file, else the config's values)
+        settings = settings_with_gains(settings, index, declare(self, gain_params(settings, p["controller"], index)))
+        self.clock_ = StepClock(settings.simulation.dt_s)
         # a bank of this one joint behind its state guard, as the in-process simulation runs all the arm's
-        self.loop_ = JointLoop(build_guarded_controllers(cfg, p["controller"], [index]),
-                               cfg["reference"]["preview_steps"])
+        self.loop_ = JointLoop(build_guarded_controllers(settings, p["controller"], [index]),
+                               settings.reference.preview_steps)
         controller = self.loop_.controller
         print(f"CONTROLLER joint_controller {p['joint']}: {type(controller).__name__}", flush=True)
         self.checkpoint = Path(p["checkpoint_file"]) if p["checkpoint_file"] else None
-        if self.checkpoint is not None and not hasattr(controller, "state_dict"):
+        if self.checkpoint is not None and not controller.learns:
             raise ParameterError(f"checkpoint_file: the {p['controller']} controller has no learned state to save")
-        self.checkpoint_every = max(1, int(round(cfg["checkpoint"]["period_s"] / cfg["simulation"]["dt_s"])))
+        self.checkpoint_every = max(1, int(round(settings.checkpoint.period_s / settings.simulation.dt_s)))
         self.checkpoint_phase = checkpoint_phase(index, arm.n_joints, self.checkpoint_every)
         self.resumed_from = None
         if p["init_file"] and not (p["resume"] and self.checkpoint is not None and self.checkpoint.is_file()):
@@ -130,9 +132,9 @@ class JointControllerNode(Node):
                 raise ParameterError(f"resume: {exc}") from None
             self.resumed_from = step
             print(f"RESUMED joint_controller {self.joint} from the checkpoint of step {step}", flush=True)
-        kill_s = cfg["faults"]["kill_controller_at_s"][index]
+        kill_s = settings.faults.kill_controller_at_s[index]
         # the injected crash hits the first incarnation only (a restarted controller is not killed again)
-        self.kill_step = (int(round(kill_s / cfg["simulation"]["dt_s"])) if kill_s >= 0 and p["incarnation"] == 0
+        self.kill_step = (int(round(kill_s / settings.simulation.dt_s)) if kill_s >= 0 and p["incarnation"] == 0
                           else None)
         self.malformed = 0
         self.states_received = 0
@@ -140,12 +142,12 @@ class JointControllerNode(Node):
         self._state_layout = joint_state_cdr.OneJointLayout(self.joint, ("position", "velocity"))
         self._effort_layout = joint_state_cdr.OneJointLayout(self.joint, ("effort",))
         qos = loop_qos(p["reliability"], depth=p["queue_depth"])
-        self.torque_limit = cfg["plant"]["torque_limit_nm"][index]
+        self.torque_limit = settings.plant.torque_limit_nm[index]
         # The effort topic is offered only once the first reference batch is in: the plant starts when
         # every effort topic has its publisher, so its state 0 never waits on a reference still in discovery.
         self._pub = None
         self._link = None
-        self._effort_setup = (cfg, index, qos)
+        self._effort_setup = (settings.faults, index, qos)
         self._held: list[tuple[int, float]] = []  # (step, torque N m) answers waiting for the subscribers
         self._matched = False
         self.held_answers = 0
@@ -195,9 +197,9 @@ class JointControllerNode(Node):
 
     def _offer_effort(self) -> None:
         """Create the effort publisher (and its fault-injecting link, if configured)."""
-        cfg, index, qos = self._effort_setup
+        faults, index, qos = self._effort_setup
         self._pub = self.create_publisher(JointState, effort_topic(self.joint), qos)
-        self._link = links_from_config(cfg, "effort", index, self._pub.publish, self.torque_limit)
+        self._link = faulty_link(faults, "effort", index, self._pub.publish, self.torque_limit)
         self._match = MatchWait([Need(self._pub.topic_name, "subscribers", self.p["effort_subscribers"],
                                       self._pub.get_subscription_count)], self.p["match_timeout_s"])
         self._match_timer = wall_timer(self, 0.005, self._check_matched)
@@ -257,8 +259,7 @@ class JointControllerNode(Node):
         loop = self.loop_
         c = {f"bad_states_{k}": v for k, v in loop.bad_states.items()}
         c["nonfinite_torques"] = loop.nonfinite_torques
-        resets = getattr(loop.controller, "ekf_resets", {})
-        c.update({f"ekf_resets_{k}": int(v[0]) for k, v in resets.items()})
+        c.update(loop.controller.counters(0))
         c.update({"malformed_states": self.malformed, "malformed_references": self.malformed_references, "states": self.states_received, "efforts": self.efforts_sent,
                   "duplicate_states": loop.duplicates, "last_step": loop.last_step,
                   "held_until_matched": self.held_answers})

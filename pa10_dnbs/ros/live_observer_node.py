@@ -7,7 +7,7 @@ default, also when it runs at the root), and the Foxglove channels carry the res
 (a best-effort reader sends no acknowledgements the plant's writer would have
 to track) on a subscription that no executor spins: DDS keeps the newest
 state and the display timer takes it, so the 1 kHz messages cost no Python
-callback. The seven reference topics and /robot_description are subscribed
+callback. Every joint's reference topic and /robot_description are subscribed
 reliably (transient-local, so batches and the URDF sent before it matched
 still arrive), /diagnostics too. Serves the live view on ``host``:``port``
 (0: a free port), one frame per 1 / ``display_hz`` s of wall time. Prints
@@ -26,7 +26,6 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from trajectory_msgs.msg import JointTrajectory
 
-from ..arm import arm_of
 from ..live.schemas import live_channels
 from ..live.server import LiveServer, LiveServerError
 from ..live.view import LiveView
@@ -35,7 +34,7 @@ from ..loop.scheduling import apply_batch, apply_fifo
 from .params import CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, declare, load_node_config
 from .runtime import announce_ready, exit_process, run_node
 from ..wire.topics import DEFAULT_NS, DIAGNOSTICS, ArmTopics
-from .wire import description_qos, reference_qos
+from .endpoints import description_qos, reference_qos
 from .wall_timer import wall_timer
 
 
@@ -63,15 +62,15 @@ class LiveObserverNode(Node):
             raise ParameterError(f"parameter port must be in 0..65535, got {p['port']}")
         if not 0 < p["display_hz"] <= 1000:
             raise ParameterError(f"parameter display_hz must be in (0, 1000] frames per second, got {p['display_hz']}")
-        cfg = load_node_config(p["config_file"])
+        settings = load_node_config(p["config_file"])
         ns = self.get_namespace()
         arm = ArmTopics(ns if ns != "/" else DEFAULT_NS)
         try:
             self.server = LiveServer(live_channels(arm), host=p["host"], port=p["port"])
         except LiveServerError as exc:
             raise ParameterError(str(exc)) from None
-        self.view = LiveView(self.server, cfg["plant"]["torque_limit_nm"], cfg["simulation"]["dt_s"],
-                             display_hz=p["display_hz"], joint_names=arm_of(cfg).joint_names, arm=arm)
+        self.view = LiveView(self.server, settings.plant.torque_limit_nm, settings.simulation.dt_s,
+                             display_hz=p["display_hz"], joint_names=settings.arm.joint_names, arm=arm)
         self.arm = arm
         feed = self.view.on_message
         # a node of its own, never added to the executor (and free of the launcher's name remapping)
@@ -84,7 +83,7 @@ class LiveObserverNode(Node):
                                  raw=True)
         self.create_subscription(DiagnosticArray, DIAGNOSTICS, lambda d: feed(DIAGNOSTICS, d), diagnostics_qos(),
                                  raw=True)
-        for j in arm_of(cfg).joint_names:
+        for j in settings.arm.joint_names:
             t = arm.reference(j)
             self.create_subscription(JointTrajectory, t, lambda d, t=t: feed(t, d), reference_qos(),
                                      raw=True)

@@ -23,16 +23,17 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
 from ..arm import ArmError
-from ..config import ConfigError, default_config_path, load_config
+from ..config import ConfigError, default_config_path
+from ..run_settings import build_settings
 from ..loop.robot_stepper import MODES, RobotStepper
 from ..plant.engines import open_plant
 from ..wire import joint_state_cdr
 from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, ClockSchedule, check_clock_hz
 from .params import CONFIG_FILE, Param, ParameterError, check_choice, declare
-from .plant_wire import CLOCK_CDR
+from .plant_endpoints import CLOCK_CDR
 from .polled import PolledSubscription, SubscriptionWaitSet
 from .runtime import announce_ready
-from .wire import CLOCK
+from .endpoints import CLOCK
 
 PARAMS = {
     "config_file": CONFIG_FILE,
@@ -64,16 +65,16 @@ class MuJoCoRobotNode(Node):
         if not p["resend_s"] > 0:
             raise ParameterError(f"parameter resend_s must be > 0, got {p['resend_s']}")
         try:
-            cfg = load_config(p["config_file"] or default_config_path(), arm=p["arm"] or None)
+            settings = build_settings(p["config_file"] or default_config_path(), arm=p["arm"] or None)
         except (ArmError, ConfigError) as exc:
             raise ParameterError(f"parameter {'arm' if isinstance(exc, ArmError) else 'config_file'}: {exc}") from None
-        self.dt = cfg["simulation"]["dt_s"]
+        self.dt = settings.simulation.dt_s
         try:
             check_clock_hz(p["clock_hz"], self.dt)
         except ValueError as exc:
             raise ParameterError(f"parameter clock_hz {exc}") from None
         self.p = p
-        self.plant, self._close_plant = open_plant(cfg, "mujoco")
+        self.plant, self._close_plant = open_plant(settings, "mujoco")
         self.joint_names = self.plant.joint_names
         self.stepper = RobotStepper(self.plant, p["mode"], self.dt)
         self.last_step = int(round(p["duration_s"] / self.dt)) if p["duration_s"] > 0 else 2**62

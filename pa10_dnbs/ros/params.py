@@ -15,7 +15,10 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 
-from ..config import ConfigError, default_config_path, load_config
+from ..config import ConfigError, default_config_path
+from ..controller_gains import gain_keys, gain_range, joint_gains, with_joint_gains
+from ..run_settings import build_settings
+from ..settings import Settings
 
 
 class ParameterError(ValueError):
@@ -91,13 +94,32 @@ def cli_parameter(argv, name: str) -> str | None:
     return None
 
 
-def load_node_config(path: str) -> dict:
-    """The numeric config (config/*.yaml) a node runs with; '' means the shipped default. A bad file is a
-    ParameterError (parameter config_file)."""
+def load_node_config(path: str) -> Settings:
+    """The settings a node runs with, built once from its config file (the launcher's config_used.yaml, every
+    value resolved; '' means the shipped default) and the arm it names. A bad file is a ParameterError
+    (parameter config_file)."""
     try:
-        return load_config(path or default_config_path())
+        return build_settings(path or default_config_path())
     except ConfigError as exc:
         raise ParameterError(f"parameter config_file: {exc}") from None
+
+
+def gain_params(settings: Settings, controller: str, row: int) -> dict[str, Param]:
+    """The gains of joint ``row``'s ``controller`` as read-only parameters named by their config keys, each
+    with its unit and the key's range, valued by ``settings`` unless a params file gives them
+    (controller_gains.py)."""
+    return {key: Param(value, description, *gain_range(key))
+            for (key, description), value in zip(gain_keys(controller).items(),
+                                                 joint_gains(settings, controller, row).values())}
+
+
+def settings_with_gains(settings: Settings, row: int, gains: dict) -> Settings:
+    """``settings`` with joint ``row``'s gains as its parameters hold them; a value the config's check refuses
+    is a ParameterError naming the parameter."""
+    try:
+        return with_joint_gains(settings, row, gains)
+    except ConfigError as exc:
+        raise ParameterError(f"parameter {exc}") from None
 
 
 def check_choice(name: str, value, choices) -> None:

@@ -1,6 +1,6 @@
 """The plant's lockstep loop: step as soon as every joint has answered, resend and time out otherwise.
 
-One wait set over the seven effort subscriptions: the plant sleeps until
+One wait set over the effort subscriptions (one per joint): the plant sleeps until
 some effort is queued (or a resend / timeout is due), takes every effort
 that is there, steps as many times as complete steps allow (a player
 re-driving the plant from a bag sends efforts ahead) and publishes each new
@@ -32,14 +32,15 @@ def run_lockstep(node, executor, stop) -> None:
     next_housekeeping = clock() + HOUSEKEEPING_S
     while not node.finished and not stop.done():
         if not gate.ready:
-            ready = node.wire.wait(min(SLICE_S, policy.next_check_s(clock()), max(0.0, next_housekeeping - clock())))
+            ready = node.endpoints.wait(min(SLICE_S, policy.next_check_s(clock()),
+                                            max(0.0, next_housekeeping - clock())))
             if ready:
                 node.take_efforts(ready)
         while gate.ready and not node.finished:  # efforts sent ahead may complete later steps too
             node.step(gate.take_lockstep())
             publish(gate.step)
             if gate.ready:  # stepping on efforts sent ahead: keep taking, so the queues never overflow
-                ready = node.wire.wait(0.0)
+                ready = node.endpoints.wait(0.0)
                 if ready:
                     node.take_efforts(ready)
         if node.finished:

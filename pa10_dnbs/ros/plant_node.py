@@ -1,10 +1,10 @@
-"""plant_node: the PyBullet PA10 plant on the wire.
+"""plant_node: the PyBullet plant of the arm on the ROS graph.
 
 Before step 0, the start handshake (``wait_for_graph``, ``ros/ready.py``): its own endpoints matched, /clock
 at time 0 out, and every node of ``ready_nodes`` ready on the ``ready`` topic (one timeout, naming the nodes
 that are not).
 
-What it publishes and how it takes efforts: ``plant_wire.py``. How it
+What it publishes and how it takes efforts: ``plant_endpoints.py``. How it
 paces the steps (``mode``):
 
 - lockstep (``plant_lockstep.py``): state k+1 is computed once every
@@ -23,7 +23,7 @@ paces the steps (``mode``):
 deadline (``plant_realtime.py``). The plant itself runs on wall time (no use_sim_time).
 
 Defensive: a non-finite effort counts as missing (hold or zero, counted), an
-out-of-range one is saturated at Table 2 and counted. Faults configured in
+out-of-range one is saturated at its torque limit and counted. Faults configured in
 ``faults.state`` are injected on each joint's state link. Fault counters go
 to /diagnostics every second; timing figures and counters go to
 ``stats_file`` (JSON, ``plant_stats.py``) at exit.
@@ -44,19 +44,20 @@ from ..loop.effort_gate import EffortGate
 from ..loop.endpoint_match import MatchWait
 from ..loop.plant_timing import PlantTiming
 from ..loop.scheduling import apply_fifo, check_priority
-from ..plant.from_config import open_client, plant_from_config
+from ..plant.from_config import open_client, plant_from_settings
 from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, check_clock_hz
 from ..wire.robot_interface import default_state_topic, parse_robot_command
+from ..settings import Settings
 from .diagnostics import DiagnosticsReporter
 from .params import CONFIG_FILE, RT_PRIORITY, Param, ParameterError, check_choice, declare, load_node_config
 from .plant_lockstep import run_lockstep
 from .plant_realtime import run_realtime
 from .plant_stats import diagnostics_report, plant_stats
-from .plant_standard_wire import StandardPlantWire
-from .plant_wire import PlantWire
+from .plant_standard_endpoints import StandardPlantEndpoints
+from .plant_endpoints import PlantEndpoints
 from .ready import ReadyListener
 from .runtime import announce_ready
-from .wire import StepClock, record_qos
+from .endpoints import StepClock, record_qos
 
 
 PARAMS = {
@@ -127,23 +128,23 @@ class PlantNode(Node):
         except ValueError as exc:
             raise ParameterError(f"parameter {exc}") from None
         self.p = p
-        cfg = load_node_config(p["config_file"])
-        self.dt = cfg["simulation"]["dt_s"]
+        settings = load_node_config(p["config_file"])
+        self.dt = settings.simulation.dt_s
         try:
             check_clock_hz(p["clock_hz"], self.dt)
         except ValueError as exc:
             raise ParameterError(f"parameter clock_hz {exc}") from None
-        duration = p["duration_s"] if p["duration_s"] > 0 else cfg["simulation"]["duration_s"]
+        duration = p["duration_s"] if p["duration_s"] > 0 else settings.simulation.duration_s
         self.n_steps = int(round(duration / self.dt))
         self.clock_ = StepClock(self.dt)
-        self.plant = self._open_plant(cfg)
+        self.plant = self._open_plant(settings)
         n = self.plant.n_joints
         self.get_logger().info(arm_line(self.plant.arm))
         self.gate = EffortGate(n, p["on_missing_effort"])
         self.gate.bin_steps = max(1, int(round(60.0 / self.dt)))  # realtime on-time fraction per simulated minute
         # realtime: latest value only (depth 1), a late reader skips stale states. lockstep: a deep
         # history, so a recorder that falls behind for a while still gets every message.
-        self.wire = self._make_wire(cfg, realtime)
+        self.endpoints = self._make_endpoints(settings, realtime)
         self.timing = PlantTiming(self.n_steps, n)
         self.cpu = CpuMeter()
         self.resends = [0] * n
@@ -162,17 +163,17 @@ class PlantNode(Node):
             print(self.rt_message, flush=True)
         announce_ready("plant")
 
-    def _open_plant(self, cfg: dict):
+    def _open_plant(self, settings: Settings):
         """The physics: the PyBullet plant of the config's arm, at its initial state."""
         self._client = open_client()
-        return plant_from_config(cfg, self._client)
+        return plant_from_settings(settings, self._client)
 
     def _close_plant(self) -> None:
         self._client.disconnect()
 
-    def _make_wire(self, cfg: dict, realtime: bool):
-        """The per-joint topics (``plant_wire.py``), or with ``interface:=standard`` the standard robot interface
-        (``plant_standard_wire.py``): there the plant waits for every command (no effort timeout)."""
+    def _make_endpoints(self, settings: Settings, realtime: bool):
+        """The per-joint topics (``plant_endpoints.py``), or with ``interface:=standard`` the standard robot interface
+        (``plant_standard_endpoints.py``): there the plant waits for every command (no effort timeout)."""
         p = self.p
         if p["interface"] == "standard":
             try:
@@ -180,19 +181,20 @@ class PlantNode(Node):
             except ValueError as exc:
                 raise ParameterError(f"parameter robot_command: {exc}") from None
             p["effort_timeout_s"] = math.inf  # a robot in lockstep waits for its command (docs/your_robot.md)
-            return StandardPlantWire(self, cfg, self.clock_, p["robot_state_topic"] or default_state_topic(command),
-                                     command, p["clock_hz"], self.n_steps, lambda: self.gate.step)
-        return PlantWire(self, cfg, self.clock_, p["reliability"],
-                         state_depth=1 if realtime else record_qos().depth,
-                         effort_depth=1 if realtime else p["effort_queue_depth"], clock_hz=p["clock_hz"],
-                         last_step=self.n_steps)
+            return StandardPlantEndpoints(self, settings, self.clock_,
+                                          p["robot_state_topic"] or default_state_topic(command),
+                                          command, p["clock_hz"], self.n_steps, lambda: self.gate.step)
+        return PlantEndpoints(self, settings, self.clock_, p["reliability"],
+                              state_depth=1 if realtime else record_qos().depth,
+                              effort_depth=1 if realtime else p["effort_queue_depth"], clock_hz=p["clock_hz"],
+                              last_step=self.n_steps)
 
     # ---------------------------------------------------------------- stepping
     def publish_state(self, k: int, joints=None, observed: bool = True) -> None:
         """State ``k`` (to ``joints`` only: a resend); ``observed=False`` keeps joint_states and /clock for
         ``publish_observed`` (realtime: after the tick's deadline, out of the controllers' window)."""
         q, qd = self.plant.state
-        t_ns = self.wire.publish_state(k, q, qd, self.gate.applied, joints, observed)
+        t_ns = self.endpoints.publish_state(k, q, qd, self.gate.applied, joints, observed)
         if joints is None:
             self.timing.published(k, t_ns)
             if not observed:
@@ -201,13 +203,13 @@ class PlantNode(Node):
     def publish_observed(self) -> None:
         """joint_states and /clock of the last state published with ``observed=False`` (once)."""
         if self._observed is not None:
-            self.wire.publish_observed(*self._observed)
+            self.endpoints.publish_observed(*self._observed)
             self._observed = None
 
     def take_efforts(self, joints=None) -> bool:
         """Offer every queued effort (of ``joints``, default all) to the gate; True when the current step is
         complete."""
-        for joint, k, u, received_ns in self.wire.take_efforts(joints):
+        for joint, k, u, received_ns in self.endpoints.take_efforts(joints):
             self.timing.answered(k, joint, received_ns)
             self.gate.offer(joint, k, u)
         return self.gate.ready
@@ -228,10 +230,10 @@ class PlantNode(Node):
         proves the /clock match from both sides. One timeout, ``start_timeout_s``: then a RuntimeError naming
         what is missing and every node that is not ready, with what it waits for."""
         # each recorder subscribes to every topic, efforts included (the wire adds them to each count)
-        wait = MatchWait(self.wire.needs(self.p["state_subscribers"], self.p["clock_subscribers"],
+        wait = MatchWait(self.endpoints.needs(self.p["state_subscribers"], self.p["clock_subscribers"],
                                          self.p["min_joint_states_subscribers"], self.p["recorders"]),
                          self.p["start_timeout_s"])
-        self.wire.publish_start_clock()
+        self.endpoints.publish_start_clock()
         board = self.ready.board if self.ready is not None else None
         while not stop.done():
             matched = wait.poll() == "met"
@@ -260,7 +262,7 @@ class PlantNode(Node):
             run_lockstep(self, executor, stop)
         else:
             run_realtime(self, executor, stop)
-        if self.finished and not stop.done() and not self.wire.flush(FINAL_FLUSH_S):
+        if self.finished and not stop.done() and not self.endpoints.flush(FINAL_FLUSH_S):
             # the observer lags on a loaded machine: give it the run's last states before the writers go
             self.get_logger().warning(f"not every subscriber acknowledged the last states within {FINAL_FLUSH_S:g} s")
 
@@ -269,7 +271,7 @@ class PlantNode(Node):
         return plant_stats(self)
 
     def close(self) -> None:
-        self.wire.close()
+        self.endpoints.close()
         path = self.p["stats_file"]
         if path:
             write_json(path, self.stats())

@@ -12,7 +12,7 @@ zeroed and counted as misses (``EffortGate.take_deadline``), and the physics
 steps with exactly those torques. What only observers read of state k
 (joint_states, and /clock every 10th state at 100 Hz, with up to nine
 subscribers) goes out at the deadline, before the physics step: not in the
-window in which the seven controllers need the CPU. Then the plant sleeps until the next
+window in which the joint controllers need the CPU. Then the plant sleeps until the next
 tick's start; a start later than ``late_tolerance`` of the tick is counted
 and the schedule shifts (no catch-up). Misses and late starts are warned
 about at most once per ``warn_period_s`` (``loop/miss_warnings.py``).
@@ -45,7 +45,7 @@ def run_realtime(node, executor, stop) -> None:
         t_end = clock() + p["effort_timeout_s"]
         ready = None
         while not node.take_efforts(ready) and not stop.done() and clock() < t_end:
-            ready = node.wire.wait(max(0.0, min(SLICE_S, t_end - clock())))
+            ready = node.endpoints.wait(max(0.0, min(SLICE_S, t_end - clock())))
         if stop.done():
             return
         warnings.missed(k, node.gate.missing)
@@ -65,7 +65,7 @@ def run_realtime(node, executor, stop) -> None:
 
 
 def _ticks(node, executor, stop, sched, warnings, clock, next_housekeeping) -> None:
-    gate, wire, log = node.gate, node.wire, node.get_logger()
+    gate, endpoints, log = node.gate, node.endpoints, node.get_logger()
     while not stop.done():
         # collect the answers to the state of this tick until all are in or the deadline passes
         ready = None  # first look at every joint (stale answers may be queued)
@@ -74,7 +74,7 @@ def _ticks(node, executor, stop, sched, warnings, clock, next_housekeeping) -> N
             if left <= 0 or stop.done():
                 node.take_efforts()  # a last look at the deadline
                 break
-            ready = wire.wait(min(left, SLICE_S))
+            ready = endpoints.wait(min(left, SLICE_S))
         if stop.done():
             return
         k = gate.step

@@ -20,8 +20,8 @@ MAX_RANGES = 100  # miss ranges kept per joint in the stats file
 
 
 def joint_counters(node, i: int) -> dict:
-    c = plant_counters(node.gate, node.wire, node.resends, i)
-    link = node.wire.state_links[i]
+    c = plant_counters(node.gate, node.endpoints, node.resends, i)
+    link = node.endpoints.state_links[i]
     if link is not None:
         c.update({f"injected_state_{k}": v for k, v in link.counters().items()})
     return c
@@ -33,15 +33,15 @@ def diagnostics_report(node) -> list:
 
 
 def plant_stats(node) -> dict:
-    gate, wire, p = node.gate, node.wire, node.p
+    gate, endpoints, p = node.gate, node.endpoints, node.p
     k = gate.step
     wall = (node.wall_end if node.finished else time.perf_counter()) - node.wall_start
     joints = []
     for i, name in enumerate(node.plant.joint_names):
-        link = wire.state_links[i]
+        link = endpoints.state_links[i]
         joints.append({
             "name": name,
-            **plant_counters(gate, wire, node.resends, i),
+            **plant_counters(gate, endpoints, node.resends, i),
             "first_missed_step": gate.miss_steps[i][0] if gate.miss_steps[i] else None,
             "miss_ranges": step_ranges(gate.miss_steps[i], MAX_RANGES),
             "stale_efforts": int(gate.stale[i]),
@@ -56,14 +56,14 @@ def plant_stats(node) -> dict:
         "mode": p["mode"], "steps": int(k), "completed": node.finished,
         "sim_time_s": k * node.dt, "wall_time_s": wall if math.isfinite(wall) else None,
         "real_time_factor": (k * node.dt / wall) if wall_ok else None,
-        "reliability": p["reliability"], "state_qos_depth": wire.state_qos.depth,
-        "effort_qos_depth": wire.effort_qos.depth,
+        "reliability": p["reliability"], "state_qos_depth": endpoints.state_qos.depth,
+        "effort_qos_depth": endpoints.effort_qos.depth,
         "on_missing_effort": p["on_missing_effort"], "effort_timeout_s": p["effort_timeout_s"],
         "rt_priority": p["rt_priority"], "rt_priority_applied": node.rt_applied,
         "cpu": node.cpu.report(),
-        # one wait set over the seven effort subscriptions: how often the plant blocked / woke with efforts
-        "effort_waits_per_step": wire.waits / k if k else None,
-        "effort_wakeups_per_step": wire.wakeups_with_efforts / k if k else None,
+        # one wait set over the effort subscriptions (one per joint): how often the plant blocked / woke with efforts
+        "effort_waits_per_step": endpoints.waits / k if k else None,
+        "effort_wakeups_per_step": endpoints.wakeups_with_efforts / k if k else None,
         "limit_hits": node.plant.limit_hits.tolist(), "joints": joints,
         "on_time_fraction": None, "late_start_ticks": 0,
     }

@@ -13,7 +13,7 @@ in the DDS reader's history (the QoS depth) until the node takes them:
   reference node: one wake-up per period, however many messages came);
 - ``SubscriptionWaitSet``: one rcl wait set over fixed subscriptions, for a
   loop that blocks until any of them has data, then takes all that is there
-  (the plant waiting for its seven efforts).
+  (the plant waiting for its efforts, one per joint).
 
 Topic names are expanded and remapped by rcl, as for ordinary subscriptions.
 ``destroy()`` releases them (``runtime.run_node`` does it for ``node.polled``).

@@ -30,7 +30,6 @@ from typing import NoReturn
 
 from rclpy.node import Node
 
-from ..arm import arm_of
 from ..bag.custom_data import CUSTOM_CONFIG, CUSTOM_PREFIX
 from ..bag.bag_writer import COMPRESSIONS, BagWriter
 from ..bag.tf_messages import tf_message_cdr
@@ -47,7 +46,7 @@ from .params import (CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterErro
 from .polled import Inbox
 from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node, spin_until
-from .wire import CLOCK, TF, TF_STATIC
+from .endpoints import CLOCK, TF, TF_STATIC
 from .wall_timer import wall_timer
 
 # types whose CDR body starts with a stamp (header.stamp, or the Clock's time)
@@ -101,8 +100,8 @@ class RecorderNode(Node):
         if not specs and not p["all_topics"]:
             raise ParameterError("give parameter topics (a list of /names) or all_topics:=true")
         self.p = p
-        cfg = load_node_config(p["config_file"])
-        custom = {CUSTOM_CONFIG: json.dumps(cfg)}
+        settings = load_node_config(p["config_file"])
+        custom = {CUSTOM_CONFIG: json.dumps(settings.to_config())}
         for item in (s for s in p["custom_data"] if s):
             key, sep, value = item.partition("=")
             if not sep:
@@ -118,16 +117,16 @@ class RecorderNode(Node):
         self.received = 0
         self._subs = {}
         self._announced = False
-        model = arm_of(cfg)
+        model = settings.arm
         self.joint_names = model.joint_names
         self.chain = model.chain if p["tf_rate_hz"] > 0 else None
         self._tf_period_ns = int(round(1e9 / p["tf_rate_hz"])) if self.chain else 0
         self._next_tf_ns = 0
         self._next_progress_ns = 0
-        self.dt_ns = int(round(cfg["simulation"]["dt_s"] * 1e9))
+        self.dt_ns = int(round(settings.simulation.dt_s * 1e9))
         check_choice("compression", p["compression"], COMPRESSIONS)
         # x_d from the reference batches, for the worst |e| on PROGRESS lines (sampled at tf_rate_hz)
-        self.refs = ReferenceBuffer(len(self.joint_names), StepClock(cfg["simulation"]["dt_s"]))
+        self.refs = ReferenceBuffer(len(self.joint_names), StepClock(settings.simulation.dt_s))
         self._ref_joint = {self.arm.reference(j): i for i, j in enumerate(self.joint_names)}
         self.writer = BagWriter(Path(p["bag"]), force=p["force"], custom_data=custom, compression=p["compression"])
         self.cpu = CpuMeter()

@@ -29,7 +29,6 @@ from rosgraph_msgs.msg import Clock
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from trajectory_msgs.msg import JointTrajectory
 
-from ..arm import arm_of
 from ..config_error import ConfigError
 from ..controller_factory import build_reference, load_reference_trajectory, switchable_reference
 from ..core.joint_trajectory import TrajectoryError, trajectory_from_lists
@@ -43,7 +42,7 @@ from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
 from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node
-from .wire import CLOCK, StepClock, record_qos, reference_qos, reference_topic
+from .endpoints import CLOCK, StepClock, record_qos, reference_qos, reference_topic
 
 
 FAULT_KEYS = ("clock_backwards",)
@@ -72,8 +71,8 @@ class ReferenceNode(Node):
     def __init__(self):
         super().__init__("reference")
         p = declare(self, PARAMS)
-        cfg = load_node_config(p["config_file"])
-        preview = cfg["reference"]["preview_steps"]
+        settings = load_node_config(p["config_file"])
+        preview = settings.reference.preview_steps
         if p["batch_steps"] < 1 or p["lookahead_steps"] <= preview:
             raise ParameterError(f"batch_steps must be >= 1 and lookahead_steps > reference.preview_steps = {preview}")
         if not p["poll_period_s"] > 0:
@@ -81,12 +80,12 @@ class ReferenceNode(Node):
         trajectory = None
         if p["trajectory_file"]:
             try:
-                trajectory = load_reference_trajectory(cfg, p["trajectory_file"], flag="parameter trajectory_file:")
+                trajectory = load_reference_trajectory(settings, p["trajectory_file"], flag="parameter trajectory_file:")
             except ConfigError as exc:
                 raise ParameterError(str(exc)) from None
-        self.reference = switchable_reference(cfg, build_reference(cfg, trajectory))
+        self.reference = switchable_reference(settings, build_reference(settings, trajectory))
         self.trajectories = {"accepted": 0, "refused": 0}
-        self.clock_ = StepClock(cfg["simulation"]["dt_s"])
+        self.clock_ = StepClock(settings.simulation.dt_s)
         self.p = p
         self.batch = p["batch_steps"]
         self.lookahead = p["lookahead_steps"]
@@ -94,10 +93,10 @@ class ReferenceNode(Node):
         self.clock_step = -1  # the latest step seen on /clock
         self.clock_messages = 0
         self.clock_backwards = 0
-        dt = cfg["simulation"]["dt_s"]
+        dt = settings.simulation.dt_s
         # a run of known length: nothing past its last step + lookahead (so a bag's count is fixed)
         self.last_step = int(round(p["duration_s"] / dt)) + self.lookahead if p["duration_s"] > 0 else None
-        self.joint_names = arm_of(cfg).joint_names
+        self.joint_names = settings.arm.joint_names
         self._pubs = [self.create_publisher(JointTrajectory, reference_topic(j), reference_qos())
                       for j in self.joint_names]
         self.cpu = CpuMeter()

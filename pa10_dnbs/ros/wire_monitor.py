@@ -1,6 +1,6 @@
 """wire_monitor node: collects what travels on the wire, for metrics and reports.
 
-Subscribes to /joint_states and the seven reference topics and, at exit,
+Subscribes to /joint_states and every joint's reference topic and, at exit,
 writes what it received to ``out_file`` (npz): state k from /joint_states
 stamped k, the torque applied over step k from the effort field of
 /joint_states stamped k+1, x_d(k) from the reference batches. Prints
@@ -20,7 +20,6 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
-from ..arm import arm_of
 from ..wire.wire_record import WireRecord
 from ..wire import joint_state_cdr, trajectory_cdr
 from ..loop.scheduling import apply_batch, apply_fifo
@@ -29,7 +28,7 @@ from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
 from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node, spin_until
-from .wire import JOINT_STATES, StepClock, record_qos, reference_qos, reference_topic
+from .endpoints import JOINT_STATES, StepClock, record_qos, reference_qos, reference_topic
 
 
 PARAMS = {
@@ -50,10 +49,10 @@ class WireMonitorNode(Node):
             raise ParameterError("parameter out_file is required")
         if not p["poll_period_s"] > 0:
             raise ParameterError(f"parameter poll_period_s must be > 0 s, got {p['poll_period_s']}")
-        cfg = load_node_config(p["config_file"])
-        dt_s = cfg["simulation"]["dt_s"]
-        duration = p["duration_s"] if p["duration_s"] > 0 else cfg["simulation"]["duration_s"]
-        self.joint_names = names = arm_of(cfg).joint_names
+        settings = load_node_config(p["config_file"])
+        dt_s = settings.simulation.dt_s
+        duration = p["duration_s"] if p["duration_s"] > 0 else settings.simulation.duration_s
+        self.joint_names = names = settings.arm.joint_names
         self.record = WireRecord(int(round(duration / dt_s)), dt_s, len(names))
         self.out_file = p["out_file"]
         self.clock = StepClock(dt_s)

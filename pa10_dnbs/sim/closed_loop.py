@@ -17,6 +17,7 @@ from ..plant.engines import DEFAULT_ENGINE, open_plant
 from ..loop.guarded_controllers import GuardedControllers
 from ..report.progress import ProgressBar
 from ..run_data import RunData
+from ..settings import Settings
 from .computed_torque import ComputedTorqueController
 
 CONTROLLERS = ("dnbs", "pid", "ctc")  # ctc: centralized computed torque with the plant's model, in-process only
@@ -37,7 +38,7 @@ class Disturbances:
     seed: int = 0
 
 
-def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = False,
+def simulate(settings: Settings, controller: str, duration_s: float, progress: bool = False,
              init_states: list[dict] | None = None, disturbances: Disturbances | None = None,
              engine: str = DEFAULT_ENGINE, trajectory=None) -> RunData:
     """Closed loop for ``duration_s`` seconds of simulated time.
@@ -50,12 +51,12 @@ def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = Fal
     ``trajectory``: a JointTrajectory (``--trajectory FILE``) followed from step 0 instead of eq. 27; the
     reference node builds the same reference (``build_reference``), so the lockstep graph gives the same bits.
     """
-    dt = cfg["simulation"]["dt_s"]
+    dt = settings.simulation.dt_s
     n = int(round(duration_s / dt))
-    reference = build_reference(cfg, trajectory)
-    plant, close_plant = open_plant(cfg, engine)
+    reference = build_reference(settings, trajectory)
+    plant, close_plant = open_plant(settings, engine)
     try:
-        guarded = _controllers(cfg, controller, plant)
+        guarded = _controllers(settings, controller, plant)
         if init_states is not None:
             for row, state in enumerate(init_states):
                 guarded.controllers.load_state_dict(row, state, resume_steps=False)
@@ -93,7 +94,7 @@ def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = Fal
             bar.update(n)
             bar.close()
         return RunData(controller=controller, dt_s=dt, joint_names=plant.joint_names,
-                       torque_limit_nm=np.array(cfg["plant"]["torque_limit_nm"]),
+                       torque_limit_nm=np.array(settings.plant.torque_limit_nm),
                        position_rad=pos, velocity_rad_s=vel, reference_rad=ref, torque_nm=tau,
                        wall_time_s=wall, extra={"limit_hits": plant.limit_hits.tolist(),
                                                 "controllers": guarded.controllers})
@@ -101,14 +102,14 @@ def simulate(cfg: dict, controller: str, duration_s: float, progress: bool = Fal
         close_plant()
 
 
-def _controllers(cfg: dict, controller: str, plant) -> GuardedControllers:
+def _controllers(settings: Settings, controller: str, plant) -> GuardedControllers:
     """The joints' controllers behind their state guards (the nodes' own code), or computed torque."""
     if controller == "ctc":
-        c = cfg["ctc"]
-        ctc = ComputedTorqueController(plant, c["kp_per_s2"], c["kd_per_s"], cfg["plant"]["torque_limit_nm"],
-                                      c["on_saturation"])
-        return GuardedControllers(ctc, build_state_guard(cfg), cfg["guards"]["on_bad_state"])
-    return build_guarded_controllers(cfg, controller)
+        c = settings.ctc
+        ctc = ComputedTorqueController(plant, c.kp_per_s2, c.kd_per_s, settings.plant.torque_limit_nm,
+                                      c.on_saturation)
+        return GuardedControllers(ctc, build_state_guard(settings), settings.guards.on_bad_state)
+    return build_guarded_controllers(settings, controller)
 
 
 def _sensor_noise(dist: Disturbances, n: int, nj: int):

@@ -39,6 +39,9 @@ class ComputedTorqueController:
     e_ddot + Kd e_dot + Kp e = 0 (per joint, numbers or arrays (n,)); ``on_saturation``: one of
     ON_SATURATION (module docstring). ``last_scale``: the s of the last step (1.0 when nothing saturated)."""
 
+    learns = False  # a ControllerBank (core/controller_bank.py) with nothing to learn
+    learning_pending = False
+
     def __init__(self, plant, kp_per_s2, kd_per_s, torque_limit_nm, on_saturation: str = "clip"):
         if on_saturation not in ON_SATURATION:
             raise ValueError(f"on_saturation: one of {', '.join(ON_SATURATION)}, got {on_saturation!r}")
@@ -51,6 +54,21 @@ class ComputedTorqueController:
         self.last_scale = 1.0
 
     def step(self, x1: np.ndarray, x2: np.ndarray, ref: ReferenceSample, active: np.ndarray | None = None) -> np.ndarray:
+        """``answer`` (nothing to learn)."""
+        return self.answer(x1, x2, ref, active)
+
+    def learn(self) -> None:
+        """Nothing to learn."""
+
+    def state_dict(self, row: int = 0) -> dict[str, np.ndarray]:
+        """No learned state: {}."""
+        return {}
+
+    def counters(self, row: int = 0) -> dict[str, int]:
+        """No events to count: {}."""
+        return {}
+
+    def answer(self, x1: np.ndarray, x2: np.ndarray, ref: ReferenceSample, active: np.ndarray | None = None) -> np.ndarray:
         """Torques (n,) [N m]; needs ``ref.acceleration_rad_s2``. (No learning: ``active`` changes nothing.)"""
         if ref.acceleration_rad_s2 is None:
             raise ValueError("computed torque needs the reference acceleration")

@@ -9,7 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..accel.choice import resolve_kernel
-from ..config import default_config_path, load_config
+from ..config import default_config_path
+from ..run_settings import build_settings
 from ..report.metrics_file import metrics_dict, metrics_settings
 from .closed_loop import simulate
 
@@ -36,12 +37,12 @@ def run_engines(arms: list[str], controllers: list[str], duration_s: float, say=
     """Every (arm, engine, controller) run in-process for ``duration_s`` s; ``say``: a line per run, or None."""
     runs = []
     for arm in arms:
-        cfg = resolve_kernel(load_config(default_config_path(), arm=arm), say=lambda *_: None)
-        settings = metrics_settings(cfg, duration_s)
+        settings = resolve_kernel(build_settings(default_config_path(), arm=arm), say=lambda *_: None)
+        measured = metrics_settings(settings, duration_s)
         for engine in ENGINE_PAIR:
             for kind in controllers:
-                run = simulate(cfg, kind, duration_s, engine=engine)
-                m = metrics_dict(run, settings)
+                run = simulate(settings, kind, duration_s, engine=engine)
+                m = metrics_dict(run, measured)
                 r = EngineRun(arm, engine, kind, float(m["worst_rms_error_rad"]), m["worst_settling_time_s"],
                               tuple(m["window_s"]), bool(m["all_finite"] and m["torques_within_limits"]))
                 runs.append(r)

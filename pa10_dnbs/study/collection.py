@@ -57,14 +57,14 @@ def arm_file(key: str) -> Path:
     return share_path("urdf", "collection", key, "arm.yaml")
 
 
-def _controller_figures(run, cfg: dict, duration_s: float) -> dict:
+def _controller_figures(run, settings, duration_s: float) -> dict:
     from ..report.metrics_file import metrics_dict, metrics_settings
 
-    m = metrics_dict(run, metrics_settings(cfg, duration_s))
+    m = metrics_dict(run, metrics_settings(settings, duration_s))
     err, tau = run.error_rad, run.torque_nm
     finite = bool(np.all(np.isfinite(err)) and np.all(np.isfinite(tau)))
     max_abs = float(np.nanmax(np.abs(err))) if np.any(np.isfinite(err)) else math.inf
-    start = int(math.ceil(cfg["metrics"]["startup_s"] / run.dt_s))
+    start = int(math.ceil(settings.metrics.startup_s / run.dt_s))
     lim = np.asarray(run.torque_limit_nm, float)
     with np.errstate(invalid="ignore"):
         at_limit = int(np.sum(np.any(np.abs(tau[start:]) >= lim * (1 - 1e-12), axis=1)))
@@ -85,7 +85,8 @@ def run_row(key: str, mode: str, spec: str, duration_s: float) -> dict:
     ``duration_s``. A refused arm is a row with its one line; an exception that is not a refusal is a row too
     (status ``error``), so one arm cannot stop the table."""
     from ..accel.choice import resolve_kernel
-    from ..config import ConfigError, default_config_path, load_config
+    from ..config import ConfigError, default_config_path
+    from ..run_settings import build_settings
     from ..sim.closed_loop import simulate
 
     row = {"arm": key, "mode": mode, "spec": spec, "status": "accepted", "reason": "", "warnings": []}
@@ -93,7 +94,7 @@ def run_row(key: str, mode: str, spec: str, duration_s: float) -> dict:
     err = io.StringIO()
     try:
         with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-            cfg = resolve_kernel(load_config(default_config_path(), arm=spec))
+            settings = resolve_kernel(build_settings(default_config_path(), arm=spec))
     except ConfigError as exc:
         row.update(status="refused", reason=str(exc).splitlines()[0])
         return row
@@ -101,12 +102,12 @@ def run_row(key: str, mode: str, spec: str, duration_s: float) -> dict:
         row.update(status="error", reason=f"{type(exc).__name__}: {exc}".splitlines()[0])
         return row
     row["warnings"] = [line.split(": ", 2)[-1] for line in err.getvalue().splitlines() if line.startswith("warning:")]
-    row["n_joints"] = len(cfg["plant"]["torque_limit_nm"])
+    row["n_joints"] = settings.n_joints
     for kind in CONTROLLERS:
         try:
             with np.errstate(all="ignore"), contextlib.redirect_stderr(io.StringIO()):
-                run = simulate(cfg, kind, duration_s)
-            row[kind] = _controller_figures(run, cfg, duration_s)
+                run = simulate(settings, kind, duration_s)
+            row[kind] = _controller_figures(run, settings, duration_s)
         except Exception as exc:  # noqa: BLE001
             row[kind] = {"error": f"{type(exc).__name__}: {exc}".splitlines()[0]}
     row["wall_time_s"] = time.perf_counter() - t0
@@ -204,17 +205,18 @@ def study_summary(key: str, duration_s: float, jobs: int) -> dict:
     """Every study scenario x DNBS and PID x STUDY_SEEDS seeds on ``key``'s arm file (study/runner.py): per
     scenario DNBS's worst seed and PID's best seed (worst joint's RMS [rad]) and DNBS's diverged runs; a scenario
     the arm cannot track (study/feasibility.py) is not run: its entry holds its one line under ``infeasible``."""
-    from ..config import default_config_path, load_config
+    from ..config import default_config_path
+    from ..run_settings import build_settings
     from .feasibility import infeasible_scenarios
     from .runner import run_study
     from .scenarios import SCENARIOS
 
     with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
-        cfg = load_config(default_config_path(), arm=str(arm_file(key)))
+        settings = build_settings(default_config_path(), arm=str(arm_file(key)))
     t0 = time.perf_counter()
-    infeasible = infeasible_scenarios(cfg, list(SCENARIOS), duration_s)
+    infeasible = infeasible_scenarios(settings, list(SCENARIOS), duration_s)
     feasible = [sc for sc in SCENARIOS if sc not in infeasible]
-    rows = run_study(cfg, feasible, STUDY_CONTROLLERS, STUDY_SEEDS, duration_s, workers=jobs) if feasible else []
+    rows = run_study(settings, feasible, STUDY_CONTROLLERS, STUDY_SEEDS, duration_s, workers=jobs) if feasible else []
     out = {"seeds": STUDY_SEEDS, "scenarios": {}, "wall_time_s": round(time.perf_counter() - t0, 1)}
     for sc in SCENARIOS:
         if sc in infeasible:

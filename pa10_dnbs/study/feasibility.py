@@ -11,48 +11,48 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..arm import arm_of
 from ..plant.from_config import plant_params
 from ..plant.reference_torque import ReferenceTorque
-from .scenarios import scenario_config
+from ..settings import Settings
+from .scenarios import scenario_settings
 
 #: A scenario is infeasible when its reference asks more than this fraction of a joint's torque limit.
 INFEASIBLE_FRACTION = 1.0
 
 
-def scenario_peak_torque(cfg: dict, scenario: str, duration_s: float) -> np.ndarray:
+def scenario_peak_torque(settings: Settings, scenario: str, duration_s: float) -> np.ndarray:
     """(n,) the largest |tau_j| [N m] the reference of ``scenario`` asks of the plant of ``scenario`` over
     ``duration_s`` (at most reference_torque.HORIZON_S)."""
-    scfg, _ = scenario_config(cfg, scenario, 0)
-    torque = ReferenceTorque(arm_of(scfg), duration_s, scfg["simulation"]["dt_s"], params=plant_params(scfg))
+    changed, _ = scenario_settings(settings, scenario, 0)
+    torque = ReferenceTorque(changed.arm, duration_s, changed.simulation.dt_s, params=plant_params(changed))
     try:
-        return torque.peak(scfg["reference"])
+        return torque.peak(changed.to_config()["reference"])
     finally:
         torque.close()
 
 
-def infeasible_line(cfg: dict, scenario: str, duration_s: float) -> str | None:
-    """None when ``scenario`` is feasible on ``cfg``'s arm; else one line naming the joint that is furthest over
-    its limit, the torque it needs [N m] and its limit [N m] (and how many other joints are over)."""
-    limit = np.asarray(cfg["plant"]["torque_limit_nm"], float)
-    ratio = scenario_peak_torque(cfg, scenario, duration_s) / limit
+def infeasible_line(settings: Settings, scenario: str, duration_s: float) -> str | None:
+    """None when ``scenario`` is feasible on the settings' arm; else one line naming the joint that is furthest
+    over its limit, the torque it needs [N m] and its limit [N m] (and how many other joints are over)."""
+    limit = np.asarray(settings.plant.torque_limit_nm, float)
+    ratio = scenario_peak_torque(settings, scenario, duration_s) / limit
     over = np.flatnonzero(ratio > INFEASIBLE_FRACTION)
     if over.size == 0:
         return None
     j = int(np.argmax(ratio))
-    name = arm_of(cfg).joint_names[j]
+    name = settings.arm.joint_names[j]
     more = f" (and {over.size - 1} more joint{'s' if over.size > 2 else ''} over)" if over.size > 1 else ""
-    return (f"{scenario}: infeasible on arm {arm_of(cfg).name}: joint "
+    return (f"{scenario}: infeasible on arm {settings.arm.name}: joint "
             f"{name} needs {ratio[j] * limit[j]:.3g} N m along the reference (inverse dynamics with gravity on the "
             f"scenario's plant), its limit is {limit[j]:g} N m{more}: no torque-limited controller can track it; "
             f"not run")
 
 
-def infeasible_scenarios(cfg: dict, scenarios, duration_s: float) -> dict[str, str]:
-    """{scenario: its one line} of the ``scenarios`` that are infeasible on ``cfg``'s arm (in their order)."""
+def infeasible_scenarios(settings: Settings, scenarios, duration_s: float) -> dict[str, str]:
+    """{scenario: its one line} of the ``scenarios`` that are infeasible on the settings' arm (in their order)."""
     out = {}
     for sc in scenarios:
-        line = infeasible_line(cfg, sc, duration_s)
+        line = infeasible_line(settings, sc, duration_s)
         if line is not None:
             out[sc] = line
     return out

@@ -11,7 +11,7 @@ import numpy as np
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..sim.closed_loop import simulate
 from .executor import Executor
-from .scenarios import scenario_config
+from .scenarios import scenario_settings
 
 DIVERGED_RAD = 1.0  # a run with |e| above this (or a non-finite value) counts as diverged
 
@@ -20,11 +20,11 @@ def _finite_or_none(x):
     return float(x) if x is not None and math.isfinite(x) else None
 
 
-def run_one(cfg: dict, scenario: str, controller: str, seed: int, duration_s: float) -> dict:
-    """The row of one run (the fields of study.json)."""
-    scfg, dist = scenario_config(cfg, scenario, seed)
-    run = simulate(scfg, controller, duration_s, disturbances=dist)
-    m = metrics_dict(run, metrics_settings(scfg, run.n_steps * run.dt_s))
+def run_one(settings, scenario: str, controller: str, seed: int, duration_s: float) -> dict:
+    """The row of one run (the fields of study.json); ``settings``: the nominal run's Settings."""
+    changed, dist = scenario_settings(settings, scenario, seed)
+    run = simulate(changed, controller, duration_s, disturbances=dist)
+    m = metrics_dict(run, metrics_settings(changed, run.n_steps * run.dt_s))
     err = run.error_rad
     diverged = not (np.all(np.isfinite(err)) and np.all(np.isfinite(run.torque_nm))) or bool(
         np.nanmax(np.abs(err)) > DIVERGED_RAD)
@@ -36,7 +36,7 @@ def run_one(cfg: dict, scenario: str, controller: str, seed: int, duration_s: fl
             "diverged": diverged}
 
 
-def run_study(cfg: dict, scenarios, controllers, seeds: int, duration_s: float, workers: int | None = None,
+def run_study(settings, scenarios, controllers, seeds: int, duration_s: float, workers: int | None = None,
               on_done=None, scheduler: str | None = None) -> list[dict]:
     """Rows of every combination, sorted by scenario, controller, seed; ``on_done(row)`` once per run.
 
@@ -44,7 +44,7 @@ def run_study(cfg: dict, scenarios, controllers, seeds: int, duration_s: float, 
     a Dask scheduler to run on instead.
     Results are keyed by (scenario, controller, seed): a run a cluster redid is one row.
     """
-    tasks = {(sc, ctrl, seed): (cfg, sc, ctrl, seed, duration_s)
+    tasks = {(sc, ctrl, seed): (settings, sc, ctrl, seed, duration_s)
              for sc, ctrl, seed in product(scenarios, controllers, range(seeds))}
 
     def done(key, row):

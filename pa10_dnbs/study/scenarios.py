@@ -1,14 +1,14 @@
-"""The study's scenarios: each one a change of the plant or reference in the config, and/or what the
+"""The study's scenarios: each one a change of the plant or reference settings, and/or what the
 in-process loop adds between plant and controllers (sensor noise, a torque delay).
 
 The controllers keep the configuration tuned for the nominal arm in every scenario.
 """
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass
 from typing import Callable
 
+from ..settings import Settings, replace_in
 from ..sim.closed_loop import Disturbances
 
 COULOMB_FRACTION = 0.05  # Coulomb friction of every joint: 5 % of its torque limit (none is published for the PA10)
@@ -18,26 +18,26 @@ COULOMB_FRACTION = 0.05  # Coulomb friction of every joint: 5 % of its torque li
 class Scenario:
     name: str
     description: str
-    edit: Callable[[dict], None] | None = None                  # changes a deep copy of the config in place
+    edit: Callable[[Settings], Settings] | None = None          # the changed settings (validated again)
     disturbances: Callable[[int], Disturbances] | None = None   # seed -> what the loop adds
 
 
-def _payload(kg: float) -> Callable[[dict], None]:
-    def edit(cfg: dict) -> None:
-        cfg["plant"]["payload_kg"] = kg
+def _payload(kg: float) -> Callable[[Settings], Settings]:
+    def edit(settings: Settings) -> Settings:
+        return replace_in(settings, "plant.payload_kg", kg)
     return edit
 
 
-def _links_heavier(cfg: dict) -> None:
-    cfg["plant"]["link_mass_scale"] = 1.3
+def _links_heavier(settings: Settings) -> Settings:
+    return replace_in(settings, "plant.link_mass_scale", 1.3)
 
 
-def _coulomb(cfg: dict) -> None:
-    cfg["plant"]["coulomb_nm"] = tuple(COULOMB_FRACTION * x for x in cfg["plant"]["torque_limit_nm"])
+def _coulomb(settings: Settings) -> Settings:
+    return replace_in(settings, "plant.coulomb_nm", tuple(COULOMB_FRACTION * x for x in settings.plant.torque_limit_nm))
 
 
-def _fast_reference(cfg: dict) -> None:
-    cfg["reference"]["frequency_rad_s"] = tuple(1.5 * w for w in cfg["reference"]["frequency_rad_s"])
+def _fast_reference(settings: Settings) -> Settings:
+    return replace_in(settings, "reference.frequency_rad_s", tuple(1.5 * w for w in settings.reference.frequency_rad_s))
 
 
 SCENARIOS = {s.name: s for s in (
@@ -54,11 +54,10 @@ SCENARIOS = {s.name: s for s in (
 )}
 
 
-def scenario_config(cfg: dict, scenario: str, seed: int) -> tuple[dict, Disturbances | None]:
-    """(the config of ``scenario`` with simulation.seed = ``seed``, its disturbances)."""
+def scenario_settings(settings: Settings, scenario: str, seed: int) -> tuple[Settings, Disturbances | None]:
+    """(the settings of ``scenario`` with simulation.seed = ``seed``, its disturbances)."""
     s = SCENARIOS[scenario]
-    out = copy.deepcopy(cfg)
-    out["simulation"]["seed"] = seed
+    out = replace_in(settings, "simulation.seed", seed)
     if s.edit is not None:
-        s.edit(out)
+        out = s.edit(out)
     return out, (s.disturbances(seed) if s.disturbances is not None else None)

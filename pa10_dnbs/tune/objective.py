@@ -20,7 +20,7 @@ import numpy as np
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..sim.closed_loop import simulate
 from ..study.runner import DIVERGED_RAD
-from ..study.scenarios import SCENARIOS, scenario_config
+from ..study.scenarios import SCENARIOS, scenario_settings
 
 RMS_FLOOR_RAD = 1e-9
 SETTLE_WEIGHT = 0.2      # decades per second of settling: 0.5 s costs 0.1 decade
@@ -52,12 +52,13 @@ def objective(rows: list[dict]) -> float:
     return max(run_cost(r) for r in rows)
 
 
-def tune_run(cfg: dict, scenario: str, controller: str, seed: int, duration_s: float) -> dict:
-    """One run's figures (a study row plus the saturated fraction after start-up, the duration and the cost)."""
-    scfg, dist = scenario_config(cfg, scenario, seed)
+def tune_run(settings, scenario: str, controller: str, seed: int, duration_s: float) -> dict:
+    """One run's figures (a study row plus the saturated fraction after start-up, the duration and the cost);
+    ``settings``: the trial's Settings."""
+    changed, dist = scenario_settings(settings, scenario, seed)
     with np.errstate(all="ignore"):
-        run = simulate(scfg, controller, duration_s, disturbances=dist)
-        m = metrics_dict(run, metrics_settings(scfg, run.n_steps * run.dt_s))
+        run = simulate(changed, controller, duration_s, disturbances=dist)
+        m = metrics_dict(run, metrics_settings(changed, run.n_steps * run.dt_s))
         err = run.error_rad
         diverged = not (np.all(np.isfinite(err)) and np.all(np.isfinite(run.torque_nm))) or bool(
             np.nanmax(np.abs(err)) > DIVERGED_RAD)

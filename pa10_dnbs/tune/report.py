@@ -12,10 +12,10 @@ from .objective import FAIL_COST, objective, run_cost
 from .space import SPACES, Param, on_bound, settings_fragment
 
 
-def tuned_yaml(spec, base_cfg: dict, values: dict, arm_value: str, extends: Path, header: list[str]) -> str:
+def tuned_yaml(spec, base, values: dict, arm_value: str, extends: Path, header: list[str]) -> str:
     """The tuned settings as a config file: ``extends`` the config the tune started from, names the arm, and
     sets the per-joint values of the best point (``simulate --config`` takes it as it is)."""
-    fragment = settings_fragment(spec.controller, base_cfg, dict(spec.fixed, **values))
+    fragment = settings_fragment(spec.controller, base, dict(spec.fixed, **values))
     doc = {"extends": str(Path(extends).resolve()), "arm": arm_value, **fragment}
     return "".join(f"# {line}\n" for line in header) + yaml.safe_dump(doc, sort_keys=False, width=110,
                                                                       default_flow_style=None)

@@ -11,11 +11,12 @@ both networks' EKF q and p0 times theirs, and the learning ramp in seconds (0: n
 """
 from __future__ import annotations
 
-import copy
 import math
 from dataclasses import dataclass
 
+from ..config import merged, validate
 from ..config_error import ConfigError
+from ..settings import Settings
 
 
 @dataclass(frozen=True)
@@ -67,13 +68,13 @@ def select(controller: str, names: list[str] | None) -> tuple[Param, ...]:
     return tuple(p for p in space if p.name in names)
 
 
-def start_values(controller: str, cfg: dict) -> dict[str, float]:
-    """The point of the full space that is ``cfg`` itself (multipliers 1; the ramp as configured, clipped)."""
+def start_values(controller: str, settings: Settings) -> dict[str, float]:
+    """The point of the full space that is ``settings`` itself (multipliers 1; the ramp as set, clipped)."""
     values = {p.name: 1.0 for p in SPACES[controller]}
     if controller == "dnbs":
-        ramp = cfg["dnbs"]["remedies"]["learning_ramp"]
+        ramp = settings.dnbs.remedies.learning_ramp
         p = next(p for p in SPACES["dnbs"] if p.name == "ramp_s")
-        values["ramp_s"] = min(max(ramp["ramp_s"] if ramp["enabled"] else 0.0, p.low), p.high)
+        values["ramp_s"] = min(max(ramp.ramp_s if ramp.enabled else 0.0, p.low), p.high)
     return values
 
 
@@ -81,43 +82,33 @@ def _scaled(values, factor: float) -> list[float]:
     return [float(v) * factor for v in values]
 
 
-def settings_fragment(controller: str, cfg: dict, values: dict[str, float]) -> dict:
-    """The config fragment (per-joint lists) that the point ``values`` gives, from ``cfg``'s own values; a name
-    missing from ``values`` keeps its start value."""
-    v = dict(start_values(controller, cfg), **values)
+def settings_fragment(controller: str, settings: Settings, values: dict[str, float]) -> dict:
+    """The config fragment (per-joint lists) that the point ``values`` gives, from ``settings``' own values; a
+    name missing from ``values`` keeps its start value."""
+    v = dict(start_values(controller, settings), **values)
     if controller == "pid":
         w, d, i = v["bandwidth"], v["damping"], v["integral"]
-        p = cfg["pid"]
-        return {"pid": {"kp": _scaled(p["kp"], w * w), "kd": _scaled(p["kd"], d * w),
-                        "ki": _scaled(p["ki"], i * w ** 3)}}
+        p = settings.pid
+        return {"pid": {"kp": _scaled(p.kp, w * w), "kd": _scaled(p.kd, d * w), "ki": _scaled(p.ki, i * w ** 3)}}
     if controller == "ctc":
         w, d = v["bandwidth"], v["damping"]
-        c = cfg["ctc"]
-        return {"ctc": {"kp_per_s2": _scaled(c["kp_per_s2"], w * w), "kd_per_s": _scaled(c["kd_per_s"], d * w)}}
-    d = cfg["dnbs"]
-    rt = d["remedies"]["robust_term"]
-    nets = {net: {"q": _scaled(d[net]["q"], v["ekf_q"]), "p0": _scaled(d[net]["p0"], v["ekf_p0"])}
-            for net in ("alpha_net", "torque_net")}
-    nets["torque_net"]["error_scale_rad_s"] = _scaled(d["torque_net"]["error_scale_rad_s"], v["error_scale"])
+        c = settings.ctc
+        return {"ctc": {"kp_per_s2": _scaled(c.kp_per_s2, w * w), "kd_per_s": _scaled(c.kd_per_s, d * w)}}
+    d = settings.dnbs
+    rt = d.remedies.robust_term
+    nets = {name: {"q": _scaled(net.q, v["ekf_q"]), "p0": _scaled(net.p0, v["ekf_p0"])}
+            for name, net in (("alpha_net", d.alpha_net), ("torque_net", d.torque_net))}
+    nets["torque_net"]["error_scale_rad_s"] = _scaled(d.torque_net.error_scale_rad_s, v["error_scale"])
     ramp = float(v["ramp_s"])
     return {"dnbs": {**nets, "remedies": {
-        "robust_term": {"torque_gain_nms_per_rad": _scaled(rt["torque_gain_nms_per_rad"], v["torque_gain"]),
-                        "alpha_gain_per_s": _scaled(rt["alpha_gain_per_s"], v["alpha_gain"])},
+        "robust_term": {"torque_gain_nms_per_rad": _scaled(rt.torque_gain_nms_per_rad, v["torque_gain"]),
+                        "alpha_gain_per_s": _scaled(rt.alpha_gain_per_s, v["alpha_gain"])},
         "learning_ramp": {"enabled": ramp > 0.0, "ramp_s": ramp}}}}
 
 
-def apply(cfg: dict, fragment: dict) -> dict:
-    """A deep copy of the validated ``cfg`` with ``fragment``'s values (lists become tuples, as load_config gives)."""
-    out = copy.deepcopy(cfg)
-
-    def merge(node: dict, frag: dict) -> None:
-        for k, val in frag.items():
-            if isinstance(val, dict):
-                merge(node[k], val)
-            else:
-                node[k] = tuple(val) if isinstance(val, list) else val
-    merge(out, fragment)
-    return out
+def apply(settings: Settings, fragment: dict) -> Settings:
+    """``settings`` with ``fragment``'s values (a config fragment), validated again."""
+    return Settings.of(validate(merged(settings.to_config(), fragment), settings.n_joints), settings.arm)
 
 
 def on_bound(params: tuple[Param, ...], values: dict[str, float], tol: float = 0.02) -> list[str]:

@@ -16,6 +16,7 @@ import warnings
 from dataclasses import dataclass, field
 
 from ..config_error import ConfigError
+from ..settings import Settings
 from ..study.executor import Executor
 from .objective import objective, tune_run
 from .space import Param, apply, settings_fragment, start_values
@@ -123,12 +124,12 @@ def completed(study) -> list:
     return study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))
 
 
-def trial_config(base_cfg: dict, spec: TuneSpec, values: dict) -> dict:
+def trial_settings(base: Settings, spec: TuneSpec, values: dict) -> Settings:
     """The validated config of a trial's point (the dimensions not searched at their start values)."""
-    return apply(base_cfg, settings_fragment(spec.controller, base_cfg, dict(spec.fixed, **values)))
+    return apply(base, settings_fragment(spec.controller, base, dict(spec.fixed, **values)))
 
 
-def optimize(study, spec: TuneSpec, base_cfg: dict, n_trials: int, executor: Executor, progress=None) -> None:
+def optimize(study, spec: TuneSpec, base: Settings, n_trials: int, executor: Executor, progress=None) -> None:
     """Run trials until the study holds ``n_trials`` completed ones. ``progress(done, best, runs_done, runs)``
     after every run. Interrupted (Ctrl-C, an error): the trials of the batch are marked failed, the completed
     ones stay in the storage, and the exception goes on."""
@@ -141,10 +142,10 @@ def optimize(study, spec: TuneSpec, base_cfg: dict, n_trials: int, executor: Exe
         tasks = {}
         for t in asked:
             values = {p.name: t.suggest_float(p.name, p.low, p.high, log=p.log) for p in spec.params}
-            cfg = trial_config(base_cfg, spec, values)
+            trial = trial_settings(base, spec, values)
             for sc in spec.scenarios:
                 for seed in spec.seeds:
-                    tasks[(t.number, sc, seed)] = (cfg, sc, spec.controller, seed, spec.duration_s)
+                    tasks[(t.number, sc, seed)] = (trial, sc, spec.controller, seed, spec.duration_s)
         n_runs = [0]
 
         def on_run(key, row):
@@ -165,15 +166,15 @@ def optimize(study, spec: TuneSpec, base_cfg: dict, n_trials: int, executor: Exe
         progress(len(completed(study)), 0, 0)
 
 
-def held_out(base_cfg: dict, spec: TuneSpec, best_values: dict, scenarios: list[str], seeds: list[int],
+def held_out(base: Settings, spec: TuneSpec, best_values: dict, scenarios: list[str], seeds: list[int],
              executor: Executor) -> dict[str, list[dict]]:
     """Rows of the start settings and of ``best_values`` on every (scenario, seed): {'start': [...], 'tuned': [...]}."""
-    cfgs = {"start": trial_config(base_cfg, spec, start_values(spec.controller, base_cfg)),
-            "tuned": trial_config(base_cfg, spec, best_values)}
-    tasks = {(which, sc, seed): (cfg, sc, spec.controller, seed, spec.duration_s)
-             for which, cfg in cfgs.items() for sc in scenarios for seed in seeds}
+    trials = {"start": trial_settings(base, spec, start_values(spec.controller, base)),
+              "tuned": trial_settings(base, spec, best_values)}
+    tasks = {(which, sc, seed): (trial, sc, spec.controller, seed, spec.duration_s)
+             for which, trial in trials.items() for sc in scenarios for seed in seeds}
     rows = executor.run(tune_run, tasks)
-    return {which: [rows[k] for k in tasks if k[0] == which] for which in cfgs}
+    return {which: [rows[k] for k in tasks if k[0] == which] for which in trials}
 
 
 class TrialProgress:

@@ -1,7 +1,7 @@
 """Step k <-> stamp k T, in integer nanoseconds, and the stamp at the start of a stamped CDR message.
 
 Step k travels as the stamp k * T, so step and simulated time are the same
-thing on the wire. No ROS types here: ``ros/wire.py`` adds the conversions
+thing on the wire. No ROS types here: ``ros/endpoints.py`` adds the conversions
 to and from ``builtin_interfaces`` messages on top.
 """
 from __future__ import annotations

@@ -1,13 +1,13 @@
 """The plant's wire in the standard robot interface (``interface:=standard``): the PyBullet plant as a robot
-the joint bus drives (docs/your_robot.md), instead of the per-joint topics of ``plant_wire.py``.
+the joint bus drives (docs/your_robot.md), instead of the per-joint topics of ``plant_endpoints.py``.
 
 Publishes every joint's state as one ``sensor_msgs/JointState`` (name, position [rad], velocity [rad/s], and as
 effort the torque applied over the step before [N m]; stamped with the robot's time k T) on ``state_topic``,
-and /clock (``ClockSchedule``, latched at time 0, as ``plant_wire.py``). Takes commands in the form of
+and /clock (``ClockSchedule``, latched at time 0, as ``plant_endpoints.py``). Takes commands in the form of
 ``RobotCommand``: a JointState of efforts stamped with the state it answers (matched by joint name), or a
 Float64MultiArray in the arm's joint order (no stamp: it answers the current step). A command gives every
 joint's effort at once: the plant's lockstep and realtime loops run unchanged on top. Same methods as
-``PlantWire``; no per-joint topics, no joint_states of its own (the bus publishes the graph's).
+``PlantEndpoints``; no per-joint topics, no joint_states of its own (the bus publishes the graph's).
 """
 from __future__ import annotations
 
@@ -22,14 +22,14 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
-from ..arm import arm_of
 from ..loop.endpoint_match import Need
 from ..wire import joint_state_cdr
 from ..wire.clock_schedule import ClockSchedule
 from ..wire.robot_interface import JointMatcher, RobotCommand
-from .plant_wire import CLOCK_CDR
+from ..settings import Settings
+from .plant_endpoints import CLOCK_CDR
 from .polled import PolledSubscription, SubscriptionWaitSet
-from .wire import CLOCK, StepClock, record_qos
+from .endpoints import CLOCK, StepClock, record_qos
 
 ROBOT_QOS_DEPTH = 10  # the standard topics: reliable, volatile, keep-last 10 (matches a best-effort reader too)
 
@@ -40,13 +40,13 @@ def robot_qos(reliability: str = "reliable", depth: int = ROBOT_QOS_DEPTH) -> Qo
                       durability=DurabilityPolicy.VOLATILE)
 
 
-class StandardPlantWire:
-    def __init__(self, node, cfg: dict, clock: StepClock, state_topic: str, command: RobotCommand, clock_hz: float,
+class StandardPlantEndpoints:
+    def __init__(self, node, settings: Settings, clock: StepClock, state_topic: str, command: RobotCommand, clock_hz: float,
                  last_step: int, current_step):
         """``current_step()``: the plant's current step (what a Float64MultiArray command answers)."""
         self.node = node
         self.clock = clock
-        arm = arm_of(cfg)
+        arm = settings.arm
         self.joint_names = arm.joint_names
         n = len(self.joint_names)
         self.command = command
@@ -63,7 +63,7 @@ class StandardPlantWire:
                                                robot_qos(depth=100), raw=not forward)
         self._wait_set = SubscriptionWaitSet(node, [self._command_sub])
         self.state_links = [None] * n  # no state faults are injected on this interface
-        self._limits = np.array(cfg["plant"]["torque_limit_nm"], dtype=float).tolist()
+        self._limits = np.array(settings.plant.torque_limit_nm, dtype=float).tolist()
         self.waits = 0
         self.wakeups_with_efforts = 0
         self.malformed = np.zeros(n, dtype=np.int64)
@@ -103,7 +103,7 @@ class StandardPlantWire:
         return list(range(len(self.joint_names))) if ready else []
 
     def take_efforts(self, joints=None) -> list[tuple[int, int, float, int]]:
-        """Every queued command as (joint, step, torque [N m], received [ns]) per joint, saturated at Table 2."""
+        """Every queued command as (joint, step, torque [N m], received [ns]) per joint, saturated at the torque limit."""
         out = []
         while (got := self._command_sub.take()) is not None:
             data, received_ns = got

@@ -4,14 +4,14 @@ Names relative to the node's namespace (/pa10 by default, wire/topics.py).
 Publishes robot_description (the URDF, transient-local), /clock (with the
 states ``ClockSchedule`` picks: one per 1 / clock_hz of simulated time, and
 the last; none with clock_hz 0),
-joint_states (all 7: position, velocity, and as effort the torque applied
+joint_states (every joint: position, velocity, and as effort the torque applied
 over the step that led to this state) and per joint <joint>/state
 (that joint only, stamped k T), through each joint's fault-injecting state
-link when ``faults.state`` configures one. The seven <joint>/effort
+link when ``faults.state`` configures one. The <joint>/effort
 subscriptions are polled (``polled.py``): the plant blocks on one wait set
 over them and takes every effort that is there at once, so it wakes once
 per batch of efforts, not once per effort. Decoded efforts come out
-saturated at Table 2 (counted) with their reception time; undecodable ones
+saturated at the torque limit (counted) with their reception time; undecodable ones
 are counted and dropped.
 """
 from __future__ import annotations
@@ -26,27 +26,27 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 
-from ..arm import arm_of
-from ..faults.faulty_link import links_from_config
+from ..faults.faulty_link import faulty_link
 from ..loop.endpoint_match import Need
 from ..wire import joint_state_cdr
 from ..wire.clock_schedule import ClockSchedule
+from ..settings import Settings
 from .polled import PolledSubscription, SubscriptionWaitSet
-from .wire import (CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, StepClock, description_qos, effort_topic, loop_qos,
+from .endpoints import (CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, StepClock, description_qos, effort_topic, loop_qos,
                    record_qos, state_topic)  # relative names
 
 
 CLOCK_CDR = struct.Struct("<HHiI")  # rosgraph_msgs/Clock: encapsulation (little-endian CDR), sec, nanosec
 
 
-class PlantWire:
-    def __init__(self, node, cfg: dict, clock: StepClock, reliability: str, state_depth: int, effort_depth: int,
+class PlantEndpoints:
+    def __init__(self, node, settings: Settings, clock: StepClock, reliability: str, state_depth: int, effort_depth: int,
                  clock_hz: float, last_step: int):
         """``reliability`` and the depths: QoS of the per-joint state and effort topics; ``clock_hz``: /clock
         rate [Hz of simulated time] (0: no /clock); ``last_step``: the run's last state (it carries a /clock)."""
         self.node = node
         self.clock = clock
-        arm = arm_of(cfg)
+        arm = settings.arm
         self.joint_names = names = arm.joint_names
         n = len(names)
         self.state_qos = loop_qos(reliability, depth=state_depth)
@@ -62,9 +62,9 @@ class PlantWire:
         # the URDF, latched, as robot_state_publisher offers it (Foxglove and the recorder read it)
         self._description_pub = node.create_publisher(String, ROBOT_DESCRIPTION, description_qos())
         self._description_pub.publish(String(data=arm.urdf_text()))
-        self.state_links = [links_from_config(cfg, "state", i, self._state_pubs[i].publish, arm.upper_rad[i])
+        self.state_links = [faulty_link(settings.faults, "state", i, self._state_pubs[i].publish, arm.upper_rad[i])
                             for i in range(n)]
-        self.torque_limit = np.array(cfg["plant"]["torque_limit_nm"], dtype=float)
+        self.torque_limit = np.array(settings.plant.torque_limit_nm, dtype=float)
         self._limits = self.torque_limit.tolist()
         self._state_layouts = [joint_state_cdr.OneJointLayout(j, ("position", "velocity")) for j in names]
         self._effort_layouts = [joint_state_cdr.OneJointLayout(j, ("effort",)) for j in names]
@@ -112,7 +112,7 @@ class PlantWire:
     # ------------------------------------------------------------- in
     @property
     def effort_subscriptions(self) -> list:
-        """The seven polled effort subscriptions, in joint order (the joint bus's paced loop waits on them)."""
+        """The polled effort subscriptions, one per joint in joint order (the joint bus's paced loop waits on them)."""
         return list(self._effort_subs)
 
     def wait(self, timeout_s: float) -> list[int]:
@@ -124,7 +124,7 @@ class PlantWire:
 
     def take_efforts(self, joints=None) -> list[tuple[int, int, float, int]]:
         """Every queued effort (of ``joints``, default all) as (joint, step, torque [N m], received [ns]),
-        saturated at Table 2."""
+        saturated at the torque limit."""
         out = []
         for joint in (range(len(self._effort_subs)) if joints is None else joints):
             sub, layout = self._effort_subs[joint], self._effort_layouts[joint]
@@ -137,7 +137,7 @@ class PlantWire:
                     self.malformed[joint] += 1
                     continue
                 lim = self._limits[joint]
-                if math.isfinite(u) and abs(u) > lim:  # out of range: counted, saturated at Table 2
+                if math.isfinite(u) and abs(u) > lim:  # out of range: counted, saturated at the torque limit
                     self.out_of_range[joint] += 1
                     u = lim if u > 0 else -lim
                 out.append((joint, self.clock.step_of_sec_nanosec(sec, nanosec), u, received_ns))
