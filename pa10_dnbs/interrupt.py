@@ -4,7 +4,7 @@ A terminal's Ctrl-C sends SIGINT to every process of the foreground group: the c
 
 - Pool workers ignore SIGINT (:func:`ignore_sigint`, their pool's initializer; :func:`sigint_blocked` closes the
   window between fork and initializer). A worker interrupted inside multiprocessing's queues can leave a half
-  message in a pipe the pool reads forever (the rare hang of issue 38); the parent stops them itself.
+  message in a pipe the pool reads forever (the rare hang the old pool had); the parent stops them itself.
 - The command: the first SIGINT raises KeyboardInterrupt (the command stops its work, keeps what is complete,
   says where, exits 130); from then on a second SIGINT ends at once (:func:`two_stage_sigint`): every child is
   killed and reaped, one line (:func:`on_second_sigint` sets it), exit 130, no clean-up that could wait.

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """PyBullet against MuJoCo: each arm's controllers run in-process on both engines, printed side by side
-(docs/engines.md's table) with issue 37's target per arm (MuJoCo's DNBS settles by 0.5 s, RMS within 2x).
+(docs/engines.md's table) with the target per arm (MuJoCo's DNBS settles by 0.5 s, RMS within 2x).
 
     .venv/bin/python scripts/engine_comparison.py --arms pa10,iiwa,panda --duration 20
 

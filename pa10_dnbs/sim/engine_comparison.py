@@ -15,7 +15,7 @@ from ..report.metrics_file import metrics_dict, metrics_settings
 from .closed_loop import simulate
 
 ENGINE_PAIR = ("pybullet", "mujoco")
-SETTLE_TARGET_S = 0.5  # issue 37: MuJoCo's DNBS settles by 0.5 s
+SETTLE_TARGET_S = 0.5  # the target: MuJoCo's DNBS settles by 0.5 s
 RMS_RATIO_TARGET = 2.0  # ... and reaches a worst RMS within 2x of PyBullet's
 
 
@@ -73,7 +73,7 @@ def engine_table(runs: list[EngineRun]) -> str:
 
 
 def target_lines(runs: list[EngineRun]) -> list[str]:
-    """One line per arm on issue 37's target: MuJoCo's DNBS settles by 0.5 s with a worst RMS within 2x of
+    """One line per arm on the target: MuJoCo's DNBS settles by 0.5 s with a worst RMS within 2x of
     PyBullet's; each line starts with "met" or "NOT met"."""
     out = []
     for arm in dict.fromkeys(r.arm for r in runs):

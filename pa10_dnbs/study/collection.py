@@ -1,4 +1,4 @@
-"""The collection benchmark (issue 35): every serial arm of example-robot-data, bare and with an arm file.
+"""The collection benchmark: every serial arm of example-robot-data, bare and with an arm file.
 
 One row per (arm, mode): accepted or refused (the one line the intake gives), the rule's warnings, and per
 controller (DNBS, PID, CTC) the worst joint's RMS error over the window [rad], settling time into 1e-2 rad [s],
