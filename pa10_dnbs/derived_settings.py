@@ -26,7 +26,10 @@ DERIVED_KEYS = REFERENCE_KEYS + GAIN_KEYS
 #: files (so an arm file can set them; config/default.yaml must not, or no arm file could).
 #: ctc.on_saturation: computed torque scales its feedback to stay within the limits (sim/computed_torque.py);
 #: the PA10, iiwa and Panda arm files pin ``clip``, the law their published numbers were made with.
-RULE_DEFAULTS = {"ctc": {"on_saturation": "scale_feedback"}}
+RULE_DEFAULTS = {"ctc": {"on_saturation": "scale_feedback"},
+                 # the alpha network starts near zero: its EKF (R = 1 on e1 / E1) learns an untrained output away
+                 # only to about 2e-3 E1 std rad, a floor of 1.1e-5 rad at the presets' 0.01 (docs/arms.md)
+                 "dnbs": {"alpha_net": {"init_weight_std": 1e-6}}}
 
 
 def derived_reference(arm: Arm, tree: dict | None = None, report: bool = True) -> dict:
