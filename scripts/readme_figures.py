@@ -109,6 +109,8 @@ def _tests(rec: dict) -> list[tuple[str, str]]:
     args = f["pytest_args"]
     marker = args[args.index("-m") + 1] if "-m" in args[:-1] else None
     tier = {None: "the full suite", "not graph": 'the fast tier, `-m "not graph"`'}.get(marker, f'`-m "{marker}"`')
+    if "-n" in args[:-1]:
+        tier += f", `-n {args[args.index('-n') + 1]}`"
     failed = f", **{f['failed'] + f['errors']} failed**" if f["failed"] + f["errors"] else ""
     return [(f"tests ({tier})", f"{f['passed']} passed{failed}, {f['skipped']} skipped; pytest "
              f"{_minutes(f['pytest_s'])}")]

@@ -47,3 +47,27 @@ class ControllerBank(Protocol):
 
     def counters(self, row: int = 0) -> dict[str, int]:
         """Row ``row``'s event counters for the run's report (DNBS: its EKF resets; {} for a fixed bank)."""
+
+
+class FixedGainBank:
+    """What every bank that does not learn (PID, computed torque) shares: ``step`` is ``answer``, nothing to
+    learn, no learned state, no events. A subclass defines ``answer`` and ``n_joints``."""
+
+    learns = False
+    learning_pending = False
+
+    def step(self, x1: np.ndarray, x2: np.ndarray, ref: ReferenceSample,
+             active: np.ndarray | None = None) -> np.ndarray:
+        """``answer`` (the subclass's; nothing to learn)."""
+        return self.answer(x1, x2, ref, active)
+
+    def learn(self) -> None:
+        """Nothing to learn."""
+
+    def state_dict(self, row: int = 0) -> dict[str, np.ndarray]:
+        """No learned state: {}."""
+        return {}
+
+    def counters(self, row: int = 0) -> dict[str, int]:
+        """No events to count: {}."""
+        return {}

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .controller_bank import FixedGainBank
 from .reference import ReferenceSample
 
 
@@ -34,12 +35,9 @@ class PIDParams:
                          self.anti_windup)
 
 
-class PIDControllers:
+class PIDControllers(FixedGainBank):
     """Fixed-gain PIDs of n joints (a :class:`~pa10_dnbs.core.controller_bank.ControllerBank` that does not
     learn: its integrator is state, not learning, and is not checkpointed)."""
-
-    learns = False
-    learning_pending = False
 
     def __init__(self, params: PIDParams):
         self.params = params
@@ -48,21 +46,6 @@ class PIDControllers:
     @property
     def n_joints(self) -> int:
         return self.integral.size
-
-    def step(self, x1: np.ndarray, x2: np.ndarray, ref: ReferenceSample, active: np.ndarray | None = None) -> np.ndarray:
-        """``answer`` (nothing to learn)."""
-        return self.answer(x1, x2, ref, active)
-
-    def learn(self) -> None:
-        """Nothing to learn."""
-
-    def state_dict(self, row: int = 0) -> dict[str, np.ndarray]:
-        """No learned state: {}."""
-        return {}
-
-    def counters(self, row: int = 0) -> dict[str, int]:
-        """No events to count: {}."""
-        return {}
 
     def answer(self, x1: np.ndarray, x2: np.ndarray, ref: ReferenceSample, active: np.ndarray | None = None) -> np.ndarray:
         """Torques (n,) [N m] for angles x1 (n,) [rad] and velocities x2 (n,) [rad/s]; a row whose ``active``

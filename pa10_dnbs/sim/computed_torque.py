@@ -28,19 +28,17 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.controller_bank import FixedGainBank
 from ..core.reference import ReferenceSample
 
 ON_SATURATION = ("scale_feedback", "clip")
 _BISECTIONS = 30  # s to 2^-30 ~ 1e-9
 
 
-class ComputedTorqueController:
+class ComputedTorqueController(FixedGainBank):
     """All joints at once; ``kp_per_s2`` [1/s^2] and ``kd_per_s`` [1/s] shape the error dynamics
     e_ddot + Kd e_dot + Kp e = 0 (per joint, numbers or arrays (n,)); ``on_saturation``: one of
     ON_SATURATION (module docstring). ``last_scale``: the s of the last step (1.0 when nothing saturated)."""
-
-    learns = False  # a ControllerBank (core/controller_bank.py) with nothing to learn
-    learning_pending = False
 
     def __init__(self, plant, kp_per_s2, kd_per_s, torque_limit_nm, on_saturation: str = "clip"):
         if on_saturation not in ON_SATURATION:
@@ -52,21 +50,6 @@ class ComputedTorqueController:
         self.n_joints = self.limit.size
         self.on_saturation = on_saturation
         self.last_scale = 1.0
-
-    def step(self, x1: np.ndarray, x2: np.ndarray, ref: ReferenceSample, active: np.ndarray | None = None) -> np.ndarray:
-        """``answer`` (nothing to learn)."""
-        return self.answer(x1, x2, ref, active)
-
-    def learn(self) -> None:
-        """Nothing to learn."""
-
-    def state_dict(self, row: int = 0) -> dict[str, np.ndarray]:
-        """No learned state: {}."""
-        return {}
-
-    def counters(self, row: int = 0) -> dict[str, int]:
-        """No events to count: {}."""
-        return {}
 
     def answer(self, x1: np.ndarray, x2: np.ndarray, ref: ReferenceSample, active: np.ndarray | None = None) -> np.ndarray:
         """Torques (n,) [N m]; needs ``ref.acceleration_rad_s2``. (No learning: ``active`` changes nothing.)"""
