@@ -59,3 +59,19 @@ def test_the_plant_and_reference_run_read_only_settings_from_the_params_file(cfg
     assert "[m/s^2]" in plant_p["descriptions"]["plant.gravity_mps2"]
     assert plant_p["values"]["arm_file"] == str(cfg.arm.file)
     assert "simulation.dt_s" in got["/pa10/reference"]["values"] and "plant.gravity_mps2" not in got["/pa10/reference"]["values"]
+
+
+def test_each_node_reads_its_arm_once_from_the_path_its_params_give(cfg, tmp_path, domain):
+    """The arm file and its URDF are parsed once per node, from arm_file (here the iiwa's, with a config file
+    for the PA10 that a node never reads once the params file gives everything)."""
+    from pa10_dnbs.arm import load_arm
+    from pa10_dnbs.run_settings import build_settings
+
+    iiwa = build_settings(REPO / "config" / "default.yaml", arm="iiwa", report=False)
+    params = write_params_file(tmp_path / "ros_params.yaml", iiwa, "pid", "/pa10")
+    probe = subprocess.run(["timeout", "-k", "5", "90", sys.executable, str(REPO / "test" / "arm_parse_probe.py"),
+                            params, NO_CONFIG], cwd=REPO, env=ros_env(domain), text=True, capture_output=True,
+                           timeout=100)
+    assert probe.returncode == 0, probe.stderr
+    reads = json.loads(probe.stdout.strip().splitlines()[-1])
+    assert reads == {"plant": [str(load_arm("iiwa").file)], "reference": [str(load_arm("iiwa").file)]}, reads

@@ -24,7 +24,7 @@ ARM_FILE_DESCRIPTION = ("the arm file (urdf/<arm>/arm.yaml) or URDF this node's 
 #: node name (as the launcher starts it) -> the sections of the settings it runs
 NODE_SECTIONS: dict[str, tuple[str, ...]] = {
     "plant": ("simulation", "reference", "plant", "faults"),       # physics, initial state, state-link faults
-    "joint_bus": ("simulation", "reference", "plant", "faults"),   # the plant's parameters (it stands in its place)
+    "joint_bus": ("simulation", "plant", "faults"),                # in the plant's place: no physics of its own
     "mujoco_robot": ("simulation", "reference", "plant"),          # physics and initial state
     "reference": ("simulation", "reference"),                      # eq. 27 and its preview, at dt
     "wire_monitor": ("simulation",),                               # dt and the run's length
@@ -72,17 +72,16 @@ def _unit(key: str, spec) -> str:
 
 def _describe(key: str, spec) -> SettingParam:
     unit = _unit(key, spec)
-    what = {Joints: "one value per joint, chain order", Pair: "[t0, t1]", tuple: "one value per input, in its unit"}.get(type(spec))
+    shape = {Joints: "one value per joint, chain order", Pair: "[t0, t1]",
+             tuple: "one value per input, in its unit"}.get(type(spec))
     if isinstance(spec, Text) and spec.choices:
-        what = "one of " + ", ".join(spec.choices)
-    text = f"{key} of the run's settings (config/default.yaml)" + (f", {what}" if what else "") + \
-        (f" [{unit}]" if unit else "")
-    num = spec.num if isinstance(spec, Joints) else spec if isinstance(spec, Num) else None
+        shape = "one of " + ", ".join(spec.choices)
+    text = (f"{key} of the run's settings (config/default.yaml)" + (f", {shape}" if shape else "")
+            + (f" [{unit}]" if unit else ""))
     if isinstance(spec, Pair):
         return SettingParam(text, 0.0, None)
-    if isinstance(spec, tuple):
-        num = spec[0]
-    if num is None:
+    num = spec.num if isinstance(spec, Joints) else spec[0] if isinstance(spec, tuple) else spec
+    if not isinstance(num, Num):  # a flag or a string
         return SettingParam(text)
     if num.strict and num.low is not None:
         text += f"; > {num.low:g}"
