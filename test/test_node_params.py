@@ -19,6 +19,9 @@ CASES = [  # (node module, bad parameter, word the error line must hold): each n
     ("plant_node", "interface:=ros2_control", "interface"),
     ("joint_bus_node", "robot_command:=torque", "robot_command"),     # before it waits for any robot
     ("joint_bus_node", "robot_timeout_s:=0.0", "robot_timeout_s"),
+    ("plant_node", "simulation.dt_s:=0.5", "simulation.dt_s"),                  # a setting: outside its range
+    ("plant_node", "plant.torque_limit_nm:=[1.0,2.0]", "plant.torque_limit_nm"),  # not one value per joint
+    ("reference_node", "arm_file:=/no/such/arm.yaml", "arm_file"),
 ]
 TIMEOUT_S = 60
 

@@ -89,10 +89,16 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
     """(name, argv) of every process: the wire monitor, the recorder (with --record), the nine nodes,
     the plant last (it starts stepping once the others are matched)."""
     py = [sys.executable, "-m"]
+    # each node's settings: from the run's params file when there is one (config_file is then not given),
+    # else from the config file
+    files = ["--params-file", str(opt.params_file)] if opt.params_file is not None else []
+
+    def settings_source(params: dict) -> dict:
+        return {k: v for k, v in params.items() if k != "config_file"} if files else params
 
     def ros(node: str, params: dict) -> list[str]:
-        return _ros_args(node, {**params, "sched_batch": str(opt.sched_batch).lower(), "use_sim_time": "true",
-                                "rt_priority": opt.rt_priority}, opt.namespace)
+        return _ros_args(node, {**settings_source(params), "sched_batch": str(opt.sched_batch).lower(),
+                                "use_sim_time": "true", "rt_priority": opt.rt_priority}, opt.namespace) + files
 
     config_file = str(opt.config_path)
     if opt.record_bag is None:
@@ -127,18 +133,19 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
     if opt.plant_engine == "mujoco":  # --plant mujoco: our own external robot, before the bus (the last process)
         from .plant_engine import mujoco_robot_command
 
-        cmds.append(mujoco_robot_command(opt, lambda node, params: _ros_args(node, params, opt.namespace)))
+        cmds.append(mujoco_robot_command(opt, lambda node, params: _ros_args(node, settings_source(params),
+                                                                             opt.namespace) + files))
     plant, module, extra = "plant", "pa10_dnbs.ros.plant_node", {}
     if opt.robot == "external":  # the joint bus in the plant's place: same handshake, topics and stats file
         plant, module = JOINT_BUS, "pa10_dnbs.ros.joint_bus_node"
         extra = {"robot_command": opt.robot_command, "robot_state_topic": opt.robot_state_topic or "''",
                  "robot_command_topic": opt.robot_command_topic or "''", "robot_timeout_s": opt.robot_timeout_s}
-    cmds.append((plant, py + [module] + _ros_args(plant, {
+    cmds.append((plant, py + [module] + _ros_args(plant, settings_source({
         **extra, "ready_nodes": _yaml_list(ready), "settle_s": 0.0,
         "config_file": config_file, "mode": opt.mode, "duration_s": opt.duration_s, "reliability": loop_reliability(opt),
         "effort_timeout_s": opt.effort_timeout_s, "on_missing_effort": opt.on_missing_effort,
         "real_time_factor": opt.real_time_factor, "deadline_fraction": opt.deadline_fraction,
         "rt_priority": opt.rt_priority,
         "stats_file": str(stats_file), "min_joint_states_subscribers": int(opt.record_bag is None),
-        "recorders": int(opt.record_bag is not None), "clock_hz": opt.clock_hz}, opt.namespace)))
+        "recorders": int(opt.record_bag is not None), "clock_hz": opt.clock_hz}), opt.namespace) + files))
     return cmds

@@ -31,7 +31,8 @@ from ..live.server import LiveServer, LiveServerError
 from ..live.view import LiveView
 from .diagnostics import diagnostics_qos
 from ..loop.scheduling import apply_batch, apply_fifo
-from .params import CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, declare, load_node_config
+from .params import RT_PRIORITY, SCHED_BATCH, SETTINGS_DEFAULTS, Param, ParameterError, declare, declare_settings
+from .settings_params import NODE_SECTIONS
 from .runtime import announce_ready, exit_process, run_node
 from ..wire.topics import DEFAULT_NS, DIAGNOSTICS, ArmTopics
 from .endpoints import description_qos, reference_qos
@@ -45,7 +46,7 @@ def newest_only_qos() -> QoSProfile:
 
 
 PARAMS = {
-    "config_file": CONFIG_FILE,
+    "config_file": SETTINGS_DEFAULTS,
     "sched_batch": SCHED_BATCH,
     "rt_priority": RT_PRIORITY,
     "host": Param("127.0.0.1", "address the Foxglove WebSocket server listens on"),
@@ -62,7 +63,7 @@ class LiveObserverNode(Node):
             raise ParameterError(f"parameter port must be in 0..65535, got {p['port']}")
         if not 0 < p["display_hz"] <= 1000:
             raise ParameterError(f"parameter display_hz must be in (0, 1000] frames per second, got {p['display_hz']}")
-        settings = load_node_config(p["config_file"])
+        settings = declare_settings(self, NODE_SECTIONS["live_view"], p["config_file"])
         ns = self.get_namespace()
         arm = ArmTopics(ns if ns != "/" else DEFAULT_NS)
         try:

@@ -22,22 +22,21 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
-from ..arm import ArmError
-from ..config import ConfigError, default_config_path
-from ..run_settings import build_settings
 from ..loop.robot_stepper import MODES, RobotStepper
 from ..plant.engines import open_plant
 from ..wire import joint_state_cdr
 from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, ClockSchedule, check_clock_hz
-from .params import CONFIG_FILE, Param, ParameterError, check_choice, declare
+from .params import SETTINGS_DEFAULTS, Param, ParameterError, check_choice, declare, declare_settings
 from .plant_endpoints import CLOCK_CDR
 from .polled import PolledSubscription, SubscriptionWaitSet
 from .runtime import announce_ready
+from .settings_params import NODE_SECTIONS
 from .endpoints import CLOCK
 
 PARAMS = {
-    "config_file": CONFIG_FILE,
-    "arm": Param("", "the arm: a preset's name or an arm file or URDF; '' = the config's arm"),
+    "config_file": SETTINGS_DEFAULTS,
+    "arm": Param("", "the arm of those defaults: a preset's name or an arm file or URDF; '' = the config's arm "
+                     "(arm_file, when given, is the arm)"),
     "mode": Param("lockstep", "lockstep (step once the command for the current state is in) or paced (wall-clock "
                               "ticks of simulation.dt_s with the latest command)"),
     "duration_s": Param(0.0, "robot time to run [s]; 0 = until SIGINT", 0.0),
@@ -64,10 +63,7 @@ class MuJoCoRobotNode(Node):
         check_choice("mode", p["mode"], MODES)
         if not p["resend_s"] > 0:
             raise ParameterError(f"parameter resend_s must be > 0, got {p['resend_s']}")
-        try:
-            settings = build_settings(p["config_file"] or default_config_path(), arm=p["arm"] or None)
-        except (ArmError, ConfigError) as exc:
-            raise ParameterError(f"parameter {'arm' if isinstance(exc, ArmError) else 'config_file'}: {exc}") from None
+        settings = declare_settings(self, NODE_SECTIONS["mujoco_robot"], p["config_file"], p["arm"], "arm")
         self.dt = settings.simulation.dt_s
         try:
             check_clock_hz(p["clock_hz"], self.dt)

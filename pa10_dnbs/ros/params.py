@@ -5,6 +5,9 @@ its parameters once, at start), and an inclusive range where there is one (Float
 IntegerRange in the descriptor, so ``ros2 param describe`` shows it and rclpy refuses a value outside it).
 A bad value (outside the range, of the wrong type, or refused by a node's own check) is a
 ``ParameterError``: one line on stderr and exit code 2 (``runtime.run_node``).
+
+A node's settings (the sections of the config it runs, ``settings_params.py``) are declared the same way by
+:func:`declare_settings`, which hands back the typed settings built from those parameters alone.
 """
 from __future__ import annotations
 
@@ -15,10 +18,12 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 
+from ..arm import ArmError, load_arm
 from ..config import ConfigError, default_config_path
 from ..controller_gains import gain_keys, gain_range, joint_gains, with_joint_gains
 from ..run_settings import build_settings
 from ..settings import Settings
+from .settings_params import ARM_FILE, ARM_FILE_DESCRIPTION, node_settings, section_params, section_values
 
 
 class ParameterError(ValueError):
@@ -40,7 +45,8 @@ class Param:
         d = ParameterDescriptor(description=self.description, read_only=self.read_only)
         if self.lo is None and self.hi is None:
             return d
-        if isinstance(self.default, bool) or not isinstance(self.default, (int, float)):
+        numbers = list(self.default) if isinstance(self.default, (list, tuple)) else [self.default]
+        if not numbers or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in numbers):
             raise TypeError(f"a range needs a numeric default, got {self.default!r}")
         if isinstance(self.default, int):
             d.integer_range = [IntegerRange(from_value=int(-2**63 if self.lo is None else self.lo),
@@ -94,14 +100,53 @@ def cli_parameter(argv, name: str) -> str | None:
     return None
 
 
-def load_node_config(path: str) -> Settings:
-    """The settings a node runs with, built once from its config file (the launcher's config_used.yaml, every
-    value resolved; '' means the shipped default) and the arm it names. A bad file is a ParameterError
-    (parameter config_file)."""
+def load_node_config(path: str, arm: str | None = None, arm_param: str = ARM_FILE) -> Settings:
+    """The settings a node runs with, built once from its config file (every value resolved; '' means the
+    shipped default) and the arm it names (``arm``: another one, given by parameter ``arm_param``). A bad file
+    is a ParameterError naming the parameter (config_file, or ``arm_param`` when that arm is bad)."""
     try:
-        return build_settings(path or default_config_path())
+        return build_settings(path or default_config_path(), arm=arm or None)
     except ConfigError as exc:
-        raise ParameterError(f"parameter config_file: {exc}") from None
+        name = arm_param if arm and isinstance(exc, ArmError) else "config_file"
+        raise ParameterError(f"parameter {name}: {_one_line(exc)}") from None
+
+
+def declare_settings(node: Node, sections, config_file: str = "", arm: str | None = None, arm_param: str = ARM_FILE):
+    """Declare ``arm_file`` and every key of ``sections`` (``settings_params.NODE_SECTIONS``) as read-only
+    parameters, with unit and range, and return the typed settings built from their values alone
+    (``settings_params.node_settings``); the arm is read once, from ``arm_file``.
+
+    Their values come from the run's params file (the launcher's ros_params.yaml) or ``-p``; only when some
+    are not given there, their defaults are the settings of ``config_file`` ('' = the shipped default) for the
+    arm ``arm`` (else the config's). A bad value is a ParameterError naming the parameter."""
+    specs = section_params(sections)
+    names = [ARM_FILE, *specs]
+    given = node._parameter_overrides  # what the params file and -p give this node (rclpy keeps no public view)
+    if all(name in given for name in names):
+        defaults = {name: _plain_value(given[name].value) for name in names}
+    else:
+        arm_file = _text(given.get(ARM_FILE))
+        defaults = section_values(load_node_config(config_file, arm_file or arm, ARM_FILE if arm_file else arm_param),
+                                  sections)
+    params = {ARM_FILE: Param(defaults[ARM_FILE], ARM_FILE_DESCRIPTION)}
+    params.update({key: Param(defaults[key], s.description, s.lo, s.hi) for key, s in specs.items()})
+    values = declare(node, params)
+    try:
+        the_arm = load_arm(values[ARM_FILE])
+    except ConfigError as exc:
+        raise ParameterError(f"parameter {ARM_FILE}: {_one_line(exc)}") from None
+    try:
+        return node_settings(the_arm, values, sections)
+    except ConfigError as exc:
+        raise ParameterError(f"parameter {exc}") from None
+
+
+def _plain_value(value):
+    return value.tolist() if hasattr(value, "tolist") else list(value) if isinstance(value, tuple) else value
+
+
+def _text(parameter) -> str | None:
+    return parameter.value if parameter is not None and isinstance(parameter.value, str) else None
 
 
 def gain_params(settings: Settings, controller: str, row: int) -> dict[str, Param]:
@@ -128,6 +173,8 @@ def check_choice(name: str, value, choices) -> None:
 
 
 CONFIG_FILE = Param("", "the YAML config (config/default.yaml and its units); '' = the shipped default")
+SETTINGS_DEFAULTS = Param("", "the YAML config (config/default.yaml and its units) whose values are the defaults of "
+                              "the settings parameters the params file does not give; '' = the shipped default")
 SCHED_BATCH = Param(False, "SCHED_BATCH on every thread: the node's wake-ups do not preempt the plant (the "
                            "launcher's --sched-batch sets it on every node but the plant); false = the default policy")
 RT_PRIORITY = Param(0, "SCHED_FIFO priority 1..99 on every thread, where the OS allows it (the launcher's "

@@ -49,7 +49,7 @@ from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, check_clock_hz
 from ..wire.robot_interface import default_state_topic, parse_robot_command
 from ..settings import Settings
 from .diagnostics import DiagnosticsReporter
-from .params import CONFIG_FILE, RT_PRIORITY, Param, ParameterError, check_choice, declare, load_node_config
+from .params import RT_PRIORITY, SETTINGS_DEFAULTS, Param, ParameterError, check_choice, declare, declare_settings
 from .plant_lockstep import run_lockstep
 from .plant_realtime import run_realtime
 from .plant_stats import diagnostics_report, plant_stats
@@ -57,11 +57,12 @@ from .plant_standard_endpoints import StandardPlantEndpoints
 from .plant_endpoints import PlantEndpoints
 from .ready import ReadyListener
 from .runtime import announce_ready
+from .settings_params import NODE_SECTIONS
 from .endpoints import StepClock, record_qos
 
 
 PARAMS = {
-    "config_file": CONFIG_FILE,
+    "config_file": SETTINGS_DEFAULTS,
     "mode": Param("lockstep", "lockstep (step once every effort is in) or realtime (wall-clock ticks)"),
     "duration_s": Param(0.0, "simulated time to run [s]; 0 = simulation.duration_s of the config", 0.0),
     "clock_hz": Param(DEFAULT_CLOCK_HZ, "/clock rate [Hz of simulated time]; 0 = no /clock", 0.0, 1e6),
@@ -128,7 +129,8 @@ class PlantNode(Node):
         except ValueError as exc:
             raise ParameterError(f"parameter {exc}") from None
         self.p = p
-        settings = load_node_config(p["config_file"])
+        # its settings (physics, initial state, state faults): read-only parameters, the run's params file
+        settings = declare_settings(self, NODE_SECTIONS[self.NODE_NAME], p["config_file"])
         self.dt = settings.simulation.dt_s
         try:
             check_clock_hz(p["clock_hz"], self.dt)

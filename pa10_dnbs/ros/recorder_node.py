@@ -41,8 +41,9 @@ from .bag_qos import bag_qos, subscription_qos, to_bag_qos
 from ..loop.cpu_meter import CpuMeter
 from .msg_types import message_class
 from ..loop.scheduling import apply_batch, apply_fifo
-from .params import (CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, check_choice, declare,
-                     load_node_config)
+from .params import (RT_PRIORITY, SCHED_BATCH, SETTINGS_DEFAULTS, Param, ParameterError, check_choice, declare,
+                     declare_settings)
+from .settings_params import NODE_SECTIONS
 from .polled import Inbox
 from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node, spin_until
@@ -72,7 +73,7 @@ PARAMS = {
     "topics": Param([""], "topics to record: names, optionally name:pkg/msg/Type; relative ones in the namespace"),
     "all_topics": Param(False, "record every topic discovered"),
     "time_source": Param("clock", "log time: clock (latest /clock) or system (wall time)"),
-    "config_file": CONFIG_FILE,
+    "config_file": SETTINGS_DEFAULTS,
     "sched_batch": SCHED_BATCH,
     "rt_priority": RT_PRIORITY,
     "custom_data": Param([""], "key=value entries for the bag's custom_data"),
@@ -100,7 +101,7 @@ class RecorderNode(Node):
         if not specs and not p["all_topics"]:
             raise ParameterError("give parameter topics (a list of /names) or all_topics:=true")
         self.p = p
-        settings = load_node_config(p["config_file"])
+        settings = declare_settings(self, NODE_SECTIONS["recorder"], p["config_file"])  # the whole run, into the bag
         custom = {CUSTOM_CONFIG: json.dumps(settings.to_config())}
         for item in (s for s in p["custom_data"] if s):
             key, sep, value = item.partition("=")

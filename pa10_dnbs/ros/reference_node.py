@@ -37,11 +37,12 @@ from ..wire.topics import TRAJECTORY
 from ..wire.trajectory_cdr import encode_one_joint
 from .diagnostics import DiagnosticsReporter, status, status_name
 from ..loop.scheduling import apply_batch, apply_fifo
-from .params import CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, declare, load_node_config
+from .params import RT_PRIORITY, SCHED_BATCH, SETTINGS_DEFAULTS, Param, ParameterError, declare, declare_settings
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
 from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node
+from .settings_params import NODE_SECTIONS
 from .endpoints import CLOCK, StepClock, record_qos, reference_qos, reference_topic
 
 
@@ -51,7 +52,7 @@ NOW = Duration(seconds=0)  # wait_for_all_acked: just look
 
 
 PARAMS = {
-    "config_file": CONFIG_FILE,
+    "config_file": SETTINGS_DEFAULTS,
     "sched_batch": SCHED_BATCH,
     "rt_priority": RT_PRIORITY,
     "batch_steps": Param(100, "reference points per message [steps]", 1),
@@ -71,7 +72,7 @@ class ReferenceNode(Node):
     def __init__(self):
         super().__init__("reference")
         p = declare(self, PARAMS)
-        settings = load_node_config(p["config_file"])
+        settings = declare_settings(self, NODE_SECTIONS["reference"], p["config_file"])  # eq. 27 at dt: read-only
         preview = settings.reference.preview_steps
         if p["batch_steps"] < 1 or p["lookahead_steps"] <= preview:
             raise ParameterError(f"batch_steps must be >= 1 and lookahead_steps > reference.preview_steps = {preview}")

@@ -23,16 +23,17 @@ from trajectory_msgs.msg import JointTrajectory
 from ..wire.wire_record import WireRecord
 from ..wire import joint_state_cdr, trajectory_cdr
 from ..loop.scheduling import apply_batch, apply_fifo
-from .params import CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, declare, load_node_config
+from .params import RT_PRIORITY, SCHED_BATCH, SETTINGS_DEFAULTS, Param, ParameterError, declare, declare_settings
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
 from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node, spin_until
+from .settings_params import NODE_SECTIONS
 from .endpoints import JOINT_STATES, StepClock, record_qos, reference_qos, reference_topic
 
 
 PARAMS = {
-    "config_file": CONFIG_FILE,
+    "config_file": SETTINGS_DEFAULTS,
     "sched_batch": SCHED_BATCH,
     "rt_priority": RT_PRIORITY,
     "duration_s": Param(0.0, "the run's simulated time [s]; 0 = simulation.duration_s of the config", 0.0),
@@ -49,7 +50,7 @@ class WireMonitorNode(Node):
             raise ParameterError("parameter out_file is required")
         if not p["poll_period_s"] > 0:
             raise ParameterError(f"parameter poll_period_s must be > 0 s, got {p['poll_period_s']}")
-        settings = load_node_config(p["config_file"])
+        settings = declare_settings(self, NODE_SECTIONS["wire_monitor"], p["config_file"])
         dt_s = settings.simulation.dt_s
         duration = p["duration_s"] if p["duration_s"] > 0 else settings.simulation.duration_s
         self.joint_names = names = settings.arm.joint_names
