@@ -3,16 +3,11 @@ the PA10, iiwa and Panda arm files keep the 0.01 of their published runs, an arm
 and the tracking floor it sets: the EKF learns the untrained output away only to about 2e-3 E1 x spread rad,
 so the spread 0.01 leaves a floor of about 1e-5 rad that the spread 1e-6 removes (docs/arms.md, three layers).
 """
-import contextlib
-import io
-import shutil
 from pathlib import Path
 
 import numpy as np
-import yaml
 
-from pa10_dnbs.config import default_config_path
-from pa10_dnbs.run_settings import build_settings
+from arm_files import arm_file, quiet_settings
 from pa10_dnbs.settings import replace_in
 from pa10_dnbs.sim.closed_loop import simulate
 
@@ -21,26 +16,17 @@ ARM3 = Path(__file__).resolve().parent / "fixtures" / "urdf_intake" / "continuou
 
 def _arm_file(tmp_path, spread: float | None = None) -> str:
     """The 3-joint fixture with a 0.1 kg m^2 rotor on each joint (an arm file, as the collection's)."""
-    shutil.copy(ARM3, tmp_path / "arm3.urdf")
-    doc = {"name": "arm3", "urdf": "arm3.urdf", "rotor_inertia_kgm2": 0.1,
-           "sources": {"urdf": "test fixture", "rotor_inertia_kgm2": "generic 0.1"}}
+    fields = {"rotor_inertia_kgm2": 0.1, "sources": {"urdf": "test fixture", "rotor_inertia_kgm2": "generic 0.1"}}
     if spread is not None:
-        doc["settings"] = {"dnbs": {"alpha_net": {"init_weight_std": spread}}}
-    path = tmp_path / f"arm3_{spread}.yaml"
-    path.write_text(yaml.safe_dump(doc))
-    return str(path)
-
-
-def _settings(arm):
-    with contextlib.redirect_stderr(io.StringIO()):
-        return build_settings(default_config_path(), arm=arm)
+        fields["settings"] = {"dnbs": {"alpha_net": {"init_weight_std": spread}}}
+    return arm_file(tmp_path, ARM3, f"arm3_{spread}.yaml", **fields)
 
 
 def test_the_spread_comes_from_the_rule_layer_and_the_presets_keep_theirs(tmp_path):
-    assert set(_settings(str(ARM3)).dnbs.alpha_net.init_weight_std) == {1e-6}  # a bare URDF: the rule
+    assert set(quiet_settings(str(ARM3)).dnbs.alpha_net.init_weight_std) == {1e-6}  # a bare URDF: the rule
     for preset in ("pa10", "iiwa", "panda"):
-        assert set(_settings(preset).dnbs.alpha_net.init_weight_std) == {0.01}, preset
-    assert set(_settings(_arm_file(tmp_path, 0.001)).dnbs.alpha_net.init_weight_std) == {0.001}  # an arm file
+        assert set(quiet_settings(preset).dnbs.alpha_net.init_weight_std) == {0.01}, preset
+    assert set(quiet_settings(_arm_file(tmp_path, 0.001)).dnbs.alpha_net.init_weight_std) == {0.001}  # an arm file
 
 
 def _window_rms(settings, spread: float) -> float:
@@ -52,7 +38,7 @@ def _window_rms(settings, spread: float) -> float:
 
 
 def test_the_initial_spread_sets_the_tracking_floor(tmp_path):
-    settings = _settings(_arm_file(tmp_path))
+    settings = quiet_settings(_arm_file(tmp_path))
     wide, tenth, narrow = (_window_rms(settings, s) for s in (0.01, 1e-3, 1e-6))
     assert 2e-6 < wide < 1e-4, wide  # the floor of the spread 0.01 (about 1e-5 rad on every arm)
     assert 0.05 < tenth / wide < 0.2, (tenth, wide)  # proportional to the spread (here 1.7e-5, 1.8e-6)

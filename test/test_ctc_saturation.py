@@ -2,20 +2,16 @@
 coupled arm without rotor inertia (the xArm7 of example-robot-data, fixture without meshes) clipping each joint
 diverges from the 0.1 rad start offset while scaling the feedback tracks; ``clip`` is the textbook law bit for
 bit; the key's layers (rule: scale_feedback; the presets' arm files: clip) and its check."""
-import contextlib
-import io
-import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 
+from arm_files import arm_file, quiet_settings
 from cli_runner import run_cli
 from pa10_dnbs.config import default_config_path
 from pa10_dnbs.core.reference import ReferenceSample
 from pa10_dnbs.plant.engines import open_plant
-from pa10_dnbs.run_settings import build_settings
 from pa10_dnbs.sim.closed_loop import simulate
 from pa10_dnbs.sim.computed_torque import ComputedTorqueController
 
@@ -23,25 +19,17 @@ XARM7 = Path(__file__).resolve().parent / "fixtures" / "urdf_intake" / "xarm7_no
 
 
 def _xarm7_file(tmp_path, mode: str | None) -> str:
-    shutil.copy(XARM7, tmp_path / "xarm7.urdf")
-    doc = {"name": "xarm7", "urdf": "xarm7.urdf", "sources": {"urdf": "example-robot-data 6.0.0, meshes removed"}}
+    fields = {"sources": {"urdf": "example-robot-data 6.0.0, meshes removed"}}
     if mode is not None:
-        doc["settings"] = {"ctc": {"on_saturation": mode}}
-    path = tmp_path / f"arm_{mode}.yaml"
-    path.write_text(yaml.safe_dump(doc))
-    return str(path)
-
-
-def _cfg(arm):
-    with contextlib.redirect_stderr(io.StringIO()):
-        return build_settings(default_config_path(), arm=arm)
+        fields["settings"] = {"ctc": {"on_saturation": mode}}
+    return arm_file(tmp_path, XARM7, f"arm_{mode}.yaml", **fields)
 
 
 def test_on_a_light_coupled_arm_clipping_diverges_and_scaling_the_feedback_tracks(tmp_path):
     errors = {}
     for mode in ("clip", "scale_feedback"):
         with np.errstate(all="ignore"):
-            run = simulate(_cfg(_xarm7_file(tmp_path, mode)), "ctc", 1.0)
+            run = simulate(quiet_settings(_xarm7_file(tmp_path, mode)), "ctc", 1.0)
         errors[mode] = run.error_rad
         assert np.all(np.abs(run.torque_nm) <= np.asarray(run.torque_limit_nm) + 1e-9), mode
     assert np.nanmax(np.abs(errors["clip"][-300:])) > 1.0  # diverged: joints 1-4 saturate from step 1
@@ -51,7 +39,7 @@ def test_on_a_light_coupled_arm_clipping_diverges_and_scaling_the_feedback_track
 
 
 def test_clip_is_the_textbook_law_bit_for_bit_and_scale_feedback_only_differs_where_it_saturates(tmp_path):
-    cfg = _cfg(_xarm7_file(tmp_path, "clip"))
+    cfg = quiet_settings(_xarm7_file(tmp_path, "clip"))
     plant, close = open_plant(cfg)
     try:
         lim = np.asarray(cfg.plant.torque_limit_nm)
@@ -84,10 +72,10 @@ def test_clip_is_the_textbook_law_bit_for_bit_and_scale_feedback_only_differs_wh
 
 
 def test_the_key_comes_from_the_rule_layer_the_presets_clip_and_a_bad_value_is_one_line(tmp_path):
-    assert _cfg(str(XARM7)).ctc.on_saturation == "scale_feedback"  # a bare URDF: the rule layer
+    assert quiet_settings(str(XARM7)).ctc.on_saturation == "scale_feedback"  # a bare URDF: the rule layer
     for preset in ("pa10", "iiwa", "panda"):
-        assert _cfg(preset).ctc.on_saturation == "clip", preset  # their published numbers
-    assert _cfg(_xarm7_file(tmp_path, "clip")).ctc.on_saturation == "clip"  # an arm file sets it
+        assert quiet_settings(preset).ctc.on_saturation == "clip", preset  # their published numbers
+    assert quiet_settings(_xarm7_file(tmp_path, "clip")).ctc.on_saturation == "clip"  # an arm file sets it
     bad = tmp_path / "bad.yaml"
     bad.write_text(f"extends: {default_config_path()}\nctc: {{on_saturation: scale}}\n")
     r = run_cli("simulate", "--config", bad, "--arm", "pa10", "--duration", "0.01", "--out", tmp_path / "o")
