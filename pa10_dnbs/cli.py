@@ -26,6 +26,10 @@ if __name__ != "__main__" and not sys.argv[0].endswith("pa10-dnbs"):   # importe
     interrupt.end_quiet_start(_startup_sigint)
 
 LIVE_PORT = 8765  # Foxglove's default WebSocket port
+#: The flag of each setting a library's error can name (ConfigError.setting): the command line says it as given.
+SETTING_FLAGS = {"trajectory": "--trajectory", "duration_s": "--duration", "jobs": "--jobs", "out": "--out",
+                 "record": "--record", "controller": "--controller", "params": "--params", "storage": "--storage",
+                 "scheduler": "--scheduler"}
 
 
 def _simulate(args: argparse.Namespace) -> int:
@@ -366,7 +370,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with interrupt.two_stage_sigint():   # Ctrl-C: the command stops and says what it kept; twice: at once
             return args.func(args)
-    except (ConfigError, KernelBuildError, OutputExistsError, OutputInUseError, BagExistsError, BagError) as exc:
+    except ConfigError as exc:
+        print(f"pa10-dnbs: error: {exc.named(SETTING_FLAGS.get(exc.setting))}", file=sys.stderr)
+        return 2
+    except (KernelBuildError, OutputExistsError, OutputInUseError, BagExistsError, BagError) as exc:
         print(f"pa10-dnbs: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:

@@ -13,7 +13,7 @@ from ..accel.choice import resolve_kernel
 from ..bag.analysis import bag_arm, bag_joint_names, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
 from ..bag.bag_writer import COMPRESSIONS, check_bag_path
-from ..config import ConfigError, default_config_path, load_config
+from ..config import ConfigError, default_config_path
 from ..controller_factory import load_reference_trajectory
 from ..core.checkpoint import checkpoint_dir, load_joint_checkpoints
 from ..interrupt import outputs_written
@@ -28,7 +28,7 @@ from ..number_text import interval
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_creatable, check_output_dir, write_report
 from ..output_lock import lock_output
-from ..run_settings import document_arm, with_rules
+from ..run_settings import build_settings
 from ..run_size import check_run_size, say_note
 from ..wire.wire_record import load_wire_run
 from ..wire.steps import StepClock
@@ -71,9 +71,8 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     eq. 27 (docs/trajectories.md); checked here first (a bad file: ConfigError, nothing written).
     """
     config_path = Path(config_path).resolve() if config_path else default_config_path()
-    document = load_config(config_path)  # the settings, built once: config file(s), arm file, rules
-    the_arm = document_arm(document, arm)
-    settings = with_rules(the_arm, document)
+    settings = build_settings(config_path, arm)  # the settings, built once: config file(s), arm file, rules
+    the_arm = settings.arm
     joint_names = the_arm.joint_names
     if namespace is None:
         namespace = default_namespace(the_arm.name)

@@ -6,8 +6,8 @@ import shutil
 from pathlib import Path
 
 from ..accel.choice import resolve_kernel
-from ..config import ConfigError, default_config_path, load_config
-from ..controller_factory import load_reference_trajectory
+from ..config import ConfigError, default_config_path
+from ..core.joint_trajectory import TrajectoryError
 from ..core.checkpoint import load_joint_checkpoints, save_checkpoint
 from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, on_second_sigint, outputs_written, say
 from ..number_text import interval
@@ -15,9 +15,10 @@ from ..report.markdown import report_markdown
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report, write_run
 from ..report.partial import partial_banner, write_partial_mark
-from ..run_settings import document_arm, with_rules
+from ..run_settings import build_settings
 from ..run_size import check_run_size, say_note
 from ..sim.closed_loop import simulate
+from ..trajectory_file import load_trajectory_file
 
 CHOICES = {"dnbs": ("dnbs",), "pid": ("pid",), "ctc": ("ctc",), "both": ("dnbs", "pid"), "all": ("dnbs", "pid", "ctc")}
 
@@ -35,9 +36,8 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
     output directory, or a directory of ``<joint>.npz``); the report says so.
     """
     config_path = Path(config_path) if config_path else default_config_path()
-    document = load_config(config_path)  # the settings, built once: config file(s), arm file, rules
-    the_arm = document_arm(document, arm)
-    settings = with_rules(the_arm, document)
+    settings = build_settings(config_path, arm)  # the settings, built once: config file(s), arm file, rules
+    the_arm = settings.arm
     if duration_s is None:
         duration_s = settings.simulation.duration_s
     if not (math.isfinite(duration_s) and duration_s > 0):
@@ -47,6 +47,7 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
         raise ConfigError(f"--duration: {duration_s} s is shorter than two steps")
     duration_s = n_steps * settings.simulation.dt_s
     kinds = CHOICES[controller]
+    traj = load_trajectory_file(Path(trajectory), the_arm) if trajectory is not None else None  # its quintics: the run's
     check_run_size("--duration", duration_s, n_steps, len(the_arm.joint_names), kept_runs=len(kinds),
                    total_runs=len(kinds), say=say_note)
     init_states = None
@@ -57,7 +58,6 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
             init_states = load_joint_checkpoints(init_from, the_arm.joint_names)
         except ValueError as exc:
             raise ConfigError(f"--init-from: {exc}") from None
-    traj = load_reference_trajectory(settings, trajectory) if trajectory is not None else None
     check_output_dir(out, force)
     if "dnbs" in kinds:
         settings = resolve_kernel(settings, say=print)  # dnbs.kernel: auto -> c or numpy, said in one line
@@ -65,8 +65,11 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
     runs, metrics = [], []
     try:
         for kind in kinds:
-            run = simulate(settings, kind, duration_s, progress=progress,
-                           init_states=init_states if kind == "dnbs" else None, engine=engine, trajectory=traj)
+            try:
+                run = simulate(settings, kind, duration_s, progress=progress,
+                               init_states=init_states if kind == "dnbs" else None, engine=engine, trajectory=traj)
+            except TrajectoryError as exc:  # the arm cannot follow the file's quintics: before any run, nothing written
+                raise ConfigError(f"trajectory {trajectory}: {exc}", setting="trajectory") from None
             extra = ({"warm_start_from": str(Path(init_from).resolve())}
                      if init_states is not None and kind == "dnbs" else {})
             if engine != "pybullet":

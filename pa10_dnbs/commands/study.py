@@ -10,11 +10,11 @@ from itertools import product
 from pathlib import Path
 
 from ..accel.choice import resolve_kernel
-from ..config import ConfigError, default_config_path, load_config
+from ..config import ConfigError, default_config_path
 from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, on_second_sigint, outputs_written, say
 from ..report.outputs import atomic_output_dir, check_output_dir
 from ..report.progress import ProgressBar
-from ..run_settings import document_arm, with_rules
+from ..run_settings import build_settings
 from ..run_size import check_run_size, say_note
 from ..sim.closed_loop import CONTROLLERS
 from ..study.feasibility import infeasible_scenarios
@@ -40,8 +40,7 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
     if workers is not None and workers < 1:
         raise ConfigError(f"--jobs: must be >= 1, got {workers}")
     config_path = Path(config_path) if config_path else default_config_path()
-    document = load_config(config_path)  # the settings, built once: config file(s), arm file, rules
-    settings = with_rules(document_arm(document, arm), document)
+    settings = build_settings(config_path, arm)  # the settings, built once: config file(s), arm file, rules
     n_runs, n_steps = len(scen) * len(ctrl) * seeds, int(round(duration_s / settings.simulation.dt_s))
     at_once = 1 if scheduler is not None else min(n_runs, workers or os.cpu_count() or 1)
     check_run_size("--duration", duration_s, n_steps, settings.n_joints, at_once=at_once,

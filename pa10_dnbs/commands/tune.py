@@ -18,7 +18,7 @@ from pathlib import Path
 
 from ..arm import load_arm, preset_names
 from ..atomic_file import atomic_path
-from ..config import ConfigError, default_config_path, load_config
+from ..config import ConfigError, default_config_path
 from ..interrupt import EXIT_INTERRUPTED, check, deferred, immediate, on_second_sigint, say
 from ..output_lock import lock_output
 from ..report.outputs import check_creatable
@@ -29,7 +29,7 @@ from .name_list import name_list
 from ..tune.report import held_out_table, held_out_verdict, tune_figures, tune_markdown, tuned_yaml
 from ..tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 from ..tune.space import select, start_values
-from ..run_settings import document_arm, with_rules
+from ..run_settings import build_settings
 from ..tune.tuner import TrialProgress, TuneSpec, completed, held_out, open_storage, open_study, optimize
 
 HELD_OUT_SEED0 = 100   # held-out seeds are 100, 101, ...: never a training seed (0 .. --seeds - 1)
@@ -60,9 +60,8 @@ def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, co
         raise ConfigError(f"--out: {out} exists and is not a directory")
     check_creatable(out, "--out")
     config_path = Path(config_path) if config_path else default_config_path()
-    document = load_config(config_path)  # the settings, built once: config file(s), arm file, rules
-    the_arm = document_arm(document, arm)
-    base = with_rules(the_arm, document)
+    base = build_settings(config_path, arm)  # the settings, built once: config file(s), arm file, rules
+    the_arm = base.arm
     n_steps = int(round(duration_s / base.simulation.dt_s))
     if n_steps < 2:
         raise ConfigError(f"--duration: {duration_s} s is shorter than two steps")

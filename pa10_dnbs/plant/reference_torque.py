@@ -2,7 +2,7 @@
 
 tau(t) = (M(q) + J_r) qdd + h(q, qd) + F(qd) at the reference's q, qd, qdd (the plant's own model: PyBullet's
 mass matrix and calculateInverseDynamics on the actuated block, the locked joints held, rotor inertia and
-friction from the arm file). The reference rule (arm/reference_rule.py) keeps its peak within the limits.
+friction as the parameters it is given say). The reference rule (arm/reference_rule.py) keeps its peak within the limits.
 """
 from __future__ import annotations
 
@@ -21,13 +21,11 @@ class ReferenceTorque:
     """peak(fragment) -> (n,) the largest |tau_j| [N m] along a ``reference`` fragment (amplitude_rad,
     envelope_rate_per_s3, frequency_rad_s, centre_rad) over ``duration_s`` (at most HORIZON_S). Holds one PyBullet client: close()."""
 
-    def __init__(self, arm: Arm, duration_s: float, dt_s: float, gravity_mps2: float = 9.81,
-                 params: PlantParams | None = None):
-        """``params``: the plant's parameters (a study scenario's payload, heavier links, friction); None: the
-        arm's facts with ``gravity_mps2``."""
+    def __init__(self, arm: Arm, duration_s: float, dt_s: float, params: PlantParams):
+        """``params``: the plant's parameters (the settings' plant section, a study scenario's payload, heavier
+        links, friction: plant/from_config.py ``plant_params``)."""
         self._client = open_client()
-        self._plant = PyBulletArmPlant(self._client, arm, PlantParams(gravity_mps2=gravity_mps2)
-                                       if params is None else params)
+        self._plant = PyBulletArmPlant(self._client, arm, params)
         self._dt = dt_s
         horizon = min(duration_s, HORIZON_S)
         self._steps = np.arange(0, int(round(horizon / dt_s)) + 1, max(1, int(round(SAMPLE_STEP_S / dt_s))))

@@ -24,7 +24,8 @@ def scenario_peak_torque(settings: Settings, scenario: str, duration_s: float) -
     """(n,) the largest |tau_j| [N m] the reference of ``scenario`` asks of the plant of ``scenario`` over
     ``duration_s`` (at most reference_torque.HORIZON_S)."""
     changed, _ = scenario_settings(settings, scenario, 0)
-    torque = ReferenceTorque(changed.arm, duration_s, changed.simulation.dt_s, params=plant_params(changed))
+    torque = ReferenceTorque(changed.arm, duration_s, changed.simulation.dt_s,
+                             plant_params(changed.plant, changed.simulation.dt_s))
     try:
         return torque.peak(changed.to_config()["reference"])
     finally:
