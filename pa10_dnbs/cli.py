@@ -27,18 +27,25 @@ if __name__ != "__main__" and not sys.argv[0].endswith("pa10-dnbs"):   # importe
 
 LIVE_PORT = 8765  # Foxglove's default WebSocket port
 #: The flag of each setting a library's error can name (ConfigError.setting): the command line says it as given.
-SETTING_FLAGS = {"trajectory": "--trajectory", "duration_s": "--duration", "jobs": "--jobs", "out": "--out",
-                 "record": "--record", "controller": "--controller", "params": "--params", "storage": "--storage",
-                 "scheduler": "--scheduler"}
+SETTING_FLAGS = {"trajectory": "--trajectory", "duration_s": "--duration", "jobs": "--jobs", "controller": "--controller",
+                 "params": "--params", "storage": "--storage", "scheduler": "--scheduler", "live_port": "--live",
+                 "live_host": "--live-host", "live_hz": "--live-hz", "netns": "--netns", "plant": "--plant",
+                 "robot": "--robot", "robot_command": "--robot-command", "robot_state_topic": "--robot-state-topic",
+                 "robot_command_topic": "--robot-command-topic", "robot_timeout": "--robot-timeout"}
+
+
+def _progress(args: argparse.Namespace) -> bool:
+    return not args.no_progress and sys.stderr.isatty()
 
 
 def _simulate(args: argparse.Namespace) -> int:
+    from .commands.options import SimulateOptions
     from .commands.simulate import run_simulate
 
-    return run_simulate(config_path=args.config, controller=args.controller, duration_s=args.duration,
-                        out=args.out, force=args.force, progress=not args.no_progress and sys.stderr.isatty(),
-                        init_from=args.init_from, figures=not args.no_figures, arm=args.arm, engine=args.engine,
-                        trajectory=args.trajectory)
+    return run_simulate(SimulateOptions(
+        out=args.out, config_path=args.config, controller=args.controller, duration_s=args.duration,
+        force=args.force, progress=_progress(args), init_from=args.init_from, figures=not args.no_figures,
+        arm=args.arm, engine=args.engine, trajectory=args.trajectory))
 
 
 def _unused_flags(args: argparse.Namespace, rules) -> None:
@@ -56,25 +63,26 @@ def _live_defaults(args: argparse.Namespace) -> None:
 
 def _launch(args: argparse.Namespace) -> int:
     from .commands.launch import run_launch
+    from .commands.options import LaunchOptions
+    from .launch.fault_flags import FaultFlags
 
     realtime = args.mode == "realtime"
     _unused_flags(args, [("rtf", realtime, "only with --mode realtime (lockstep runs as fast as the graph answers)"),
                          ("deadline_fraction", realtime, "only with --mode realtime (lockstep has no deadlines)"),
                          ("bag_compression", args.record is not None, "only with --record")])
     _live_defaults(args)
-    return run_launch(config_path=args.config, mode=args.mode, controller=args.controller,
-                      duration_s=args.duration, out=args.out, force=args.force,
-                      progress=not args.no_progress and sys.stderr.isatty(), domain_id=args.domain_id,
-                      reliability=args.reliability,
-                      effort_timeout_s=1.0 if args.effort_timeout is None else args.effort_timeout,
-                      on_missing_effort=args.on_missing_effort, record=args.record, fault_args=args,
-                      restart=args.restart, netns=args.netns, init_from=args.init_from,
-                      bag_compression=args.bag_compression or "zstd", live_port=args.live, live_host=args.live_host,
-                      live_hz=args.live_hz, real_time_factor=1.0 if args.rtf is None else args.rtf,
-                      deadline_fraction=0.9 if args.deadline_fraction is None else args.deadline_fraction,
-                      rt_priority=args.rt_priority, sched_batch=args.sched_batch, namespace=args.namespace,
-                      clock_hz=args.clock_hz, figures=not args.no_figures, arm=args.arm, robot=_robot_options(args),
-                      trajectory=args.trajectory, plant=args.plant)
+    return run_launch(LaunchOptions(
+        out=args.out, config_path=args.config, mode=args.mode, controller=args.controller, duration_s=args.duration,
+        force=args.force, progress=_progress(args), domain_id=args.domain_id, reliability=args.reliability,
+        effort_timeout_s=1.0 if args.effort_timeout is None else args.effort_timeout,
+        on_missing_effort=args.on_missing_effort, record=args.record, faults=FaultFlags.of(args),
+        restart=args.restart, netns=tuple(args.netns), init_from=args.init_from,
+        bag_compression=args.bag_compression or "zstd", live_port=args.live, live_host=args.live_host,
+        live_hz=args.live_hz, real_time_factor=1.0 if args.rtf is None else args.rtf,
+        deadline_fraction=0.9 if args.deadline_fraction is None else args.deadline_fraction,
+        rt_priority=args.rt_priority, sched_batch=args.sched_batch, namespace=args.namespace,
+        clock_hz=args.clock_hz, figures=not args.no_figures, arm=args.arm, robot=_robot_options(args),
+        trajectory=args.trajectory, plant=args.plant))
 
 
 def _robot_options(args: argparse.Namespace):
@@ -90,51 +98,60 @@ def _robot_options(args: argparse.Namespace):
 
 
 def _robot(args: argparse.Namespace) -> int:
+    from .commands.options import RobotCommandOptions
     from .commands.robot import run_robot
 
-    return run_robot(args.config, args.arm, args.mode, args.duration, args.state_topic, args.command_topic,
-                     args.clock_hz)
+    return run_robot(RobotCommandOptions(
+        config_path=args.config, arm=args.arm, mode=args.mode, duration_s=args.duration,
+        state_topic=args.state_topic, command_topic=args.command_topic, clock_hz=args.clock_hz))
 
 
 def _study(args: argparse.Namespace) -> int:
+    from .commands.options import StudyOptions
     from .commands.study import run_study_command
 
-    return run_study_command(args.scenarios, args.controllers, args.seeds, args.duration, args.out, args.force,
-                             args.config, args.jobs, progress=not args.no_progress and sys.stderr.isatty(),
-                             arm=args.arm, scheduler=args.scheduler)
+    return run_study_command(StudyOptions(
+        out=args.out, scenarios=args.scenarios, controllers=args.controllers, seeds=args.seeds,
+        duration_s=args.duration, force=args.force, config_path=args.config, workers=args.jobs,
+        progress=_progress(args), arm=args.arm, scheduler=args.scheduler))
 
 
 def _tune(args: argparse.Namespace) -> int:
+    from .commands.options import TuneOptions
     from .commands.tune import run_tune
 
-    return run_tune(args.controller, args.trials, args.out, arm=args.arm, config_path=args.config,
-                    storage=args.storage, seed=args.seed, jobs=args.jobs, scheduler=args.scheduler,
-                    scenarios=args.scenarios, seeds=args.seeds, held_out_seeds=args.held_out_seeds,
-                    duration_s=args.duration, params=args.params,
-                    progress=not args.no_progress and sys.stderr.isatty())
+    return run_tune(TuneOptions(
+        controller=args.controller, out=args.out, trials=args.trials, arm=args.arm, config_path=args.config,
+        storage=args.storage, seed=args.seed, jobs=args.jobs, scheduler=args.scheduler, scenarios=args.scenarios,
+        seeds=args.seeds, held_out_seeds=args.held_out_seeds, duration_s=args.duration, params=args.params,
+        progress=_progress(args)))
 
 
 def _arm(args: argparse.Namespace) -> int:
     from .commands.arm_info import run_arm_info
+    from .commands.options import ArmInfoOptions
 
-    return run_arm_info(args.config, args.arm)
+    return run_arm_info(ArmInfoOptions(config_path=args.config, arm=args.arm))
 
 
 def _analyse(args: argparse.Namespace) -> int:
     from .commands.analyse import run_analyse
+    from .commands.options import AnalyseOptions
 
-    return run_analyse(args.bag, args.out, args.force, args.config,
-                       progress=not args.no_progress and sys.stderr.isatty(), figures=not args.no_figures)
+    return run_analyse(AnalyseOptions(bag_path=args.bag, out=args.out, force=args.force, config_path=args.config,
+                                      progress=_progress(args), figures=not args.no_figures))
 
 
 def _replay(args: argparse.Namespace) -> int:
+    from .commands.options import ReplayOptions
     from .commands.replay import run_replay
 
     _live_defaults(args)
-    return run_replay(args.bag, rate=args.rate, topics=args.topics, start_offset_s=args.start_offset, loop=args.loop,
-                      clock_hz=args.clock, wait_for_subscribers_s=args.wait_for_subscribers,
-                      queue_depth=args.queue_depth, live_port=args.live, live_host=args.live_host,
-                      live_hz=args.live_hz, config_path=args.config, namespace=args.namespace)
+    return run_replay(ReplayOptions(
+        bag_path=args.bag, rate=args.rate, topics=args.topics, start_offset_s=args.start_offset, loop=args.loop,
+        clock_hz=args.clock, wait_for_subscribers_s=args.wait_for_subscribers, queue_depth=args.queue_depth,
+        live_port=args.live, live_host=args.live_host, live_hz=args.live_hz, config_path=args.config,
+        namespace=args.namespace))
 
 
 def add_arm_argument(p: argparse.ArgumentParser) -> None:
@@ -274,13 +291,13 @@ def build_parser() -> argparse.ArgumentParser:
     rb.add_argument("--mode", choices=("lockstep", "paced"), default="lockstep",
                     help="lockstep: publish state k, wait for the command stamped k, step once; paced: step every "
                          "simulation.dt_s of wall time with the latest command")
-    rb.add_argument("--duration", type=float, default=None, metavar="SECONDS",
+    rb.add_argument("--duration", type=nonnegative, default=None, metavar="SECONDS",
                     help="robot time to run [s] (default: until Ctrl-C)")
     rb.add_argument("--state-topic", default="/robot_joint_states", metavar="TOPIC",
                     help="the robot's JointState topic (default /robot_joint_states)")
     rb.add_argument("--command-topic", default="/robot_joint_command", metavar="TOPIC",
                     help="its JointState effort command topic (default /robot_joint_command)")
-    rb.add_argument("--clock-hz", type=float, default=100.0, metavar="HZ",
+    rb.add_argument("--clock-hz", type=nonnegative, default=100.0, metavar="HZ",
                     help="/clock rate in Hz of robot time (default 100; 0: none)")
     rb.set_defaults(func=_robot)
 

@@ -13,15 +13,17 @@ import numpy as np
 from ..arm.gain_rule import report_rule
 from ..arm.summary import arm_line
 from ..config import default_config_path
+from .options import ArmInfoOptions
 from ..plant.from_config import plant_params
 from ..run_settings import build_settings
 
 
-def run_arm_info(config_path: Path | None, arm: str | None) -> int:
+def run_arm_info(options: ArmInfoOptions) -> int:
     """Print the arm's facts, sources, inertia sweep and gains; returns 0 (bad input raises ConfigError)."""
     from ..derived_settings import derived_gains, inertia_sweep_along
 
-    settings = build_settings(Path(config_path) if config_path else default_config_path(), arm=arm)
+    o = options
+    settings = build_settings(Path(o.config_path) if o.config_path else default_config_path(), arm=o.arm)
     the_arm, run = settings.arm, settings.simulation
     print(arm_line(the_arm).replace("; ", ";\n  "))
     print("sources:")

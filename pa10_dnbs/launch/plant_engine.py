@@ -21,7 +21,7 @@ def plant_robot_options(plant: str, robot: RobotOptions | None, mode: str) -> Ro
     """The joint bus's options for ``--plant`` (None and ``robot`` unchanged for pybullet); ConfigError naming the
     flag when ``--plant mujoco`` is combined with what it cannot run."""
     if plant not in PLANTS:
-        raise ConfigError(f"--plant: expected one of {', '.join(PLANTS)}, got {plant!r}")
+        raise ConfigError(f"plant: expected one of {', '.join(PLANTS)}, got {plant!r}", setting="plant")
     if plant == "pybullet":
         return robot
     if robot is not None:
