@@ -38,14 +38,14 @@ def _progress(args: argparse.Namespace) -> bool:
     return not args.no_progress and sys.stderr.isatty()
 
 
-def _simulate(args: argparse.Namespace) -> int:
+def _simulate_options(args: argparse.Namespace):
+    """The ``simulate`` command's options from its parsed flags."""
     from .commands.options import SimulateOptions
-    from .commands.simulate import run_simulate
 
-    return run_simulate(SimulateOptions(
+    return SimulateOptions(
         out=args.out, config_path=args.config, controller=args.controller, duration_s=args.duration,
         force=args.force, progress=_progress(args), init_from=args.init_from, figures=not args.no_figures,
-        arm=args.arm, engine=args.engine, trajectory=args.trajectory))
+        arm=args.arm, engine=args.engine, trajectory=args.trajectory)
 
 
 def _unused_flags(args: argparse.Namespace, rules) -> None:
@@ -61,8 +61,8 @@ def _live_defaults(args: argparse.Namespace) -> None:
     args.live_hz = 50.0 if args.live_hz is None else args.live_hz
 
 
-def _launch(args: argparse.Namespace) -> int:
-    from .commands.launch import run_launch
+def _launch_options(args: argparse.Namespace):
+    """The ``launch`` command's options from its parsed flags."""
     from .commands.options import LaunchOptions
     from .launch.fault_flags import FaultFlags
 
@@ -71,7 +71,7 @@ def _launch(args: argparse.Namespace) -> int:
                          ("deadline_fraction", realtime, "only with --mode realtime (lockstep has no deadlines)"),
                          ("bag_compression", args.record is not None, "only with --record")])
     _live_defaults(args)
-    return run_launch(LaunchOptions(
+    return LaunchOptions(
         out=args.out, config_path=args.config, mode=args.mode, controller=args.controller, duration_s=args.duration,
         force=args.force, progress=_progress(args), domain_id=args.domain_id, reliability=args.reliability,
         effort_timeout_s=1.0 if args.effort_timeout is None else args.effort_timeout,
@@ -82,7 +82,7 @@ def _launch(args: argparse.Namespace) -> int:
         deadline_fraction=0.9 if args.deadline_fraction is None else args.deadline_fraction,
         rt_priority=args.rt_priority, sched_batch=args.sched_batch, namespace=args.namespace,
         clock_hz=args.clock_hz, figures=not args.no_figures, arm=args.arm, robot=_robot_options(args),
-        trajectory=args.trajectory, plant=args.plant))
+        trajectory=args.trajectory, plant=args.plant)
 
 
 def _robot_options(args: argparse.Namespace):
@@ -97,61 +97,88 @@ def _robot_options(args: argparse.Namespace):
                         args.robot_command_topic, 1.0 if args.robot_timeout is None else args.robot_timeout)
 
 
-def _robot(args: argparse.Namespace) -> int:
+def _robot_command_options(args: argparse.Namespace):
+    """The ``robot`` command's options from its parsed flags."""
     from .commands.options import RobotCommandOptions
-    from .commands.robot import run_robot
 
-    return run_robot(RobotCommandOptions(
+    return RobotCommandOptions(
         config_path=args.config, arm=args.arm, mode=args.mode, duration_s=args.duration,
-        state_topic=args.state_topic, command_topic=args.command_topic, clock_hz=args.clock_hz))
+        state_topic=args.state_topic, command_topic=args.command_topic, clock_hz=args.clock_hz)
 
 
-def _study(args: argparse.Namespace) -> int:
+def _study_options(args: argparse.Namespace):
+    """The ``study`` command's options from its parsed flags."""
     from .commands.options import StudyOptions
-    from .commands.study import run_study_command
 
-    return run_study_command(StudyOptions(
+    return StudyOptions(
         out=args.out, scenarios=args.scenarios, controllers=args.controllers, seeds=args.seeds,
         duration_s=args.duration, force=args.force, config_path=args.config, workers=args.jobs,
-        progress=_progress(args), arm=args.arm, scheduler=args.scheduler))
+        progress=_progress(args), arm=args.arm, scheduler=args.scheduler)
 
 
-def _tune(args: argparse.Namespace) -> int:
+def _tune_options(args: argparse.Namespace):
+    """The ``tune`` command's options from its parsed flags."""
     from .commands.options import TuneOptions
-    from .commands.tune import run_tune
 
-    return run_tune(TuneOptions(
+    return TuneOptions(
         controller=args.controller, out=args.out, trials=args.trials, arm=args.arm, config_path=args.config,
         storage=args.storage, seed=args.seed, jobs=args.jobs, scheduler=args.scheduler, scenarios=args.scenarios,
         seeds=args.seeds, held_out_seeds=args.held_out_seeds, duration_s=args.duration, params=args.params,
-        progress=_progress(args)))
+        progress=_progress(args))
 
 
-def _arm(args: argparse.Namespace) -> int:
-    from .commands.arm_info import run_arm_info
+def _arm_options(args: argparse.Namespace):
+    """The ``arm`` command's options from its parsed flags."""
     from .commands.options import ArmInfoOptions
 
-    return run_arm_info(ArmInfoOptions(config_path=args.config, arm=args.arm))
+    return ArmInfoOptions(config_path=args.config, arm=args.arm)
 
 
-def _analyse(args: argparse.Namespace) -> int:
-    from .commands.analyse import run_analyse
+def _analyse_options(args: argparse.Namespace):
+    """The ``analyse`` command's options from its parsed flags."""
     from .commands.options import AnalyseOptions
 
-    return run_analyse(AnalyseOptions(bag_path=args.bag, out=args.out, force=args.force, config_path=args.config,
-                                      progress=_progress(args), figures=not args.no_figures))
+    return AnalyseOptions(bag_path=args.bag, out=args.out, force=args.force, config_path=args.config,
+                          progress=_progress(args), figures=not args.no_figures)
 
 
-def _replay(args: argparse.Namespace) -> int:
+def _replay_options(args: argparse.Namespace):
+    """The ``replay`` command's options from its parsed flags."""
     from .commands.options import ReplayOptions
-    from .commands.replay import run_replay
 
     _live_defaults(args)
-    return run_replay(ReplayOptions(
+    return ReplayOptions(
         bag_path=args.bag, rate=args.rate, topics=args.topics, start_offset_s=args.start_offset, loop=args.loop,
         clock_hz=args.clock, wait_for_subscribers_s=args.wait_for_subscribers, queue_depth=args.queue_depth,
         live_port=args.live, live_host=args.live_host, live_hz=args.live_hz, config_path=args.config,
-        namespace=args.namespace))
+        namespace=args.namespace)
+
+
+#: Each command: (its module in commands/, its run function, the builder of its options from the parsed flags).
+COMMANDS = {
+    "simulate": ("simulate", "run_simulate", _simulate_options),
+    "launch": ("launch", "run_launch", _launch_options),
+    "robot": ("robot", "run_robot", _robot_command_options),
+    "study": ("study", "run_study_command", _study_options),
+    "tune": ("tune", "run_tune", _tune_options),
+    "arm": ("arm_info", "run_arm_info", _arm_options),
+    "analyse": ("analyse", "run_analyse", _analyse_options),
+    "replay": ("replay", "run_replay", _replay_options),
+}
+
+
+def command_options(args: argparse.Namespace):
+    """The options dataclass of the parsed command (commands/options.py); ConfigError for a flag that does not apply."""
+    return COMMANDS[args.func_name][2](args)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """Build the command's options from its flags and run it (its module imported only now)."""
+    import importlib
+
+    module, run, _ = COMMANDS[args.func_name]
+    options = command_options(args)
+    return getattr(importlib.import_module(f".commands.{module}", __package__), run)(options)
 
 
 def add_arm_argument(p: argparse.ArgumentParser) -> None:
@@ -210,7 +237,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--engine", choices=("pybullet", "mujoco"), default="pybullet",
                      help="the plant's physics engine: pybullet (the project's plant) or mujoco (an independent "
                           "second engine on the same arm; docs/engines.md)")
-    sim.set_defaults(func=_simulate)
+    sim.set_defaults(func=_run, func_name="simulate")
 
     la = sub.add_parser("launch", help="the ROS 2 node graph (plant, one controller per joint, reference)")
     la.add_argument("--mode", choices=("lockstep", "realtime"), default="lockstep",
@@ -281,7 +308,7 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--robot-timeout", type=positive, default=None, metavar="SECONDS",
                     help="with --robot external: wall time without a new robot state that makes it stale (default 1)")
     add_fault_arguments(la)
-    la.set_defaults(func=_launch)
+    la.set_defaults(func=_run, func_name="launch")
 
     rb = sub.add_parser("robot", help="the arm in MuJoCo as an external robot: a ROS 2 node on the standard robot "
                                       "interface (docs/engines.md, docs/your_robot.md)")
@@ -299,7 +326,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="its JointState effort command topic (default /robot_joint_command)")
     rb.add_argument("--clock-hz", type=nonnegative, default=100.0, metavar="HZ",
                     help="/clock rate in Hz of robot time (default 100; 0: none)")
-    rb.set_defaults(func=_robot)
+    rb.set_defaults(func=_run, func_name="robot")
 
     st = sub.add_parser("study", help="robustness study: scenarios x controllers x seeds, in parallel (in-process)")
     st.add_argument("--scenarios", default="nominal", metavar="LIST",
@@ -314,12 +341,12 @@ def build_parser() -> argparse.ArgumentParser:
     add_parallel_arguments(st, "runs")
     st.add_argument("--force", action="store_true", help="replace an existing output (never one a running command writes)")
     st.add_argument("--no-progress", action="store_true", help="no progress bar")
-    st.set_defaults(func=_study)
+    st.set_defaults(func=_run, func_name="study")
 
     ar = sub.add_parser("arm", help="an arm's facts, sources, effective inertias and gains (docs/arms.md)")
     ar.add_argument("--config", type=Path, default=None, help="YAML config (default: the shipped default)")
     add_arm_argument(ar)
-    ar.set_defaults(func=_arm)
+    ar.set_defaults(func=_run, func_name="arm")
 
     tu = sub.add_parser("tune", help="search a controller's settings on an arm with Optuna (docs/tuning.md)")
     tu.add_argument("--controller", required=True, metavar="NAME", help="dnbs, pid or ctc")
@@ -345,7 +372,7 @@ def build_parser() -> argparse.ArgumentParser:
     tu.add_argument("--duration", type=seconds, default=20.0, metavar="SECONDS", help="simulated time per run")
     add_parallel_arguments(tu, "runs of the trials")
     tu.add_argument("--no-progress", action="store_true", help="no progress line")
-    tu.set_defaults(func=_tune)
+    tu.set_defaults(func=_run, func_name="tune")
 
     an = sub.add_parser("analyse", help="metrics, figures and report of a recorded run, from its bag alone")
     an.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 bag directory (metadata.yaml + .mcap)")
@@ -355,7 +382,7 @@ def build_parser() -> argparse.ArgumentParser:
     an.add_argument("--force", action="store_true", help="replace an existing output (never one a running command writes)")
     an.add_argument("--no-progress", action="store_true", help="no progress bar")
     an.add_argument("--no-figures", action="store_true", help="metrics and report.md without figures")
-    an.set_defaults(func=_analyse)
+    an.set_defaults(func=_run, func_name="analyse")
 
     rp = sub.add_parser("replay", help="publish a bag's topics with their recorded timing (like ros2 bag play)")
     rp.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 bag directory")
@@ -377,7 +404,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_live_args(rp)
     rp.add_argument("--config", type=Path, default=None,
                     help="with --live: config for the torque limits (default: the one stored in the bag)")
-    rp.set_defaults(func=_replay)
+    rp.set_defaults(func=_run, func_name="replay")
     return parser
 
 

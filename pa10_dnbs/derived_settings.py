@@ -3,8 +3,8 @@
 Two rules, run in this order by :func:`with_rule_values` (``run_settings.build_settings`` calls it once, after the
 config is checked): the reference (reference_rule.py, from the URDF limits alone) and the gains (gain_rule.py,
 from the arm's mass matrix along that reference). Only the keys nobody gave are taken from them; the PA10's arm
-file gives all, so nothing is derived for it. Both rules run the settings' own plant (its ``plant`` section,
-the arm's facts resolved into it): they are handed its parameters, and look nothing up.
+file gives all, so nothing is derived for it. Both rules read one plant, the settings' own (its ``plant``
+section, the arm's facts resolved into it), opened once for them: they look nothing up.
 """
 from __future__ import annotations
 
@@ -16,9 +16,9 @@ from .arm import Arm
 from .arm.gain_rule import SWEEP_STEP_S, gain_rule, report_rule
 from .arm.reference_rule import feasible_reference, reference_rule
 from .core.reference import Reference
-from .plant.from_config import plant_params
+from .plant.from_config import opened_plant, plant_params
 from .plant.inertia_sweep import inertia_sweep
-from .plant.pybullet_plant import PlantParams
+from .plant.pybullet_plant import PyBulletArmPlant
 from .plant.reference_torque import ReferenceTorque
 from .settings import PlantSettings, ReferenceSettings, RunSettings
 
@@ -42,51 +42,49 @@ def with_rule_values(arm: Arm, checked: dict, absent: tuple[str, ...], report: b
     if not absent:
         return checked
     run = RunSettings.of(checked["simulation"])
-    params = plant_params(PlantSettings.of(checked["plant"]), run.dt_s)
     values: dict = {}
     reference = dict(checked["reference"])
-    if any(key in absent for key in REFERENCE_KEYS):
-        values = derived_reference(arm, run, params, report=report)
-        reference.update({k: v for k, v in values["reference"].items() if f"reference.{k}" in absent})
-    if any(key in absent for key in GAIN_KEYS):
-        values = dict(values, **derived_gains(arm, ReferenceSettings.of(reference), run, params, report=report))
+    with opened_plant(arm, plant_params(PlantSettings.of(checked["plant"]), run.dt_s)) as plant:
+        if any(key in absent for key in REFERENCE_KEYS):
+            values = derived_reference(plant, run, report=report)
+            reference.update({k: v for k, v in values["reference"].items() if f"reference.{k}" in absent})
+        if any(key in absent for key in GAIN_KEYS):
+            values = dict(values, **derived_gains(plant, ReferenceSettings.of(reference), run, report=report))
     return _placed(checked, values, absent)
 
 
-def derived_reference(arm: Arm, run: RunSettings, params: PlantParams, report: bool = True) -> dict:
-    """The ``reference`` fragment of the reference rule, made feasible (reference_rule.feasible_reference: the
-    torque it asks over ``run.duration_s`` on the plant of ``params``, inverse dynamics with gravity, within the
-    limits); ``report``: its lines on stderr."""
+def derived_reference(plant: PyBulletArmPlant, run: RunSettings, report: bool = True) -> dict:
+    """The ``reference`` fragment of the reference rule for the arm of ``plant``, made feasible
+    (reference_rule.feasible_reference: the torque it asks of ``plant`` over ``run.duration_s``, inverse dynamics
+    with gravity, within the plant's limits); ``report``: its lines on stderr."""
+    arm = plant.arm
     fragment = reference_rule(arm.lower_rad, arm.upper_rad)
-    torque = ReferenceTorque(arm, run.duration_s, run.dt_s, params)
-    try:
-        fragment, lines = feasible_reference(fragment, arm.lower_rad, arm.upper_rad, np.asarray(params.torque_limit_nm),
-                                             torque.peak, arm.joint_names)
-    finally:
-        torque.close()
+    torque = ReferenceTorque(plant, run.duration_s, run.dt_s)
+    limit = np.asarray(plant.params.torque_limit_nm)
+    fragment, lines = feasible_reference(fragment, arm.lower_rad, arm.upper_rad, limit, torque.peak, arm.joint_names)
     if report:
         for line in lines:
             print(f"warning: arm {arm.name}: {line}", file=sys.stderr)
     return {"reference": fragment}
 
 
-def inertia_sweep_along(arm: Arm, reference: ReferenceSettings, run: RunSettings, params: PlantParams):
-    """The arm's effective inertias on the plant of ``params`` along ``reference``, every 20 ms over the run's
-    duration_s (an InertiaSweep)."""
+def inertia_sweep_along(plant: PyBulletArmPlant, reference: ReferenceSettings, run: RunSettings):
+    """The effective inertias of ``plant``'s arm along ``reference``, every 20 ms over the run's duration_s (an
+    InertiaSweep)."""
     dt = run.dt_s
     ref = Reference(reference.amplitude_rad, reference.envelope_rate_per_s3, reference.frequency_rad_s, dt_s=dt,
                     centre_rad=reference.centre_rad)
     steps = np.arange(0, int(round(run.duration_s / dt)) + 1, max(1, int(round(SWEEP_STEP_S / dt))))
-    return inertia_sweep(arm, ref.position(steps), params)
+    return inertia_sweep(plant, ref.position(steps))
 
 
-def derived_gains(arm: Arm, reference: ReferenceSettings, run: RunSettings, params: PlantParams,
-                  report: bool = True, sweep=None) -> dict:
-    """The gain rule's fragment (a config fragment) for the arm on the plant of ``params`` along ``reference``
-    over ``run`` (``sweep``: :func:`inertia_sweep_along`'s, computed when None). ``report``: print the derivation
-    (one line per joint) and any warning on stderr."""
-    dt = run.dt_s
-    sweep = inertia_sweep_along(arm, reference, run, params) if sweep is None else sweep
+def derived_gains(plant: PyBulletArmPlant, reference: ReferenceSettings, run: RunSettings, report: bool = True,
+                  sweep=None) -> dict:
+    """The gain rule's fragment (a config fragment) for the arm of ``plant`` along ``reference`` over ``run``
+    (``sweep``: :func:`inertia_sweep_along`'s, computed when None). ``report``: print the derivation (one line
+    per joint) and any warning on stderr."""
+    dt, arm = run.dt_s, plant.arm
+    sweep = inertia_sweep_along(plant, reference, run) if sweep is None else sweep
     fragment = gain_rule(arm, sweep, dt)
     if report:
         report_rule(arm, sweep, fragment, dt)

@@ -14,7 +14,7 @@ from ..arm.gain_rule import report_rule
 from ..arm.summary import arm_line
 from ..config import default_config_path
 from .options import ArmInfoOptions
-from ..plant.from_config import plant_params
+from ..plant.from_config import opened_plant, plant_params
 from ..run_settings import build_settings
 
 
@@ -29,9 +29,9 @@ def run_arm_info(options: ArmInfoOptions) -> int:
     print("sources:")
     for key, text in the_arm.sources.items():
         print(f"  {key}: {text}")
-    params = plant_params(settings.plant, run.dt_s)
-    sweep = inertia_sweep_along(the_arm, settings.reference, run, params)
-    rule = derived_gains(the_arm, settings.reference, run, params, report=False, sweep=sweep)
+    with opened_plant(the_arm, plant_params(settings.plant, run.dt_s)) as plant:
+        sweep = inertia_sweep_along(plant, settings.reference, run)
+        rule = derived_gains(plant, settings.reference, run, report=False, sweep=sweep)
     report_rule(the_arm, sweep, rule, run.dt_s, stream=None)
     run_ku = np.array(settings.dnbs.remedies.robust_term.torque_gain_nms_per_rad)
     rule_ku = np.array(rule["dnbs"]["remedies"]["robust_term"]["torque_gain_nms_per_rad"])

@@ -1,6 +1,8 @@
 """Build the PyBullet plant and its initial state from a run's typed settings."""
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 import numpy as np
 
 from ..arm import Arm
@@ -20,6 +22,17 @@ def open_client(gui: bool = False):
         from pybullet_utils.bullet_client import BulletClient
 
         return BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
+
+
+@contextmanager
+def opened_plant(arm: Arm, params: PlantParams):
+    """``with opened_plant(arm, params) as plant``: the arm on PyBullet with ``params`` on a private client,
+    released on leaving (for what is read off the model before a run: the rules, a scenario's torque)."""
+    client = open_client()
+    try:
+        yield PyBulletArmPlant(client, arm, params)
+    finally:
+        client.disconnect()
 
 
 def plant_from_settings(settings: Settings, client) -> PyBulletArmPlant:
