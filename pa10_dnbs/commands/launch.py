@@ -95,7 +95,7 @@ def run_launch(options: LaunchOptions) -> int:
             raise ConfigError(f"--init-from: {exc}") from None
         init_from = checkpoint_dir(o.init_from).resolve()
     out, force, controller, mode, record = o.out, o.force, o.controller, o.mode, o.record
-    check_output_dir(out, force)
+    check_output_dir(out, force, "--out")
     rt_priority, refused = granted_priority(o.rt_priority)
     if refused:  # said once here, rather than by each of the ten nodes in its log
         print(f"launch: {refused}", flush=True)
