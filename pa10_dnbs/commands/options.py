@@ -37,11 +37,21 @@ class SimulateOptions:
 
 @dataclass(frozen=True)
 class LaunchOptions:
-    """``pa10-dnbs launch``: the node graph's run. mode lockstep or realtime; real_time_factor and
-    deadline_fraction pace realtime; effort_timeout_s [s of wall time] bounds lockstep's wait; record a bag
-    directory (bag_compression zstd or none); faults the fault flags; restart resume or fresh (None: off); netns
-    GROUP=NAMESPACE items; live_port the live view's port (None: off); robot ``--robot external`` (None: the
-    project's plant); plant pybullet or mujoco; clock_hz [Hz of simulated time]; domain_id None: a leased one."""
+    """``pa10-dnbs launch``: one run of the node graph.
+
+    mode: lockstep or realtime; real_time_factor and deadline_fraction pace realtime (docs/timing.md);
+    effort_timeout_s [s of wall time] bounds lockstep's wait for an effort, on_missing_effort (hold or zero)
+    replaces a missing one. reliability: the joint topics' QoS (None: the mode's default). domain_id: None: a
+    leased free one (with an external robot: this shell's ROS_DOMAIN_ID). record: a bag directory
+    (bag_compression zstd or none). faults: the fault flags, applied to the settings' faults section.
+    restart: resume or fresh (None: a dead controller is not restarted). netns: GROUP=NAMESPACE items.
+    init_from: the checkpoints of an earlier run (a warm start of DNBS). live_port: serve the live view on
+    live_host:live_port (0: a free port; None: off), live_hz frames per second at most. rt_priority: SCHED_FIFO
+    priority of every node where the OS grants it (0: off); sched_batch: every node but the plant under
+    SCHED_BATCH. namespace: the arm's ROS namespace (None: /<the arm's name>). clock_hz: /clock rate [Hz of
+    simulated time]. robot: ``--robot external`` and its topics (None: the project's plant, docs/your_robot.md);
+    plant: pybullet (the plant node) or mujoco (the MuJoCo robot node behind the joint bus, docs/engines.md).
+    trajectory: a JointTrajectory file the reference node follows from step 0 instead of eq. 27."""
 
     out: Path
     config_path: Path | None = None
