@@ -26,15 +26,26 @@ if __name__ != "__main__" and not sys.argv[0].endswith("pa10-dnbs"):   # importe
     interrupt.end_quiet_start(_startup_sigint)
 
 LIVE_PORT = 8765  # Foxglove's default WebSocket port
+#: The flag of each setting a library's error can name (ConfigError.setting): the command line says it as given.
+SETTING_FLAGS = {"trajectory": "--trajectory", "duration_s": "--duration", "jobs": "--jobs", "controller": "--controller",
+                 "params": "--params", "storage": "--storage", "scheduler": "--scheduler", "live_port": "--live",
+                 "live_host": "--live-host", "live_hz": "--live-hz", "netns": "--netns", "plant": "--plant",
+                 "robot": "--robot", "robot_command": "--robot-command", "robot_state_topic": "--robot-state-topic",
+                 "robot_command_topic": "--robot-command-topic", "robot_timeout": "--robot-timeout"}
 
 
-def _simulate(args: argparse.Namespace) -> int:
-    from .commands.simulate import run_simulate
+def _progress(args: argparse.Namespace) -> bool:
+    return not args.no_progress and sys.stderr.isatty()
 
-    return run_simulate(config_path=args.config, controller=args.controller, duration_s=args.duration,
-                        out=args.out, force=args.force, progress=not args.no_progress and sys.stderr.isatty(),
-                        init_from=args.init_from, figures=not args.no_figures, arm=args.arm, engine=args.engine,
-                        trajectory=args.trajectory)
+
+def _simulate_options(args: argparse.Namespace):
+    """The ``simulate`` command's options from its parsed flags."""
+    from .commands.options import SimulateOptions
+
+    return SimulateOptions(
+        out=args.out, config_path=args.config, controller=args.controller, duration_s=args.duration,
+        force=args.force, progress=_progress(args), init_from=args.init_from, figures=not args.no_figures,
+        arm=args.arm, engine=args.engine, trajectory=args.trajectory)
 
 
 def _unused_flags(args: argparse.Namespace, rules) -> None:
@@ -50,27 +61,32 @@ def _live_defaults(args: argparse.Namespace) -> None:
     args.live_hz = 50.0 if args.live_hz is None else args.live_hz
 
 
-def _launch(args: argparse.Namespace) -> int:
-    from .commands.launch import run_launch
+def _launch_options(args: argparse.Namespace):
+    """The ``launch`` command's options from its parsed flags."""
+    from .commands.options import LaunchOptions
+    from .launch.fault_flags import FaultFlags
 
     realtime = args.mode == "realtime"
     _unused_flags(args, [("rtf", realtime, "only with --mode realtime (lockstep runs as fast as the graph answers)"),
                          ("deadline_fraction", realtime, "only with --mode realtime (lockstep has no deadlines)"),
                          ("bag_compression", args.record is not None, "only with --record")])
     _live_defaults(args)
-    return run_launch(config_path=args.config, mode=args.mode, controller=args.controller,
-                      duration_s=args.duration, out=args.out, force=args.force,
-                      progress=not args.no_progress and sys.stderr.isatty(), domain_id=args.domain_id,
-                      reliability=args.reliability,
-                      effort_timeout_s=1.0 if args.effort_timeout is None else args.effort_timeout,
-                      on_missing_effort=args.on_missing_effort, record=args.record, fault_args=args,
-                      restart=args.restart, netns=args.netns, init_from=args.init_from,
-                      bag_compression=args.bag_compression or "zstd", live_port=args.live, live_host=args.live_host,
-                      live_hz=args.live_hz, real_time_factor=1.0 if args.rtf is None else args.rtf,
-                      deadline_fraction=0.9 if args.deadline_fraction is None else args.deadline_fraction,
-                      rt_priority=args.rt_priority, sched_batch=args.sched_batch, namespace=args.namespace,
-                      clock_hz=args.clock_hz, figures=not args.no_figures, arm=args.arm, robot=_robot_options(args),
-                      trajectory=args.trajectory, plant=args.plant)
+    if args.plant == "mujoco" and args.robot is not None:
+        raise ConfigError("--plant mujoco: not with --robot external (it starts its own robot, behind the joint bus)")
+    if args.plant == "mujoco" and args.mode != "lockstep":
+        raise ConfigError("--plant mujoco: only --mode lockstep so far (the joint bus runs lockstep)")
+    return LaunchOptions(
+        out=args.out, config_path=args.config, mode=args.mode, controller=args.controller, duration_s=args.duration,
+        force=args.force, progress=_progress(args), domain_id=args.domain_id, reliability=args.reliability,
+        effort_timeout_s=1.0 if args.effort_timeout is None else args.effort_timeout,
+        on_missing_effort=args.on_missing_effort, record=args.record, faults=FaultFlags.of(args),
+        restart=args.restart, netns=tuple(args.netns), init_from=args.init_from,
+        bag_compression=args.bag_compression or "zstd", live_port=args.live, live_host=args.live_host,
+        live_hz=args.live_hz, real_time_factor=1.0 if args.rtf is None else args.rtf,
+        deadline_fraction=0.9 if args.deadline_fraction is None else args.deadline_fraction,
+        rt_priority=args.rt_priority, sched_batch=args.sched_batch, namespace=args.namespace,
+        clock_hz=args.clock_hz, figures=not args.no_figures, arm=args.arm, robot=_robot_options(args),
+        trajectory=args.trajectory, plant=args.plant)
 
 
 def _robot_options(args: argparse.Namespace):
@@ -85,52 +101,88 @@ def _robot_options(args: argparse.Namespace):
                         args.robot_command_topic, 1.0 if args.robot_timeout is None else args.robot_timeout)
 
 
-def _robot(args: argparse.Namespace) -> int:
-    from .commands.robot import run_robot
+def _robot_command_options(args: argparse.Namespace):
+    """The ``robot`` command's options from its parsed flags."""
+    from .commands.options import RobotCommandOptions
 
-    return run_robot(args.config, args.arm, args.mode, args.duration, args.state_topic, args.command_topic,
-                     args.clock_hz)
-
-
-def _study(args: argparse.Namespace) -> int:
-    from .commands.study import run_study_command
-
-    return run_study_command(args.scenarios, args.controllers, args.seeds, args.duration, args.out, args.force,
-                             args.config, args.jobs, progress=not args.no_progress and sys.stderr.isatty(),
-                             arm=args.arm, scheduler=args.scheduler)
+    return RobotCommandOptions(
+        config_path=args.config, arm=args.arm, mode=args.mode, duration_s=args.duration,
+        state_topic=args.state_topic, command_topic=args.command_topic, clock_hz=args.clock_hz)
 
 
-def _tune(args: argparse.Namespace) -> int:
-    from .commands.tune import run_tune
+def _study_options(args: argparse.Namespace):
+    """The ``study`` command's options from its parsed flags."""
+    from .commands.options import StudyOptions
 
-    return run_tune(args.controller, args.trials, args.out, arm=args.arm, config_path=args.config,
-                    storage=args.storage, seed=args.seed, jobs=args.jobs, scheduler=args.scheduler,
-                    scenarios=args.scenarios, seeds=args.seeds, held_out_seeds=args.held_out_seeds,
-                    duration_s=args.duration, params=args.params,
-                    progress=not args.no_progress and sys.stderr.isatty())
-
-
-def _arm(args: argparse.Namespace) -> int:
-    from .commands.arm_info import run_arm_info
-
-    return run_arm_info(args.config, args.arm)
+    return StudyOptions(
+        out=args.out, scenarios=args.scenarios, controllers=args.controllers, seeds=args.seeds,
+        duration_s=args.duration, force=args.force, config_path=args.config, workers=args.jobs,
+        progress=_progress(args), arm=args.arm, scheduler=args.scheduler)
 
 
-def _analyse(args: argparse.Namespace) -> int:
-    from .commands.analyse import run_analyse
+def _tune_options(args: argparse.Namespace):
+    """The ``tune`` command's options from its parsed flags."""
+    from .commands.options import TuneOptions
 
-    return run_analyse(args.bag, args.out, args.force, args.config,
-                       progress=not args.no_progress and sys.stderr.isatty(), figures=not args.no_figures)
+    return TuneOptions(
+        controller=args.controller, out=args.out, trials=args.trials, arm=args.arm, config_path=args.config,
+        storage=args.storage, seed=args.seed, jobs=args.jobs, scheduler=args.scheduler, scenarios=args.scenarios,
+        seeds=args.seeds, held_out_seeds=args.held_out_seeds, duration_s=args.duration, params=args.params,
+        progress=_progress(args))
 
 
-def _replay(args: argparse.Namespace) -> int:
-    from .commands.replay import run_replay
+def _arm_options(args: argparse.Namespace):
+    """The ``arm`` command's options from its parsed flags."""
+    from .commands.options import ArmInfoOptions
+
+    return ArmInfoOptions(config_path=args.config, arm=args.arm)
+
+
+def _analyse_options(args: argparse.Namespace):
+    """The ``analyse`` command's options from its parsed flags."""
+    from .commands.options import AnalyseOptions
+
+    return AnalyseOptions(bag_path=args.bag, out=args.out, force=args.force, config_path=args.config,
+                          progress=_progress(args), figures=not args.no_figures)
+
+
+def _replay_options(args: argparse.Namespace):
+    """The ``replay`` command's options from its parsed flags."""
+    from .commands.options import ReplayOptions
 
     _live_defaults(args)
-    return run_replay(args.bag, rate=args.rate, topics=args.topics, start_offset_s=args.start_offset, loop=args.loop,
-                      clock_hz=args.clock, wait_for_subscribers_s=args.wait_for_subscribers,
-                      queue_depth=args.queue_depth, live_port=args.live, live_host=args.live_host,
-                      live_hz=args.live_hz, config_path=args.config, namespace=args.namespace)
+    return ReplayOptions(
+        bag_path=args.bag, rate=args.rate, topics=args.topics, start_offset_s=args.start_offset, loop=args.loop,
+        clock_hz=args.clock, wait_for_subscribers_s=args.wait_for_subscribers, queue_depth=args.queue_depth,
+        live_port=args.live, live_host=args.live_host, live_hz=args.live_hz, config_path=args.config,
+        namespace=args.namespace)
+
+
+#: Each command: (its module in commands/, its run function, the builder of its options from the parsed flags).
+COMMANDS = {
+    "simulate": ("simulate", "run_simulate", _simulate_options),
+    "launch": ("launch", "run_launch", _launch_options),
+    "robot": ("robot", "run_robot", _robot_command_options),
+    "study": ("study", "run_study_command", _study_options),
+    "tune": ("tune", "run_tune", _tune_options),
+    "arm": ("arm_info", "run_arm_info", _arm_options),
+    "analyse": ("analyse", "run_analyse", _analyse_options),
+    "replay": ("replay", "run_replay", _replay_options),
+}
+
+
+def command_options(args: argparse.Namespace):
+    """The options dataclass of the parsed command (commands/options.py); ConfigError for a flag that does not apply."""
+    return COMMANDS[args.func_name][2](args)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """Build the command's options from its flags and run it (its module imported only now)."""
+    import importlib
+
+    module, run, _ = COMMANDS[args.func_name]
+    options = command_options(args)
+    return getattr(importlib.import_module(f".commands.{module}", __package__), run)(options)
 
 
 def add_arm_argument(p: argparse.ArgumentParser) -> None:
@@ -189,7 +241,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--engine", choices=("pybullet", "mujoco"), default="pybullet",
                      help="the plant's physics engine: pybullet (the project's plant) or mujoco (an independent "
                           "second engine on the same arm; docs/engines.md)")
-    sim.set_defaults(func=_simulate)
+    sim.set_defaults(func=_run, func_name="simulate")
 
     la = sub.add_parser("launch", help="the ROS 2 node graph (plant, one controller per joint, reference)")
     la.add_argument("--mode", choices=("lockstep", "realtime"), default="lockstep",
@@ -260,7 +312,7 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--robot-timeout", type=positive, default=None, metavar="SECONDS",
                     help="with --robot external: wall time without a new robot state that makes it stale (default 1)")
     add_fault_arguments(la)
-    la.set_defaults(func=_launch)
+    la.set_defaults(func=_run, func_name="launch")
 
     rb = sub.add_parser("robot", help="the arm in MuJoCo as an external robot: a ROS 2 node on the standard robot "
                                       "interface (docs/engines.md, docs/your_robot.md)")
@@ -270,15 +322,15 @@ def build_parser() -> argparse.ArgumentParser:
     rb.add_argument("--mode", choices=("lockstep", "paced"), default="lockstep",
                     help="lockstep: publish state k, wait for the command stamped k, step once; paced: step every "
                          "simulation.dt_s of wall time with the latest command")
-    rb.add_argument("--duration", type=float, default=None, metavar="SECONDS",
+    rb.add_argument("--duration", type=nonnegative, default=None, metavar="SECONDS",
                     help="robot time to run [s] (default: until Ctrl-C)")
     rb.add_argument("--state-topic", default="/robot_joint_states", metavar="TOPIC",
                     help="the robot's JointState topic (default /robot_joint_states)")
     rb.add_argument("--command-topic", default="/robot_joint_command", metavar="TOPIC",
                     help="its JointState effort command topic (default /robot_joint_command)")
-    rb.add_argument("--clock-hz", type=float, default=100.0, metavar="HZ",
+    rb.add_argument("--clock-hz", type=nonnegative, default=100.0, metavar="HZ",
                     help="/clock rate in Hz of robot time (default 100; 0: none)")
-    rb.set_defaults(func=_robot)
+    rb.set_defaults(func=_run, func_name="robot")
 
     st = sub.add_parser("study", help="robustness study: scenarios x controllers x seeds, in parallel (in-process)")
     st.add_argument("--scenarios", default="nominal", metavar="LIST",
@@ -293,12 +345,12 @@ def build_parser() -> argparse.ArgumentParser:
     add_parallel_arguments(st, "runs")
     st.add_argument("--force", action="store_true", help="replace an existing output (never one a running command writes)")
     st.add_argument("--no-progress", action="store_true", help="no progress bar")
-    st.set_defaults(func=_study)
+    st.set_defaults(func=_run, func_name="study")
 
     ar = sub.add_parser("arm", help="an arm's facts, sources, effective inertias and gains (docs/arms.md)")
     ar.add_argument("--config", type=Path, default=None, help="YAML config (default: the shipped default)")
     add_arm_argument(ar)
-    ar.set_defaults(func=_arm)
+    ar.set_defaults(func=_run, func_name="arm")
 
     tu = sub.add_parser("tune", help="search a controller's settings on an arm with Optuna (docs/tuning.md)")
     tu.add_argument("--controller", required=True, metavar="NAME", help="dnbs, pid or ctc")
@@ -324,7 +376,7 @@ def build_parser() -> argparse.ArgumentParser:
     tu.add_argument("--duration", type=seconds, default=20.0, metavar="SECONDS", help="simulated time per run")
     add_parallel_arguments(tu, "runs of the trials")
     tu.add_argument("--no-progress", action="store_true", help="no progress line")
-    tu.set_defaults(func=_tune)
+    tu.set_defaults(func=_run, func_name="tune")
 
     an = sub.add_parser("analyse", help="metrics, figures and report of a recorded run, from its bag alone")
     an.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 bag directory (metadata.yaml + .mcap)")
@@ -334,7 +386,7 @@ def build_parser() -> argparse.ArgumentParser:
     an.add_argument("--force", action="store_true", help="replace an existing output (never one a running command writes)")
     an.add_argument("--no-progress", action="store_true", help="no progress bar")
     an.add_argument("--no-figures", action="store_true", help="metrics and report.md without figures")
-    an.set_defaults(func=_analyse)
+    an.set_defaults(func=_run, func_name="analyse")
 
     rp = sub.add_parser("replay", help="publish a bag's topics with their recorded timing (like ros2 bag play)")
     rp.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 bag directory")
@@ -356,7 +408,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_live_args(rp)
     rp.add_argument("--config", type=Path, default=None,
                     help="with --live: config for the torque limits (default: the one stored in the bag)")
-    rp.set_defaults(func=_replay)
+    rp.set_defaults(func=_run, func_name="replay")
     return parser
 
 
@@ -366,7 +418,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with interrupt.two_stage_sigint():   # Ctrl-C: the command stops and says what it kept; twice: at once
             return args.func(args)
-    except (ConfigError, KernelBuildError, OutputExistsError, OutputInUseError, BagExistsError, BagError) as exc:
+    except ConfigError as exc:
+        print(f"pa10-dnbs: error: {exc.named(SETTING_FLAGS.get(exc.setting))}", file=sys.stderr)
+        return 2
+    except (KernelBuildError, OutputExistsError, OutputInUseError, BagExistsError, BagError) as exc:
         print(f"pa10-dnbs: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:

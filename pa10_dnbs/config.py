@@ -288,26 +288,20 @@ def _check_given(key: str, value: Any, spec: Any) -> None:
         check_value(key, value, spec, None)
 
 
-def layered(document: dict, arm_facts: dict, arm_settings: dict) -> dict:
-    """The config of an arm before its derived values: the arm's facts (``plant``, over the rules' fixed
-    values), its ``settings``, then the config document, each over the one before."""
-    return _merge(_merge(arm_facts, arm_settings), document)
-
-
-def missing(tree: dict, keys: tuple[str, ...]) -> bool:
-    """Whether any of the dotted ``keys`` is not given in ``tree``."""
-    return any(_get(tree, key) is None for key in keys)
-
-
-def checked_with_placeholders(tree: dict, keys: tuple[str, ...], n_joints: int) -> dict:
-    """``tree`` checked for an arm of ``n_joints`` joints, with ones standing in for the ``keys`` it lacks (so
-    the rest can be checked before a rule gives their values)."""
-    return check_value("", _merge(_placeholders(keys, n_joints), tree), SCHEMA, n_joints)
-
-
 def merged(base: dict, over: dict) -> dict:
     """``base`` with ``over``'s keys replacing its own, mappings merged key by key."""
     return _merge(base, over)
+
+
+def checked_layers(layers: list[dict], n_joints: int, rule_keys: tuple[str, ...]) -> tuple[dict, tuple[str, ...]]:
+    """(the ``layers`` merged, each over the one before, checked for an arm of ``n_joints`` joints; the dotted
+    ``rule_keys`` that none of them gives). Ones (true for a switch) stand in for those keys in the checked
+    config, so the rest is checked before a rule gives their values. ConfigError naming the key."""
+    tree: dict = {}
+    for layer in layers:
+        tree = _merge(tree, layer)
+    absent = tuple(key for key in rule_keys if _get(tree, key) is None)
+    return validate(_merge(_placeholders(absent, n_joints), tree), n_joints), absent
 
 
 def _get(tree: dict, dotted: str):

@@ -36,14 +36,14 @@ def read_trajectory(path: Path) -> JointTrajectory:
     return trajectory_from_mapping(data)
 
 
-def load_trajectory_file(path: Path, arm, flag: str = "--trajectory") -> JointTrajectory:
+def load_trajectory_file(path: Path, arm) -> JointTrajectory:
     """The file's trajectory, checked against ``arm`` (an Arm: joint names, URDF limits); ConfigError
-    ``<flag> <path>: <what is wrong>`` otherwise."""
+    ``trajectory <path>: <what is wrong>`` (setting ``trajectory``) otherwise."""
     try:
         traj = read_trajectory(path)
         check_trajectory(traj, arm.joint_names, arm.lower_rad, arm.upper_rad)
     except TrajectoryError as exc:
-        raise ConfigError(f"{flag} {path}: {exc}") from None
+        raise ConfigError(f"trajectory {path}: {exc}", setting="trajectory") from None
     except OSError as exc:
-        raise ConfigError(f"{flag} {path}: {exc.strerror or exc}") from None
+        raise ConfigError(f"trajectory {path}: {exc.strerror or exc}", setting="trajectory") from None
     return traj

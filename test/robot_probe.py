@@ -32,7 +32,7 @@ def main() -> int:
 
     cfg = build_settings(default_config_path(), arm=arm_name)
     names = list(cfg.arm.joint_names)
-    q0, _ = initial_state(cfg)
+    q0, _ = initial_state(cfg.simulation, cfg.reference)
     rclpy.init(signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     node = rclpy.create_node("robot_probe")
     qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)

@@ -159,8 +159,8 @@ def test_an_arm_of_three_joints_from_a_bare_urdf_runs_every_controller(tmp_path)
 def test_a_locked_finger_is_held_exactly(tmp_path):
     """A prismatic finger left out of the actuated joints: the plant's M and h are those of the same arm with
     the finger welded on, to machine precision."""
-    from pa10_dnbs.plant.from_config import open_client
-    from pa10_dnbs.plant.pybullet_plant import PlantParams, PyBulletArmPlant
+    from pa10_dnbs.plant.from_config import arm_plant_params, open_client
+    from pa10_dnbs.plant.pybullet_plant import PyBulletArmPlant
 
     (tmp_path / "a").mkdir()
     (tmp_path / "b").mkdir()
@@ -171,7 +171,7 @@ def test_a_locked_finger_is_held_exactly(tmp_path):
     assert locked.locked_joints == ("finger_joint",) and welded.locked_joints == ()
     client = open_client()
     try:
-        a, b = (PyBulletArmPlant(client, arm, PlantParams()) for arm in (locked, welded))
+        a, b = (PyBulletArmPlant(client, arm, arm_plant_params(arm)) for arm in (locked, welded))
         rng = np.random.default_rng(3)
         for _ in range(20):
             q, qd = rng.uniform(-1.5, 1.5, 3), rng.uniform(-2, 2, 3)

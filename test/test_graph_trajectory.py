@@ -101,7 +101,8 @@ def test_a_trajectory_sent_while_running_is_tracked_and_wrong_ones_change_nothin
     # the in-process loop with the same reference (eq. 27, the example spliced in at `start`): the same run
     import pa10_dnbs.sim.closed_loop as closed_loop
 
-    monkeypatch.setattr(closed_loop, "build_reference", lambda cfg, trajectory=None: expected)
+    built = closed_loop.joint_loop  # the joints' guarded bank as the run builds it; the reference the graph's
+    monkeypatch.setattr(closed_loop, "joint_loop", lambda *a, **k: (expected, built(*a, **k)[1]))
     local = closed_loop.simulate(build_settings(out / "config_used.yaml"), "dnbs", DURATION_S)
     for field in ("position_rad", "velocity_rad_s", "reference_rad", "torque_nm"):
         a, b = getattr(local, field), getattr(run, field)

@@ -229,16 +229,17 @@ def test_a_stalled_client_does_not_block_logging(live):
 
 # ------------------------------------------------------------------ options
 def test_live_options_are_checked_before_anything_starts():
-    with pytest.raises(ConfigError, match="--live: port must be in 0..65535"):
+    with pytest.raises(ConfigError, match="^live_port: port must be in 0..65535") as err:
         check_live_options("127.0.0.1", 70000)
-    with pytest.raises(ConfigError, match="--live-hz"):
+    assert err.value.named("--live").startswith("--live: port must be in 0..65535")  # as the command line says it
+    with pytest.raises(ConfigError, match="^live_hz"):
         check_live_options("127.0.0.1", 0, 0.0)
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         s.listen()
-        with pytest.raises(ConfigError, match=r"--live: cannot serve on 127.0.0.1:\d+ \(in use\)"):
+        with pytest.raises(ConfigError, match=r"^live_port: cannot serve on 127.0.0.1:\d+ \(in use\)"):
             check_live_options("127.0.0.1", s.getsockname()[1])
-    with pytest.raises(ConfigError, match="--live-host"):
+    with pytest.raises(ConfigError, match="^live_host"):
         check_live_options("no-such-host.invalid", 0)
     check_live_options("127.0.0.1", 0)
 

@@ -7,9 +7,9 @@ import pytest
 
 from cli_runner import run_cli
 from pa10_dnbs.arm import load_arm
-from pa10_dnbs.plant.from_config import open_client
+from pa10_dnbs.plant.from_config import arm_plant_params, open_client
 from pa10_dnbs.plant.mujoco_plant import MuJoCoArmPlant
-from pa10_dnbs.plant.pybullet_plant import PlantParams, PyBulletArmPlant
+from pa10_dnbs.plant.pybullet_plant import PyBulletArmPlant
 from pa10_dnbs.run_settings import build_settings
 from test_arms import three_link_urdf, write_arm
 
@@ -41,7 +41,7 @@ def test_mass_matrix_and_bias_torques_agree_with_pybullet(client, name):
     """M(q) + armature and h(q, qd) (Coriolis, centrifugal, gravity) of MuJoCo equal PyBullet's plant's, so the
     two engines model the same arm with the same rotor inertias (the independent dynamics check)."""
     arm = load_arm(name)
-    pb, mj = PyBulletArmPlant(client, arm, PlantParams()), MuJoCoArmPlant(arm, PlantParams())
+    pb, mj = PyBulletArmPlant(client, arm, arm_plant_params(arm)), MuJoCoArmPlant(arm, arm_plant_params(arm))
     assert np.allclose(np.diag(mj.mass_matrix(np.zeros(arm.n_joints))) - np.diag(pb.mass_matrix(
         np.zeros(arm.n_joints))), 0.0, atol=REL_TOL)
     worst_m = worst_h = 0.0
@@ -53,7 +53,7 @@ def test_mass_matrix_and_bias_torques_agree_with_pybullet(client, name):
 
 def test_the_arm_files_facts_are_mujocos_joint_properties():
     arm = load_arm("panda")
-    mj = MuJoCoArmPlant(arm, PlantParams())
+    mj = MuJoCoArmPlant(arm, arm_plant_params(arm))
     np.testing.assert_array_equal(mj.model.dof_armature, arm.rotor_inertia_kgm2)
     np.testing.assert_array_equal(mj.model.dof_damping, arm.viscous_nms_per_rad)
     np.testing.assert_array_equal(mj.model.dof_frictionloss, arm.coulomb_nm)
@@ -65,7 +65,7 @@ def test_a_frictionless_step_equals_pybullets_step(client, name):
     """Without friction both plants take the same semi-implicit Euler step from the same M and h: 200 steps
     under torques from the same state stay together to round-off."""
     arm = load_arm(name)
-    params = PlantParams(viscous_nms_per_rad=(0.0,) * 7, coulomb_nm=(0.0,) * 7)
+    params = arm_plant_params(arm, viscous_nms_per_rad=(0.0,) * 7, coulomb_nm=(0.0,) * 7)
     pb, mj = PyBulletArmPlant(client, arm, params), MuJoCoArmPlant(arm, params)
     q0, qd0 = np.full(7, 0.2), np.linspace(-0.5, 0.5, 7)
     for p in (pb, mj):
@@ -81,14 +81,14 @@ def test_a_frictionless_step_equals_pybullets_step(client, name):
 
 def test_payload_and_heavier_links_agree_with_pybullet(client):
     arm = load_arm("iiwa")
-    for params in (PlantParams(payload_kg=5.0), PlantParams(link_mass_scale=1.3)):
+    for params in (arm_plant_params(arm, payload_kg=5.0), arm_plant_params(arm, link_mass_scale=1.3)):
         pb, mj = PyBulletArmPlant(client, arm, params), MuJoCoArmPlant(arm, params)
         for q, qd in _random_states(arm, np.random.default_rng(3), 5):
             assert _max_rel(pb.mass_matrix(q), mj.mass_matrix(q)) < REL_TOL
             assert _max_rel(pb.bias_torque(q, qd), mj.bias_torque(q, qd)) < REL_TOL
-    plain = MuJoCoArmPlant(arm, PlantParams())
+    plain = MuJoCoArmPlant(arm, arm_plant_params(arm))
     q = np.full(7, 0.4)
-    assert np.abs(MuJoCoArmPlant(arm, PlantParams(payload_kg=5.0)).bias_torque(q, np.zeros(7))
+    assert np.abs(MuJoCoArmPlant(arm, arm_plant_params(arm, payload_kg=5.0)).bias_torque(q, np.zeros(7))
                   - plain.bias_torque(q, np.zeros(7))).max() > 1.0  # the payload is there at all
 
 
@@ -104,7 +104,7 @@ def test_locked_joints_are_welded_where_pybullet_holds_them(client, tmp_path):
     arm = load_arm(write_arm(tmp_path, urdf, exclude_joints=["j3", "finger_joint"], rotor_inertia_kgm2=[0.05, 0.05],
                              tip_link="l2"))
     assert arm.joint_names == ("j1", "j2") and arm.locked_position_rad == (0.5, 0.0)
-    pb, mj = PyBulletArmPlant(client, arm, PlantParams()), MuJoCoArmPlant(arm, PlantParams())
+    pb, mj = PyBulletArmPlant(client, arm, arm_plant_params(arm)), MuJoCoArmPlant(arm, arm_plant_params(arm))
     assert mj.model.nv == 2
     for q, qd in _random_states(arm, np.random.default_rng(5), 10):
         assert _max_rel(pb.mass_matrix(q), mj.mass_matrix(q)) < REL_TOL
@@ -113,7 +113,7 @@ def test_locked_joints_are_welded_where_pybullet_holds_them(client, tmp_path):
 
 def test_torques_are_saturated_nan_refused_and_limits_clamped():
     arm = load_arm("pa10")
-    mj = MuJoCoArmPlant(arm, PlantParams(gravity_mps2=0.0))
+    mj = MuJoCoArmPlant(arm, arm_plant_params(arm, gravity_mps2=0.0))
     mj.step(np.full(7, np.inf))
     np.testing.assert_array_equal(mj.applied_torque_nm, arm.torque_limit_nm)
     with pytest.raises(ValueError, match="NaN"):

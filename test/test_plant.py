@@ -11,6 +11,7 @@ from pybullet_utils.bullet_client import BulletClient
 
 from pa10_dnbs.arm import ArmError, load_arm
 from pa10_dnbs.plant import PlantParams, PyBulletArmPlant
+from pa10_dnbs.plant.from_config import arm_plant_params
 
 PA10 = load_arm("pa10")
 
@@ -49,7 +50,7 @@ def client():
 @pytest.fixture
 def make_plant(client):
     def _make(**kwargs):
-        return PyBulletArmPlant(client, PA10, PlantParams(**kwargs))
+        return PyBulletArmPlant(client, PA10, arm_plant_params(PA10, **kwargs))
     return _make
 
 
@@ -397,7 +398,7 @@ def test_reset_validates_state(make_plant):
 
 def test_deterministic_across_clients_and_resets(client):
     torques = np.random.default_rng(4).uniform(-1.2 * TABLE2_NM, 1.2 * TABLE2_NM, size=(400, 7))
-    params = PlantParams(coulomb_nm=(1.0,) * 7)
+    params = arm_plant_params(PA10, coulomb_nm=(1.0,) * 7)
     other = BulletClient(connection_mode=pybullet.DIRECT)
     try:
         plants = [PyBulletArmPlant(client, PA10, params), PyBulletArmPlant(other, PA10, params)]

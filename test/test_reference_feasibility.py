@@ -6,6 +6,7 @@ import pytest
 
 from pa10_dnbs.arm import load_arm
 from pa10_dnbs.arm.reference_rule import TORQUE_FRACTION, feasible_reference, reference_rule
+from pa10_dnbs.plant.from_config import arm_plant_params, opened_plant
 from pa10_dnbs.plant.reference_torque import ReferenceTorque
 
 LOWER, UPPER = np.array([0.0, -2.0]), np.array([2.88, 2.0])
@@ -46,11 +47,8 @@ def test_the_plant_check_reads_gravity_from_the_arm(tmp_path):
     shoulder (joint 2) far above its inertial part alone, and every preset joint stays within 80 %."""
     arm = load_arm("panda")
     frag = reference_rule(arm.lower_rad, arm.upper_rad)
-    with_g, without_g = ReferenceTorque(arm, 5.0, 0.001), ReferenceTorque(arm, 5.0, 0.001, gravity_mps2=0.0)
-    try:
-        pg, p0 = with_g.peak(frag), without_g.peak(frag)
-    finally:
-        with_g.close()
-        without_g.close()
+    with (opened_plant(arm, arm_plant_params(arm)) as g,
+          opened_plant(arm, arm_plant_params(arm, gravity_mps2=0.0)) as z):
+        pg, p0 = ReferenceTorque(g, 5.0, 0.001).peak(frag), ReferenceTorque(z, 5.0, 0.001).peak(frag)
     assert pg[1] > 5 * p0[1]
     assert (pg / arm.torque_limit_nm).max() <= TORQUE_FRACTION

@@ -23,7 +23,7 @@ def test_command_forms_and_their_default_topics():
     for bad in ("position", "forward:", "forward:1abc", "forward:a b", "JointState"):
         with pytest.raises(ValueError):
             parse_robot_command(bad)
-    with pytest.raises(ValueError, match="robot-command-topic"):
+    with pytest.raises(ValueError, match="robot_command_topic"):
         parse_robot_command("forward:effort_controller", "/x")
 
 
@@ -73,14 +73,16 @@ def test_launch_flags_are_checked_with_one_line_naming_the_flag(monkeypatch):
     assert check_robot_options(RobotOptions(command="forward:arm_effort"), "lockstep")["robot_command"] \
         == "forward:arm_effort"
     assert check_robot_options(RobotOptions(), "realtime")["robot"] == "external"  # paced: the bus follows
-    cases = [(RobotOptions(command="torque"), "lockstep", "--robot-command"),
-             (RobotOptions(state_topic="/bad topic"), "lockstep", "--robot-state-topic"),
-             (RobotOptions(command_topic="//x"), "lockstep", "--robot-command-topic"),
-             (RobotOptions(timeout_s=0.0), "lockstep", "--robot-timeout"),
-             (RobotOptions(timeout_s=math.nan), "lockstep", "--robot-timeout")]
-    for opt, mode, flag in cases:
-        with pytest.raises(ConfigError, match=f"^{flag}"):
+    cases = [(RobotOptions(command="torque"), "lockstep", "robot_command"),
+             (RobotOptions(state_topic="/bad topic"), "lockstep", "robot_state_topic"),
+             (RobotOptions(command_topic="//x"), "lockstep", "robot_command_topic"),
+             (RobotOptions(timeout_s=0.0), "lockstep", "robot_timeout"),
+             (RobotOptions(timeout_s=math.nan), "lockstep", "robot_timeout")]
+    for opt, mode, setting in cases:  # the library names the setting; the command line, its flag (cli.py)
+        with pytest.raises(ConfigError, match=f"^{setting}: ") as err:
             check_robot_options(opt, mode)
+        flag = "--" + setting.replace("_", "-")
+        assert err.value.setting == setting and err.value.named(flag).startswith(f"{flag}: ")
     monkeypatch.setenv("ROS_DOMAIN_ID", "42")
     assert robot_domain() == 42
     monkeypatch.delenv("ROS_DOMAIN_ID")

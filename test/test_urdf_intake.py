@@ -17,8 +17,8 @@ from pa10_dnbs.arm.arm_file import _load
 from pa10_dnbs.arm.plant_urdf import principal_moments
 from pa10_dnbs.arm.summary import arm_line
 from pa10_dnbs.plant.dynamics_check import compare_with_mujoco
-from pa10_dnbs.plant.from_config import open_client
-from pa10_dnbs.plant.pybullet_plant import PlantParams, PyBulletArmPlant
+from pa10_dnbs.plant.from_config import arm_plant_params, open_client
+from pa10_dnbs.plant.pybullet_plant import PyBulletArmPlant
 
 FIXTURES = Path(__file__).parent / "fixtures" / "urdf_intake"
 MUJOCO_RTOL = 1e-8  # PyBullet diagonalises an off-diagonal inertia (threshold 1e-6): M to 1e-10, qdd to 3e-9
@@ -115,7 +115,7 @@ def test_package_meshes_that_do_not_resolve_neither_fail_nor_warn(capfd):
     arm = load_arm(_fixture("package_mesh"))
     client = open_client()
     try:
-        PyBulletArmPlant(client, arm, PlantParams())
+        PyBulletArmPlant(client, arm, arm_plant_params(arm))
     finally:
         client.disconnect()
     out = capfd.readouterr()

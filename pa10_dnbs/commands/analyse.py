@@ -7,6 +7,7 @@ from pathlib import Path
 from ..bag.analysis import bag_arm, bag_joint_names, robot_chain, run_info, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
 from ..config import default_config_path
+from .options import AnalyseOptions
 from ..number_text import interval
 from ..output_lock import lock_output
 from ..report.metrics_file import DEFAULT_METRICS, metrics_dict, window_settings
@@ -40,17 +41,18 @@ def _recorded_prefix_end(rec) -> int | None:
     return end
 
 
-def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None = None, progress: bool = False,
-                figures: bool = True) -> int:
-    """Rebuild the run from the bag and write the report into ``out``. Raises BagError on a bad bag.
+def run_analyse(options: AnalyseOptions) -> int:
+    """Rebuild the run from the bag ``options.bag_path`` and write the report into ``options.out``. Raises
+    BagError on a bad bag.
 
-    ``progress``: a progress bar on stderr while the bag is read (report/progress.py; drawn on a terminal only).
+    ``options.progress``: a progress bar on stderr while the bag is read (report/progress.py; drawn on a terminal only).
     """
-    check_output_dir(out, force)
-    lock_output(bag_path, "bag")  # a bag another run is still recording (or replacing) is refused, not misread
-    with Bag(bag_path) as bag:
+    o = options
+    check_output_dir(o.out, o.force, "--out")
+    lock_output(o.bag_path, "bag")  # a bag another run is still recording (or replacing) is refused, not misread
+    with Bag(o.bag_path) as bag:
         info = run_info(bag)
-        cfg, cfg_note = _run_config(info, config_path, bag)
+        cfg, cfg_note = _run_config(info, o.config_path, bag)
         dt = float(cfg["simulation"]["dt_s"])
         n_steps = None
         if "duration_s" in info:
@@ -59,7 +61,7 @@ def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None
             except ValueError:
                 raise BagError(f"{bag.path}: custom_data duration_s is not a number: {info['duration_s']!r}") from None
         bar = None
-        if progress:
+        if o.progress:
             js = bag_arm(bag).joint_states
             total = n_steps if n_steps is not None else bag.topics[js].count if js in bag.topics else 0
             bar = ProgressBar(total, dt, f"analyse {bag.path.name}")
@@ -96,13 +98,13 @@ def run_analyse(bag_path: Path, out: Path, force: bool, config_path: Path | None
         if truncated:
             notes.append(truncated)
         chain = robot_chain(bag, cfg.get("arm"))
-        with atomic_output_dir(out, force) as tmp:
+        with atomic_output_dir(o.out, o.force) as tmp:
             write_report(tmp, [run], [metrics], title="Run from a bag", notes=notes, chain=chain,
-                         figures=figures)
+                         figures=o.figures)
     if truncated:
         print(f"analyse: {truncated}")
     print(f"{controller}: worst-joint RMS error {metrics['worst_rms_error_rad']:.3e} rad over "
           f"{interval(metrics['window_s'])} s "
           f"({rec.n} steps from {bag.path})")
-    print(f"wrote {out}/report.md")
+    print(f"wrote {o.out}/report.md")
     return 0 if metrics["all_finite"] and metrics["torques_within_limits"] else 1

@@ -13,21 +13,25 @@ import numpy as np
 from ..arm.gain_rule import report_rule
 from ..arm.summary import arm_line
 from ..config import default_config_path
+from .options import ArmInfoOptions
+from ..plant.from_config import opened_plant, plant_params
 from ..run_settings import build_settings
 
 
-def run_arm_info(config_path: Path | None, arm: str | None) -> int:
+def run_arm_info(options: ArmInfoOptions) -> int:
     """Print the arm's facts, sources, inertia sweep and gains; returns 0 (bad input raises ConfigError)."""
     from ..derived_settings import derived_gains, inertia_sweep_along
 
-    settings = build_settings(Path(config_path) if config_path else default_config_path(), arm=arm)
+    o = options
+    settings = build_settings(Path(o.config_path) if o.config_path else default_config_path(), arm=o.arm)
     the_arm, run = settings.arm, settings.simulation
     print(arm_line(the_arm).replace("; ", ";\n  "))
     print("sources:")
     for key, text in the_arm.sources.items():
         print(f"  {key}: {text}")
-    sweep = inertia_sweep_along(the_arm, settings.reference, run)
-    rule = derived_gains(the_arm, settings.reference, run, report=False, sweep=sweep)
+    with opened_plant(the_arm, plant_params(settings.plant, run.dt_s)) as plant:
+        sweep = inertia_sweep_along(plant, settings.reference, run)
+        rule = derived_gains(plant, settings.reference, run, report=False, sweep=sweep)
     report_rule(the_arm, sweep, rule, run.dt_s, stream=None)
     run_ku = np.array(settings.dnbs.remedies.robust_term.torque_gain_nms_per_rad)
     rule_ku = np.array(rule["dnbs"]["remedies"]["robust_term"]["torque_gain_nms_per_rad"])

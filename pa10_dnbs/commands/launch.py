@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 import shutil
 import sys
 from pathlib import Path
@@ -10,10 +9,11 @@ from pathlib import Path
 import yaml
 
 from ..accel.choice import resolve_kernel
+from .options import LaunchOptions
 from ..bag.analysis import bag_arm, bag_joint_names, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
-from ..bag.bag_writer import COMPRESSIONS, check_bag_path
-from ..config import ConfigError, default_config_path, load_config
+from ..bag.bag_writer import check_bag_path
+from ..config import ConfigError, default_config_path
 from ..controller_factory import load_reference_trajectory
 from ..core.checkpoint import checkpoint_dir, load_joint_checkpoints
 from ..interrupt import outputs_written
@@ -23,121 +23,80 @@ from ..launch.graph_run import GraphFailure, GraphOptions, loop_reliability, par
 from ..launch.params_file import write_params_file
 from ..launch.realtime_advice import ON_TIME_TARGET, injected_misses, realtime_hint
 from ..live.options import check_live_options
-from ..loop.scheduling import DEFAULT_RT_PRIORITY, check_priority, granted_priority
+from ..loop.scheduling import granted_priority
 from ..number_text import interval
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_creatable, check_output_dir, write_report
 from ..output_lock import lock_output
-from ..run_settings import document_arm, with_rules
+from ..run_settings import build_settings
 from ..run_size import check_run_size, say_note
 from ..wire.wire_record import load_wire_run
 from ..wire.steps import StepClock
 from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, ClockSchedule, check_clock_hz
 from ..wire.topics import CLOCK, ArmTopics, check_namespace, default_namespace
-from ..launch.robot_options import RobotOptions, check_robot_options, robot_domain
+from ..launch.robot_options import check_robot_options, robot_domain
 from ..launch.plant_engine import plant_robot_options
 
 
 
-def run_launch(config_path: Path | None, mode: str, controller: str, duration_s: float | None, out: Path,
-               force: bool, progress: bool, domain_id: int | None, reliability: str | None, effort_timeout_s: float,
-               on_missing_effort: str, record: Path | None = None, fault_args=None, restart: str | None = None,
-               netns: list[str] | None = None, init_from: Path | None = None, bag_compression: str = "zstd",
-               live_port: int | None = None, live_host: str = "127.0.0.1", live_hz: float = 50.0,
-               real_time_factor: float = 1.0, deadline_fraction: float = 0.9, rt_priority: int = DEFAULT_RT_PRIORITY,
-               sched_batch: bool = False, namespace: str | None = None,
-               clock_hz: float = DEFAULT_CLOCK_HZ, figures: bool = True, arm: str | None = None,
-               robot: RobotOptions | None = None, trajectory: Path | None = None, plant: str = "pybullet") -> int:
-    """Run the graph once and write metrics, figures and report into ``out``. Returns the exit code.
+def run_launch(options: LaunchOptions) -> int:
+    """Run the graph once (``options``, checked by the command line's parsing) and write metrics, figures and
+    report into ``options.out``. Returns the exit code.
 
-    ``fault_args``: the parsed fault flags (launch/fault_flags.py) applied to the config; the config the
-    nodes run with is written to ``out/config_used.yaml``. ``restart``: 'resume' or 'fresh'.
-    ``netns``: ['GROUP=NAMESPACE', ...] to run node groups in network namespaces.
-    ``init_from``: warm start of the DNBS controllers from an earlier run's checkpoints (reported as such).
-    ``bag_compression``: 'zstd' or 'none' (with ``record``). ``live_port``: serve the live view
-    (Foxglove WebSocket) on ``live_host``:``live_port`` (0: a free port), ``live_hz`` frames per second at most.
-    ``real_time_factor``, ``deadline_fraction``: realtime pacing (docs/timing.md); ``rt_priority``: SCHED_FIFO
-    priority of every node where the OS grants it (0: off; refused: one line, and the default policy);
-    ``sched_batch``: every node but the plant under SCHED_BATCH.
-    ``reliability`` None: the mode's default QoS.
-    ``namespace``: the arm's ROS namespace (every node runs in it; /clock, /tf, /diagnostics stay global); None:
-    ``/<the arm's name>``. ``arm``: a preset's name or an arm file or URDF (``--arm``); None: the config's.
-    ``clock_hz``: /clock rate [Hz of simulated time], > 0 (the reference node is paced by /clock).
-    ``robot``: ``--robot external`` and its topics: the joint bus in the plant's place, against a running robot
-    on ``domain_id`` (default: this shell's ROS_DOMAIN_ID; docs/your_robot.md). None: the project's plant.
-    ``plant``: 'pybullet' (the project's plant node) or 'mujoco': the MuJoCo robot node behind the joint bus, in the
-    launcher's own domain (launch/plant_engine.py, docs/engines.md).
-    ``trajectory``: a JointTrajectory file (YAML or JSON) the reference node follows from step 0 instead of
-    eq. 27 (docs/trajectories.md); checked here first (a bad file: ConfigError, nothing written).
+    The config the nodes run with (the fault flags applied) is written to ``out/config_used.yaml``, their
+    parameters to ``out/ros_params.yaml``. What depends on the settings is checked here, before anything starts
+    (one line, exit 2): the duration against the step, the clock rate against dt, the trajectory file (read as
+    the reference node will), the checkpoints of a warm start, the robot's topics, the bag's path.
     """
-    config_path = Path(config_path).resolve() if config_path else default_config_path()
-    document = load_config(config_path)  # the settings, built once: config file(s), arm file, rules
-    the_arm = document_arm(document, arm)
-    settings = with_rules(the_arm, document)
+    o = options
+    config_path = Path(o.config_path).resolve() if o.config_path else default_config_path()
+    settings = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
+    the_arm = settings.arm
     joint_names = the_arm.joint_names
-    if namespace is None:
-        namespace = default_namespace(the_arm.name)
-    if fault_args is not None:
-        settings = apply_fault_flags(settings, fault_args)
+    namespace = default_namespace(the_arm.name) if o.namespace is None else o.namespace
+    settings = apply_fault_flags(settings, o.faults)
     try:
         check_namespace(namespace)
     except ValueError as exc:
         raise ConfigError(f"--namespace: {exc}") from None
-    if restart not in (None, "resume", "fresh"):
-        raise ConfigError(f"--restart: expected resume or fresh, got {restart!r}")
-    namespaces = parse_netns(netns or [])
-    if duration_s is None:
-        duration_s = settings.simulation.duration_s
-    if not (math.isfinite(duration_s) and duration_s > 0):
-        raise ConfigError(f"--duration: must be a positive finite number of seconds, got {duration_s}")
-    own_robot = plant == "mujoco"
-    robot = plant_robot_options(plant, robot, mode)
-    robot_fields = check_robot_options(robot, mode) if robot is not None else {}
+    namespaces = parse_netns(list(o.netns))
+    duration_s = settings.simulation.duration_s if o.duration_s is None else o.duration_s
+    own_robot = o.plant == "mujoco"
+    robot = plant_robot_options(o.plant, o.robot, o.mode)
+    robot_fields = check_robot_options(robot, o.mode) if robot is not None else {}
     if own_robot:
         robot_fields["plant_engine"] = "mujoco"
+    domain_id = o.domain_id
     if robot is not None and domain_id is None and not own_robot:  # the robot is running: the graph joins its domain
         domain_id = robot_domain()
-    if domain_id is not None and not 0 <= domain_id <= 101:
-        raise ConfigError(f"--domain-id: must be in 0..101, got {domain_id}")
-    if not (math.isfinite(effort_timeout_s) and effort_timeout_s > 0):
-        raise ConfigError(f"--effort-timeout: must be a positive number of seconds, got {effort_timeout_s}")
-    if not (math.isfinite(real_time_factor) and 0 < real_time_factor <= 100):
-        raise ConfigError(f"--rtf: must be a real-time factor in (0, 100], got {real_time_factor}")
-    if not (math.isfinite(deadline_fraction) and 0 < deadline_fraction <= 1):
-        raise ConfigError(f"--deadline-fraction: must be in (0, 1], got {deadline_fraction}")
-    try:
-        check_priority(rt_priority)
-    except ValueError:
-        raise ConfigError(f"--rt-priority: must be 0 (off) or 1..99, got {rt_priority}") from None
     dt = settings.simulation.dt_s
     try:
-        check_clock_hz(clock_hz, dt)
-        if clock_hz == 0:
-            raise ValueError("must be > 0 Hz: the reference node is paced by /clock")
+        check_clock_hz(o.clock_hz, dt)
     except ValueError as exc:
         raise ConfigError(f"--clock-hz: {exc}") from None
     n_steps = int(round(duration_s / dt))
     if n_steps < 2:
         raise ConfigError(f"--duration: {duration_s} s is shorter than two steps of {dt} s")
-    check_run_size("--duration", duration_s, n_steps, len(joint_names), graph=True, say=say_note,
-                   wall_s=n_steps * dt / real_time_factor if mode == "realtime" else None)
-    if trajectory is not None:  # the file read and checked as the reference node will: one line, exit 2
-        load_reference_trajectory(settings, trajectory)
-        trajectory = Path(trajectory).resolve()
-    if bag_compression not in COMPRESSIONS:
-        raise ConfigError(f"--bag-compression: expected one of {', '.join(COMPRESSIONS)}, got {bag_compression!r}")
-    if live_port is not None:
-        check_live_options(live_host, live_port, live_hz)
-    if init_from is not None:
-        if controller != "dnbs":
+    check_run_size(duration_s, n_steps, len(joint_names), graph=True, say=say_note,
+                   wall_s=n_steps * dt / o.real_time_factor if o.mode == "realtime" else None)
+    trajectory = None
+    if o.trajectory is not None:  # the file read and checked as the reference node will: one line, exit 2
+        load_reference_trajectory(settings, o.trajectory)
+        trajectory = Path(o.trajectory).resolve()
+    if o.live_port is not None:
+        check_live_options(o.live_host, o.live_port, o.live_hz)
+    init_from = None
+    if o.init_from is not None:
+        if o.controller != "dnbs":
             raise ConfigError("--init-from: only the DNBS controllers have learned state to start from")
         try:
-            load_joint_checkpoints(init_from, joint_names)  # all there and readable, before anything starts
+            load_joint_checkpoints(o.init_from, joint_names)  # all there and readable, before anything starts
         except ValueError as exc:
             raise ConfigError(f"--init-from: {exc}") from None
-        init_from = checkpoint_dir(init_from).resolve()
-    check_output_dir(out, force)
-    rt_priority, refused = granted_priority(rt_priority)
+        init_from = checkpoint_dir(o.init_from).resolve()
+    out, force, controller, mode, record = o.out, o.force, o.controller, o.mode, o.record
+    check_output_dir(out, force, "--out")
+    rt_priority, refused = granted_priority(o.rt_priority)
     if refused:  # said once here, rather than by each of the ten nodes in its log
         print(f"launch: {refused}", flush=True)
     if record is not None:
@@ -153,13 +112,13 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
         # nodes read the resolved kernel from config_used.yaml (KernelBuildError if c cannot be built)
         settings = resolve_kernel(settings, say=lambda line: print(f"launch: {line}", flush=True))
     opt = GraphOptions(config_path=config_path, mode=mode, controller=controller, duration_s=n_steps * dt,
-                       domain_id=domain_id, reliability=reliability, effort_timeout_s=effort_timeout_s,
-                       on_missing_effort=on_missing_effort, progress=progress, dt_s=dt, record_bag=record,
-                       force_bag=force, restart=restart, netns=namespaces, init_from=init_from,
-                       bag_compression=bag_compression, live_port=live_port, live_host=live_host, live_hz=live_hz,
-                       real_time_factor=real_time_factor, deadline_fraction=deadline_fraction,
-                       rt_priority=rt_priority, sched_batch=sched_batch, namespace=namespace,
-                       clock_hz=clock_hz, joint_names=joint_names, trajectory_file=trajectory,
+                       domain_id=domain_id, reliability=o.reliability, effort_timeout_s=o.effort_timeout_s,
+                       on_missing_effort=o.on_missing_effort, progress=o.progress, dt_s=dt, record_bag=record,
+                       force_bag=force, restart=o.restart, netns=namespaces, init_from=init_from,
+                       bag_compression=o.bag_compression, live_port=o.live_port, live_host=o.live_host,
+                       live_hz=o.live_hz, real_time_factor=o.real_time_factor, deadline_fraction=o.deadline_fraction,
+                       rt_priority=rt_priority, sched_batch=o.sched_batch, namespace=namespace,
+                       clock_hz=o.clock_hz, joint_names=joint_names, trajectory_file=trajectory,
                        **robot_fields)
     reliability = loop_reliability(opt)
     measured = metrics_settings(settings, n_steps * dt)
@@ -182,7 +141,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                               "and the reference topics")
                 else:
                     run, missing = _bag_run(record, dt, n_steps, controller, settings.plant.torque_limit_nm, stats["wall_time_s"],
-                                            lockstep_stats=stats if mode == "lockstep" else None, clock_hz=clock_hz)
+                                            lockstep_stats=stats if mode == "lockstep" else None, clock_hz=o.clock_hz)
                     source = f"the bag's {ArmTopics(namespace).joint_states} and reference topics ({record})"
                 if missing:
                     raise GraphFailure(f"the record of the run is incomplete: {missing}")
@@ -190,7 +149,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                     run, measured, source="ros-graph", mode=mode, config_file=str(config_path),
                     seed=settings.simulation.seed, reliability=reliability, domain_id=result.domain_id,
                     wall_time_total_s=result.wall_total_s, limit_hits=stats["limit_hits"],
-                    timing=timing_summary(stats, result.controllers, sched_batch),
+                    timing=timing_summary(stats, result.controllers, o.sched_batch),
                     node_exit_codes=result.exit_codes, bag=str(record) if record else None,
                     faults=fault_report(settings, stats, result),
                     **({"warm_start_from": str(init_from)} if init_from is not None else {}))
@@ -212,14 +171,14 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
                     notes.append(f"DNBS warm-started from the checkpoints in `{init_from}` (not a cold start)")
                 if faults_active(settings.faults) or result.restarts:
                     notes.append(fault_note(metrics["faults"]))
-                elif mode == "lockstep" and (nondeterministic := _unforced_timeouts(stats, effort_timeout_s)):
+                elif mode == "lockstep" and (nondeterministic := _unforced_timeouts(stats, o.effort_timeout_s)):
                     notes.append(nondeterministic)
                     print(f"pa10-dnbs launch: warning: {nondeterministic}", file=sys.stderr, flush=True)
                 if tuple(window) != tuple(settings.simulation.window_s):
                     notes.append(f"run shorter than the configured window {interval(settings.simulation.window_s)} s: "
                                  "metrics over the second half instead")
                 write_report(tmp, [run], [metrics], title=f"{the_arm.description}: node graph run ({mode})",
-                             notes=notes, chain=the_arm.chain, figures=figures)
+                             notes=notes, chain=the_arm.chain, figures=o.figures)
             except GraphFailure as exc:
                 raise _keep_logs(exc, tmp, Path(out)) from None
     except GraphFailure as exc:
@@ -241,7 +200,7 @@ def run_launch(config_path: Path | None, mode: str, controller: str, duration_s:
     if record is not None:
         size = sum(f.stat().st_size for f in record.iterdir())
         print(f"recorded {record} ({size / 1e6:.1f} MB, {size / 1e6 / (n_steps * dt):.2f} MB per simulated second, "
-              f"compression {bag_compression})")
+              f"compression {o.bag_compression})")
     print(f"wrote {out}/report.md")
     return 0 if m["all_finite"] and m["torques_within_limits"] else 1
 

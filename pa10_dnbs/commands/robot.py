@@ -8,49 +8,42 @@ imports rclpy.
 """
 from __future__ import annotations
 
-import math
 import signal
 import subprocess
 import sys
 from pathlib import Path
 
 from ..config import ConfigError, default_config_path
+from .options import RobotCommandOptions
 from ..run_settings import build_settings
 from ..launch.shm_cleanup import remove_stale, shm_files
 from ..wire.clock_schedule import check_clock_hz
 
-ROBOT_MODES = ("lockstep", "paced")
 
-
-def robot_argv(config_path: Path | None, arm: str | None, mode: str, duration_s: float | None, state_topic: str,
-               command_topic: str, clock_hz: float) -> list[str]:
-    """The node's argv after every check (ConfigError naming the flag or key)."""
-    config_path = Path(config_path) if config_path else default_config_path()
-    settings = build_settings(config_path, arm=arm)
-    if mode not in ROBOT_MODES:
-        raise ConfigError(f"--mode: must be one of {', '.join(ROBOT_MODES)}, got {mode!r}")
-    duration_s = 0.0 if duration_s is None else duration_s
-    if not (math.isfinite(duration_s) and duration_s >= 0):
-        raise ConfigError(f"--duration: must be >= 0 seconds (0: until Ctrl-C), got {duration_s}")
+def robot_argv(options: RobotCommandOptions) -> list[str]:
+    """The node's argv after the checks that depend on the settings (ConfigError naming the flag or key)."""
+    o = options
+    config_path = Path(o.config_path) if o.config_path else default_config_path()
+    settings = build_settings(config_path, arm=o.arm)
+    duration_s = 0.0 if o.duration_s is None else o.duration_s
     try:
-        check_clock_hz(clock_hz, settings.simulation.dt_s)
+        check_clock_hz(o.clock_hz, settings.simulation.dt_s)
     except ValueError as exc:
         raise ConfigError(f"--clock-hz: {exc}") from None
-    for flag, topic in (("--state-topic", state_topic), ("--command-topic", command_topic)):
+    for flag, topic in (("--state-topic", o.state_topic), ("--command-topic", o.command_topic)):
         if not topic or " " in topic:
             raise ConfigError(f"{flag}: expected a topic name, got {topic!r}")
-    params = {"config_file": config_path.resolve(), "arm": settings.arm.file, "mode": mode, "duration_s": duration_s,
-              "state_topic": state_topic, "command_topic": command_topic, "clock_hz": float(clock_hz)}
+    params = {"config_file": config_path.resolve(), "arm": settings.arm.file, "mode": o.mode, "duration_s": duration_s,
+              "state_topic": o.state_topic, "command_topic": o.command_topic, "clock_hz": float(o.clock_hz)}
     args = [sys.executable, "-m", "pa10_dnbs.ros.mujoco_robot_node", "--ros-args", "-r", "__node:=mujoco_robot"]
     for k, v in params.items():
         args += ["-p", f"{k}:={v}"]
     return args
 
 
-def run_robot(config_path: Path | None, arm: str | None, mode: str, duration_s: float | None, state_topic: str,
-              command_topic: str, clock_hz: float) -> int:
+def run_robot(options: RobotCommandOptions) -> int:
     """Check the arguments, run the robot node until it ends (its exit code; 0 after Ctrl-C)."""
-    argv = robot_argv(config_path, arm, mode, duration_s, state_topic, command_topic, clock_hz)
+    argv = robot_argv(options)
     before = shm_files()
     sys.stdout.flush()
     sys.stderr.flush()

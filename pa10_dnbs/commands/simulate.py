@@ -1,13 +1,13 @@
 """``pa10-dnbs simulate``: in-process closed loop, metrics, figures and report."""
 from __future__ import annotations
 
-import math
 import shutil
 from pathlib import Path
 
 from ..accel.choice import resolve_kernel
-from ..config import ConfigError, default_config_path, load_config
-from ..controller_factory import load_reference_trajectory
+from .options import SimulateOptions
+from ..config import ConfigError, default_config_path
+from ..core.joint_trajectory import TrajectoryError
 from ..core.checkpoint import load_joint_checkpoints, save_checkpoint
 from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, on_second_sigint, outputs_written, say
 from ..number_text import interval
@@ -15,62 +15,58 @@ from ..report.markdown import report_markdown
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report, write_run
 from ..report.partial import partial_banner, write_partial_mark
-from ..run_settings import document_arm, with_rules
+from ..run_settings import build_settings
 from ..run_size import check_run_size, say_note
 from ..sim.closed_loop import simulate
+from ..trajectory_file import load_trajectory_file
 
 CHOICES = {"dnbs": ("dnbs",), "pid": ("pid",), "ctc": ("ctc",), "both": ("dnbs", "pid"), "all": ("dnbs", "pid", "ctc")}
 
 
-def run_simulate(config_path: Path | None, controller: str, duration_s: float | None, out: Path,
-                 force: bool, progress: bool, init_from: Path | None = None, figures: bool = True,
-                 arm: str | None = None, engine: str = "pybullet", trajectory: Path | None = None) -> int:
-    """Run one or more controllers; write everything into ``out`` atomically. Returns the exit code.
+def run_simulate(options: SimulateOptions) -> int:
+    """Run one or more controllers (``options``, checked by the command line's parsing); write everything into
+    ``options.out`` atomically. Returns the exit code.
 
-    ``arm``: a preset's name or an arm file or URDF (``--arm``); None: the config's ``arm``.
-    ``engine``: the plant's physics engine (``--engine``), pybullet or mujoco (docs/engines.md).
-    ``trajectory``: a JointTrajectory file (YAML or JSON) followed from step 0 instead of eq. 27
-    (docs/trajectories.md); a bad one: ConfigError, nothing written.
-    ``init_from``: a warm start of the DNBS controllers from the checkpoints of an earlier run (a run's
-    output directory, or a directory of ``<joint>.npz``); the report says so.
+    A bad trajectory file or one the arm cannot follow, or checkpoints that do not fit: ConfigError, nothing
+    written. The report says what the run was (a trajectory instead of eq. 27, a warm start, the engine).
     """
-    config_path = Path(config_path) if config_path else default_config_path()
-    document = load_config(config_path)  # the settings, built once: config file(s), arm file, rules
-    the_arm = document_arm(document, arm)
-    settings = with_rules(the_arm, document)
-    if duration_s is None:
-        duration_s = settings.simulation.duration_s
-    if not (math.isfinite(duration_s) and duration_s > 0):
-        raise ConfigError(f"--duration: must be a positive finite number of seconds, got {duration_s}")
+    o = options
+    config_path = Path(o.config_path) if o.config_path else default_config_path()
+    settings = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
+    the_arm = settings.arm
+    duration_s = settings.simulation.duration_s if o.duration_s is None else o.duration_s
     n_steps = int(round(duration_s / settings.simulation.dt_s))
     if n_steps < 2:
-        raise ConfigError(f"--duration: {duration_s} s is shorter than two steps")
+        raise ConfigError(f"duration_s: {duration_s} s is shorter than two steps", setting="duration_s")
     duration_s = n_steps * settings.simulation.dt_s
-    kinds = CHOICES[controller]
-    check_run_size("--duration", duration_s, n_steps, len(the_arm.joint_names), kept_runs=len(kinds),
+    kinds = CHOICES[o.controller]
+    traj = load_trajectory_file(Path(o.trajectory), the_arm) if o.trajectory is not None else None  # its quintics: the run's
+    check_run_size(duration_s, n_steps, len(the_arm.joint_names), kept_runs=len(kinds),
                    total_runs=len(kinds), say=say_note)
     init_states = None
-    if init_from is not None:
+    if o.init_from is not None:
         if "dnbs" not in kinds:
             raise ConfigError("--init-from: only the DNBS controllers have learned state to start from")
         try:
-            init_states = load_joint_checkpoints(init_from, the_arm.joint_names)
+            init_states = load_joint_checkpoints(o.init_from, the_arm.joint_names)
         except ValueError as exc:
             raise ConfigError(f"--init-from: {exc}") from None
-    traj = load_reference_trajectory(settings, trajectory) if trajectory is not None else None
-    check_output_dir(out, force)
+    check_output_dir(o.out, o.force, "--out")
     if "dnbs" in kinds:
         settings = resolve_kernel(settings, say=print)  # dnbs.kernel: auto -> c or numpy, said in one line
     measured = metrics_settings(settings, duration_s)
     runs, metrics = [], []
     try:
         for kind in kinds:
-            run = simulate(settings, kind, duration_s, progress=progress,
-                           init_states=init_states if kind == "dnbs" else None, engine=engine, trajectory=traj)
-            extra = ({"warm_start_from": str(Path(init_from).resolve())}
+            try:
+                run = simulate(settings, kind, duration_s, progress=o.progress,
+                               init_states=init_states if kind == "dnbs" else None, engine=o.engine, trajectory=traj)
+            except TrajectoryError as exc:  # the arm cannot follow the file's quintics: before any run, nothing written
+                raise ConfigError(f"trajectory {o.trajectory}: {exc}", setting="trajectory") from None
+            extra = ({"warm_start_from": str(Path(o.init_from).resolve())}
                      if init_states is not None and kind == "dnbs" else {})
-            if engine != "pybullet":
-                extra["engine"] = engine
+            if o.engine != "pybullet":
+                extra["engine"] = o.engine
             metrics.append(metrics_dict(run, measured, source="in-process", config_file=str(config_path.resolve()),
                                         seed=settings.simulation.seed, limit_hits=run.extra["limit_hits"], **extra))
             runs.append(run)
@@ -79,34 +75,34 @@ def run_simulate(config_path: Path | None, controller: str, duration_s: float | 
         del metrics[len(runs):]   # a controller interrupted between its metrics and its run
         if not runs:
             say(f"pa10-dnbs: interrupted during the {kinds[0]} run (0 of {len(kinds)} controllers finished); "
-                f"nothing written to {out}: run the same command again")
+                f"nothing written to {o.out}: run the same command again")
             return EXIT_INTERRUPTED
         if len(runs) < len(kinds):
-            return _keep_partial(out, force, runs, metrics, kinds, the_arm, n_steps, controller, duration_s)
+            return _keep_partial(o.out, o.force, runs, metrics, kinds, the_arm, n_steps, o.controller, duration_s)
         # every run had finished: the whole output is written below, as without the Ctrl-C
     notes = [f"config: `{config_path}`", f"arm: {the_arm.name} ({the_arm.description}), `{the_arm.file}`",
              "source: in-process simulation (no ROS)"]
-    if engine != "pybullet":
-        notes.append(f"engine: {engine} (docs/engines.md); the gains are the same as on the PyBullet plant")
+    if o.engine != "pybullet":
+        notes.append(f"engine: {o.engine} (docs/engines.md); the gains are the same as on the PyBullet plant")
     if traj is not None:
-        notes.append(f"reference: the trajectory of `{trajectory}` from t = 0, not eq. 27 (docs/trajectories.md)")
+        notes.append(f"reference: the trajectory of `{o.trajectory}` from t = 0, not eq. 27 (docs/trajectories.md)")
     if init_states is not None:
-        notes.append(f"DNBS warm-started from the checkpoints in `{init_from}` (not a cold start)")
+        notes.append(f"DNBS warm-started from the checkpoints in `{o.init_from}` (not a cold start)")
     if "ctc" in kinds:
         notes.append("CTC: centralized computed torque with the plant's own model (the reference a decentralized "
                      "controller is compared to; in-process only)")
     if tuple(measured["window_s"]) != tuple(settings.simulation.window_s):
         notes.append(f"run shorter than the configured window {interval(settings.simulation.window_s)} s: "
                      f"metrics over the second half instead")
-    with atomic_output_dir(out, force) as tmp:
+    with atomic_output_dir(o.out, o.force) as tmp:
         write_report(tmp, runs, metrics, title=f"{the_arm.description}: closed-loop run", notes=notes,
-                     chain=the_arm.chain, figures=figures)
+                     chain=the_arm.chain, figures=o.figures)
         for run in runs:
             if run.controller == "dnbs":
                 _save_checkpoints(tmp / "checkpoints" if len(runs) == 1 else tmp / "dnbs" / "checkpoints",
                                   run.extra["controllers"], n_steps - 1, the_arm.joint_names)
-    outputs_written(f"pa10-dnbs: interrupted as it finished: {out} is written whole ({out}/report.md)")
-    print(f"wrote {out}/report.md")
+    outputs_written(f"pa10-dnbs: interrupted as it finished: {o.out} is written whole ({o.out}/report.md)")
+    print(f"wrote {o.out}/report.md")
     ok = all(m["all_finite"] and m["torques_within_limits"] for m in metrics)
     return 0 if ok else 1
 

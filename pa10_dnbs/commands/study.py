@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import json
-import math
 import os
 import shlex
 import shutil
@@ -10,11 +9,12 @@ from itertools import product
 from pathlib import Path
 
 from ..accel.choice import resolve_kernel
-from ..config import ConfigError, default_config_path, load_config
+from .options import StudyOptions
+from ..config import ConfigError, default_config_path
 from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, on_second_sigint, outputs_written, say
 from ..report.outputs import atomic_output_dir, check_output_dir
 from ..report.progress import ProgressBar
-from ..run_settings import document_arm, with_rules
+from ..run_settings import build_settings
 from ..run_size import check_run_size, say_note
 from ..sim.closed_loop import CONTROLLERS
 from ..study.feasibility import infeasible_scenarios
@@ -25,29 +25,20 @@ from .name_list import name_list
 from ..study.summary import study_figure, study_markdown
 
 
-def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: float, out: Path, force: bool,
-                      config_path: Path | None, workers: int | None, progress: bool, arm: str | None = None,
-                      scheduler: str | None = None) -> int:
-    """Run the study on ``arm`` (a preset or an arm file; None: the config's) and write its outputs in ``out``.
-
-    ``workers`` (``--jobs``): local processes; ``scheduler``: a Dask scheduler's address to run on instead."""
-    scen = name_list("--scenarios", scenarios, list(SCENARIOS))
-    ctrl = name_list("--controllers", controllers, CONTROLLERS)
-    if seeds < 1:
-        raise ConfigError(f"--seeds: must be >= 1, got {seeds}")
-    if not (math.isfinite(duration_s) and duration_s > 0):
-        raise ConfigError(f"--duration: must be a positive number of seconds, got {duration_s}")
-    if workers is not None and workers < 1:
-        raise ConfigError(f"--jobs: must be >= 1, got {workers}")
-    config_path = Path(config_path) if config_path else default_config_path()
-    document = load_config(config_path)  # the settings, built once: config file(s), arm file, rules
-    settings = with_rules(document_arm(document, arm), document)
-    n_runs, n_steps = len(scen) * len(ctrl) * seeds, int(round(duration_s / settings.simulation.dt_s))
-    at_once = 1 if scheduler is not None else min(n_runs, workers or os.cpu_count() or 1)
-    check_run_size("--duration", duration_s, n_steps, settings.n_joints, at_once=at_once,
+def run_study_command(options: StudyOptions) -> int:
+    """Run the study of ``options`` (its values checked by the command line's parsing) on its arm and write its
+    outputs in ``options.out``."""
+    o = options
+    scen = name_list("--scenarios", o.scenarios, list(SCENARIOS))
+    ctrl = name_list("--controllers", o.controllers, CONTROLLERS)
+    config_path = Path(o.config_path) if o.config_path else default_config_path()
+    settings = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
+    n_runs, n_steps = len(scen) * len(ctrl) * o.seeds, int(round(o.duration_s / settings.simulation.dt_s))
+    at_once = 1 if o.scheduler is not None else min(n_runs, o.workers or os.cpu_count() or 1)
+    check_run_size(o.duration_s, n_steps, settings.n_joints, at_once=at_once,
                    total_runs=n_runs, say=say_note)
-    check_output_dir(out, force)
-    infeasible = infeasible_scenarios(settings, scen, duration_s)   # before any run: one line each, not run
+    check_output_dir(o.out, o.force, "--out")
+    infeasible = infeasible_scenarios(settings, scen, o.duration_s)   # before any run: one line each, not run
     for line in infeasible.values():
         print(f"study: {line}")
     if len(infeasible) == len(scen):
@@ -56,38 +47,38 @@ def run_study_command(scenarios: str, controllers: str, seeds: int, duration_s: 
     asked, scen = scen, [s for s in scen if s not in infeasible]
     if "dnbs" in ctrl:
         settings = resolve_kernel(settings, say=print)  # once here, not in each worker
-    n = len(scen) * len(ctrl) * seeds
+    n = len(scen) * len(ctrl) * o.seeds
     dt = settings.simulation.dt_s
-    steps_per_run = int(round(duration_s / dt))
-    bar = ProgressBar(n * steps_per_run, dt, f"study ({n} runs)", enabled=None if progress else False)
+    steps_per_run = int(round(o.duration_s / dt))
+    bar = ProgressBar(n * steps_per_run, dt, f"study ({n} runs)", enabled=None if o.progress else False)
     done = []
 
     def finished(row: dict) -> None:  # simulated time of the finished runs, worst |e| among them
         done.append(row)
         bar.update(len(done) * steps_per_run, row["worst_max_abs_error_run_rad"])
 
-    command = (f"pa10-dnbs study --scenarios {','.join(asked)} --controllers {','.join(ctrl)} --seeds {seeds} "
-               f"--duration {duration_s:g} --out {shlex.quote(str(out))}"
+    command = (f"pa10-dnbs study --scenarios {','.join(asked)} --controllers {','.join(ctrl)} --seeds {o.seeds} "
+               f"--duration {o.duration_s:g} --out {shlex.quote(str(o.out))}"
                + (f" --config {shlex.quote(str(config_path))}" if config_path != default_config_path() else "")
-               + (f" --arm {shlex.quote(str(arm))}" if arm is not None else ""))
-    head = {"config_file": str(config_path.resolve()), "arm": str(settings.arm.file), "duration_s": duration_s,
+               + (f" --arm {shlex.quote(str(o.arm))}" if o.arm is not None else ""))
+    head = {"config_file": str(config_path.resolve()), "arm": str(settings.arm.file), "duration_s": o.duration_s,
             **({"infeasible": infeasible} if infeasible else {})}
     try:
-        rows = run_study(settings, scen, ctrl, seeds, duration_s, workers, on_done=finished, scheduler=scheduler)
+        rows = run_study(settings, scen, ctrl, o.seeds, o.duration_s, o.workers, on_done=finished, scheduler=o.scheduler)
     except KeyboardInterrupt:   # the workers are stopped (study/executor.py); the completed runs are kept
         bar.close()
-        return _keep_partial(out, force, done, list(product(scen, ctrl, range(seeds))), command, head)
+        return _keep_partial(o.out, o.force, done, list(product(scen, ctrl, range(o.seeds))), command, head)
     bar.close()
-    with atomic_output_dir(out, force) as tmp:
+    with atomic_output_dir(o.out, o.force) as tmp:
         (tmp / "study.json").write_text(json.dumps({**head, "rows": rows}, indent=2) + "\n")
-        (tmp / "study.md").write_text(study_markdown(rows, command, duration_s,
+        (tmp / "study.md").write_text(study_markdown(rows, command, o.duration_s,
                                                      {k: v.description for k, v in SCENARIOS.items()}, infeasible))
         study_figure(rows, tmp / "study.png")
-    outputs_written(f"pa10-dnbs: interrupted as it finished: {out} is written whole ({out}/study.md)")
+    outputs_written(f"pa10-dnbs: interrupted as it finished: {o.out} is written whole ({o.out}/study.md)")
     diverged = sum(r["diverged"] for r in rows)
     print(f"{n} runs, {diverged} diverged"
           + (f"; {len(infeasible)} scenario(s) infeasible on this arm, not run" if infeasible else "")
-          + f"; wrote {out}/study.md")
+          + f"; wrote {o.out}/study.md")
     return 0
 
 

@@ -9,7 +9,6 @@ resumes (a second Ctrl-C ends at once: pa10_dnbs/interrupt.py).
 from __future__ import annotations
 
 import json
-import math
 import os
 import shlex
 import sys
@@ -18,7 +17,8 @@ from pathlib import Path
 
 from ..arm import load_arm, preset_names
 from ..atomic_file import atomic_path
-from ..config import ConfigError, default_config_path, load_config
+from ..config import ConfigError, default_config_path
+from .options import TuneOptions
 from ..interrupt import EXIT_INTERRUPTED, check, deferred, immediate, on_second_sigint, say
 from ..output_lock import lock_output
 from ..report.outputs import check_creatable
@@ -29,7 +29,7 @@ from .name_list import name_list
 from ..tune.report import held_out_table, held_out_verdict, tune_figures, tune_markdown, tuned_yaml
 from ..tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 from ..tune.space import select, start_values
-from ..run_settings import document_arm, with_rules
+from ..run_settings import build_settings
 from ..tune.tuner import TrialProgress, TuneSpec, completed, held_out, open_storage, open_study, optimize
 
 HELD_OUT_SEED0 = 100   # held-out seeds are 100, 101, ...: never a training seed (0 .. --seeds - 1)
@@ -40,56 +40,46 @@ def _write(path: Path, text: str) -> None:
         tmp.write_text(text)
 
 
-def run_tune(controller: str, trials: int, out: Path, arm: str | None = None, config_path: Path | None = None,
-             storage: str | None = None, seed: int = 0, jobs: int | None = None, scheduler: str | None = None,
-             scenarios: str = TRAINING_SCENARIOS, seeds: int = TRAINING_SEEDS, held_out_seeds: int = 3,
-             duration_s: float = 20.0, params: str | None = None, progress: bool = False) -> int:
-    """Tune ``controller`` on ``arm``; returns the exit code."""
-    param_list = select(controller, None if params is None else [n.strip() for n in params.split(",") if n.strip()])
-    train = name_list("--scenarios", scenarios, list(SCENARIOS))
-    for flag, v, low in (("--trials", trials, 1), ("--seeds", seeds, 1), ("--held-out-seeds", held_out_seeds, 0),
-                         ("--seed", seed, 0)):
-        if v < low:
-            raise ConfigError(f"{flag}: must be >= {low}, got {v}")
-    if not (math.isfinite(duration_s) and duration_s > 0):
-        raise ConfigError(f"--duration: must be a positive number of seconds, got {duration_s}")
-    if jobs is not None and jobs < 1:
-        raise ConfigError(f"--jobs: must be >= 1, got {jobs}")
-    out = Path(out)
+def run_tune(options: TuneOptions) -> int:
+    """Tune the controller of ``options`` (its values checked by the command line's parsing) on its arm;
+    returns the exit code."""
+    o = options
+    param_list = select(o.controller, None if o.params is None else [n.strip() for n in o.params.split(",") if n.strip()])
+    train = name_list("--scenarios", o.scenarios, list(SCENARIOS))
+    out = Path(o.out)
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out: {out} exists and is not a directory")
     check_creatable(out, "--out")
-    config_path = Path(config_path) if config_path else default_config_path()
-    document = load_config(config_path)  # the settings, built once: config file(s), arm file, rules
-    the_arm = document_arm(document, arm)
-    base = with_rules(the_arm, document)
-    n_steps = int(round(duration_s / base.simulation.dt_s))
+    config_path = Path(o.config_path) if o.config_path else default_config_path()
+    base = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
+    the_arm = base.arm
+    n_steps = int(round(o.duration_s / base.simulation.dt_s))
     if n_steps < 2:
-        raise ConfigError(f"--duration: {duration_s} s is shorter than two steps")
-    runs_per_trial = len(train) * seeds
-    at_once = 1 if scheduler is not None else min(runs_per_trial, jobs or os.cpu_count() or 1)
-    check_run_size("--duration", duration_s, n_steps, len(the_arm.joint_names), at_once=at_once,
-                   total_runs=runs_per_trial * trials, say=say_note)
-    spec = TuneSpec(the_arm.name, controller, param_list, train, list(range(seeds)), duration_s,
-                    str(config_path.resolve()), seed, start_values(controller, base))
-    command = _command(controller, trials, out, arm, config_path, storage, seed, scenarios, seeds, held_out_seeds,
-                       duration_s, params)
+        raise ConfigError(f"--duration: {o.duration_s} s is shorter than two steps")
+    runs_per_trial = len(train) * o.seeds
+    at_once = 1 if o.scheduler is not None else min(runs_per_trial, o.jobs or os.cpu_count() or 1)
+    check_run_size(o.duration_s, n_steps, len(the_arm.joint_names), at_once=at_once,
+                   total_runs=runs_per_trial * o.trials, say=say_note)
+    spec = TuneSpec(the_arm.name, o.controller, param_list, train, list(range(o.seeds)), o.duration_s,
+                    str(config_path.resolve()), o.seed, start_values(o.controller, base))
+    command = _command(o.controller, o.trials, out, o.arm, config_path, o.storage, o.seed, o.scenarios, o.seeds, o.held_out_seeds,
+                       o.duration_s, o.params)
     lock_output(out)  # a second tune into DIR at once is refused (the same command later resumes)
-    where_kept = storage if storage is not None else str(out / "tune.db")
+    where_kept = o.storage if o.storage is not None else str(out / "tune.db")
     on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; the completed trials stay in {where_kept}; "
                      "run the same command to resume")
     state = {"study": None, "phase": "start", "bar": None,
-             "had_storage": storage is not None or (out / "tune.db").exists()}
+             "had_storage": o.storage is not None or (out / "tune.db").exists()}
     try:
         with deferred():   # a Ctrl-C stops the tune between two storage operations, never inside one
             with immediate():   # seconds of imports on a busy machine: a Ctrl-C stops them at once
                 import optuna  # noqa: F401
-            return _tune(state, spec, base, trials, out, storage, jobs, scheduler, train, seeds, held_out_seeds,
-                         controller, the_arm, config_path, command, progress)
+            return _tune(state, spec, base, o.trials, out, o.storage, o.jobs, o.scheduler, train, o.seeds, o.held_out_seeds,
+                         o.controller, the_arm, config_path, command, o.progress)
     except KeyboardInterrupt:
         if state["bar"] is not None:
             state["bar"].close()
-        say(_interrupted_line(state, trials, where_kept))
+        say(_interrupted_line(state, o.trials, where_kept))
         return EXIT_INTERRUPTED
 
 

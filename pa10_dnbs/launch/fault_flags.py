@@ -6,7 +6,7 @@ default). Errors name the flag (ConfigError, exit code 2).
 from __future__ import annotations
 
 import argparse
-from dataclasses import fields
+from dataclasses import dataclass, fields
 
 from ..config import ConfigError
 from ..faults.link_faults import CORRUPT_KINDS
@@ -17,6 +17,30 @@ LINK_FLAGS = {  # flag dest -> (direction, key)
     "delay_states": ("state", "delay_ms"), "delay_efforts": ("effort", "delay_ms"),
     "jitter_states": ("state", "jitter_ms"), "jitter_efforts": ("effort", "jitter_ms"),
 }
+
+
+@dataclass(frozen=True)
+class FaultFlags:
+    """The fault flags as given (each None when not given; ``kill``: JOINT@SECONDS items), applied to a run's
+    settings by :func:`apply_fault_flags`."""
+
+    fault_joints: str | None = None
+    drop_states: float | None = None
+    drop_efforts: float | None = None
+    delay_states: float | None = None
+    delay_efforts: float | None = None
+    jitter_states: float | None = None
+    jitter_efforts: float | None = None
+    corrupt_states: str | None = None
+    corrupt_efforts: str | None = None
+    kill: tuple[str, ...] = ()
+    fault_seed: int | None = None
+
+    @classmethod
+    def of(cls, args: argparse.Namespace) -> "FaultFlags":
+        """The flags of a parsed command line (``add_fault_arguments``'s)."""
+        return cls(**{f.name: (tuple(getattr(args, f.name)) if f.name == "kill" else getattr(args, f.name))
+                      for f in fields(cls)})
 
 
 def add_fault_arguments(p: argparse.ArgumentParser) -> None:
@@ -53,8 +77,8 @@ def _set(section: dict, key: str, joints: list[int], value) -> None:
     section[key] = tuple(values)
 
 
-def apply_fault_flags(settings: Settings, args: argparse.Namespace) -> Settings:
-    """``settings`` with the fault flags of ``args`` applied (validated again)."""
+def apply_fault_flags(settings: Settings, args: FaultFlags) -> Settings:
+    """``settings`` with the fault flags ``args`` applied (validated again)."""
     joint_names = settings.arm.joint_names
     faults = settings.to_config()["faults"]
     if args.fault_joints:

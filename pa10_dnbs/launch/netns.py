@@ -17,17 +17,17 @@ def node_env(domain_id: int, discovery_range: str = "LOCALHOST") -> dict:
 
 
 def parse_netns(specs: list[str]) -> dict[str, str]:
-    """['controllers=hostb', ...] -> {'controllers': 'hostb'}; ConfigError naming --netns on bad input."""
+    """['controllers=hostb', ...] -> {'controllers': 'hostb'}; ConfigError naming the setting netns on bad input."""
     from ..config import ConfigError
 
     out = {}
     for spec in specs:
         group, sep, ns = spec.partition("=")
         if not sep or group not in NODE_GROUPS or not ns:
-            raise ConfigError(f"--netns: expected GROUP=NAMESPACE with GROUP one of {', '.join(NODE_GROUPS)}, "
-                              f"got {spec!r}")
+            raise ConfigError(f"netns: expected GROUP=NAMESPACE with GROUP one of {', '.join(NODE_GROUPS)}, "
+                              f"got {spec!r}", setting="netns")
         if not Path(f"/var/run/netns/{ns}").exists():
-            raise ConfigError(f"--netns: no network namespace {ns!r} (see `ip netns list`)")
+            raise ConfigError(f"netns: no network namespace {ns!r} (see `ip netns list`)", setting="netns")
         out[group] = ns
     return out
 

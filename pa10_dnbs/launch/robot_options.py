@@ -31,22 +31,25 @@ def _check_topic(flag: str, topic: str) -> None:
     try:
         check_namespace(topic if topic.startswith("/") else "/" + topic)
     except ValueError:
-        raise ConfigError(f"{flag}: expected a ROS topic name like /robot_joint_states, got {topic!r}") from None
+        raise ConfigError(f"{flag}: expected a ROS topic name like /robot_joint_states, got {topic!r}",
+                          setting=flag) from None
 
 
 def check_robot_options(opt: RobotOptions, mode: str) -> dict:
-    """The GraphOptions fields of ``opt``; ConfigError (one line, naming the flag) when one is wrong."""
+    """The GraphOptions fields of ``opt``; ConfigError (one line, naming the setting: robot, robot_command, ...;
+    the command line names its flag) when one is wrong."""
     if opt.robot not in ROBOTS:
-        raise ConfigError(f"--robot: expected {' or '.join(ROBOTS)}, got {opt.robot!r}")
+        raise ConfigError(f"robot: expected {' or '.join(ROBOTS)}, got {opt.robot!r}", setting="robot")
     try:
         parse_robot_command(opt.command, opt.command_topic)
     except ValueError as exc:
-        raise ConfigError(f"--robot-command: {exc}") from None
-    for flag, topic in (("--robot-state-topic", opt.state_topic), ("--robot-command-topic", opt.command_topic)):
+        raise ConfigError(f"robot_command: {exc}", setting="robot_command") from None
+    for flag, topic in (("robot_state_topic", opt.state_topic), ("robot_command_topic", opt.command_topic)):
         if topic is not None:
             _check_topic(flag, topic)
     if not (math.isfinite(opt.timeout_s) and opt.timeout_s > 0):
-        raise ConfigError(f"--robot-timeout: must be a positive number of seconds, got {opt.timeout_s}")
+        raise ConfigError(f"robot_timeout: must be a positive number of seconds, got {opt.timeout_s}",
+                          setting="robot_timeout")
     return {"robot": opt.robot, "robot_command": opt.command, "robot_state_topic": opt.state_topic or "",
             "robot_command_topic": opt.command_topic or "", "robot_timeout_s": opt.timeout_s}
 

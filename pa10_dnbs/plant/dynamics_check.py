@@ -83,7 +83,8 @@ def compare_with_mujoco(arm: Arm, states: int = 20, seed: int = 0, urdf: Path | 
     client = open_client()
     try:
         plant = PyBulletArmPlant(client, arm, PlantParams(gravity_mps2=GRAVITY_MPS2, rotor_inertia_kgm2=zeros,
-                                                          viscous_nms_per_rad=zeros, coulomb_nm=zeros))
+                                                          viscous_nms_per_rad=zeros, coulomb_nm=zeros,
+                                                          torque_limit_nm=tuple(float(t) for t in arm.torque_limit_nm)))
         worst = np.zeros(3)
         full = np.zeros((model.nv, model.nv))
         for _ in range(states):

@@ -5,27 +5,33 @@ from __future__ import annotations
 from typing import Callable
 
 from ..settings import Settings
-from .from_config import initial_state, open_client, plant_from_settings, plant_params
+from .from_config import initial_state, open_client, plant_params
+from .pybullet_plant import PyBulletArmPlant
 
 ENGINES = ("pybullet", "mujoco")
 DEFAULT_ENGINE = "pybullet"
 
 
 def open_plant(settings: Settings, engine: str = DEFAULT_ENGINE) -> tuple[object, Callable[[], None]]:
-    """(the settings' arm on ``engine``, reset to the configured initial state; the call that releases it).
+    """(the settings' arm on ``engine`` with ``settings.plant``, reset to the configured initial state; the call
+    that releases it).
 
     ValueError naming the engine when it is not one of ``ENGINES``."""
-    if engine == "pybullet":
-        client = open_client()
-        try:
-            return plant_from_settings(settings, client), client.disconnect
-        except BaseException:
-            client.disconnect()
-            raise
+    if engine not in ENGINES:
+        raise ValueError(f"engine: must be one of {', '.join(ENGINES)}, got {engine!r}")
+    params = plant_params(settings.plant, settings.simulation.dt_s)
+    q0, qd0 = initial_state(settings.simulation, settings.reference)
     if engine == "mujoco":
         from .mujoco_plant import MuJoCoArmPlant
 
-        plant = MuJoCoArmPlant(settings.arm, plant_params(settings))
-        plant.reset(*initial_state(settings))
+        plant = MuJoCoArmPlant(settings.arm, params)
+        plant.reset(q0, qd0)
         return plant, plant.close
-    raise ValueError(f"engine: must be one of {', '.join(ENGINES)}, got {engine!r}")
+    client = open_client()
+    try:
+        plant = PyBulletArmPlant(client, settings.arm, params)
+        plant.reset(q0, qd0)
+        return plant, client.disconnect
+    except BaseException:
+        client.disconnect()
+        raise

@@ -1,10 +1,13 @@
 """Build the PyBullet plant and its initial state from a run's typed settings."""
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 import numpy as np
 
+from ..arm import Arm
 from ..interrupt import deferred
-from ..settings import Settings
+from ..settings import PlantSettings, ReferenceSettings, RunSettings, Settings
 from .pybullet_plant import PlantParams, PyBulletArmPlant
 from .quiet_stdout import quiet_c_stdout
 
@@ -21,36 +24,54 @@ def open_client(gui: bool = False):
         return BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
 
 
+@contextmanager
+def opened_plant(arm: Arm, params: PlantParams):
+    """``with opened_plant(arm, params) as plant``: the arm on PyBullet with ``params`` on a private client,
+    released on leaving (for what is read off the model before a run: the rules, a scenario's torque)."""
+    client = open_client()
+    try:
+        yield PyBulletArmPlant(client, arm, params)
+    finally:
+        client.disconnect()
+
+
 def plant_from_settings(settings: Settings, client) -> PyBulletArmPlant:
     """The settings' arm on PyBullet with ``settings.plant``, reset to the configured initial state."""
-    plant = PyBulletArmPlant(client, settings.arm, plant_params(settings))
-    q0, qd0 = initial_state(settings)
-    plant.reset(q0, qd0)
+    plant = PyBulletArmPlant(client, settings.arm, plant_params(settings.plant, settings.simulation.dt_s))
+    plant.reset(*initial_state(settings.simulation, settings.reference))
     return plant
 
 
-def plant_params(settings: Settings) -> PlantParams:
-    """The plant's parameters (``plant`` section, ``simulation.dt_s``): either engine's."""
-    p = settings.plant
+def plant_params(plant: PlantSettings, dt_s: float) -> PlantParams:
+    """The plant's parameters from the ``plant`` section (the arm's facts resolved into it) and the step
+    ``dt_s`` [s]: either engine's."""
     return PlantParams(
-        dt_s=settings.simulation.dt_s,
-        gravity_mps2=p.gravity_mps2,
-        rotor_inertia_kgm2=p.rotor_inertia_kgm2,
-        viscous_nms_per_rad=p.viscous_nms_per_rad,
-        coulomb_nm=p.coulomb_nm,
-        coulomb_smoothing_rad_s=p.coulomb_smoothing_rad_s,
-        torque_limit_nm=p.torque_limit_nm,
-        payload_kg=p.payload_kg,
-        link_mass_scale=p.link_mass_scale,
+        dt_s=dt_s,
+        gravity_mps2=plant.gravity_mps2,
+        rotor_inertia_kgm2=plant.rotor_inertia_kgm2,
+        viscous_nms_per_rad=plant.viscous_nms_per_rad,
+        coulomb_nm=plant.coulomb_nm,
+        coulomb_smoothing_rad_s=plant.coulomb_smoothing_rad_s,
+        torque_limit_nm=plant.torque_limit_nm,
+        payload_kg=plant.payload_kg,
+        link_mass_scale=plant.link_mass_scale,
     )
 
 
-def initial_state(settings: Settings) -> tuple[np.ndarray, np.ndarray]:
+def arm_plant_params(arm: Arm, **changes) -> PlantParams:
+    """The arm file's facts (rotor inertia, friction, torque limits) as plant parameters, with ``changes``
+    (PlantParams fields): for a tool or a test that runs an arm without a config; a run's plant takes its
+    settings' ``plant`` section (:func:`plant_params`)."""
+    facts = {"rotor_inertia_kgm2": arm.rotor_inertia_kgm2, "viscous_nms_per_rad": arm.viscous_nms_per_rad,
+             "coulomb_nm": arm.coulomb_nm, "torque_limit_nm": arm.torque_limit_nm}
+    return PlantParams(**{**{k: tuple(float(x) for x in v) for k, v in facts.items()}, **changes})
+
+
+def initial_state(run: RunSettings, reference: ReferenceSettings) -> tuple[np.ndarray, np.ndarray]:
     """x1(0) = x_d(0) + offset (x_d(0) = the reference's centre for eq. 27: 0 on the PA10), x2(0) = the
     configured velocity; (n,) each."""
-    sim = settings.simulation
-    q0 = np.array(sim.initial_position_offset_rad, float)
-    centre = np.array(settings.reference.centre_rad, float)
+    q0 = np.array(run.initial_position_offset_rad, float)
+    centre = np.array(reference.centre_rad, float)
     if np.any(centre != 0.0):
         q0 = centre + q0
-    return q0, np.array(sim.initial_velocity_rad_s, float)
+    return q0, np.array(run.initial_velocity_rad_s, float)

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..arm import Arm
 from .mujoco_model import build_model
-from .pybullet_plant import PlantParams, _as_joint_vector, _with_arm_facts
+from .pybullet_plant import PlantParams, _as_joint_vector, _checked_for_arm
 
 
 class MuJoCoArmPlant:
@@ -43,7 +43,7 @@ class MuJoCoArmPlant:
 
         if not isinstance(params, PlantParams):
             raise TypeError(f"params: expected PlantParams, got {type(params).__name__}")
-        params = _with_arm_facts(params, arm)
+        params = _checked_for_arm(params, arm)
         self._mj = mujoco
         self._arm = arm
         self._params = params

@@ -31,8 +31,9 @@ _VECTOR_FIELDS = (
 
 @dataclass(frozen=True)
 class PlantParams:
-    """Plant parameters (SI units); validated on construction. A per-joint field left None is the arm's fact
-    (urdf/<arm>/arm.yaml); given, it has one value per actuated joint (its length is checked by the plant).
+    """Plant parameters (SI units); validated on construction. Every per-joint field has one value per actuated
+    joint (checked by the plant, which refuses one left None): a run's come from its settings' ``plant``
+    section (plant/from_config.py ``plant_params``), a tool's from ``arm_plant_params``.
 
     Attributes
     ----------
@@ -195,7 +196,7 @@ class PyBulletArmPlant:
         if not os.path.isfile(urdf_path):
             raise FileNotFoundError(f"URDF file not found: {urdf_path}")
         n = self._n = arm.n_joints
-        params = _with_arm_facts(params, arm)
+        params = _checked_for_arm(params, arm)
         self._client = client
         self._params = params
         self._arm = arm
@@ -490,18 +491,18 @@ class PyBulletArmPlant:
             reset_joint_state(self._body, j, qj, qdj)
 
 
-def _with_arm_facts(params: PlantParams, arm: Arm) -> PlantParams:
-    """``params`` with every per-joint field that is None taken from the arm, each checked to have n values."""
-    import dataclasses
-
-    facts = {"rotor_inertia_kgm2": arm.rotor_inertia_kgm2, "viscous_nms_per_rad": arm.viscous_nms_per_rad,
-             "coulomb_nm": arm.coulomb_nm, "torque_limit_nm": arm.torque_limit_nm}
-    filled = {k: tuple(float(v) for v in facts[k]) for k in facts if getattr(params, k) is None}
-    params = dataclasses.replace(params, **filled) if filled else params
-    for name in facts:
-        if len(getattr(params, name)) != arm.n_joints:
+def _checked_for_arm(params: PlantParams, arm: Arm) -> PlantParams:
+    """``params``, each per-joint field checked to hold one value per joint of ``arm`` (ValueError naming the
+    field; one left None is refused: the settings' ``plant`` section holds every value, the arm's facts
+    resolved into it)."""
+    for name in ("rotor_inertia_kgm2", "viscous_nms_per_rad", "coulomb_nm", "torque_limit_nm"):
+        value = getattr(params, name)
+        if value is None:
+            raise ValueError(f"{name}: not given (one value per joint of {arm.name}; a run's come from its "
+                             "settings' plant section)")
+        if len(value) != arm.n_joints:
             raise ValueError(f"{name}: expected {arm.n_joints} values (one per joint of {arm.name}), "
-                             f"got {len(getattr(params, name))}")
+                             f"got {len(value)}")
     return params
 
 

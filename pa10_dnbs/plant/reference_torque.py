@@ -2,16 +2,14 @@
 
 tau(t) = (M(q) + J_r) qdd + h(q, qd) + F(qd) at the reference's q, qd, qdd (the plant's own model: PyBullet's
 mass matrix and calculateInverseDynamics on the actuated block, the locked joints held, rotor inertia and
-friction from the arm file). The reference rule (arm/reference_rule.py) keeps its peak within the limits.
+friction as the parameters it is given say). The reference rule (arm/reference_rule.py) keeps its peak within the limits.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..arm import Arm
 from ..core.reference import Reference
-from .from_config import open_client
-from .pybullet_plant import PlantParams, PyBulletArmPlant
+from .pybullet_plant import PyBulletArmPlant
 
 SAMPLE_STEP_S = 0.05  # the reference is sampled every 50 ms
 HORIZON_S = 60.0      # at most this much of the run is checked (eq. 27's envelope is full well before)
@@ -19,15 +17,13 @@ HORIZON_S = 60.0      # at most this much of the run is checked (eq. 27's envelo
 
 class ReferenceTorque:
     """peak(fragment) -> (n,) the largest |tau_j| [N m] along a ``reference`` fragment (amplitude_rad,
-    envelope_rate_per_s3, frequency_rad_s, centre_rad) over ``duration_s`` (at most HORIZON_S). Holds one PyBullet client: close()."""
+    envelope_rate_per_s3, frequency_rad_s, centre_rad) over ``duration_s`` (at most HORIZON_S), on ``plant``."""
 
-    def __init__(self, arm: Arm, duration_s: float, dt_s: float, gravity_mps2: float = 9.81,
-                 params: PlantParams | None = None):
-        """``params``: the plant's parameters (a study scenario's payload, heavier links, friction); None: the
-        arm's facts with ``gravity_mps2``."""
-        self._client = open_client()
-        self._plant = PyBulletArmPlant(self._client, arm, PlantParams(gravity_mps2=gravity_mps2)
-                                       if params is None else params)
+    def __init__(self, plant: PyBulletArmPlant, duration_s: float, dt_s: float):
+        """``plant``: the arm's plant (the settings' plant section, a study scenario's payload, heavier links,
+        friction: plant/from_config.py ``opened_plant``), held by the caller."""
+        self._plant = plant
+        arm = plant.arm
         self._dt = dt_s
         horizon = min(duration_s, HORIZON_S)
         self._steps = np.arange(0, int(round(horizon / dt_s)) + 1, max(1, int(round(SAMPLE_STEP_S / dt_s))))
@@ -41,6 +37,3 @@ class ReferenceTorque:
         p = self._plant
         tau = np.array([p.mass_matrix(a) @ c + p.bias_torque(a, b) + p.friction_torque(b) for a, b, c in zip(q, qd, qdd)])
         return np.abs(tau).max(axis=0)
-
-    def close(self) -> None:
-        self._client.disconnect()

@@ -27,9 +27,10 @@ class OutputExistsError(FileExistsError):
     """The output directory exists and ``--force`` was not given, or cannot be written, or another run uses it."""
 
 
-def check_output_dir(out: Path, force: bool, flag: str = "--out") -> None:
+def check_output_dir(out: Path, force: bool, flag: str = "out") -> None:
     """Fail early, before any work, if ``out`` is in use by another run (output_lock.py: this process then
-    holds it until the output is in place), exists and may not be replaced, or cannot be created."""
+    holds it until the output is in place), exists and may not be replaced, or cannot be created. ``flag``:
+    how the message names the output (a command passes its flag)."""
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise OutputExistsError(f"{flag}: {out} exists and is not a directory")

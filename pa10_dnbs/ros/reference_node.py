@@ -81,9 +81,9 @@ class ReferenceNode(Node):
         trajectory = None
         if p["trajectory_file"]:
             try:
-                trajectory = load_reference_trajectory(settings, p["trajectory_file"], flag="parameter trajectory_file:")
+                trajectory = load_reference_trajectory(settings, p["trajectory_file"])
             except ConfigError as exc:
-                raise ParameterError(str(exc)) from None
+                raise ParameterError(exc.named("parameter trajectory_file:")) from None
         self.reference = switchable_reference(settings, build_reference(settings, trajectory))
         self.trajectories = {"accepted": 0, "refused": 0}
         self.clock_ = StepClock(settings.simulation.dt_s)

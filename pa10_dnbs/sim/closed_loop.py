@@ -1,7 +1,7 @@
 """Run the plant and the arm's joint controllers in one process, step by step (no ROS).
 
 The controllers are the nodes' own: one bank of n rows (one per joint) behind the same
-state guard (``build_guarded_controllers``), so an in-process run equals the
+state guard (``controller_factory.joint_loop``), so an in-process run equals the
 lockstep node graph bit for bit, guards included.
 """
 from __future__ import annotations
@@ -11,10 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..controller_factory import build_guarded_controllers, build_reference, build_state_guard
+from ..controller_factory import joint_loop
 from ..core.reference import ReferenceSample
 from ..plant.engines import DEFAULT_ENGINE, open_plant
-from ..loop.guarded_controllers import GuardedControllers
 from ..report.progress import ProgressBar
 from ..run_data import RunData
 from ..settings import Settings
@@ -49,14 +48,19 @@ def simulate(settings: Settings, controller: str, duration_s: float, progress: b
     ``disturbances``: sensor noise and actuator delay (the study's scenarios); None: none.
     ``engine``: the plant's physics engine, pybullet (default) or mujoco (``plant/engines.py``).
     ``trajectory``: a JointTrajectory (``--trajectory FILE``) followed from step 0 instead of eq. 27; the
-    reference node builds the same reference (``build_reference``), so the lockstep graph gives the same bits.
+    reference node builds the same reference (controller_factory.py), so the lockstep graph gives the same bits.
     """
     dt = settings.simulation.dt_s
     n = int(round(duration_s / dt))
-    reference = build_reference(settings, trajectory)
-    plant, close_plant = open_plant(settings, engine)
+    s = settings
+    plant, close_plant = open_plant(s, engine)
     try:
-        guarded = _controllers(settings, controller, plant)
+        ctc = None
+        if controller == "ctc":  # centralized, on the plant's own model: built here, behind the same guard
+            ctc = ComputedTorqueController(plant, s.ctc.kp_per_s2, s.ctc.kd_per_s, s.plant.torque_limit_nm,
+                                           s.ctc.on_saturation)
+        reference, guarded = joint_loop(controller, s.arm, s.simulation, s.reference, s.plant.torque_limit_nm,
+                                        s.guards, s.dnbs, s.pid, trajectory=trajectory, bank=ctc)
         if init_states is not None:
             for row, state in enumerate(init_states):
                 guarded.controllers.load_state_dict(row, state, resume_steps=False)
@@ -100,16 +104,6 @@ def simulate(settings: Settings, controller: str, duration_s: float, progress: b
                                                 "controllers": guarded.controllers})
     finally:
         close_plant()
-
-
-def _controllers(settings: Settings, controller: str, plant) -> GuardedControllers:
-    """The joints' controllers behind their state guards (the nodes' own code), or computed torque."""
-    if controller == "ctc":
-        c = settings.ctc
-        ctc = ComputedTorqueController(plant, c.kp_per_s2, c.kd_per_s, settings.plant.torque_limit_nm,
-                                      c.on_saturation)
-        return GuardedControllers(ctc, build_state_guard(settings), settings.guards.on_bad_state)
-    return build_guarded_controllers(settings, controller)
 
 
 def _sensor_noise(dist: Disturbances, n: int, nj: int):

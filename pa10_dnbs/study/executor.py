@@ -34,7 +34,7 @@ class Executor:
 
     def __init__(self, jobs: int | None = None, scheduler: str | None = None):
         if jobs is not None and jobs < 1:
-            raise ConfigError(f"--jobs: must be >= 1, got {jobs}")
+            raise ConfigError(f"jobs: must be >= 1, got {jobs}", setting="jobs")
         self.scheduler = scheduler
         self.jobs = jobs or os.cpu_count() or 1
         self._pool = None
@@ -148,7 +148,7 @@ def connect(address: str):
     try:
         from distributed import Client
     except ImportError:  # pragma: no cover - pinned in requirements.txt
-        raise ConfigError("--scheduler: the 'distributed' package is not installed") from None
+        raise ConfigError("scheduler: the 'distributed' package is not installed", setting="scheduler") from None
     import logging
 
     for name in ("distributed.client", "distributed.comm", "distributed.core", "distributed.batched"):
@@ -156,10 +156,12 @@ def connect(address: str):
     try:
         client = Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:
-        raise ConfigError(f"--scheduler: cannot connect to {address}: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from None
+        raise ConfigError(f"scheduler: cannot connect to {address}: "
+                          f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}", setting="scheduler") from None
     try:
         client.wait_for_workers(1, timeout=CONNECT_TIMEOUT_S)
     except (OSError, TimeoutError) as exc:
         client.close()
-        raise ConfigError(f"--scheduler: {address} has no worker (waited {CONNECT_TIMEOUT_S:g} s)") from None
+        raise ConfigError(f"scheduler: {address} has no worker (waited {CONNECT_TIMEOUT_S:g} s)",
+                          setting="scheduler") from None
     return client

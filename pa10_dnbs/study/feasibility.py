@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..plant.from_config import plant_params
+from ..plant.from_config import opened_plant, plant_params
 from ..plant.reference_torque import ReferenceTorque
 from ..settings import Settings
 from .scenarios import scenario_settings
@@ -24,11 +24,9 @@ def scenario_peak_torque(settings: Settings, scenario: str, duration_s: float) -
     """(n,) the largest |tau_j| [N m] the reference of ``scenario`` asks of the plant of ``scenario`` over
     ``duration_s`` (at most reference_torque.HORIZON_S)."""
     changed, _ = scenario_settings(settings, scenario, 0)
-    torque = ReferenceTorque(changed.arm, duration_s, changed.simulation.dt_s, params=plant_params(changed))
-    try:
-        return torque.peak(changed.to_config()["reference"])
-    finally:
-        torque.close()
+    dt = changed.simulation.dt_s
+    with opened_plant(changed.arm, plant_params(changed.plant, dt)) as plant:
+        return ReferenceTorque(plant, duration_s, dt).peak(changed.to_config()["reference"])
 
 
 def infeasible_line(settings: Settings, scenario: str, duration_s: float) -> str | None:

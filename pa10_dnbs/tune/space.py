@@ -56,15 +56,15 @@ def select(controller: str, names: list[str] | None) -> tuple[Param, ...]:
     """The dimensions of ``controller``'s space to search (all when ``names`` is None); ConfigError on an
     unknown controller or name."""
     if controller not in SPACES:
-        raise ConfigError(f"--controller: unknown {controller}; valid: {', '.join(SPACES)}")
+        raise ConfigError(f"controller: unknown {controller}; valid: {', '.join(SPACES)}", setting="controller")
     space = SPACES[controller]
     if names is None:
         return space
     valid = [p.name for p in space]
     bad = [n for n in names if n not in valid]
     if bad or not names:
-        raise ConfigError(f"--params: unknown {', '.join(bad) if bad else '(empty list)'} for {controller}; "
-                          f"valid: {', '.join(valid)}")
+        raise ConfigError(f"params: unknown {', '.join(bad) if bad else '(empty list)'} for {controller}; "
+                          f"valid: {', '.join(valid)}", setting="params")
     return tuple(p for p in space if p.name in names)
 
 

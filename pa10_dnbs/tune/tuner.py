@@ -73,7 +73,7 @@ def open_storage(url: str):
         return optuna.storages.RDBStorage(url)
     except Exception as exc:  # sqlalchemy's errors for bad URLs, missing drivers, unreachable servers
         text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ConfigError(f"--storage: cannot open {url}: {text}") from None
+        raise ConfigError(f"storage: cannot open {url}: {text}", setting="storage") from None
 
 
 def open_study(storage, spec: TuneSpec, batch: int):

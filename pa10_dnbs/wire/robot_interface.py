@@ -43,7 +43,7 @@ def parse_robot_command(spec: str, command_topic: str | None = None) -> RobotCom
             raise ValueError(f"expected forward:<controller name> (a ROS name, e.g. forward:effort_controller), "
                              f"got {spec!r}")
         if command_topic is not None:
-            raise ValueError("--robot-command-topic is the JointState form's topic; the forward form publishes on "
+            raise ValueError("robot_command_topic is the JointState form's; the forward form publishes on "
                              f"/{name}/commands")
         return RobotCommand("forward", f"/{name}/commands")
     raise ValueError(f"expected joint_state or forward:<controller name>, got {spec!r}")
