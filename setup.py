@@ -28,7 +28,7 @@ setup(
     entry_points={
         "console_scripts": [
             "pa10-dnbs = pa10_dnbs.cli:main",
-            "plant_node = pa10_dnbs.ros.plant_node:main",
+            "plant_node = pa10_dnbs.ros.plant.node:main",
             "joint_controller_node = pa10_dnbs.ros.joint_controller_node:main",
             "reference_node = pa10_dnbs.ros.reference_node:main",
             "wire_monitor = pa10_dnbs.ros.wire_monitor:main",

@@ -49,7 +49,7 @@ def run(kind: str, duration: float, out: Path) -> dict:
         robot = None
         if kind == "bus":
             robot_log = out.parent / f"{out.name}_robot.log"
-            robot = subprocess.Popen([sys.executable, "-m", "pa10_dnbs.ros.plant_node", "--ros-args", "-r",
+            robot = subprocess.Popen([sys.executable, "-m", "pa10_dnbs.ros.plant.node", "--ros-args", "-r",
                                       "__node:=robot", "-p", "interface:=standard", "-p", f"duration_s:={duration}",
                                       "-p", "start_timeout_s:=120.0"], env=env, stdout=open(robot_log, "w"),
                                      stderr=subprocess.STDOUT)

@@ -12,7 +12,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-NODES = [("plant", "plant_node"), ("joint_controller_<joint>", "joint_controller_node"), ("reference", "reference_node"),
+NODES = [("plant", "plant.node"), ("joint_controller_<joint>", "joint_controller_node"), ("reference", "reference_node"),
          ("wire_monitor", "wire_monitor"), ("recorder", "recorder_node"), ("live_view", "live_observer_node")]
 
 

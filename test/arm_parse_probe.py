@@ -13,7 +13,7 @@ def main() -> None:
     build = arm_file._build
     arm_file._build = lambda path, *a, **k: (reads.append(str(path)), build(path, *a, **k))[1]
     import rclpy
-    from pa10_dnbs.ros.plant_node import PlantNode
+    from pa10_dnbs.ros.plant.node import PlantNode
     from pa10_dnbs.ros.reference_node import ReferenceNode
 
     extra = ["-p", f"config_file:={sys.argv[2]}"] if len(sys.argv) > 2 else []

@@ -204,7 +204,7 @@ def test_redrive_reproduces_the_recorded_states_bit_for_bit(bag, tmp_path, domai
     recorder = Proc([sys.executable, "-m", "pa10_dnbs.ros.recorder_node", *ros, f"bag:={new_bag}", "-p",
                      "topics:=[" + ",".join(f"'{t}'" for t in topics) + "]", "-p", f"end_stamp_ns:={N_STEPS * 10**6}",
                      "-p", "tf_rate_hz:=0.0"], domain_id=domain)
-    plant = Proc([sys.executable, "-m", "pa10_dnbs.ros.plant_node", *ros, "mode:=lockstep", "-p",
+    plant = Proc([sys.executable, "-m", "pa10_dnbs.ros.plant.node", *ros, "mode:=lockstep", "-p",
                   f"duration_s:={LOCKSTEP_DURATION_S}", "-p", "state_subscribers:=1", "-p", "clock_subscribers:=0",
                   "-p", "min_joint_states_subscribers:=1"], domain_id=domain)
     player = None

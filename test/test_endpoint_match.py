@@ -29,7 +29,7 @@ def test_a_need_names_who_it_waits_for():
 
 
 def test_plant_needs_name_the_recorder_and_the_parameters():
-    from pa10_dnbs.ros.plant_endpoints import _who
+    from pa10_dnbs.ros.plant.endpoints import _who
 
     assert _who("joint_controller_s1", 1, "state_subscribers", 1) == (
         "joint_controller_s1 (state_subscribers:=1) and the recorder (recorders:=1)")

@@ -19,7 +19,7 @@ def test_the_plant_names_the_nodes_that_never_became_ready(domain):
     plant = None
     try:
         ref.wait_for("READY reference", 60)
-        plant = Proc([sys.executable, "-m", "pa10_dnbs.ros.plant_node", *ROS, "duration_s:=1.0", "-p",
+        plant = Proc([sys.executable, "-m", "pa10_dnbs.ros.plant.node", *ROS, "duration_s:=1.0", "-p",
                       "state_subscribers:=0", "-p", "clock_subscribers:=1", "-p", "start_timeout_s:=8.0", "-p",
                       "ready_nodes:=['reference','joint_controller_s1']"], domain_id=domain)
         rc = plant.wait(120)

@@ -33,7 +33,7 @@ def _no_leftovers(pids, shm_before) -> None:
 
 def _plant_robot(domain: int, duration_s: float, *params: str) -> Proc:
     """The PyBullet plant speaking the standard interface, waiting for the bus (lockstep)."""
-    args = [sys.executable, "-m", "pa10_dnbs.ros.plant_node", "--ros-args", "-r", "__node:=robot",
+    args = [sys.executable, "-m", "pa10_dnbs.ros.plant.node", "--ros-args", "-r", "__node:=robot",
             "-p", "interface:=standard", "-p", f"duration_s:={duration_s}", "-p", "start_timeout_s:=120.0"]
     for p in params:
         args += ["-p", p]

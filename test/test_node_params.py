@@ -9,18 +9,18 @@ import sys
 from graph_harness import REPO, ros_env
 
 CASES = [  # (node module, bad parameter, word the error line must hold): each node, and each kind of check
-    ("plant_node", "deadline_fraction:=2.0", "deadline_fraction"),      # outside the descriptor's range
+    ("plant.node", "deadline_fraction:=2.0", "deadline_fraction"),      # outside the descriptor's range
     ("joint_controller_node", "queue_depth:=many", "queue_depth"),      # wrong type
     ("reference_node", "config_file:=/no/such/config.yaml", "config_file"),
     ("wire_monitor", "poll_period_s:=0.5", "out_file"),                 # a required parameter missing
     ("recorder_node", "qos_depth:=0", "qos_depth"),
     ("live_observer_node", "port:=70000", "port"),
-    ("plant_node", "on_missing_effort:=guess", "on_missing_effort"),  # not one of the choices
-    ("plant_node", "interface:=ros2_control", "interface"),
+    ("plant.node", "on_missing_effort:=guess", "on_missing_effort"),  # not one of the choices
+    ("plant.node", "interface:=ros2_control", "interface"),
     ("joint_bus_node", "robot_command:=torque", "robot_command"),     # before it waits for any robot
     ("joint_bus_node", "robot_timeout_s:=0.0", "robot_timeout_s"),
-    ("plant_node", "simulation.dt_s:=0.5", "simulation.dt_s"),                  # a setting: outside its range
-    ("plant_node", "plant.torque_limit_nm:=[1.0,2.0]", "plant.torque_limit_nm"),  # not one value per joint
+    ("plant.node", "simulation.dt_s:=0.5", "simulation.dt_s"),                  # a setting: outside its range
+    ("plant.node", "plant.torque_limit_nm:=[1.0,2.0]", "plant.torque_limit_nm"),  # not one value per joint
     ("reference_node", "arm_file:=/no/such/arm.yaml", "arm_file"),
 ]
 TIMEOUT_S = 60

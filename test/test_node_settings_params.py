@@ -27,7 +27,7 @@ def _run_settings(cfg):
 def test_the_plant_and_reference_run_read_only_settings_from_the_params_file(cfg, tmp_path, domain):
     settings = _run_settings(cfg)
     params = write_params_file(tmp_path / "ros_params.yaml", settings, "pid", "/pa10")
-    plant = Proc([sys.executable, "-m", "pa10_dnbs.ros.plant_node", *ROS, "-p", "start_timeout_s:=120.0",
+    plant = Proc([sys.executable, "-m", "pa10_dnbs.ros.plant.node", *ROS, "-p", "start_timeout_s:=120.0",
                   "--params-file", params], domain)
     ref = Proc([sys.executable, "-m", "pa10_dnbs.ros.reference_node", *ROS, "-p", "duration_s:=1.0",
                 "--params-file", params], domain)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from pa10_dnbs.loop.cpu_meter import CpuMeter
-from pa10_dnbs.loop.plant_timing import PlantTiming, step_ranges
+from pa10_dnbs.ros.plant.timing import PlantTiming, step_ranges
 from pa10_dnbs.loop.scheduling import apply_fifo, check_priority
 
 

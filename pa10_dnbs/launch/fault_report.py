@@ -1,7 +1,7 @@
 """What the faults did, for metrics.json and the report: injected, detected, restarts."""
 from __future__ import annotations
 
-from ..loop.plant_counters import FAULT_KEYS, REPORT_KEYS
+from ..ros.plant.counters import FAULT_KEYS, REPORT_KEYS
 from .fault_flags import plain
 
 

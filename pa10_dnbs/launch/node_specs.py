@@ -135,7 +135,7 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
 
         cmds.append(mujoco_robot_command(opt, lambda node, params: _ros_args(node, settings_source(params),
                                                                              opt.namespace) + files))
-    plant, module, extra = "plant", "pa10_dnbs.ros.plant_node", {}
+    plant, module, extra = "plant", "pa10_dnbs.ros.plant.node", {}
     if opt.robot == "external":  # the joint bus in the plant's place: same handshake, topics and stats file
         plant, module = JOINT_BUS, "pa10_dnbs.ros.joint_bus_node"
         extra = {"robot_command": opt.robot_command, "robot_state_topic": opt.robot_state_topic or "''",

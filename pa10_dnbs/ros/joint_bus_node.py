@@ -7,7 +7,7 @@ joint controller still sees only its own joint. It is the plant node with the ph
 effort gate, start handshake, lockstep loop and stats file, so the launcher, the recorder, the analysis and
 the live view work unchanged. Step k of the graph is the k-th robot state the bus forwards. Lockstep
 (``mode:=lockstep``, a robot that waits for commands): the efforts answering state k go out as one command, and
-the bus waits for the robot's next state (the plant's lockstep loop, ``plant_lockstep.py``). Paced
+the bus waits for the robot's next state (the plant's lockstep loop, ``ros/plant/lockstep.py``). Paced
 (``mode:=realtime``): the robot runs at its own rate and the bus follows it (``joint_bus_paced.py``).
 
 Time: a robot that publishes /clock gives the graph its time (the bus publishes none; its first state must
@@ -27,8 +27,8 @@ from ..wire.robot_interface import default_state_topic, parse_robot_command
 from ..wire.steps import NS_PER_S
 from ..settings import Settings
 from .params import Param, ParameterError
-from .plant_node import PARAMS as PLANT_PARAMS
-from .plant_node import PlantNode
+from .plant.node import PARAMS as PLANT_PARAMS
+from .plant.node import PlantNode
 from .joint_bus_paced import run_paced
 from .robot_link import RemoteRobot
 from .runtime import stop_requested

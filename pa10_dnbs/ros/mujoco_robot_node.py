@@ -27,7 +27,7 @@ from ..plant.engines import open_plant
 from ..wire import joint_state_cdr
 from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, ClockSchedule, check_clock_hz
 from .params import SETTINGS_DEFAULTS, Param, ParameterError, check_choice, declare, declare_settings
-from .plant_endpoints import CLOCK_CDR
+from .plant.endpoints import CLOCK_CDR
 from .polled import PolledSubscription, SubscriptionWaitSet
 from .runtime import announce_ready
 from .settings_params import NODE_SECTIONS

@@ -22,7 +22,7 @@ from std_msgs.msg import Float64MultiArray
 from ..wire import joint_state_cdr
 from ..wire.robot_interface import JointMatcher, RobotCommand, RobotFault, RobotTimeline
 from ..wire.steps import NS_PER_S
-from .plant_standard_endpoints import robot_qos
+from .plant.standard_endpoints import robot_qos
 from .polled import PolledSubscription, SubscriptionWaitSet
 
 SLICE_S = 0.05  # longest single wait for a robot state: the stop request is checked at least this often

@@ -5,7 +5,7 @@ A robot publishes ``sensor_msgs/JointState`` (name, position [rad], velocity [ra
 takes either ``sensor_msgs/JointState`` efforts [N m] on its command topic, stamped with the state they answer
 (form ``joint_state``), or ``std_msgs/Float64MultiArray`` on ``/<controller>/commands`` in the arm's joint
 order (form ``forward``). No rclpy here: the joint bus (``ros/joint_bus_node.py``) and the plant's standard
-wire (``ros/plant_standard_endpoints.py``) use it, the unit tests (test/test_robot_interface.py) too.
+wire (``ros/plant/standard_endpoints.py``) use it, the unit tests (test/test_robot_interface.py) too.
 """
 from __future__ import annotations
 

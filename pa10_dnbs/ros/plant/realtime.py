@@ -21,8 +21,8 @@ from __future__ import annotations
 
 import time
 
-from ..loop.miss_warnings import MissWarnings
-from ..loop.tick_schedule import TickSchedule
+from ...loop.miss_warnings import MissWarnings
+from ...loop.tick_schedule import TickSchedule
 
 SLICE_S = 0.2          # longest single wait: the stop request is checked at least this often
 HOUSEKEEPING_S = 0.05  # wall seconds between turns of the executor (timers, services)

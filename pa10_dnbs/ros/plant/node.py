@@ -4,14 +4,14 @@ Before step 0, the start handshake (``wait_for_graph``, ``ros/ready.py``): its o
 at time 0 out, and every node of ``ready_nodes`` ready on the ``ready`` topic (one timeout, naming the nodes
 that are not).
 
-What it publishes and how it takes efforts: ``plant_endpoints.py``. How it
+What it publishes and how it takes efforts: ``endpoints.py``. How it
 paces the steps (``mode``):
 
-- lockstep (``plant_lockstep.py``): state k+1 is computed once every
+- lockstep (``lockstep.py``): state k+1 is computed once every
   effort answering state k has arrived; a missing one is re-requested after
   ``resend_s`` and replaced (held or zeroed, counted) after
   ``effort_timeout_s``. Deterministic: the in-process simulation, bit for bit.
-- realtime (``plant_realtime.py``): deadline-synchronous ticks of
+- realtime (``realtime.py``): deadline-synchronous ticks of
   ``dt / real_time_factor`` wall seconds; at the start of tick k state k goes
   out, the efforts answering it that arrive before ``deadline_fraction`` of
   the tick are applied, a missing one is held or zeroed and counted as a
@@ -20,13 +20,13 @@ paces the steps (``mode``):
 /clock goes out with the states of ``wire/clock_schedule.py``: one per
 1 / ``clock_hz`` of simulated time (default 100 Hz, as ``ros2 bag play
 --clock``; 0: none); in realtime it and joint_states follow at the tick's
-deadline (``plant_realtime.py``). The plant itself runs on wall time (no use_sim_time).
+deadline (``realtime.py``). The plant itself runs on wall time (no use_sim_time).
 
 Defensive: a non-finite effort counts as missing (hold or zero, counted), an
 out-of-range one is saturated at its torque limit and counted. Faults configured in
 ``faults.state`` are injected on each joint's state link. Fault counters go
 to /diagnostics every second; timing figures and counters go to
-``stats_file`` (JSON, ``plant_stats.py``) at exit.
+``stats_file`` (JSON, ``stats.py``) at exit.
 """
 from __future__ import annotations
 
@@ -37,28 +37,28 @@ from typing import NoReturn
 from rclpy.node import Node
 from rclpy.task import Future
 
-from ..arm.summary import arm_line
-from ..atomic_file import write_json
-from ..loop.cpu_meter import CpuMeter
-from ..loop.effort_gate import EffortGate
-from ..loop.endpoint_match import MatchWait
-from ..loop.plant_timing import PlantTiming
-from ..loop.scheduling import apply_fifo, check_priority
-from ..plant.from_config import open_client, plant_from_settings
-from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, check_clock_hz
-from ..wire.robot_interface import default_state_topic, parse_robot_command
-from ..settings import Settings
-from .diagnostics import DiagnosticsReporter
-from .params import RT_PRIORITY, SETTINGS_DEFAULTS, Param, ParameterError, check_choice, declare, declare_settings
-from .plant_lockstep import run_lockstep
-from .plant_realtime import run_realtime
-from .plant_stats import diagnostics_report, plant_stats
-from .plant_standard_endpoints import StandardPlantEndpoints
-from .plant_endpoints import PlantEndpoints
-from .ready import ReadyListener
-from .runtime import announce_ready
-from .settings_params import NODE_SECTIONS
-from .endpoints import StepClock, record_qos
+from ...arm.summary import arm_line
+from ...atomic_file import write_json
+from ...loop.cpu_meter import CpuMeter
+from ...loop.effort_gate import EffortGate
+from ...loop.endpoint_match import MatchWait
+from .timing import PlantTiming
+from ...loop.scheduling import apply_fifo, check_priority
+from ...plant.from_config import open_client, plant_from_settings
+from ...wire.clock_schedule import DEFAULT_CLOCK_HZ, check_clock_hz
+from ...wire.robot_interface import default_state_topic, parse_robot_command
+from ...settings import Settings
+from ..diagnostics import DiagnosticsReporter
+from ..params import RT_PRIORITY, SETTINGS_DEFAULTS, Param, ParameterError, check_choice, declare, declare_settings
+from .lockstep import run_lockstep
+from .realtime import run_realtime
+from .stats import diagnostics_report, plant_stats
+from .standard_endpoints import StandardPlantEndpoints
+from .endpoints import PlantEndpoints
+from ..ready import ReadyListener
+from ..runtime import announce_ready
+from ..settings_params import NODE_SECTIONS
+from ..endpoints import StepClock, record_qos
 
 
 PARAMS = {
@@ -174,8 +174,8 @@ class PlantNode(Node):
         self._client.disconnect()
 
     def _make_endpoints(self, settings: Settings, realtime: bool):
-        """The per-joint topics (``plant_endpoints.py``), or with ``interface:=standard`` the standard robot interface
-        (``plant_standard_endpoints.py``): there the plant waits for every command (no effort timeout)."""
+        """The per-joint topics (``endpoints.py``), or with ``interface:=standard`` the standard robot interface
+        (``standard_endpoints.py``): there the plant waits for every command (no effort timeout)."""
         p = self.p
         if p["interface"] == "standard":
             try:
@@ -288,7 +288,7 @@ def _check_positive(p: dict, *keys: str) -> None:
 
 
 def main(args=None) -> NoReturn:
-    from .runtime import exit_process, run_node
+    from ..runtime import exit_process, run_node
 
     exit_process(run_node(PlantNode, args))
 

@@ -26,13 +26,13 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 
-from ..faults.faulty_link import faulty_link
-from ..loop.endpoint_match import Need
-from ..wire import joint_state_cdr
-from ..wire.clock_schedule import ClockSchedule
-from ..settings import Settings
-from .polled import PolledSubscription, SubscriptionWaitSet
-from .endpoints import (CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, StepClock, description_qos, effort_topic, loop_qos,
+from ...faults.faulty_link import faulty_link
+from ...loop.endpoint_match import Need
+from ...wire import joint_state_cdr
+from ...wire.clock_schedule import ClockSchedule
+from ...settings import Settings
+from ..polled import PolledSubscription, SubscriptionWaitSet
+from ..endpoints import (CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, StepClock, description_qos, effort_topic, loop_qos,
                    record_qos, state_topic)  # relative names
 
 

@@ -1,9 +1,9 @@
 """The plant's wire in the standard robot interface (``interface:=standard``): the PyBullet plant as a robot
-the joint bus drives (docs/your_robot.md), instead of the per-joint topics of ``plant_endpoints.py``.
+the joint bus drives (docs/your_robot.md), instead of the per-joint topics of ``endpoints.py``.
 
 Publishes every joint's state as one ``sensor_msgs/JointState`` (name, position [rad], velocity [rad/s], and as
 effort the torque applied over the step before [N m]; stamped with the robot's time k T) on ``state_topic``,
-and /clock (``ClockSchedule``, latched at time 0, as ``plant_endpoints.py``). Takes commands in the form of
+and /clock (``ClockSchedule``, latched at time 0, as ``endpoints.py``). Takes commands in the form of
 ``RobotCommand``: a JointState of efforts stamped with the state it answers (matched by joint name), or a
 Float64MultiArray in the arm's joint order (no stamp: it answers the current step). A command gives every
 joint's effort at once: the plant's lockstep and realtime loops run unchanged on top. Same methods as
@@ -22,14 +22,14 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
-from ..loop.endpoint_match import Need
-from ..wire import joint_state_cdr
-from ..wire.clock_schedule import ClockSchedule
-from ..wire.robot_interface import JointMatcher, RobotCommand
-from ..settings import Settings
-from .plant_endpoints import CLOCK_CDR
-from .polled import PolledSubscription, SubscriptionWaitSet
-from .endpoints import CLOCK, StepClock, record_qos
+from ...loop.endpoint_match import Need
+from ...wire import joint_state_cdr
+from ...wire.clock_schedule import ClockSchedule
+from ...wire.robot_interface import JointMatcher, RobotCommand
+from ...settings import Settings
+from .endpoints import CLOCK_CDR
+from ..polled import PolledSubscription, SubscriptionWaitSet
+from ..endpoints import CLOCK, StepClock, record_qos
 
 ROBOT_QOS_DEPTH = 10  # the standard topics: reliable, volatile, keep-last 10 (matches a best-effort reader too)
 

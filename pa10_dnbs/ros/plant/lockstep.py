@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import time
 
-from ..loop.lockstep_policy import LockstepPolicy
+from ...loop.lockstep_policy import LockstepPolicy
 
 SLICE_S = 0.2          # longest single wait: the stop request is checked at least this often
 HOUSEKEEPING_S = 0.05  # wall seconds between turns of the executor (timers, services)

@@ -12,9 +12,9 @@ from __future__ import annotations
 import math
 import time
 
-from ..loop.plant_counters import FAULT_KEYS, plant_counters
-from ..loop.plant_timing import step_ranges
-from .diagnostics import status, status_name
+from .counters import FAULT_KEYS, plant_counters
+from .timing import step_ranges
+from ..diagnostics import status, status_name
 
 MAX_RANGES = 100  # miss ranges kept per joint in the stats file
 
