@@ -13,7 +13,7 @@ _startup_sigint = interrupt.quiet_start()   # Ctrl-C while the modules load: one
 
 from .accel.build import KernelBuildError
 from .config import ConfigError, default_config_path
-from .launch.fault_flags import add_fault_arguments
+from .supervisor.fault_flags import add_fault_arguments
 from .loop.scheduling import DEFAULT_RT_PRIORITY
 from .bag.bag_reader import BagError
 from .bag.bag_writer import BagExistsError
@@ -64,7 +64,7 @@ def _live_defaults(args: argparse.Namespace) -> None:
 def _launch_options(args: argparse.Namespace):
     """The ``launch`` command's options from its parsed flags."""
     from .commands.options import LaunchOptions
-    from .launch.fault_flags import FaultFlags
+    from .supervisor.fault_flags import FaultFlags
 
     realtime = args.mode == "realtime"
     _unused_flags(args, [("rtf", realtime, "only with --mode realtime (lockstep runs as fast as the graph answers)"),
@@ -95,7 +95,7 @@ def _robot_options(args: argparse.Namespace):
                          for d in ("robot_command", "robot_state_topic", "robot_command_topic", "robot_timeout")])
     if args.robot is None:
         return None
-    from .launch.robot_options import RobotOptions
+    from .supervisor.robot_options import RobotOptions
 
     return RobotOptions(args.robot, args.robot_command or "joint_state", args.robot_state_topic,
                         args.robot_command_topic, 1.0 if args.robot_timeout is None else args.robot_timeout)

@@ -41,8 +41,8 @@ import bench_record  # noqa: E402
 
 from pa10_dnbs.config import default_config_path  # noqa: E402
 from pa10_dnbs.run_settings import build_settings  # noqa: E402
-from pa10_dnbs.launch.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
-from pa10_dnbs.launch.realtime_advice import ON_TIME_TARGET  # noqa: E402
+from pa10_dnbs.supervisor.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
+from pa10_dnbs.supervisor.realtime_advice import ON_TIME_TARGET  # noqa: E402
 from pa10_dnbs.loop.scheduling import DEFAULT_RT_PRIORITY, check_priority, granted_priority  # noqa: E402
 
 CPU_LINE = re.compile(r"^CPU (\S+) ([0-9.]+) us per step")

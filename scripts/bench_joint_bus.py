@@ -25,7 +25,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from pa10_dnbs.launch.domain_ids import lease_domain  # noqa: E402
+from pa10_dnbs.supervisor.domain_ids import lease_domain  # noqa: E402
 from pa10_dnbs.run_data import RunData  # noqa: E402
 
 CPU = re.compile(r"CPU (\S+) ([\d.]+) us per step")

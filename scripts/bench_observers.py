@@ -36,7 +36,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from pa10_dnbs.config import default_config_path  # noqa: E402
 from pa10_dnbs.run_settings import build_settings  # noqa: E402
-from pa10_dnbs.launch.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
+from pa10_dnbs.supervisor.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
 
 
 class LiveClient:

@@ -48,7 +48,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from pa10_dnbs.launch.shm_cleanup import shm_files, unused  # noqa: E402
+from pa10_dnbs.supervisor.shm_cleanup import shm_files, unused  # noqa: E402
 
 HUNG_MARK = "Timeout ("  # faulthandler's header when a node's teardown outlived its limit
 NODES_LINE = re.compile(r"launch: domain (\d+), \d+ nodes: (.*); observer (\w+)=(\d+)")

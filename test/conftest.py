@@ -16,7 +16,7 @@ _SHM_AT_START: set[str] = set()
 
 
 def pytest_configure(config):
-    from pa10_dnbs.launch.shm_cleanup import shm_files
+    from pa10_dnbs.supervisor.shm_cleanup import shm_files
 
     _SHM_AT_START.update(shm_files())
 
@@ -24,7 +24,7 @@ def pytest_configure(config):
 def pytest_unconfigure(config):
     """Remove the /dev/shm files this session created that no other process maps: the LTTng-UST wait
     files rcl creates in this process when a test loads rclpy (the launcher cleans up after its nodes)."""
-    from pa10_dnbs.launch.shm_cleanup import remove_stale, shm_files
+    from pa10_dnbs.supervisor.shm_cleanup import remove_stale, shm_files
 
     remove_stale(shm_files() - _SHM_AT_START, ignore_pids=frozenset({os.getpid()}))
 
@@ -48,8 +48,8 @@ def domain():
     after a run (nodes leave without destroying their DDS participant, pa10_dnbs/ros/runtime.py): only
     files created during the test that no live process maps.
     """
-    from pa10_dnbs.launch.domain_ids import lease_domain
-    from pa10_dnbs.launch.shm_cleanup import remove_stale, shm_files
+    from pa10_dnbs.supervisor.domain_ids import lease_domain
+    from pa10_dnbs.supervisor.shm_cleanup import remove_stale, shm_files
 
     before = shm_files()
     with lease_domain() as lease:
@@ -62,11 +62,11 @@ def lockstep_run(tmp_path_factory):
     """A 3 s lockstep DNBS run of the node graph, recorded into a bag: output dir, bag, exit code, output."""
     from graph_harness import Launcher
 
-    from pa10_dnbs.launch.shm_cleanup import shm_files
+    from pa10_dnbs.supervisor.shm_cleanup import shm_files
 
     base = tmp_path_factory.mktemp("graph")
     out, bag = base / "run", base / "bag"
-    from pa10_dnbs.launch.domain_ids import lease_domain
+    from pa10_dnbs.supervisor.domain_ids import lease_domain
 
     shm_before = shm_files()
     with lease_domain() as lease:

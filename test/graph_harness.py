@@ -122,7 +122,7 @@ def assert_no_leftovers(pids, shm_before: set[str]) -> None:
     Only unused new files count: another suite's graph running on the host at the same time keeps its own
     segments mapped, and is none of this test's business.
     """
-    from pa10_dnbs.launch.shm_cleanup import shm_files, unused
+    from pa10_dnbs.supervisor.shm_cleanup import shm_files, unused
 
     alive_now = sorted(str(p) for p in pids if alive(p))
     assert not alive_now, f"processes still alive: {alive_now}"

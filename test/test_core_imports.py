@@ -44,7 +44,7 @@ LAYERS = [
     {"sim", "bag", "report", "live"},                                          # in-process runs, bags, outputs, live view
     {"study", "tune"},                                                         # robustness study, tuning: sim runs
     {"ros"},                                                                   # the nodes (rclpy)
-    {"launch"},                                                                # starts and watches the nodes
+    {"supervisor"},                                                            # starts and watches the nodes
     {"commands"},
     {"cli"},
 ]

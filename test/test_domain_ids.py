@@ -2,11 +2,11 @@
 import subprocess
 import sys
 
-from pa10_dnbs.launch.domain_ids import lease_domain, try_lease
+from pa10_dnbs.supervisor.domain_ids import lease_domain, try_lease
 
 HOLD = """
 import sys, time
-from pa10_dnbs.launch.domain_ids import try_lease
+from pa10_dnbs.supervisor.domain_ids import try_lease
 lease = try_lease(int(sys.argv[1]))
 print('held' if lease else 'busy', flush=True)
 sys.stdin.readline()

@@ -11,7 +11,7 @@ from graph_harness import Launcher, assert_no_leftovers
 
 @pytest.mark.graph
 def test_launch_plant_mujoco_runs_reports_and_equals_the_in_process_engine(domain, tmp_path):
-    from pa10_dnbs.launch.shm_cleanup import shm_files
+    from pa10_dnbs.supervisor.shm_cleanup import shm_files
 
     shm_before = shm_files()
     out = tmp_path / "graph"

@@ -13,7 +13,7 @@ import pytest
 from graph_harness import Launcher, exit_codes
 from pa10_dnbs.arm import load_arm
 JOINT_NAMES = load_arm("pa10").joint_names
-from pa10_dnbs.launch.realtime_advice import ON_TIME_TARGET
+from pa10_dnbs.supervisor.realtime_advice import ON_TIME_TARGET
 from pa10_dnbs.loop.scheduling import DEFAULT_RT_PRIORITY, fifo_permitted
 from pa10_dnbs.run_data import RunData
 

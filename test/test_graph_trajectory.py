@@ -50,7 +50,7 @@ def _bad_files(tmp_path):
 
 def test_a_trajectory_sent_while_running_is_tracked_and_wrong_ones_change_nothing(tmp_path, domain, cfg,
                                                                                    monkeypatch):
-    from pa10_dnbs.launch.shm_cleanup import shm_files
+    from pa10_dnbs.supervisor.shm_cleanup import shm_files
 
     shm_before = shm_files()
     unknown, beyond, backwards = _bad_files(tmp_path)

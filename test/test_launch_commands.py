@@ -1,9 +1,9 @@
-"""The launcher writes each child's command line into the run's logs/commands.sh (launch/processes.py)."""
+"""The launcher writes each child's command line into the run's logs/commands.sh (supervisor/processes.py)."""
 import shlex
 import subprocess
 import sys
 
-from pa10_dnbs.launch.processes import COMMANDS_FILE, ManagedProcess, command_line, stop_all
+from pa10_dnbs.supervisor.processes import COMMANDS_FILE, ManagedProcess, command_line, stop_all
 
 
 def test_command_line_quotes_and_places_the_child_on_its_domain():
@@ -37,7 +37,7 @@ def test_a_failed_runs_logs_are_kept_where_its_message_points(tmp_path):
     """The run folder (.partial) of a failed launch is removed; its logs move to <out>.failed/logs and the
     failure message names them there. An interrupted run (Ctrl-C) keeps nothing."""
     from pa10_dnbs.commands.launch import _keep_logs
-    from pa10_dnbs.launch.graph_options import GraphFailure
+    from pa10_dnbs.supervisor.graph_options import GraphFailure
 
     out = tmp_path / "run"
     tmp = tmp_path / ".run.partial-x"

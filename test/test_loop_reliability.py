@@ -1,9 +1,9 @@
-"""Which QoS reliability the launcher gives the per-joint state/effort topics (launch/graph_options.py)."""
+"""Which QoS reliability the launcher gives the per-joint state/effort topics (supervisor/graph_options.py)."""
 from pathlib import Path
 
 import pytest
 
-from pa10_dnbs.launch.graph_options import GraphOptions, loop_reliability
+from pa10_dnbs.supervisor.graph_options import GraphOptions, loop_reliability
 
 CFG = Path("config/default.yaml")
 

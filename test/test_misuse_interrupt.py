@@ -446,10 +446,10 @@ def test_study_on_a_cluster_ctrl_c_cancels_its_tasks(tmp_path):
 STUCK_NODES = """
 import sys, time, types
 from pathlib import Path
-from pa10_dnbs.launch.graph_run import _hard_stop
-from pa10_dnbs.launch.processes import ManagedProcess, stop_all
-from pa10_dnbs.launch.shm_cleanup import shm_files
-from pa10_dnbs.launch.supervision import StopRequest, catch_signals
+from pa10_dnbs.supervisor.graph_run import _hard_stop
+from pa10_dnbs.supervisor.processes import ManagedProcess, stop_all
+from pa10_dnbs.supervisor.shm_cleanup import shm_files
+from pa10_dnbs.supervisor.supervision import StopRequest, catch_signals
 
 stuck = [sys.executable, "-c", "import signal, time; [signal.signal(s, signal.SIG_IGN) for s in (signal.SIGINT, "
          "signal.SIGTERM, signal.SIGUSR1)]; print('READY', flush=True); time.sleep(120)"]
@@ -470,7 +470,7 @@ print("GRACEFUL", flush=True)
 
 def test_launch_second_ctrl_c_kills_nodes_that_ignore_the_first_at_once(tmp_path):
     """Nodes that ignore SIGINT, SIGUSR1 and SIGTERM (a stuck teardown): the first Ctrl-C would wait 5 + 3 s for them
-    (launch/processes.py); the second kills them at once: the launcher's own stop logic, real processes."""
+    (supervisor/processes.py); the second kills them at once: the launcher's own stop logic, real processes."""
     c = Command(STUCK_NODES, tmp_path, script="-c")
     try:
         pids = []
@@ -510,11 +510,11 @@ def _running(c: Command) -> None:
 @pytest.mark.graph
 @pytest.mark.parametrize("presses", [1, 2])
 def test_launch_ctrl_c_once_or_twice_stops_every_node_and_writes_nothing(tmp_path, domain, monkeypatch, presses):
-    """Once: the nodes stop within their graces (SIGINT 5 s, SIGTERM 3 s: launch/processes.py). Twice, 0.2 s
-    apart: at once (every node SIGKILLed, its shared-memory files removed, launch/graph_run.py)."""
+    """Once: the nodes stop within their graces (SIGINT 5 s, SIGTERM 3 s: supervisor/processes.py). Twice, 0.2 s
+    apart: at once (every node SIGKILLed, its shared-memory files removed, supervisor/graph_run.py)."""
     from graph_harness import assert_no_leftovers
 
-    from pa10_dnbs.launch.shm_cleanup import shm_files
+    from pa10_dnbs.supervisor.shm_cleanup import shm_files
 
     monkeypatch.setattr(os, "environ", dict(os.environ))   # _launch's ROS_* settings stay in this test
     shm_before = shm_files()

@@ -57,7 +57,7 @@ def test_paced_steps_every_tick_with_the_latest_command():
 
 @pytest.mark.graph
 def test_the_robot_node_answers_lockstep_bit_for_bit_and_stops_on_sigint(domain, tmp_path):
-    from pa10_dnbs.launch.shm_cleanup import shm_files
+    from pa10_dnbs.supervisor.shm_cleanup import shm_files
 
     shm_before = shm_files()
     arm = load_arm("iiwa")

@@ -8,7 +8,7 @@ import pytest
 import yaml
 
 from graph_harness import REPO, Proc, ros_env
-from pa10_dnbs.launch.params_file import params_document
+from pa10_dnbs.supervisor.params_file import params_document
 
 pytestmark = pytest.mark.graph  # starts ROS processes
 

@@ -7,7 +7,7 @@ import sys
 import pytest
 
 from graph_harness import REPO, Proc, ros_env
-from pa10_dnbs.launch.params_file import write_params_file
+from pa10_dnbs.supervisor.params_file import write_params_file
 from pa10_dnbs.ros.settings_params import NODE_SECTIONS, section_values
 from pa10_dnbs.settings import replace_in
 

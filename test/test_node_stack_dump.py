@@ -1,6 +1,6 @@
 """SIGUSR1 makes a node write every thread's Python stack into its log and go on; SIGINT still stops it with 0.
 
-The launcher sends SIGUSR1 to a node that ignored SIGINT for 5 s (launch/processes.py, stop_all), so that a
+The launcher sends SIGUSR1 to a node that ignored SIGINT for 5 s (supervisor/processes.py, stop_all), so that a
 node stuck in C code says where. One node process (the wire monitor, which needs no other node), ~3 s.
 """
 import os

@@ -7,9 +7,9 @@ import sys
 
 import pytest
 
-from pa10_dnbs.launch import supervision
-from pa10_dnbs.launch.graph_options import GraphOptions
-from pa10_dnbs.launch.processes import ManagedProcess
+from pa10_dnbs.supervisor import supervision
+from pa10_dnbs.supervisor.graph_options import GraphOptions
+from pa10_dnbs.supervisor.processes import ManagedProcess
 from pa10_dnbs.paths import share_path
 
 

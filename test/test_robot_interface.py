@@ -1,11 +1,11 @@
-"""The standard robot interface without ROS (pa10_dnbs/wire/robot_interface.py, launch/robot_options.py):
+"""The standard robot interface without ROS (pa10_dnbs/wire/robot_interface.py, supervisor/robot_options.py):
 command forms, joint matching by name, the faults a robot's state can carry, the robot's time line."""
 import math
 
 import pytest
 
 from pa10_dnbs.config import ConfigError
-from pa10_dnbs.launch.robot_options import RobotOptions, check_robot_options, robot_domain
+from pa10_dnbs.supervisor.robot_options import RobotOptions, check_robot_options, robot_domain
 from pa10_dnbs.wire import joint_state_cdr
 from pa10_dnbs.wire.robot_interface import (JointMatcher, RobotCommand, RobotFault, RobotTimeline,
                                             default_state_topic, parse_robot_command)
@@ -94,8 +94,8 @@ def test_launch_flags_are_checked_with_one_line_naming_the_flag(monkeypatch):
 
 def test_the_launcher_starts_the_joint_bus_in_the_plants_place(tmp_path):
     """node_specs: with --robot external the last process is the joint bus with the robot's flags, no plant."""
-    from pa10_dnbs.launch.graph_options import GraphOptions
-    from pa10_dnbs.launch.node_specs import node_commands, node_group
+    from pa10_dnbs.supervisor.graph_options import GraphOptions
+    from pa10_dnbs.supervisor.node_specs import node_commands, node_group
 
     fields = check_robot_options(RobotOptions(command="forward:arm", state_topic="/arm/states"), "lockstep")
     opt = GraphOptions(config_path=tmp_path / "c.yaml", joint_names=PA10, **fields)

@@ -5,8 +5,8 @@ import sys
 from pathlib import Path
 
 from pa10_dnbs.arm import load_arm
-from pa10_dnbs.launch.graph_options import GraphOptions
-from pa10_dnbs.launch.node_specs import node_commands
+from pa10_dnbs.supervisor.graph_options import GraphOptions
+from pa10_dnbs.supervisor.node_specs import node_commands
 
 JOINT_NAMES = load_arm("pa10").joint_names
 

@@ -1,4 +1,4 @@
-"""A run's settings as ROS parameters (ros/settings_params.py) and the run's params file (launch/params_file.py):
+"""A run's settings as ROS parameters (ros/settings_params.py) and the run's params file (supervisor/params_file.py):
 every node's sections, values that come back bit for bit, and the launcher's arguments (no ROS started)."""
 from pathlib import Path
 
@@ -6,9 +6,9 @@ import pytest
 import yaml
 
 from pa10_dnbs.config_error import ConfigError
-from pa10_dnbs.launch.graph_options import GraphOptions
-from pa10_dnbs.launch.node_specs import node_commands
-from pa10_dnbs.launch.params_file import params_document, params_yaml
+from pa10_dnbs.supervisor.graph_options import GraphOptions
+from pa10_dnbs.supervisor.node_specs import node_commands
+from pa10_dnbs.supervisor.params_file import params_document, params_yaml
 from pa10_dnbs.ros.settings_params import (ARM_FILE, NODE_SECTIONS, NodeSettings, node_settings, section_params,
                                            section_values)
 from pa10_dnbs.settings import Settings, replace_in

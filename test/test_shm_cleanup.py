@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from pa10_dnbs.launch.shm_cleanup import SHM_DIR, remove_stale, shm_files
+from pa10_dnbs.supervisor.shm_cleanup import SHM_DIR, remove_stale, shm_files
 
 
 @pytest.fixture
@@ -53,7 +53,7 @@ def test_file_mapped_by_another_process_is_kept(shm_file):
 
 def test_snapshot_then_since_removes_only_the_new_unused_files(shm_file, tmp_path):
     """The hand-start clean-up of docs/graph.md: a file in the snapshot stays, one created after it goes."""
-    from pa10_dnbs.launch.shm_cleanup import main
+    from pa10_dnbs.supervisor.shm_cleanup import main
 
     old_name, old_path = shm_file
     snap = tmp_path / "before.txt"

@@ -17,11 +17,11 @@ from ..config import ConfigError, default_config_path
 from ..controller_factory import load_reference_trajectory
 from ..core.checkpoint import checkpoint_dir, load_joint_checkpoints
 from ..interrupt import outputs_written
-from ..launch.fault_flags import apply_fault_flags, faults_active, plain
-from ..launch.fault_report import fault_note, fault_report
-from ..launch.graph_run import GraphFailure, GraphOptions, loop_reliability, parse_netns, run_graph
-from ..launch.params_file import write_params_file
-from ..launch.realtime_advice import ON_TIME_TARGET, injected_misses, realtime_hint
+from ..supervisor.fault_flags import apply_fault_flags, faults_active, plain
+from ..supervisor.fault_report import fault_note, fault_report
+from ..supervisor.graph_run import GraphFailure, GraphOptions, loop_reliability, parse_netns, run_graph
+from ..supervisor.params_file import write_params_file
+from ..supervisor.realtime_advice import ON_TIME_TARGET, injected_misses, realtime_hint
 from ..live.options import check_live_options
 from ..loop.scheduling import granted_priority
 from ..number_text import interval
@@ -34,8 +34,8 @@ from ..wire.wire_record import load_wire_run
 from ..wire.steps import StepClock
 from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, ClockSchedule, check_clock_hz
 from ..wire.topics import CLOCK, ArmTopics, check_namespace, default_namespace
-from ..launch.robot_options import check_robot_options, robot_domain
-from ..launch.plant_engine import plant_robot_options
+from ..supervisor.robot_options import check_robot_options, robot_domain
+from ..supervisor.plant_engine import plant_robot_options
 
 
 
@@ -206,7 +206,7 @@ def run_launch(options: LaunchOptions) -> int:
 
 
 def _hard_stop_cleanup(tmp: Path, out: Path) -> str:
-    """A second Ctrl-C (launch/graph_run.py): the half-written output folder goes; what to add to the line."""
+    """A second Ctrl-C (supervisor/graph_run.py): the half-written output folder goes; what to add to the line."""
     shutil.rmtree(tmp, ignore_errors=True)
     return f"; nothing written to {out}"
 

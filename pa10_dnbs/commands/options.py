@@ -9,8 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..launch.fault_flags import FaultFlags
-from ..launch.robot_options import RobotOptions
+from ..supervisor.fault_flags import FaultFlags
+from ..supervisor.robot_options import RobotOptions
 from ..loop.scheduling import DEFAULT_RT_PRIORITY
 from ..tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 from ..wire.clock_schedule import DEFAULT_CLOCK_HZ

@@ -16,7 +16,7 @@ from pathlib import Path
 from ..config import ConfigError, default_config_path
 from .options import RobotCommandOptions
 from ..run_settings import build_settings
-from ..launch.shm_cleanup import remove_stale, shm_files
+from ..supervisor.shm_cleanup import remove_stale, shm_files
 from ..wire.clock_schedule import check_clock_hz
 
 

@@ -46,13 +46,13 @@ class GraphOptions:
     clock_hz: float = DEFAULT_CLOCK_HZ  # /clock rate [Hz of simulated time]; every node but the plant uses it
     joint_names: tuple[str, ...] = ()   # the arm's actuated joints, chain order: one controller process each
     trajectory_file: Path | None = None  # --trajectory: the reference node follows it from step 0 (not eq. 27)
-    params_file: Path | None = None  # the run's ROS params file (launch/params_file.py): the controllers' gains
+    params_file: Path | None = None  # the run's ROS params file (supervisor/params_file.py): the controllers' gains
     robot: str = ""                     # '' = the project's plant; 'external': the joint bus to a running robot
     robot_command: str = "joint_state"  # external: joint_state or forward:<controller> (docs/your_robot.md)
     robot_state_topic: str = ""         # external: the robot's JointState topic; '' = the command form's default
     robot_command_topic: str = ""       # external, joint_state form: the command topic; '' = /robot_joint_command
     robot_timeout_s: float = 1.0        # external: wall time without a new robot state that makes it stale
-    plant_engine: str = ""              # 'mujoco': the MuJoCo robot node runs behind the joint bus (launch/plant_engine.py)
+    plant_engine: str = ""              # 'mujoco': the MuJoCo robot node runs behind the joint bus (supervisor/plant_engine.py)
 
 
 @dataclass

@@ -84,12 +84,12 @@ def remove_stale(created_during_run: set[str], ignore_pids: frozenset[int] = fro
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m pa10_dnbs.launch.shm_cleanup --snapshot FILE`` before a hand-started session writes the names
+    """``python -m pa10_dnbs.supervisor.shm_cleanup --snapshot FILE`` before a hand-started session writes the names
     present; ``--since FILE`` after it removes the files that appeared since and that no live process maps."""
     import argparse
     import sys
 
-    ap = argparse.ArgumentParser(prog="python -m pa10_dnbs.launch.shm_cleanup", description=main.__doc__)
+    ap = argparse.ArgumentParser(prog="python -m pa10_dnbs.supervisor.shm_cleanup", description=main.__doc__)
     group = ap.add_mutually_exclusive_group(required=True)
     group.add_argument("--snapshot", metavar="FILE", help="write the Fast DDS / LTTng-UST names in /dev/shm now")
     group.add_argument("--since", metavar="FILE", help="remove the unused files that are not in this snapshot")
