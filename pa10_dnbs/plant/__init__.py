@@ -5,9 +5,7 @@ from pa10_dnbs.plant.quiet_stdout import quiet_c_stdout
 with quiet_c_stdout():
     import pybullet  # noqa: F401  (prints its build time on stdout at import)
 
-from pa10_dnbs.plant.pybullet_plant import (  # noqa: E402
-    PlantParams,
-    PyBulletArmPlant,
-)
+from pa10_dnbs.plant.plant_params import PlantParams  # noqa: E402
+from pa10_dnbs.plant.pybullet_plant import PyBulletArmPlant  # noqa: E402
 
 __all__ = ["PlantParams", "PyBulletArmPlant"]

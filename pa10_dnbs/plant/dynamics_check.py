@@ -23,7 +23,8 @@ import numpy as np
 
 from ..arm import Arm
 from .from_config import open_client
-from .pybullet_plant import PlantParams, PyBulletArmPlant
+from .plant_params import PlantParams
+from .pybullet_plant import PyBulletArmPlant
 
 GRAVITY_MPS2 = 9.81
 

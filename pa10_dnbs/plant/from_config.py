@@ -8,7 +8,8 @@ import numpy as np
 from ..arm import Arm
 from ..interrupt import deferred
 from ..settings import PlantSettings, ReferenceSettings, RunSettings, Settings
-from .pybullet_plant import PlantParams, PyBulletArmPlant
+from .plant_params import PlantParams
+from .pybullet_plant import PyBulletArmPlant
 from .quiet_stdout import quiet_c_stdout
 
 

@@ -20,10 +20,11 @@ import numpy as np
 
 from ..arm import Arm
 from .mujoco_model import build_model
-from .pybullet_plant import PlantParams, _as_joint_vector, _checked_for_arm
+from .arm_plant_base import ArmPlantBase
+from .plant_params import PlantParams, as_joint_vector, checked_for_arm
 
 
-class MuJoCoArmPlant:
+class MuJoCoArmPlant(ArmPlantBase):
     """A torque-driven serial arm of n actuated revolute joints simulated by MuJoCo.
 
     Parameters
@@ -43,7 +44,7 @@ class MuJoCoArmPlant:
 
         if not isinstance(params, PlantParams):
             raise TypeError(f"params: expected PlantParams, got {type(params).__name__}")
-        params = _checked_for_arm(params, arm)
+        params = checked_for_arm(params, arm)
         self._mj = mujoco
         self._arm = arm
         self._params = params
@@ -68,42 +69,7 @@ class MuJoCoArmPlant:
         self._step_count = 0
         self.reset(np.clip(np.zeros(n), self._lower, self._upper), np.zeros(n))
 
-    # ------------------------------------------------------------------ info
-    @property
-    def params(self) -> PlantParams:
-        """Parameters the plant was built with (per-joint fields filled from the arm)."""
-        return self._params
-
-    @property
-    def arm(self) -> Arm:
-        """The arm the plant was built for."""
-        return self._arm
-
-    @property
-    def n_joints(self) -> int:
-        """Number of actuated joints n."""
-        return self._n
-
-    @property
-    def joint_names(self) -> tuple[str, ...]:
-        """Actuated joint names in chain order."""
-        return self._arm.joint_names
-
-    @property
-    def lower_limit_rad(self) -> np.ndarray:
-        """(n,) lower joint limits from the URDF, rad."""
-        return self._lower.copy()
-
-    @property
-    def upper_limit_rad(self) -> np.ndarray:
-        """(n,) upper joint limits from the URDF, rad."""
-        return self._upper.copy()
-
-    @property
-    def dt_s(self) -> float:
-        """Integration step, s."""
-        return self._dt
-
+    # ------------------------------------------------------------------ info (the rest: ArmPlantBase)
     @property
     def time_s(self) -> float:
         """MuJoCo's simulated time since the last reset, s."""
@@ -112,8 +78,8 @@ class MuJoCoArmPlant:
     # ------------------------------------------------------------- stepping
     def reset(self, q0, qd0) -> None:
         """Set the state (q0 rad, qd0 rad/s, each (n,)) and clear the counters and MuJoCo's time."""
-        q0 = _as_joint_vector("q0", q0, self._n)
-        qd0 = _as_joint_vector("qd0", qd0, self._n)
+        q0 = as_joint_vector("q0", q0, self._n)
+        qd0 = as_joint_vector("qd0", qd0, self._n)
         if np.any(q0 < self._lower) or np.any(q0 > self._upper):
             raise ValueError(f"q0: outside the joint limits [{self._lower}, {self._upper}]")
         self._mj.mj_resetData(self.model, self.data)
@@ -153,21 +119,6 @@ class MuJoCoArmPlant:
         """(q rad, qd rad/s), each a (n,) copy."""
         return self.data.qpos[self._qadr].copy(), self.data.qvel[self._vadr].copy()
 
-    @property
-    def applied_torque_nm(self) -> np.ndarray:
-        """(n,) torque applied in the last step (after saturation), N m."""
-        return self._applied.copy()
-
-    @property
-    def step_count(self) -> int:
-        """Steps taken since the last reset."""
-        return self._step_count
-
-    @property
-    def limit_hits(self) -> np.ndarray:
-        """(n,) number of steps in which each joint was clamped to a limit."""
-        return self._limit_hits.copy()
-
     # ------------------------------------------------------------- dynamics
     def _at(self, q: np.ndarray, qd: np.ndarray):
         """The scratch data at (q, qd): positions and velocities computed (M, bias), nothing integrated."""
@@ -180,36 +131,31 @@ class MuJoCoArmPlant:
 
     def mass_matrix(self, q) -> np.ndarray:
         """(n, n) joint-space inertia M(q) + diag(armature), kg m^2 (MuJoCo's, the locked joints welded)."""
-        q = _as_joint_vector("q", q, self._n)
+        q = as_joint_vector("q", q, self._n)
         s = self._at(q, np.zeros(self._n))
         self._mj.mj_fullM(self.model, s, self._m_full)
         return self._m_full[np.ix_(self._vadr, self._vadr)].copy()
 
     def bias_torque(self, q, qd) -> np.ndarray:
         """(n,) Coriolis + centrifugal + gravity torque, N m (MuJoCo's ``qfrc_bias``)."""
-        q = _as_joint_vector("q", q, self._n)
-        qd = _as_joint_vector("qd", qd, self._n)
+        q = as_joint_vector("q", q, self._n)
+        qd = as_joint_vector("qd", qd, self._n)
         return self._at(q, qd).qfrc_bias[self._vadr].copy()
-
-    def friction_torque(self, qd) -> np.ndarray:
-        """(n,) the nominal friction law Fv qd + Fc tanh(qd / eps), N m (MuJoCo applies Fc as a constraint)."""
-        qd = _as_joint_vector("qd", qd, self._n)
-        return self._fv * qd + self._fc * np.tanh(qd * self._inv_eps)
 
     def step_friction_torque(self, qd, qdd) -> np.ndarray:
         """(n,) the friction a step from speed qd with acceleration qdd meets, N m: viscous at the end-of-step
         speed qd + dt qdd (MuJoCo's implicit damping), Coulomb as Fc tanh of that speed over eps (the
         frictionloss constraint's nominal law)."""
-        qd = _as_joint_vector("qd", qd, self._n)
-        qdd = _as_joint_vector("qdd", qdd, self._n)
+        qd = as_joint_vector("qd", qd, self._n)
+        qdd = as_joint_vector("qdd", qdd, self._n)
         v = qd + self._dt * qdd
         return self._fv * v + self._fc * np.tanh(v * self._inv_eps)
 
     def forward_acceleration(self, q, qd, tau) -> np.ndarray:
         """(n,) qdd = (M + J)^-1 (tau - bias - friction), rad/s^2 (friction: :meth:`friction_torque`)."""
-        q = _as_joint_vector("q", q, self._n)
-        qd = _as_joint_vector("qd", qd, self._n)
-        tau = _as_joint_vector("tau", tau, self._n)
+        q = as_joint_vector("q", q, self._n)
+        qd = as_joint_vector("qd", qd, self._n)
+        tau = as_joint_vector("tau", tau, self._n)
         rhs = tau - self.bias_torque(q, qd) - self.friction_torque(qd)
         return np.linalg.solve(self.mass_matrix(q), rhs)
 

@@ -13,104 +13,13 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
 
 import numpy as np
 import pybullet
 
 from ..arm import Arm
-
-_VECTOR_FIELDS = (
-    # name, lower bound, bound is strict
-    ("rotor_inertia_kgm2", 0.0, False),
-    ("viscous_nms_per_rad", 0.0, False),
-    ("coulomb_nm", 0.0, False),
-    ("torque_limit_nm", 0.0, True),
-)
-
-
-@dataclass(frozen=True)
-class PlantParams:
-    """Plant parameters (SI units); validated on construction. Every per-joint field has one value per actuated
-    joint (checked by the plant, which refuses one left None): a run's come from its settings' ``plant``
-    section (plant/from_config.py ``plant_params``), a tool's from ``arm_plant_params``.
-
-    Attributes
-    ----------
-    dt_s : float
-        Integration step, s (> 0).
-    gravity_mps2 : float
-        Gravity magnitude along -z, m/s^2 (>= 0; 0 disables gravity).
-    rotor_inertia_kgm2 : tuple of n float or None
-        Reflected rotor inertia added to diag(M), kg m^2 (>= 0).
-    viscous_nms_per_rad : tuple of n float or None
-        Viscous friction Fv, N m s/rad (>= 0).
-    coulomb_nm : tuple of n float or None
-        Coulomb friction Fc, N m (>= 0).
-    coulomb_smoothing_rad_s : float
-        eps in Fc tanh(qd / eps), rad/s (> 0).
-    torque_limit_nm : tuple of n float or None
-        Symmetric torque saturation, N m (> 0).
-    payload_kg : float
-        Point mass at the arm's flange link, kg (>= 0; the PA10's rated payload is 10 kg).
-    link_mass_scale : float
-        Factor on every link's mass and inertia tensor (> 0; 1 is the URDF as written): a model error
-        the controllers were not tuned for. The rotor inertias are not scaled.
-    """
-
-    dt_s: float = 1e-3
-    gravity_mps2: float = 9.81
-    rotor_inertia_kgm2: tuple[float, ...] | None = None
-    viscous_nms_per_rad: tuple[float, ...] | None = None
-    coulomb_nm: tuple[float, ...] | None = None
-    coulomb_smoothing_rad_s: float = 1e-2
-    torque_limit_nm: tuple[float, ...] | None = None
-    payload_kg: float = 0.0
-    link_mass_scale: float = 1.0
-
-    def __post_init__(self) -> None:
-        _check_scalar("dt_s", self.dt_s, strict=True)
-        _check_scalar("payload_kg", self.payload_kg, strict=False)
-        _check_scalar("link_mass_scale", self.link_mass_scale, strict=True)
-        _check_scalar("gravity_mps2", self.gravity_mps2, strict=False)
-        _check_scalar("coulomb_smoothing_rad_s", self.coulomb_smoothing_rad_s, strict=True)
-        for name, _, strict in _VECTOR_FIELDS:
-            value = getattr(self, name)
-            if value is None:
-                continue
-            try:
-                arr = np.asarray(value, dtype=float)
-            except (TypeError, ValueError) as exc:
-                raise ValueError(f"{name}: expected one number per joint, got {value!r}") from exc
-            if arr.ndim != 1 or arr.size == 0:
-                raise ValueError(f"{name}: expected one value per joint, got shape {arr.shape}")
-            if not np.all(np.isfinite(arr)):
-                raise ValueError(f"{name}: values must be finite, got {value!r}")
-            if np.any(arr <= 0.0) if strict else np.any(arr < 0.0):
-                bound = "> 0" if strict else ">= 0"
-                raise ValueError(f"{name}: values must be {bound}, got {value!r}")
-            object.__setattr__(self, name, tuple(float(v) for v in arr))
-
-
-def _check_scalar(name: str, value: float, strict: bool) -> None:
-    try:
-        v = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name}: expected a number, got {value!r}") from exc
-    if not math.isfinite(v):
-        raise ValueError(f"{name}: must be finite, got {value!r}")
-    if (v <= 0.0) if strict else (v < 0.0):
-        raise ValueError(f"{name}: must be {'> 0' if strict else '>= 0'}, got {value!r}")
-
-
-def _as_joint_vector(name: str, value, n: int) -> np.ndarray:
-    arr = np.asarray(value, dtype=float)
-    if arr.shape != (n,):
-        raise ValueError(f"{name}: expected shape ({n},), got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name}: values must be finite")
-    return arr
-
+from .arm_plant_base import ArmPlantBase
+from .plant_params import PlantParams, as_joint_vector, checked_for_arm
 
 def _coulomb_root(v_free: float, k: float, inv_eps: float) -> float:
     """The root v of g(v) = v - v_free + k tanh(v inv_eps) (k >= 0), to |g| <= 1e-13 (1 + |v_free|).
@@ -153,7 +62,7 @@ def _implicit_coulomb_speed(v_free: np.ndarray, k: np.ndarray, inv_eps: float) -
     return np.array([_coulomb_root(vf, kk, inv_eps) for vf, kk in zip(v_free.tolist(), k.tolist())])
 
 
-class PyBulletArmPlant:
+class PyBulletArmPlant(ArmPlantBase):
     """A torque-driven serial arm of n actuated revolute joints with rotor inertia, friction and limits.
 
     Parameters
@@ -196,7 +105,7 @@ class PyBulletArmPlant:
         if not os.path.isfile(urdf_path):
             raise FileNotFoundError(f"URDF file not found: {urdf_path}")
         n = self._n = arm.n_joints
-        params = _checked_for_arm(params, arm)
+        params = checked_for_arm(params, arm)
         self._client = client
         self._params = params
         self._arm = arm
@@ -213,7 +122,6 @@ class PyBulletArmPlant:
             if info[2] != pybullet.JOINT_FIXED:
                 dofs.append(j)
         self._joint_indices = tuple(index_of[name] for name in arm.joint_names)
-        self._joint_names = arm.joint_names
         self._lower = np.array(arm.lower_rad, dtype=float)
         self._upper = np.array(arm.upper_rad, dtype=float)
         # PyBullet's dynamics take every movable joint (its DOFs, in joint order); the actuated ones are a
@@ -291,52 +199,17 @@ class PyBulletArmPlant:
                 client.changeDynamics(self._body, names.index(flange), mass=params.payload_kg,
                                       localInertiaDiagonal=[1e-9] * 3)
 
-    # ------------------------------------------------------------------ info
-    @property
-    def params(self) -> PlantParams:
-        """Parameters the plant was built with."""
-        return self._params
-
+    # ------------------------------------------------------------------ info (the rest: ArmPlantBase)
     @property
     def body_id(self) -> int:
         """PyBullet body unique id of the arm."""
         return self._body
 
-    @property
-    def arm(self) -> Arm:
-        """The arm the plant was built for."""
-        return self._arm
-
-    @property
-    def n_joints(self) -> int:
-        """Number of actuated joints n."""
-        return self._n
-
-    @property
-    def joint_names(self) -> tuple[str, ...]:
-        """Actuated joint names in chain order."""
-        return self._joint_names
-
-    @property
-    def lower_limit_rad(self) -> np.ndarray:
-        """(n,) lower joint limits from the URDF, rad."""
-        return self._lower.copy()
-
-    @property
-    def upper_limit_rad(self) -> np.ndarray:
-        """(n,) upper joint limits from the URDF, rad."""
-        return self._upper.copy()
-
-    @property
-    def dt_s(self) -> float:
-        """Integration step, s."""
-        return self._dt
-
     # ------------------------------------------------------------- stepping
     def reset(self, q0, qd0) -> None:
         """Set the state (q0 rad, qd0 rad/s, each (n,)) and clear the counters."""
-        q0 = _as_joint_vector("q0", q0, self._n)
-        qd0 = _as_joint_vector("qd0", qd0, self._n)
+        q0 = as_joint_vector("q0", q0, self._n)
+        qd0 = as_joint_vector("qd0", qd0, self._n)
         if np.any(q0 < self._lower) or np.any(q0 > self._upper):
             raise ValueError(f"q0: outside the joint limits [{self._lower}, {self._upper}]")
         self._q[:] = q0
@@ -380,21 +253,6 @@ class PyBulletArmPlant:
         """(q rad, qd rad/s), each a (n,) copy."""
         return self._q.copy(), self._qd.copy()
 
-    @property
-    def applied_torque_nm(self) -> np.ndarray:
-        """(n,) torque applied in the last step (after saturation), N m."""
-        return self._applied.copy()
-
-    @property
-    def step_count(self) -> int:
-        """Steps taken since the last reset."""
-        return self._step_count
-
-    @property
-    def limit_hits(self) -> np.ndarray:
-        """(n,) number of steps in which each joint was clamped to a limit."""
-        return self._limit_hits.copy()
-
     # ------------------------------------------------------------- dynamics
     def _qdd(self, q: np.ndarray, qd: np.ndarray, tau: np.ndarray) -> np.ndarray:
         m, bias = self._m_and_bias(q, qd)
@@ -430,32 +288,27 @@ class PyBulletArmPlant:
 
     def mass_matrix(self, q) -> np.ndarray:
         """(n, n) joint-space inertia M(q) + diag(rotor inertia), kg m^2."""
-        q = _as_joint_vector("q", q, self._n)
+        q = as_joint_vector("q", q, self._n)
         return self._m_and_bias(q, np.zeros(self._n))[0]
 
     def bias_torque(self, q, qd) -> np.ndarray:
         """(n,) Coriolis + centrifugal + gravity torque, N m (inverse dynamics at qdd = 0)."""
-        q = _as_joint_vector("q", q, self._n)
-        qd = _as_joint_vector("qd", qd, self._n)
+        q = as_joint_vector("q", q, self._n)
+        qd = as_joint_vector("qd", qd, self._n)
         return self._m_and_bias(q, qd)[1]
-
-    def friction_torque(self, qd) -> np.ndarray:
-        """(n,) friction torque Fv qd + Fc tanh(qd / eps), N m."""
-        qd = _as_joint_vector("qd", qd, self._n)
-        return self._fv * qd + self._fc * np.tanh(qd * self._inv_eps)
 
     def step_friction_torque(self, qd, qdd) -> np.ndarray:
         """(n,) the friction torque a step from speed qd with acceleration qdd meets, N m: viscous at qd (explicit),
         Coulomb at the end-of-step speed qd + dt qdd (implicit), as :meth:`step` applies them."""
-        qd = _as_joint_vector("qd", qd, self._n)
-        qdd = _as_joint_vector("qdd", qdd, self._n)
+        qd = as_joint_vector("qd", qd, self._n)
+        qdd = as_joint_vector("qdd", qdd, self._n)
         return self._fv * qd + self._fc * np.tanh((qd + self._dt * qdd) * self._inv_eps)
 
     def forward_acceleration(self, q, qd, tau) -> np.ndarray:
         """(n,) qdd = (M + J)^-1 (tau - bias - friction), rad/s^2; tau is not saturated."""
-        q = _as_joint_vector("q", q, self._n)
-        qd = _as_joint_vector("qd", qd, self._n)
-        tau = _as_joint_vector("tau", tau, self._n)
+        q = as_joint_vector("q", q, self._n)
+        qd = as_joint_vector("qd", qd, self._n)
+        tau = as_joint_vector("tau", tau, self._n)
         m = self.mass_matrix(q)
         rhs = tau - self.bias_torque(q, qd) - self.friction_torque(qd)
         return np.linalg.solve(m, rhs)
@@ -469,8 +322,8 @@ class PyBulletArmPlant:
         PyBullet's joint state is set to (q, qd) for the forward kinematics and
         put back to the plant state afterwards.
         """
-        q = _as_joint_vector("q", q, self._n)
-        qd = _as_joint_vector("qd", qd, self._n)
+        q = as_joint_vector("q", q, self._n)
+        qd = as_joint_vector("qd", qd, self._n)
         kinetic = 0.5 * float(qd @ self.mass_matrix(q) @ qd)
         self._write_joint_state(q, qd)
         get_link_state = self._client.getLinkState
@@ -489,21 +342,3 @@ class PyBulletArmPlant:
         reset_joint_state = self._client.resetJointState
         for j, qj, qdj in zip(self._joint_indices, q.tolist(), qd.tolist()):
             reset_joint_state(self._body, j, qj, qdj)
-
-
-def _checked_for_arm(params: PlantParams, arm: Arm) -> PlantParams:
-    """``params``, each per-joint field checked to hold one value per joint of ``arm`` (ValueError naming the
-    field; one left None is refused: the settings' ``plant`` section holds every value, the arm's facts
-    resolved into it)."""
-    for name in ("rotor_inertia_kgm2", "viscous_nms_per_rad", "coulomb_nm", "torque_limit_nm"):
-        value = getattr(params, name)
-        if value is None:
-            raise ValueError(f"{name}: not given (one value per joint of {arm.name}; a run's come from its "
-                             "settings' plant section)")
-        if len(value) != arm.n_joints:
-            raise ValueError(f"{name}: expected {arm.n_joints} values (one per joint of {arm.name}), "
-                             f"got {len(value)}")
-    return params
-
-
-
