@@ -4,6 +4,7 @@ import math
 import numpy as np
 import pytest
 
+from pa10_dnbs.core.controller_bank import FixedGainBank
 from pa10_dnbs.controller_factory import build_controllers, build_reference
 from pa10_dnbs.core.checkpoint import checkpoint_due, checkpoint_phase, load_checkpoint, save_checkpoint
 from pa10_dnbs.core.reference import ReferenceSample
@@ -15,27 +16,12 @@ GUARD = StateGuard(lower_rad=np.array([-1.0]), upper_rad=np.array([1.0]), margin
 REF = ReferenceSample(np.zeros(1), np.zeros(1), np.zeros(1))
 
 
-class Constant:
+class Constant(FixedGainBank):
     """A bank of one row answering ``u`` (and recording the rows it was asked to train)."""
     n_joints = 1
 
     def __init__(self, u):
         self.u, self.trained = u, []
-
-    learns = False  # a ControllerBank that does not learn (core/controller_bank.py)
-    learning_pending = False
-
-    def learn(self):
-        pass
-
-    def state_dict(self, row=0):
-        return {}
-
-    def counters(self, row=0):
-        return {}
-
-    def step(self, x1, x2, ref, active=None):
-        return self.answer(x1, x2, ref, active)
 
     def answer(self, x1, x2, ref, active=None):
         assert np.all(np.isfinite(x1)) and np.all(np.isfinite(x2))  # never fed an untrusted state

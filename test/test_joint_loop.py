@@ -1,32 +1,18 @@
 """The controller node's loop: waits for references, answers each state once."""
 import numpy as np
 
+from pa10_dnbs.core.controller_bank import FixedGainBank
 from pa10_dnbs.core.reference import ReferenceSample
 from pa10_dnbs.loop.guarded_controllers import GuardedControllers
 from pa10_dnbs.loop.joint_loop import JointLoop
 
 
-class Recorder:
+class Recorder(FixedGainBank):
     """A bank of one row that answers 1, 2, 3, ... and records what it saw."""
     n_joints = 1
 
     def __init__(self):
         self.calls = []
-
-    learns = False  # a ControllerBank that does not learn (core/controller_bank.py)
-    learning_pending = False
-
-    def learn(self):
-        pass
-
-    def state_dict(self, row=0):
-        return {}
-
-    def counters(self, row=0):
-        return {}
-
-    def step(self, x1, x2, ref, active=None):
-        return self.answer(x1, x2, ref, active)
 
     def answer(self, x1, x2, ref: ReferenceSample, active=None):
         self.calls.append((float(x1[0]), float(x2[0]), float(ref.position_rad[0]), float(ref.velocity_rad_s[0]),
