@@ -220,7 +220,7 @@ def test_standalone_recorder_rejects_bad_parameters(tmp_path, domain):
 
 def test_launcher_rejects_a_lockstep_bag_that_lost_messages(tmp_path, cfg):
     """A lockstep recording must hold one message per step on every per-step topic, or the run fails."""
-    from pa10_dnbs.commands.launch import _bag_run
+    from pa10_dnbs.commands.launch_record import bag_run as _bag_run
 
     bag = _write_run_bag(tmp_path / "b", n=300)
     run, missing = _bag_run(bag, 1e-3, 300, "dnbs", cfg, 1.0, lockstep_stats=None)

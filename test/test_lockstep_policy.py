@@ -31,7 +31,7 @@ def test_bad_periods_are_refused():
 
 
 def test_a_nominal_lockstep_run_that_stepped_past_a_missing_effort_says_it_is_not_deterministic():
-    from pa10_dnbs.commands.launch import _unforced_timeouts
+    from pa10_dnbs.commands.launch_report import _unforced_timeouts
 
     def stats(*timeouts):
         return {"joints": [{"name": n, "effort_timeouts": t} for n, t in zip(("s1", "s2", "s3"), timeouts)]}

@@ -1,0 +1,85 @@
+"""What a launched run's report says beside its figures: its notes (config, arm, source, timing, trajectory, robot,
+warm start, faults, window) and the timing part of metrics.json."""
+from __future__ import annotations
+
+import sys
+
+from ..number_text import interval
+from ..supervisor.fault_flags import faults_active
+from ..supervisor.fault_report import fault_note
+from .launch_plan import LaunchPlan
+from .options import LaunchOptions
+
+
+def report_notes(plan: LaunchPlan, o: LaunchOptions, stats: dict, result, source: str, metrics: dict) -> list[str]:
+    """The report's notes of the run ``plan`` made from ``o``: the graph's ``stats`` and ``result``, the record
+    the time series were rebuilt from (``source``), its ``metrics``; a lockstep run that stepped past a missing
+    effort without an injected fault is also warned about on stderr."""
+    settings, mode, config_path, the_arm = plan.settings, o.mode, plan.config_path, plan.settings.arm
+    trajectory, init_from, robot, own_robot = plan.trajectory, plan.init_from, plan.robot, plan.own_robot
+    reliability, window = plan.reliability, plan.measured["window_s"]
+    notes = [f"config: `{config_path}`",
+             f"arm: {the_arm.name} ({the_arm.description}), `{the_arm.file}`",
+             f"source: ROS 2 node graph, {mode} mode, {reliability} QoS, domain {result.domain_id}; "
+             f"time series rebuilt from {source}",
+             _timing_note(stats)]
+    if trajectory is not None:
+        notes.append(f"reference: the trajectory of `{trajectory}` from t = 0, not eq. 27 "
+                     "(docs/trajectories.md)")
+    if own_robot:
+        notes.append("plant: the arm in MuJoCo (`pa10-dnbs robot --engine mujoco`) behind the joint bus, "
+                     "lockstep (docs/engines.md)")
+    elif robot is not None:
+        notes.append(f"plant: an external robot behind the joint bus ({robot.command} commands; "
+                     "docs/your_robot.md)")
+    if init_from is not None:
+        notes.append(f"DNBS warm-started from the checkpoints in `{init_from}` (not a cold start)")
+    if faults_active(settings.faults) or result.restarts:
+        notes.append(fault_note(metrics["faults"]))
+    elif mode == "lockstep" and (nondeterministic := _unforced_timeouts(stats, o.effort_timeout_s)):
+        notes.append(nondeterministic)
+        print(f"pa10-dnbs launch: warning: {nondeterministic}", file=sys.stderr, flush=True)
+    if tuple(window) != tuple(settings.simulation.window_s):
+        notes.append(f"run shorter than the configured window {interval(settings.simulation.window_s)} s: "
+                     "metrics over the second half instead")
+    return notes
+
+
+def _unforced_timeouts(stats: dict, effort_timeout_s: float) -> str | None:
+    """What to say when a lockstep run without injected faults stepped past a missing effort, else None."""
+    joints = [(j["name"], j["effort_timeouts"]) for j in stats["joints"] if j["effort_timeouts"]]
+    if not joints:
+        return None
+    return (f"the plant stepped without an answer {sum(n for _, n in joints)} times "
+            f"({', '.join(f'{name}: {n}' for name, n in joints)}; --effort-timeout {effort_timeout_s:g} s of wall "
+            "time): no fault was injected, so a node stalled (a loaded machine?) and this lockstep run is not "
+            "the in-process run bit for bit")
+
+
+TIMING_KEYS = ("on_time_fraction", "late_start_ticks", "max_start_lateness_us", "target_real_time_factor",
+               "real_time_factor", "tick_period_s", "deadline_fraction", "reliability", "state_qos_depth",
+               "effort_qos_depth", "effort_timeout_s", "on_missing_effort", "rt_priority", "rt_priority_applied",
+               "cpu", "effort_waits_per_step", "effort_wakeups_per_step", "on_time_fraction_per_bin")
+
+
+def timing_summary(stats: dict, controllers: dict, sched_batch: bool) -> dict:
+    """The timing part of metrics.json: the plant's pacing figures and, per joint, misses and latency; whether
+    the nodes were asked for SCHED_BATCH and the policies the controllers ended with (their stats files)."""
+    policies = sorted({c["sched_policy"] for c in controllers.values() if c and "sched_policy" in c})
+    return ({k: stats.get(k) for k in TIMING_KEYS}
+            | {"sched_batch": sched_batch, "controller_sched_policies": policies, "joints": stats["joints"]})
+
+
+def _timing_note(stats: dict) -> str:
+    j = stats["joints"]
+    med = max(x["latency_median_us"] or 0 for x in j)
+    p99 = max(x["latency_p99_us"] or 0 for x in j)
+    s = (f"plant: {stats['steps']} steps, real-time factor {stats['real_time_factor']:.2f}; state-to-effort latency "
+         f"p50 up to {med:.0f} us, p99 up to {p99:.0f} us; effort timeouts "
+         f"{sum(x['effort_timeouts'] for x in j)}")
+    if stats["mode"] == "realtime":
+        s += (f"; target real-time factor {stats['target_real_time_factor']:g} (tick {1e3 * stats['tick_period_s']:.2f}"
+              f" ms, deadline {100 * stats['deadline_fraction']:.0f} %); ticks with every effort on time "
+              f"{100 * stats['on_time_fraction']:.2f} %, late tick starts {stats['late_start_ticks']}, missed ticks "
+              "per joint " + ", ".join(f"{x['name']} {x['missed_ticks']}" for x in j))
+    return s
