@@ -1,6 +1,8 @@
-"""Build a plant node and a reference node in this process from a params file and count how often each reads
-its arm (arm file and URDF: ``arm_file._build``); prints one JSON line {node: [paths read]}.
-argv: the params file, then an optional config_file for both nodes."""
+"""Build a plant node, a reference node and joint a1's PID controller (the iiwa's first joint) in this process
+from a params file and count how often each reads its arm (arm file and URDF: ``arm_file._build``); prints one
+JSON line {node: [paths read]}.
+argv: the params file, then an optional config_file for all three nodes."""
+import functools
 import json
 import os
 import sys
@@ -14,12 +16,15 @@ def main() -> None:
     arm_file._build = lambda path, *a, **k: (reads.append(str(path)), build(path, *a, **k))[1]
     import rclpy
     from pa10_dnbs.ros.plant.node import PlantNode
+    from pa10_dnbs.ros.joint_controller_node import JointControllerNode
     from pa10_dnbs.ros.reference_node import ReferenceNode
 
     extra = ["-p", f"config_file:={sys.argv[2]}"] if len(sys.argv) > 2 else []
-    rclpy.init(args=["probe", "--ros-args", "-r", "__ns:=/pa10", *extra, "--params-file", sys.argv[1]])
+    joint = ["-p", "joint:=a1", "-p", "controller:=pid"]  # the plant and reference declare neither
+    rclpy.init(args=["probe", "--ros-args", "-r", "__ns:=/pa10", *extra, *joint, "--params-file", sys.argv[1]])
+    controller = functools.partial(JointControllerNode, ["probe", "--ros-args", *joint])
     out = {}
-    for name, kind in (("plant", PlantNode), ("reference", ReferenceNode)):
+    for name, kind in (("plant", PlantNode), ("reference", ReferenceNode), ("joint_controller_a1", controller)):
         arm_file._load.cache_clear()  # each node its own process in a graph: nothing read before it
         reads.clear()
         node = kind()

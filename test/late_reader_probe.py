@@ -26,7 +26,7 @@ def main() -> int:
     rclpy.init(signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     writer_node, early_node, late_node = (rclpy.create_node(f"late_reader_probe_{k}") for k in ("w", "e", "l"))
     got = {"early": [], "late": []}
-    pub = writer_node.create_publisher(Clock, "/probe/clock", record_qos())  # as plant_endpoints's /clock
+    pub = writer_node.create_publisher(Clock, "/probe/clock", record_qos())  # as the plant's /clock (ros/plant/endpoints.py)
     early_node.create_subscription(Clock, "/probe/clock", lambda m: got["early"].append(m.clock.nanosec),
                                    record_qos(CLOCK_DEPTH))
     ex = SingleThreadedExecutor()

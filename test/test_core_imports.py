@@ -40,7 +40,7 @@ LAYERS = [
     {"settings"},                                                              # a run's typed settings
     {"plant", "loop", "accel", "trajectory_file"},                             # physics, loop logic, compiled step
     {"derived_settings", "run_settings"},                                      # the rules; settings built once
-    {"controller_factory", "controller_gains"},                               # what a joint runs; its gains
+    {"controller_factory"},                                                   # what a joint runs
     {"sim", "bag", "report", "live"},                                          # in-process runs, bags, outputs, live view
     {"study", "tune"},                                                         # robustness study, tuning: sim runs
     {"ros"},                                                                   # the nodes (rclpy)

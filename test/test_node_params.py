@@ -22,13 +22,20 @@ CASES = [  # (node module, bad parameter, word the error line must hold): each n
     ("plant.node", "simulation.dt_s:=0.5", "simulation.dt_s"),                  # a setting: outside its range
     ("plant.node", "plant.torque_limit_nm:=[1.0,2.0]", "plant.torque_limit_nm"),  # not one value per joint
     ("reference_node", "arm_file:=/no/such/arm.yaml", "arm_file"),
+    # a joint controller's setting: its joint's one value (a strict bound; a list where one double is its value)
+    ("joint_controller_node", ("joint:=s1", "dnbs.alpha_net.error_scale_rad:=0.0"), "dnbs.alpha_net.error_scale_rad"),
+    ("joint_controller_node", ("joint:=s1", "controller:=pid", "pid.kp:=[1.0,2.0]"), "pid.kp"),
 ]
+
+
+def _ros_args(param) -> list[str]:
+    return [a for one in (param if isinstance(param, tuple) else (param,)) for a in ("-p", one)]
 TIMEOUT_S = 60
 
 
 def test_bad_parameter_exits_2_with_one_line(domain):
     procs = [subprocess.Popen(["timeout", "-k", "5", str(TIMEOUT_S), sys.executable, "-m", f"pa10_dnbs.ros.{module}",
-                               "--ros-args", "-p", param], cwd=REPO, env=ros_env(domain), text=True,
+                               "--ros-args", *_ros_args(param)], cwd=REPO, env=ros_env(domain), text=True,
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)
              for module, param, _ in CASES]
     results = [p.communicate(timeout=TIMEOUT_S + 10) for p in procs]

@@ -62,7 +62,7 @@ def test_the_plant_and_reference_run_read_only_settings_from_the_params_file(cfg
 
 
 def test_each_node_reads_its_arm_once_from_the_path_its_params_give(cfg, tmp_path, domain):
-    """The arm file and its URDF are parsed once per node, from arm_file (here the iiwa's, with a config file
+    """The arm file and its URDF are parsed once per node (a joint controller too), from arm_file (here the iiwa's, with a config file
     for the PA10 that a node never reads once the params file gives everything)."""
     from pa10_dnbs.arm import load_arm
     from pa10_dnbs.run_settings import build_settings
@@ -74,4 +74,5 @@ def test_each_node_reads_its_arm_once_from_the_path_its_params_give(cfg, tmp_pat
                            timeout=100)
     assert probe.returncode == 0, probe.stderr
     reads = json.loads(probe.stdout.strip().splitlines()[-1])
-    assert reads == {"plant": [str(load_arm("iiwa").file)], "reference": [str(load_arm("iiwa").file)]}, reads
+    once = [str(load_arm("iiwa").file)]
+    assert reads == {"plant": once, "reference": once, "joint_controller_a1": once}, reads

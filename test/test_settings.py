@@ -55,17 +55,3 @@ def test_settings_travel_to_a_worker_as_the_arm_file(cfg):
     data = pickle.dumps(cfg)
     assert len(data) < 20_000  # no URDF chain in it
     assert pickle.loads(data).arm is cfg.arm  # one Arm per file per process
-
-
-def test_one_joints_gains_are_read_and_replaced_by_their_config_keys(cfg):
-    from pa10_dnbs.controller_gains import gain_range, joint_gains, with_joint_gains
-
-    gains = joint_gains(cfg, "pid", 1)
-    assert gains == {"pid.kp": cfg.pid.kp[1], "pid.ki": cfg.pid.ki[1], "pid.kd": cfg.pid.kd[1],
-                     "plant.torque_limit_nm": cfg.plant.torque_limit_nm[1]}
-    changed = with_joint_gains(cfg, 1, dict(gains, **{"pid.kp": 1234.5}))
-    assert changed.pid.kp == cfg.pid.kp[:1] + (1234.5,) + cfg.pid.kp[2:] and changed.pid.ki == cfg.pid.ki
-    assert with_joint_gains(cfg, 1, gains) == cfg  # the same values: the same settings, bit for bit
-    assert gain_range("dnbs.alpha_net.eta") == (0.0, 1.0) and gain_range("pid.kp") == (0.0, None)
-    with pytest.raises(ConfigError, match=r"^plant\.torque_limit_nm\[1\]: must be > 0"):
-        with_joint_gains(cfg, 1, {"plant.torque_limit_nm": 0.0})

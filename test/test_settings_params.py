@@ -81,8 +81,8 @@ def test_with_a_params_file_the_nodes_get_it_and_no_config_file(tmp_path):
     assert set(cmds) == {"recorder", "live_view", "reference", "plant"} | {f"joint_controller_{j}" for j in JOINTS}
     for name, argv in cmds.items():
         assert argv[-2:] == ["--params-file", str(tmp_path / "ros_params.yaml")], name
-        if not name.startswith("joint_controller_"):  # a controller still reads its config for what is not a gain
-            assert not any(a.startswith("config_file:=") for a in argv), (name, argv)
+        assert not any(a.startswith("config_file:=") for a in argv), (name, argv)  # the params file gives all
     without = dict(node_commands(GraphOptions(config_path=Path("config/default.yaml"), joint_names=JOINTS),
                                  tmp_path / "stats.json", tmp_path / "wire.npz"))
     assert "config_file:=config/default.yaml" in without["plant"] and "--params-file" not in without["plant"]
+    assert "config_file:=config/default.yaml" in without["joint_controller_s1"]

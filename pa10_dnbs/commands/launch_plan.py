@@ -113,7 +113,7 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
         lock_output(record, "bag")
         check_bag_path(record, force)
     if controller == "dnbs":  # auto resolved (and c built) once here, before the joint controllers start; the
-        # nodes read the resolved kernel from config_used.yaml (KernelBuildError if c cannot be built)
+        # nodes read the resolved kernel from their params (ros_params.yaml) (KernelBuildError if c cannot be built)
         settings = resolve_kernel(settings, say=lambda line: print(f"launch: {line}", flush=True))
     opt = GraphOptions(config_path=config_path, mode=mode, controller=controller, duration_s=n_steps * dt,
                        domain_id=domain_id, reliability=o.reliability, effort_timeout_s=o.effort_timeout_s,

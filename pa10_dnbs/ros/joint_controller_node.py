@@ -53,8 +53,8 @@ from ..loop.cpu_meter import CpuMeter
 from ..loop.endpoint_match import MatchWait, Need
 from ..loop.joint_loop import JointLoop
 from ..loop.scheduling import apply_batch, apply_fifo, check_priority, policy_name
-from .params import (CONFIG_FILE, RT_PRIORITY, SCHED_BATCH, Param, ParameterError, check_choice, cli_parameter,
-                     declare, gain_params, load_node_config, settings_with_gains)
+from .params import (RT_PRIORITY, SCHED_BATCH, SETTINGS_DEFAULTS, Param, ParameterError, check_choice,
+                     cli_parameter, declare, declare_joint_settings)
 from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node
 from .endpoints import StepClock, effort_topic, loop_qos, reference_qos, reference_topic, state_topic
@@ -65,7 +65,7 @@ FAULT_KEYS = ("bad_states_nonfinite", "bad_states_position", "bad_states_speed",
 
 
 PARAMS = {
-    "config_file": CONFIG_FILE,
+    "config_file": SETTINGS_DEFAULTS,
     "joint": Param("", "the joint: one of the arm's actuated joints (required; names the node "
                        "joint_controller_<joint>)"),
     "controller": Param("dnbs", "dnbs or pid"),
@@ -97,14 +97,12 @@ class JointControllerNode(Node):
         except ValueError as exc:
             raise ParameterError(f"parameter {exc}") from None
         check_choice("controller", p["controller"], CONTROLLER_KINDS)
-        settings = load_node_config(p["config_file"])
+        # every setting it runs: read-only parameters, this joint's values (the launcher's params file, else the
+        # config's), and its arm read once from arm_file (ros/settings_params.py: JOINT_CONTROLLER_KEYS)
+        settings, index = declare_joint_settings(self, p["controller"], p["joint"], p["config_file"])
         arm = settings.arm
-        check_choice("joint", p["joint"], arm.joint_names)
         self.p = p
         self.joint = p["joint"]
-        index = arm.index(self.joint)
-        # its gains: read-only parameters (the launcher's params file, else the config's values)
-        settings = settings_with_gains(settings, index, declare(self, gain_params(settings, p["controller"], index)))
         self.clock_ = StepClock(settings.simulation.dt_s)
         # a bank of this one joint behind its state guard, as the in-process simulation runs all the arm's
         self.loop_ = JointLoop(build_guarded_controllers(settings, p["controller"], [index]),
@@ -114,7 +112,9 @@ class JointControllerNode(Node):
         self.checkpoint = Path(p["checkpoint_file"]) if p["checkpoint_file"] else None
         if self.checkpoint is not None and not controller.learns:
             raise ParameterError(f"checkpoint_file: the {p['controller']} controller has no learned state to save")
-        self.checkpoint_every = max(1, int(round(settings.checkpoint.period_s / settings.simulation.dt_s)))
+        # a controller that learns nothing runs no checkpoint settings
+        self.checkpoint_every = (max(1, int(round(settings.checkpoint.period_s / settings.simulation.dt_s)))
+                                 if controller.learns else 1)
         self.checkpoint_phase = checkpoint_phase(index, arm.n_joints, self.checkpoint_every)
         self.resumed_from = None
         if p["init_file"] and not (p["resume"] and self.checkpoint is not None and self.checkpoint.is_file()):

@@ -7,7 +7,8 @@ A bad value (outside the range, of the wrong type, or refused by a node's own ch
 ``ParameterError``: one line on stderr and exit code 2 (``runtime.run_node``).
 
 A node's settings (the sections of the config it runs, ``settings_params.py``) are declared the same way by
-:func:`declare_settings`, which hands back the typed settings built from those parameters alone.
+:func:`declare_settings`, which hands back the typed settings built from those parameters alone; a joint
+controller's (the keys it runs, its joint's value of each per-joint key) by :func:`declare_joint_settings`.
 """
 from __future__ import annotations
 
@@ -20,10 +21,10 @@ from rclpy.node import Node
 
 from ..arm import ArmError, load_arm
 from ..config import ConfigError, default_config_path
-from ..controller_gains import gain_keys, gain_range, joint_gains, with_joint_gains
 from ..run_settings import build_settings
 from ..settings import Settings
-from .settings_params import ARM_FILE, ARM_FILE_DESCRIPTION, node_settings, section_params, section_values
+from .settings_params import (ARM_FILE, ARM_FILE_DESCRIPTION, joint_node_settings, joint_params, joint_values,
+                              node_settings, section_params, section_values)
 
 
 class ParameterError(ValueError):
@@ -119,26 +120,56 @@ def declare_settings(node: Node, sections, config_file: str = "", arm: str | Non
     Their values come from the run's params file (the launcher's ros_params.yaml) or ``-p``; only when some
     are not given there, their defaults are the settings of ``config_file`` ('' = the shipped default) for the
     arm ``arm`` (else the config's). A bad value is a ParameterError naming the parameter."""
-    specs = section_params(sections)
+    def from_config(arm_file: str | None) -> dict:
+        return section_values(load_node_config(config_file, arm_file or arm, ARM_FILE if arm_file else arm_param),
+                              sections)
+
+    values, the_arm = _declare_with_arm(node, section_params(sections), from_config)
+    try:
+        return node_settings(the_arm, values, sections)
+    except ConfigError as exc:
+        raise ParameterError(f"parameter {exc}") from None
+
+
+def declare_joint_settings(node: Node, controller: str, joint: str, config_file: str = ""):
+    """Declare ``arm_file`` and every setting joint ``joint``'s ``controller`` ('dnbs' or 'pid') runs
+    (``settings_params.JOINT_CONTROLLER_KEYS``; a per-joint key holds this joint's value, one double) as read-only
+    parameters, with unit and range; return (its settings built from their values alone, the joint's index in
+    the arm). The arm is read once, from ``arm_file``.
+
+    Their values come from the run's params file or ``-p``; only when some are not given there, their defaults
+    are the settings of ``config_file`` ('' = the shipped default), which is then read. A bad value, or a joint
+    the arm has not, is a ParameterError naming the parameter."""
+    def from_config(arm_file: str | None) -> dict:
+        settings = load_node_config(config_file, arm_file, ARM_FILE)
+        check_choice("joint", joint, settings.arm.joint_names)
+        return joint_values(settings, controller, settings.arm.index(joint))
+
+    values, the_arm = _declare_with_arm(node, joint_params(controller), from_config)
+    check_choice("joint", joint, the_arm.joint_names)
+    try:
+        return joint_node_settings(the_arm, values, controller), the_arm.index(joint)
+    except ConfigError as exc:
+        raise ParameterError(f"parameter {exc}") from None
+
+
+def _declare_with_arm(node: Node, specs: dict, from_config) -> tuple[dict, object]:
+    """Declare ``arm_file`` and ``specs`` (name -> SettingParam) read-only, defaults from what the params file
+    and ``-p`` give the node, or else from ``from_config(arm_file given or None)`` (a config file is read only
+    then); return their values and the arm, read once from ``arm_file``."""
     names = [ARM_FILE, *specs]
     given = node._parameter_overrides  # what the params file and -p give this node (rclpy keeps no public view)
     if all(name in given for name in names):
         defaults = {name: _plain_value(given[name].value) for name in names}
     else:
-        arm_file = _text(given.get(ARM_FILE))
-        defaults = section_values(load_node_config(config_file, arm_file or arm, ARM_FILE if arm_file else arm_param),
-                                  sections)
+        defaults = from_config(_text(given.get(ARM_FILE)))
     params = {ARM_FILE: Param(defaults[ARM_FILE], ARM_FILE_DESCRIPTION)}
     params.update({key: Param(defaults[key], s.description, s.lo, s.hi) for key, s in specs.items()})
     values = declare(node, params)
     try:
-        the_arm = load_arm(values[ARM_FILE])
+        return values, load_arm(values[ARM_FILE])
     except ConfigError as exc:
         raise ParameterError(f"parameter {ARM_FILE}: {_one_line(exc)}") from None
-    try:
-        return node_settings(the_arm, values, sections)
-    except ConfigError as exc:
-        raise ParameterError(f"parameter {exc}") from None
 
 
 def _plain_value(value):
@@ -147,24 +178,6 @@ def _plain_value(value):
 
 def _text(parameter) -> str | None:
     return parameter.value if parameter is not None and isinstance(parameter.value, str) else None
-
-
-def gain_params(settings: Settings, controller: str, row: int) -> dict[str, Param]:
-    """The gains of joint ``row``'s ``controller`` as read-only parameters named by their config keys, each
-    with its unit and the key's range, valued by ``settings`` unless a params file gives them
-    (controller_gains.py)."""
-    return {key: Param(value, description, *gain_range(key))
-            for (key, description), value in zip(gain_keys(controller).items(),
-                                                 joint_gains(settings, controller, row).values())}
-
-
-def settings_with_gains(settings: Settings, row: int, gains: dict) -> Settings:
-    """``settings`` with joint ``row``'s gains as its parameters hold them; a value the config's check refuses
-    is a ParameterError naming the parameter."""
-    try:
-        return with_joint_gains(settings, row, gains)
-    except ConfigError as exc:
-        raise ParameterError(f"parameter {exc}") from None
 
 
 def check_choice(name: str, value, choices) -> None:

@@ -7,6 +7,12 @@ string, or a list of doubles for a per-joint value, a pair or a tuple (one value
 ``arm_file``, the arm file (or URDF) the node reads its arm from. Descriptions carry the unit, ranges are the
 keys' bounds in ``config.SCHEMA``. :func:`node_settings` rebuilds the typed sections from the values and
 validates them as a config file's would be (ConfigError naming the key).
+
+A joint controller runs one joint, so its parameters are the keys it runs (``JOINT_CONTROLLER_KEYS``) under the
+same dotted names, with one rule of its own: **every per-joint key holds its own joint's value, one double**
+(``pid.kp``, ``dnbs.alpha_net.error_scale_rad``); scalars and per-input tuples are as elsewhere.
+:func:`joint_values` gives them, :func:`joint_node_settings` rebuilds the node's settings from them alone (each
+per-joint number broadcast to every row, as a config file's single number is: the node runs only its own row).
 """
 from __future__ import annotations
 
@@ -70,10 +76,10 @@ def _unit(key: str, spec) -> str:
     return "1"
 
 
-def _describe(key: str, spec) -> SettingParam:
+def _describe(key: str, spec, one_joint: bool = False) -> SettingParam:
     unit = _unit(key, spec)
-    shape = {Joints: "one value per joint, chain order", Pair: "[t0, t1]",
-             tuple: "one value per input, in its unit"}.get(type(spec))
+    shape = {Joints: "this node's joint's value" if one_joint else "one value per joint, chain order",
+             Pair: "[t0, t1]", tuple: "one value per input, in its unit"}.get(type(spec))
     if isinstance(spec, Text) and spec.choices:
         shape = "one of " + ", ".join(spec.choices)
     text = (f"{key} of the run's settings (config/default.yaml)" + (f", {shape}" if shape else "")
@@ -91,6 +97,116 @@ def _describe(key: str, spec) -> SettingParam:
 def section_params(sections) -> dict[str, SettingParam]:
     """Every parameter of ``sections`` (names of ``settings.SECTIONS``): dotted key -> SettingParam."""
     return {key: _describe(key, spec) for name in sections for key, spec in _leaves(SCHEMA[name], name)}
+
+
+#: controller kind -> the settings a joint controller runs (a section or subsection: every key under it)
+JOINT_CONTROLLER_KEYS: dict[str, tuple[str, ...]] = {
+    "dnbs": ("simulation.dt_s", "simulation.seed", "reference.preview_steps", "plant.torque_limit_nm", "dnbs",
+             "guards", "checkpoint", "faults.seed", "faults.effort", "faults.kill_controller_at_s"),
+    "pid": ("simulation.dt_s", "reference.preview_steps", "plant.torque_limit_nm", "pid",
+            "guards.position_margin_rad", "guards.max_speed_rad_s", "guards.on_bad_state",
+            "faults.seed", "faults.effort", "faults.kill_controller_at_s"),
+}
+
+
+def _spec_of(dotted: str):
+    spec = SCHEMA
+    for part in dotted.split("."):
+        spec = spec[part]
+    return spec
+
+
+def _joint_leaves(controller: str):
+    """(dotted key, spec) of every setting a ``controller`` joint controller runs, in JOINT_CONTROLLER_KEYS order."""
+    for key in JOINT_CONTROLLER_KEYS[controller]:
+        spec = _spec_of(key)
+        if isinstance(spec, dict):
+            yield from _leaves(spec, key)
+        else:
+            yield key, spec
+
+
+def joint_params(controller: str) -> dict[str, SettingParam]:
+    """Every settings parameter of a ``controller`` ('dnbs' or 'pid') joint controller: dotted key ->
+    SettingParam (a per-joint key described as the node's joint's value)."""
+    return {key: _describe(key, spec, one_joint=True) for key, spec in _joint_leaves(controller)}
+
+
+def _setting(settings, key: str):
+    node = settings
+    for part in key.split("."):
+        node = getattr(node, part)
+    return node
+
+
+def joint_values(settings: Settings, controller: str, row: int) -> dict[str, object]:
+    """The parameters' values of joint ``row``'s ``controller`` node, ``arm_file`` first: a per-joint key's value
+    of that row as one float, everything else as :func:`section_values` gives it."""
+    out: dict[str, object] = {ARM_FILE: str(settings.arm.file)}
+    for key, spec in _joint_leaves(controller):
+        value = _setting(settings, key)
+        out[key] = float(value[row]) if isinstance(spec, Joints) else _ros_value(spec, value)
+    return out
+
+
+class _Part:
+    """The keys of a section a node runs when it runs only some of them; reading another is an AttributeError
+    naming it (the node runs nothing but its parameters)."""
+
+    def __init__(self, key: str, fields: dict):
+        self._key = key
+        self.__dict__.update(fields)
+
+    def __getattr__(self, name: str):
+        if name.startswith("__"):
+            raise AttributeError(name)
+        raise AttributeError(f"this node's parameters hold no {self._key}.{name} (ros/settings_params.py)")
+
+
+def _section_classes() -> dict[str, type]:
+    """Dotted key -> the typed class of every section and subsection (``faults.effort`` ->
+    EffortLinkFaultSettings)."""
+    import typing
+
+    out: dict[str, type] = {}
+    todo = list(SECTIONS.values())
+    while todo:
+        cls = todo.pop()
+        out[cls.KEY] = cls
+        todo.extend(t for t in typing.get_type_hints(cls).values()
+                    if isinstance(t, type) and dataclasses.is_dataclass(t))
+    return out
+
+
+def _complete(spec: dict, tree: dict) -> bool:
+    return set(tree) == set(spec) and all(_complete(spec[k], v) for k, v in tree.items() if isinstance(v, dict))
+
+
+def _typed(key: str, spec: dict, tree: dict, classes: dict):
+    """The (sub)section ``key`` from its checked ``tree``: its typed class when every key is there, else a
+    :class:`_Part` of what is there."""
+    if _complete(spec, tree):
+        return classes[key].of(tree)
+    return _Part(key, {k: _typed(f"{key}.{k}", spec[k], v, classes) if isinstance(v, dict) else v
+                       for k, v in tree.items()})
+
+
+def joint_node_settings(arm: Arm, values: dict, controller: str) -> NodeSettings:
+    """A ``controller`` joint controller's settings from its parameter ``values`` (dotted key -> value, a
+    per-joint key one number) for ``arm``: every number checked as a config file's (ConfigError naming the key)
+    and broadcast to every joint's row; a section it runs whole is typed, the others hold only its keys."""
+    trees: dict[str, dict] = {}
+    for key, spec in _joint_leaves(controller):
+        value = values[key]
+        value = list(value) if isinstance(value, (list, tuple)) or hasattr(value, "tolist") else value
+        checked = check_value(key, value, spec, arm.n_joints)
+        name, *parents, leaf = key.split(".")
+        node = trees.setdefault(name, {})
+        for part in parents:
+            node = node.setdefault(part, {})
+        node[leaf] = checked
+    classes = _section_classes()
+    return NodeSettings(arm, {name: _typed(name, SCHEMA[name], tree, classes) for name, tree in trees.items()})
 
 
 def _ros_value(spec, value):
@@ -121,9 +237,10 @@ class NodeSettings:
 
     def __init__(self, arm: Arm, sections: dict):
         for name, section in sections.items():
-            check_value(name, dataclasses.asdict(section), SCHEMA[name], arm.n_joints)
+            if dataclasses.is_dataclass(section):  # a _Part's keys are checked one by one as it is made
+                check_value(name, dataclasses.asdict(section), SCHEMA[name], arm.n_joints)
         sim = sections.get("simulation")
-        if sim is not None and sim.window_s[1] > sim.duration_s + 1e-12:
+        if dataclasses.is_dataclass(sim) and sim.window_s[1] > sim.duration_s + 1e-12:
             raise ConfigError(f"simulation.window_s: ends at {sim.window_s[1]:g} s, after "
                               f"simulation.duration_s = {sim.duration_s:g} s")
         self.arm = arm

@@ -81,6 +81,8 @@ def controller_command(opt: GraphOptions, workdir: Path, joint: str, incarnation
         if opt.init_from is not None:
             params["init_file"] = str(opt.init_from / f"{joint}.npz")
     files = ["--params-file", str(opt.params_file)] if opt.params_file is not None else []
+    if files:  # every setting it runs is in the params file: no config file to read
+        del params["config_file"]
     return [sys.executable, "-m", "pa10_dnbs.ros.joint_controller_node"] + _ros_args(f"joint_controller_{joint}",
                                                                                     params, opt.namespace) + files
 

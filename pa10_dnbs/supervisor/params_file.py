@@ -2,7 +2,8 @@
 
 Written by the launcher next to config_used.yaml and passed to every node with ``--ros-args --params-file``:
 
-- each joint controller's gains and torque limit (controller_gains.py), one joint's values each;
+- each joint controller: ``arm_file`` and every setting it runs (``ros/settings_params.py``:
+  ``JOINT_CONTROLLER_KEYS``), a per-joint key holding that joint's value, one double;
 - the plant (or the joint bus), the MuJoCo robot, the reference node, the observers: ``arm_file`` and every key
   of the sections of the settings they run (``ros/settings_params.py``: ``NODE_SECTIONS``).
 
@@ -17,8 +18,7 @@ from pathlib import Path
 
 import yaml
 
-from ..controller_gains import joint_gains
-from ..ros.settings_params import NODE_SECTIONS, section_values
+from ..ros.settings_params import NODE_SECTIONS, joint_values, section_values
 from ..settings import Settings
 
 
@@ -33,10 +33,11 @@ def node_name(namespace: str, node: str) -> str:
 
 
 def params_document(settings: Settings, controller: str, namespace: str) -> dict:
-    """{node: {"ros__parameters": {...}}} for every joint controller of the arm (each gain under its config key)
-    and every other node that runs settings (``NODE_SECTIONS``), nested as ROS nests a dotted parameter name
-    (``pid: {kp: ...}`` is the parameter ``pid.kp``)."""
-    doc = {controller_node_name(namespace, joint): {"ros__parameters": _nested(joint_gains(settings, controller, row))}
+    """{node: {"ros__parameters": {...}}} for every joint controller of the arm (every setting it runs, its
+    joint's value of each per-joint key) and every other node that runs settings (``NODE_SECTIONS``), nested as
+    ROS nests a dotted parameter name (``pid: {kp: ...}`` is the parameter ``pid.kp``)."""
+    doc = {controller_node_name(namespace, joint):
+           {"ros__parameters": _nested(joint_values(settings, controller, row))}
            for row, joint in enumerate(settings.arm.joint_names)}
     for node, sections in NODE_SECTIONS.items():
         doc[node_name(namespace, node)] = {"ros__parameters": _nested(section_values(settings, sections))}
