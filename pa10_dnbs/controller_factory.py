@@ -79,8 +79,8 @@ def _pid_params(pid: PidSettings, torque_limit_nm, dt_s: float) -> PIDParams:
                      torque_limit_nm=np.array(torque_limit_nm, float), dt_s=dt_s, anti_windup=pid.anti_windup)
 
 
-def _bank(kind: str, rows: list[int], run: RunSettings, torque_limit_nm, guards: GuardSettings, dnbs: DnbsSettings,
-          pid: PidSettings) -> ControllerBank:
+def _bank(kind: str, rows: list[int], run: RunSettings, torque_limit_nm, guards: GuardSettings,
+          dnbs: DnbsSettings | None, pid: PidSettings | None) -> ControllerBank:
     """Controllers of joint indices ``rows``, one per row, in that order.
 
     ``dnbs.kernel: c`` steps a DNBS bank with the compiled kernel (the same bits; KernelBuildError when it
@@ -135,8 +135,9 @@ def pid_params(settings: Settings) -> PIDParams:
 def build_controllers(settings: Settings, kind: str, joints=None) -> ControllerBank:
     """Controllers of joint indices ``joints`` (0..n-1; all of the arm's when None), one per row, in that order
     (the kernels and seeds of :func:`_bank`)."""
-    s = settings
-    return _bank(kind, _rows(s, joints), s.simulation, s.plant.torque_limit_nm, s.guards, s.dnbs, s.pid)
+    s = settings  # only the kind's own section is read: a joint controller node's settings hold no other
+    return _bank(kind, _rows(s, joints), s.simulation, s.plant.torque_limit_nm, s.guards,
+                 s.dnbs if kind == "dnbs" else None, s.pid if kind == "pid" else None)
 
 
 def build_reference(settings: Settings, trajectory: JointTrajectory | None = None) -> Reference | TrajectoryReference:
