@@ -76,11 +76,6 @@ class Arm:
     chain: UrdfChain | None = None
     plant_urdf: Path | None = None
 
-    def __reduce__(self):
-        """Pickled as its file: a worker process reads it once there (``load_arm`` keeps one per file)."""
-        from .arm_file import load_arm
-        return load_arm, (str(self.file),)
-
     @property
     def n_joints(self) -> int:
         """Number of actuated joints."""

@@ -7,6 +7,7 @@ moving link without inertia, a list of the wrong length, a fact without its sour
 """
 from __future__ import annotations
 
+import copyreg
 import functools
 import math
 import sys
@@ -219,3 +220,11 @@ def _check_inertia(urdf: Path, inertial, link: str, joint: str) -> None:
     tensor = np.array([[i["ixx"], i["ixy"], i["ixz"]], [i["ixy"], i["iyy"], i["iyz"]], [i["ixz"], i["iyz"], i["izz"]]])
     if not (mass > 0.0 and np.all(np.isfinite(tensor)) and np.all(np.linalg.eigvalsh(tensor) > 0.0)):
         raise ArmError(f"{urdf}: link {link!r} (moved by {joint!r}): mass {mass:g} kg and inertia must be > 0")
+
+
+def _pickled_as_its_file(arm: Arm):
+    """An Arm is pickled as its file: a worker process reads it once there (``load_arm`` keeps one per file)."""
+    return load_arm, (str(arm.file),)
+
+
+copyreg.pickle(Arm, _pickled_as_its_file)

@@ -1,4 +1,5 @@
-"""The arm's plant backed by PyBullet (the only module that imports pybullet)."""
+"""The arm's model: the PyBullet plant (the only module that imports pybullet), the MuJoCo plant, their shared
+parameters and checks, the rules' tools (inertia sweep, reference torque); the plant node is ros/plant/."""
 
 from pa10_dnbs.plant.quiet_stdout import quiet_c_stdout
 
