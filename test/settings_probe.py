@@ -7,30 +7,20 @@ import os
 import sys
 
 import rclpy
+from param_services import call
 from rcl_interfaces.srv import DescribeParameters, GetParameters, ListParameters, SetParameters
 from rclpy.parameter import Parameter, parameter_value_to_python
 
 
-def _call(node, kind, service: str, request):
-    client = node.create_client(kind, service)
-    if not client.wait_for_service(timeout_sec=30.0):
-        raise SystemExit(f"no service {service}")
-    future = client.call_async(request)
-    rclpy.spin_until_future_complete(node, future, timeout_sec=30.0)
-    if future.result() is None:
-        raise SystemExit(f"no answer from {service}")
-    return future.result()
-
-
 def probe(node, target: str, to_set: str) -> dict:
-    names = list(_call(node, ListParameters, f"{target}/list_parameters", ListParameters.Request()).result.names)
-    values = _call(node, GetParameters, f"{target}/get_parameters", GetParameters.Request(names=names)).values
-    described = _call(node, DescribeParameters, f"{target}/describe_parameters",
+    names = list(call(node, ListParameters, f"{target}/list_parameters", ListParameters.Request()).result.names)
+    values = call(node, GetParameters, f"{target}/get_parameters", GetParameters.Request(names=names)).values
+    described = call(node, DescribeParameters, f"{target}/describe_parameters",
                       DescribeParameters.Request(names=names)).descriptors
     current = dict(zip(names, (parameter_value_to_python(v) for v in values)))
     value = current[to_set]
     changed = [v + 1.0 for v in value] if isinstance(value, list) else value + 1.0
-    answer = _call(node, SetParameters, f"{target}/set_parameters",
+    answer = call(node, SetParameters, f"{target}/set_parameters",
                    SetParameters.Request(parameters=[Parameter(to_set, value=changed).to_parameter_msg()])).results[0]
     return {"values": {n: list(v) if isinstance(v, (list, tuple)) else v for n, v in current.items()},
             "read_only": {n: d.read_only for n, d in zip(names, described)},
