@@ -62,7 +62,7 @@ typedef struct {
     double *alpha, *u_unsat;        /* the controller's alpha (n) and torque_unsaturated (n) */
     const double *ia, *it;          /* 1 / input_scale of the two networks (2 and 3) */
     const double *A, *U, *ka, *ku;  /* output scales and robust-term gains (n) */
-    const double *lim;              /* Table 2 torque limits (n) */
+    const double *lim;              /* the joints' torque limits (n), N m */
     const double *E, *d;            /* training-error scales and dead-zone bands (2n) */
     const double *eta, *r, *q;      /* EKF learning rates, R and Q (2n) */
     const double *bounds;           /* projection's per-weight bounds (2n, W), NULL: none */
@@ -179,7 +179,7 @@ void dnbs_answer_alpha(dnbs_kernel *k, const double *in) {
 }
 
 /* Answer, step 3 of 3: the torque networks' regressors and the torques; u_out (n) gets them clipped to
- * the Table 2 limits, torque_unsaturated the unclipped ones. */
+ * the joints' torque limits, torque_unsaturated the unclipped ones. */
 void dnbs_answer_torque(dnbs_kernel *k, const double *in, double *u_out) {
     const dnbs_config *c = &k->c;
     long n = c->n, W = c->W;
