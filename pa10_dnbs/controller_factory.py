@@ -128,10 +128,6 @@ def dnbs_params(settings: Settings) -> DNBSParams:
     return _dnbs_params(settings.dnbs, settings.plant.torque_limit_nm, settings.simulation.dt_s, settings.guards)
 
 
-def pid_params(settings: Settings) -> PIDParams:
-    return _pid_params(settings.pid, settings.plant.torque_limit_nm, settings.simulation.dt_s)
-
-
 def build_controllers(settings: Settings, kind: str, joints=None) -> ControllerBank:
     """Controllers of joint indices ``joints`` (0..n-1; all of the arm's when None), one per row, in that order
     (the kernels and seeds of :func:`_bank`)."""

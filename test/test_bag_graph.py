@@ -22,7 +22,6 @@ from mcap_crc_probe import assert_every_crc_written_and_valid, assert_jazzy_fiel
 from pa10_dnbs.arm import load_arm
 JOINT_NAMES = load_arm("pa10").joint_names
 from pa10_dnbs.bag.bag_reader import Bag
-from pa10_dnbs.kinematics.urdf_chain import UrdfChain
 from pa10_dnbs.sim.closed_loop import simulate
 from pa10_dnbs.run_data import RunData
 

@@ -10,7 +10,7 @@ from pa10_dnbs.config import ConfigError
 from pa10_dnbs.faults.delay_line import DelayLine
 from pa10_dnbs.faults.link_faults import FaultInjector, LinkFaults
 from pa10_dnbs.arm import load_arm
-from pa10_dnbs.supervisor.fault_flags import add_fault_arguments, apply_fault_flags, faults_active
+from pa10_dnbs.supervisor.fault_flags import FaultFlags, add_fault_arguments, apply_fault_flags, faults_active
 
 JOINT_NAMES = load_arm("pa10").joint_names
 
@@ -60,7 +60,7 @@ def test_delay_line_delivers_late_and_in_due_order():
 def _args(*argv):
     p = argparse.ArgumentParser()
     add_fault_arguments(p)
-    return p.parse_args(list(argv))
+    return FaultFlags.of(p.parse_args(list(argv)))
 
 
 def test_flags_override_the_chosen_joints(cfg):

@@ -64,3 +64,20 @@ def test_a_half_built_node_is_freed_only_under_the_exit_deadline(domain):
     # /dev/shm, never by a participant (the launcher removes them, shm_cleanup.py): only Fast DDS's count here
     leaked = {f for f in unused(shm_files() - before) if not f.startswith("lttng-ust-wait-")}
     assert not leaked, f"shared-memory files left behind: {sorted(leaked)}"
+
+
+def test_a_wrong_type_in_a_complete_params_file_is_one_line_naming_the_key(cfg, tmp_path, domain):
+    """With every setting in the params file its values are the declared defaults: one of the wrong type for a
+    ranged key (a string for plant.payload_kg) is refused in one line, exit 2, not a traceback."""
+    from pa10_dnbs.supervisor.params_file import write_params_file
+
+    params = write_params_file(tmp_path / "ros_params.yaml", cfg, "pid", "/pa10")
+    text = params.read_text()
+    assert "payload_kg: 0.0" in text
+    params.write_text(text.replace("payload_kg: 0.0", "payload_kg: 'heavy'", 1))
+    p = subprocess.run(["timeout", "-k", "5", str(TIMEOUT_S), sys.executable, "-m", "pa10_dnbs.ros.plant.node",
+                        "--ros-args", "-r", "__ns:=/pa10", "--params-file", str(params)],
+                       cwd=REPO, env=ros_env(domain), text=True, capture_output=True, timeout=TIMEOUT_S + 10)
+    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    assert p.returncode == 2 and len(lines) == 1 and "plant.payload_kg" in lines[0], p.stderr
+    assert "Traceback" not in p.stderr

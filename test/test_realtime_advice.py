@@ -1,7 +1,6 @@
 """The launcher's advice after a realtime run that missed deadlines (supervisor/realtime_advice.py)."""
-from pa10_dnbs.arm import load_arm
 from pa10_dnbs.config import default_config_path
-from pa10_dnbs.supervisor.fault_flags import apply_fault_flags
+from pa10_dnbs.supervisor.fault_flags import FaultFlags, apply_fault_flags
 from pa10_dnbs.supervisor.realtime_advice import ON_TIME_TARGET, injected_misses, realtime_hint
 from pa10_dnbs.run_settings import build_settings
 
@@ -29,7 +28,7 @@ def test_injected_effort_drops_are_named_not_blamed_on_the_cpu():
     cfg = build_settings(default_config_path())
     assert injected_misses(cfg.faults) == []
     args = build_parser().parse_args(["launch", "--mode", "realtime", "--drop-efforts", "0.05", "--out", "x"])
-    faulty = apply_fault_flags(cfg, args)
+    faulty = apply_fault_flags(cfg, FaultFlags.of(args))
     assert injected_misses(faulty.faults) == ["efforts dropped"]
     line = realtime_hint(0.5, priority_applied=True, injected=injected_misses(faulty.faults))
     assert "efforts dropped" in line and "by design" in line

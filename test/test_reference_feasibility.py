@@ -2,7 +2,6 @@
 feasible reference is kept as it is, an infeasible one is moved until it fits, and a joint no tried reference
 fits is named in one line."""
 import numpy as np
-import pytest
 
 from pa10_dnbs.arm import load_arm
 from pa10_dnbs.arm.reference_rule import TORQUE_FRACTION, feasible_reference, reference_rule

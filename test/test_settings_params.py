@@ -74,14 +74,16 @@ def test_the_params_file_gives_back_every_value_bit_for_bit(cfg):
     assert doc["/pa10/joint_controller_s1"]["ros__parameters"]["plant"]["torque_limit_nm"] == 232.0
 
 
-def test_with_a_params_file_the_nodes_get_it_and_no_config_file(tmp_path):
-    opt = GraphOptions(config_path=Path("config/default.yaml"), joint_names=JOINTS, live_port=0,
+def test_with_a_params_file_the_nodes_get_it_and_the_runs_config_for_what_it_lacks(tmp_path):
+    used = tmp_path / "config_used.yaml"
+    opt = GraphOptions(config_path=used, joint_names=JOINTS, live_port=0,
                        params_file=tmp_path / "ros_params.yaml", record_bag=tmp_path / "bag")
     cmds = dict(node_commands(opt, tmp_path / "stats.json", tmp_path / "wire.npz"))
     assert set(cmds) == {"recorder", "live_view", "reference", "plant"} | {f"joint_controller_{j}" for j in JOINTS}
     for name, argv in cmds.items():
         assert argv[-2:] == ["--params-file", str(tmp_path / "ros_params.yaml")], name
-        assert not any(a.startswith("config_file:=") for a in argv), (name, argv)  # the params file gives all
+        # read only for a key the params file lacks: the run's own config, never the shipped default
+        assert f"config_file:={used}" in argv, (name, argv)
     without = dict(node_commands(GraphOptions(config_path=Path("config/default.yaml"), joint_names=JOINTS),
                                  tmp_path / "stats.json", tmp_path / "wire.npz"))
     assert "config_file:=config/default.yaml" in without["plant"] and "--params-file" not in without["plant"]

@@ -4,8 +4,8 @@
 numpy reference, said in one line; both give the same result bits (test/test_compiled_dnbs.py), so the
 choice changes only the speed. ``c`` fails (KernelBuildError, exit 2) where it cannot build; ``numpy``
 never builds anything. Commands resolve ``auto`` once, before any controller exists: the launcher
-writes the resolved kernel into config_used.yaml, so every joint controller runs what it chose
-and none of them builds.
+writes the resolved kernel into the run's params file (ros_params.yaml), so every joint controller runs
+what it chose and none of them builds.
 """
 from __future__ import annotations
 

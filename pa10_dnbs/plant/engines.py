@@ -5,8 +5,7 @@ from __future__ import annotations
 from typing import Callable
 
 from ..settings import Settings
-from .from_config import initial_state, open_client, plant_params
-from .pybullet_plant import PyBulletArmPlant
+from .from_config import initial_state, open_client, plant_from_settings, plant_params
 
 ENGINES = ("pybullet", "mujoco")
 DEFAULT_ENGINE = "pybullet"
@@ -19,19 +18,15 @@ def open_plant(settings: Settings, engine: str = DEFAULT_ENGINE) -> tuple[object
     ValueError naming the engine when it is not one of ``ENGINES``."""
     if engine not in ENGINES:
         raise ValueError(f"engine: must be one of {', '.join(ENGINES)}, got {engine!r}")
-    params = plant_params(settings.plant, settings.simulation.dt_s)
-    q0, qd0 = initial_state(settings.simulation, settings.reference)
     if engine == "mujoco":
         from .mujoco_plant import MuJoCoArmPlant
 
-        plant = MuJoCoArmPlant(settings.arm, params)
-        plant.reset(q0, qd0)
+        plant = MuJoCoArmPlant(settings.arm, plant_params(settings.plant, settings.simulation.dt_s))
+        plant.reset(*initial_state(settings.simulation, settings.reference))
         return plant, plant.close
     client = open_client()
     try:
-        plant = PyBulletArmPlant(client, settings.arm, params)
-        plant.reset(q0, qd0)
-        return plant, client.disconnect
+        return plant_from_settings(settings, client), client.disconnect
     except BaseException:
         client.disconnect()
         raise

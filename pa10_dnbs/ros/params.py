@@ -48,7 +48,7 @@ class Param:
             return d
         numbers = list(self.default) if isinstance(self.default, (list, tuple)) else [self.default]
         if not numbers or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in numbers):
-            raise TypeError(f"a range needs a numeric default, got {self.default!r}")
+            raise TypeError(f"expected a number (or one per joint), got {self.default!r}")
         if isinstance(self.default, int):
             d.integer_range = [IntegerRange(from_value=int(-2**63 if self.lo is None else self.lo),
                                             to_value=int(2**63 - 1 if self.hi is None else self.hi), step=1)]
@@ -75,7 +75,7 @@ def declare(node: Node, specs: dict[str, Param]) -> dict:
     for name, spec in specs.items():
         try:
             node.declare_parameter(name, spec.default, spec.descriptor())
-        except ParameterException as exc:
+        except (ParameterException, TypeError) as exc:  # TypeError: a value of the wrong type for a ranged key
             raise ParameterError(f"parameter {name}: {_one_line(exc)} ({spec.description})") from None
     return {name: node.get_parameter(name).value for name in specs}
 
@@ -185,7 +185,6 @@ def check_choice(name: str, value, choices) -> None:
         raise ParameterError(f"parameter {name} must be one of {', '.join(map(str, choices))}, got {value!r}")
 
 
-CONFIG_FILE = Param("", "the YAML config (config/default.yaml and its units); '' = the shipped default")
 SETTINGS_DEFAULTS = Param("", "the YAML config (config/default.yaml and its units) whose values are the defaults of "
                               "the settings parameters the params file does not give; '' = the shipped default")
 SCHED_BATCH = Param(False, "SCHED_BATCH on every thread: the node's wake-ups do not preempt the plant (the "

@@ -160,7 +160,7 @@ def connect(address: str):
                           f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}", setting="scheduler") from None
     try:
         client.wait_for_workers(1, timeout=CONNECT_TIMEOUT_S)
-    except (OSError, TimeoutError) as exc:
+    except (OSError, TimeoutError):
         client.close()
         raise ConfigError(f"scheduler: {address} has no worker (waited {CONNECT_TIMEOUT_S:g} s)",
                           setting="scheduler") from None

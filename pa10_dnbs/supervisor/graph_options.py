@@ -46,7 +46,7 @@ class GraphOptions:
     clock_hz: float = DEFAULT_CLOCK_HZ  # /clock rate [Hz of simulated time]; every node but the plant uses it
     joint_names: tuple[str, ...] = ()   # the arm's actuated joints, chain order: one controller process each
     trajectory_file: Path | None = None  # --trajectory: the reference node follows it from step 0 (not eq. 27)
-    params_file: Path | None = None  # the run's ROS params file (supervisor/params_file.py): the controllers' gains
+    params_file: Path | None = None  # the run's ROS params file (supervisor/params_file.py): every node's settings
     robot: str = ""                     # '' = the project's plant; 'external': the joint bus to a running robot
     robot_command: str = "joint_state"  # external: joint_state or forward:<controller> (docs/your_robot.md)
     robot_state_topic: str = ""         # external: the robot's JointState topic; '' = the command form's default

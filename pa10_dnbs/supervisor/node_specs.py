@@ -81,8 +81,6 @@ def controller_command(opt: GraphOptions, workdir: Path, joint: str, incarnation
         if opt.init_from is not None:
             params["init_file"] = str(opt.init_from / f"{joint}.npz")
     files = ["--params-file", str(opt.params_file)] if opt.params_file is not None else []
-    if files:  # every setting it runs is in the params file: no config file to read
-        del params["config_file"]
     return [sys.executable, "-m", "pa10_dnbs.ros.joint_controller_node"] + _ros_args(f"joint_controller_{joint}",
                                                                                     params, opt.namespace) + files
 
@@ -91,15 +89,12 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
     """(name, argv) of every process: the wire monitor, the recorder (with --record), the nine nodes,
     the plant last (it starts stepping once the others are matched)."""
     py = [sys.executable, "-m"]
-    # each node's settings: from the run's params file when there is one (config_file is then not given),
-    # else from the config file
+    # each node's settings: from the run's params file when there is one; config_file (the run's config_used.yaml)
+    # is read only for a key the params file does not give, so a node never falls back to the shipped config
     files = ["--params-file", str(opt.params_file)] if opt.params_file is not None else []
 
-    def settings_source(params: dict) -> dict:
-        return {k: v for k, v in params.items() if k != "config_file"} if files else params
-
     def ros(node: str, params: dict) -> list[str]:
-        return _ros_args(node, {**settings_source(params), "sched_batch": str(opt.sched_batch).lower(),
+        return _ros_args(node, {**params, "sched_batch": str(opt.sched_batch).lower(),
                                 "use_sim_time": "true", "rt_priority": opt.rt_priority}, opt.namespace) + files
 
     config_file = str(opt.config_path)
@@ -135,14 +130,13 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
     if opt.plant_engine == "mujoco":  # --plant mujoco: our own external robot, before the bus (the last process)
         from .plant_engine import mujoco_robot_command
 
-        cmds.append(mujoco_robot_command(opt, lambda node, params: _ros_args(node, settings_source(params),
-                                                                             opt.namespace) + files))
+        cmds.append(mujoco_robot_command(opt, lambda node, params: _ros_args(node, params, opt.namespace) + files))
     plant, module, extra = "plant", "pa10_dnbs.ros.plant.node", {}
     if opt.robot == "external":  # the joint bus in the plant's place: same handshake, topics and stats file
         plant, module = JOINT_BUS, "pa10_dnbs.ros.joint_bus_node"
         extra = {"robot_command": opt.robot_command, "robot_state_topic": opt.robot_state_topic or "''",
                  "robot_command_topic": opt.robot_command_topic or "''", "robot_timeout_s": opt.robot_timeout_s}
-    cmds.append((plant, py + [module] + _ros_args(plant, settings_source({
+    cmds.append((plant, py + [module] + _ros_args(plant, ({
         **extra, "ready_nodes": _yaml_list(ready), "settle_s": 0.0,
         "config_file": config_file, "mode": opt.mode, "duration_s": opt.duration_s, "reliability": loop_reliability(opt),
         "effort_timeout_s": opt.effort_timeout_s, "on_missing_effort": opt.on_missing_effort,
