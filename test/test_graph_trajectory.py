@@ -58,7 +58,7 @@ def test_a_trajectory_sent_while_running_is_tracked_and_wrong_ones_change_nothin
     la = Launcher("--mode", "lockstep", "--controller", "dnbs", "--duration", DURATION_S, "--out", out,
                   domain_id=domain)
     sender = Proc([sys.executable, "-m", "pa10_dnbs.ros.trajectory_sender", unknown, EXAMPLE, beyond, backwards,
-                   "--after-clock", "0.8", "--gap", "0.3", "--wait", "240"], domain)
+                   "--after-clock", "0.8", "--clock-gap", "0.3", "--wait", "240"], domain)
     try:
         pids = la.node_pids()
         sender_rc = sender.wait(timeout=300)

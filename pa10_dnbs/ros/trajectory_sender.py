@@ -1,14 +1,15 @@
 """Send JointTrajectory files to a running graph's reference node, on <ns>/trajectory, one after another.
 
     python -m pa10_dnbs.ros.trajectory_sender FILE [FILE ...] [--namespace /pa10] [--after-clock S]
-                                                [--gap S] [--stamp S] [--wait S]
+                                                [--gap S | --clock-gap S] [--stamp S] [--wait S]
 
 Each file (YAML or JSON, docs/trajectories.md) goes out as a trajectory_msgs/JointTrajectory exactly as
 written: the sender reads its fields but does not check them against an arm, so the reference node is the one
 that accepts or refuses it (its log says which, in one line). It waits until the reference node's
 subscription has matched (``--wait`` s of wall time, else exit 1), and with ``--after-clock S`` until /clock
-has reached S s of simulated time; then it sends the files in order, ``--gap`` s of wall time apart (reliable,
-so none is lost and they arrive in order). ``--stamp S``: header.stamp (0, the default: the trajectory starts
+has reached S s of simulated time; then it sends the files in order, ``--gap`` s of wall time apart, or
+``--clock-gap`` s of simulated time apart (/clock: independent of how fast the graph runs), reliable, so none
+is lost and they arrive in order. ``--stamp S``: header.stamp (0, the default: the trajectory starts
 at the first step the reference node has not yet published). Prints one ``sent FILE`` line per file. Exit 0
 once every message is acknowledged, 1 on a timeout, 2 on a file it cannot read.
 """
@@ -59,8 +60,11 @@ def main(argv=None) -> int:
     ap.add_argument("--namespace", default=DEFAULT_NS, help="the arm's namespace (default /pa10)")
     ap.add_argument("--after-clock", type=float, default=0.0, metavar="S",
                     help="send once /clock has reached S seconds of simulated time (default 0: at once)")
-    ap.add_argument("--gap", type=float, default=0.0, metavar="S",
-                    help="wall time between two files [s] (default 0)")
+    gaps = ap.add_mutually_exclusive_group()
+    gaps.add_argument("--gap", type=float, default=0.0, metavar="S",
+                      help="wall time between two files [s] (default 0)")
+    gaps.add_argument("--clock-gap", type=float, default=0.0, metavar="S",
+                      help="simulated time between two files [s], on /clock (default 0)")
     ap.add_argument("--stamp", type=float, default=0.0, metavar="S", help="header.stamp [s] (default 0)")
     ap.add_argument("--wait", type=float, default=60.0, metavar="S",
                     help="wall time to wait for the subscriber, /clock and each acknowledgement (default 60)")
@@ -96,11 +100,20 @@ def _send(node, msgs, args) -> int:
             print(f"trajectory_sender: {what} after {args.wait:g} s", file=sys.stderr, flush=True)
             return 1
         rclpy.spin_once(node, timeout_sec=0.05)
+    sent_at = clock[0]
     for i, (f, msg) in enumerate(msgs):
-        if i:
+        if i and args.clock_gap > 0:
+            due = sent_at + args.clock_gap
+            while clock[0] < due:
+                if time.monotonic() > deadline + args.wait:
+                    print(f"trajectory_sender: /clock at {clock[0]:g} s, not yet {due:g} s", file=sys.stderr, flush=True)
+                    return 1
+                rclpy.spin_once(node, timeout_sec=0.01)
+        elif i:
             until = time.monotonic() + args.gap
             while time.monotonic() < until:
                 rclpy.spin_once(node, timeout_sec=min(0.05, max(until - time.monotonic(), 0.0)))
+        sent_at = clock[0]
         pub.publish(msg)
         print(f"sent {f}" + (f" at /clock {clock[0]:.3f} s" if clock[0] >= 0 else ""), flush=True)
     # the acknowledgements come with the writer's next heartbeat exchange (up to a few seconds): waited once
