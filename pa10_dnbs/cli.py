@@ -116,7 +116,7 @@ def _study_options(args: argparse.Namespace):
 
     return StudyOptions(
         out=args.out, scenarios=args.scenarios, controllers=args.controllers, seeds=args.seeds,
-        duration_s=args.duration, force=args.force, config_path=args.config, workers=args.jobs,
+        duration_s=args.duration, force=args.force, config_path=args.config, jobs=args.jobs,
         progress=_progress(args), arm=args.arm, scheduler=args.scheduler)
 
 

@@ -88,7 +88,7 @@ class LaunchOptions:
 
 @dataclass(frozen=True)
 class StudyOptions:
-    """``pa10-dnbs study``: scenarios and controllers as comma-separated lists; seeds 0..seeds-1; workers local
+    """``pa10-dnbs study``: scenarios and controllers as comma-separated lists; seeds 0..seeds-1; jobs local
     processes (None: one per core); scheduler a Dask scheduler's address instead."""
 
     out: Path
@@ -98,7 +98,7 @@ class StudyOptions:
     duration_s: float = 20.0
     force: bool = False
     config_path: Path | None = None
-    workers: int | None = None
+    jobs: int | None = None
     progress: bool = False
     arm: str | None = None
     scheduler: str | None = None

@@ -34,7 +34,7 @@ def run_study_command(options: StudyOptions) -> int:
     config_path = Path(o.config_path) if o.config_path else default_config_path()
     settings = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
     n_runs, n_steps = len(scen) * len(ctrl) * o.seeds, int(round(o.duration_s / settings.simulation.dt_s))
-    at_once = 1 if o.scheduler is not None else min(n_runs, o.workers or os.cpu_count() or 1)
+    at_once = 1 if o.scheduler is not None else min(n_runs, o.jobs or os.cpu_count() or 1)
     check_run_size(o.duration_s, n_steps, settings.n_joints, at_once=at_once,
                    total_runs=n_runs, say=say_note)
     check_output_dir(o.out, o.force, "--out")
@@ -64,7 +64,7 @@ def run_study_command(options: StudyOptions) -> int:
     head = {"config_file": str(config_path.resolve()), "arm": str(settings.arm.file), "duration_s": o.duration_s,
             **({"infeasible": infeasible} if infeasible else {})}
     try:
-        rows = run_study(settings, scen, ctrl, o.seeds, o.duration_s, o.workers, on_done=finished, scheduler=o.scheduler)
+        rows = run_study(settings, scen, ctrl, o.seeds, o.duration_s, o.jobs, on_done=finished, scheduler=o.scheduler)
     except KeyboardInterrupt:   # the workers are stopped (study/executor.py); the completed runs are kept
         bar.close()
         return _keep_partial(o.out, o.force, done, list(product(scen, ctrl, range(o.seeds))), command, head)

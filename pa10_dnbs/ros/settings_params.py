@@ -133,6 +133,7 @@ def joint_params(controller: str) -> dict[str, SettingParam]:
 
 
 def _setting(settings, key: str):
+    """The value at a dotted ``key`` of ``settings``."""
     node = settings
     for part in key.split("."):
         node = getattr(node, part)
@@ -223,10 +224,7 @@ def section_values(settings, sections) -> dict[str, object]:
     out: dict[str, object] = {ARM_FILE: str(settings.arm.file)}
     for name in sections:
         for key, spec in _leaves(SCHEMA[name], name):
-            node = settings
-            for part in key.split("."):
-                node = getattr(node, part)
-            out[key] = _ros_value(spec, node)
+            out[key] = _ros_value(spec, _setting(settings, key))
     return out
 
 
