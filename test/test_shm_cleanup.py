@@ -1,4 +1,8 @@
-"""The /dev/shm cleanup removes only files nobody maps, and counts a mapping in another process."""
+"""The /dev/shm cleanup removes only files nobody maps, and counts a mapping in another process.
+
+The test file stays mapped by this process while a test runs: another test's clean-up (a parallel worker's
+``domain`` fixture, a launcher) counts that mapping and leaves it alone, and these tests ignore it
+(``ignore_pids``) where they mean "unmapped"."""
 import mmap
 import os
 import subprocess
@@ -9,13 +13,17 @@ import pytest
 from pa10_dnbs.supervisor.shm_cleanup import SHM_DIR, remove_stale, shm_files
 
 
+HERE = frozenset({os.getpid()})
+
+
 @pytest.fixture
 def shm_file():
     name = f"lttng-ust-wait-test-{os.getpid()}"
     path = os.path.join(SHM_DIR, name)
     with open(path, "wb") as fh:
         fh.write(b"\0" * mmap.PAGESIZE)
-    yield name, path
+    with open(path, "r+b") as fh, mmap.mmap(fh.fileno(), mmap.PAGESIZE):
+        yield name, path
     if os.path.exists(path):
         os.unlink(path)
 
@@ -23,16 +31,15 @@ def shm_file():
 def test_unmapped_file_is_removed_and_listed(shm_file):
     name, path = shm_file
     assert name in shm_files()
-    assert remove_stale({name}) == [name]
+    assert remove_stale({name}, ignore_pids=HERE) == [name]
     assert not os.path.exists(path)
 
 
 def test_file_mapped_here_is_kept_unless_this_process_is_ignored(shm_file):
-    name, path = shm_file
-    with open(path, "r+b") as fh, mmap.mmap(fh.fileno(), mmap.PAGESIZE) as _:
-        assert remove_stale({name}) == []
-        assert os.path.exists(path)
-        assert remove_stale({name}, ignore_pids=frozenset({os.getpid()})) == [name]
+    name, path = shm_file  # mapped here by the fixture
+    assert remove_stale({name}) == []
+    assert os.path.exists(path)
+    assert remove_stale({name}, ignore_pids=HERE) == [name]
     assert not os.path.exists(path)
 
 
@@ -43,12 +50,12 @@ def test_file_mapped_by_another_process_is_kept(shm_file):
     child = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     try:
         assert child.stdout.readline().strip() == "mapped"
-        assert remove_stale({name}, ignore_pids=frozenset({os.getpid()})) == []
+        assert remove_stale({name}, ignore_pids=HERE) == []
         assert os.path.exists(path)
     finally:
         child.stdin.close()
         child.wait(timeout=10)
-    assert remove_stale({name}) == [name]
+    assert remove_stale({name}, ignore_pids=HERE) == [name]
 
 
 def test_snapshot_then_since_removes_only_the_new_unused_files(shm_file, tmp_path):
