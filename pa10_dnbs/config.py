@@ -166,17 +166,22 @@ def _number(key: str, value: Any, spec: Num) -> float | int:
     return int(value) if spec.integer else float(value)
 
 
+def _check_mapping(key: str, value: Any, spec: dict) -> None:
+    """``value`` is a mapping whose keys are all in ``spec`` (ConfigError naming the first unknown key)."""
+    if not isinstance(value, dict):
+        raise ConfigError(f"{key or '<root>'}: expected a mapping, got {type(value).__name__}")
+    unknown = sorted(set(value) - set(spec))
+    if unknown:
+        raise ConfigError(f"{key + '.' if key else ''}{unknown[0]}: unknown key "
+                          f"(allowed: {', '.join(sorted(spec))})")
+
+
 def check_value(key: str, value: Any, spec: Any, n: int | None) -> Any:
     """``value`` checked against ``spec`` (``n``: the arm's number of joints, the length of every Joints list;
     None: any length). Lists may be tuples (typed settings hold tuples). Returns the value normalised (numbers
     as float or int, lists as tuples)."""
     if isinstance(spec, dict):
-        if not isinstance(value, dict):
-            raise ConfigError(f"{key or '<root>'}: expected a mapping, got {type(value).__name__}")
-        unknown = sorted(set(value) - set(spec))
-        if unknown:
-            raise ConfigError(f"{key + '.' if key else ''}{unknown[0]}: unknown key "
-                              f"(allowed: {', '.join(sorted(spec))})")
+        _check_mapping(key, value, spec)
         missing = sorted(set(spec) - set(value))
         if missing:
             raise ConfigError(f"{key + '.' if key else ''}{missing[0]}: missing key")
@@ -276,12 +281,7 @@ def load_config(path: str | Path) -> dict:
 def _check_given(key: str, value: Any, spec: Any) -> None:
     """The keys ``value`` gives checked against ``spec`` (missing keys are left to the arm and the rules)."""
     if isinstance(spec, dict):
-        if not isinstance(value, dict):
-            raise ConfigError(f"{key or '<root>'}: expected a mapping, got {type(value).__name__}")
-        unknown = sorted(set(value) - set(spec))
-        if unknown:
-            raise ConfigError(f"{key + '.' if key else ''}{unknown[0]}: unknown key "
-                              f"(allowed: {', '.join(sorted(spec))})")
+        _check_mapping(key, value, spec)
         for k, v in value.items():
             _check_given(f"{key}.{k}" if key else k, v, spec[k])
     elif value is not None:
