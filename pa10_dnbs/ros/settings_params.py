@@ -192,20 +192,27 @@ def _typed(key: str, spec: dict, tree: dict, classes: dict):
                        for k, v in tree.items()})
 
 
+def _listed(value):
+    """A parameter's value as a config file holds it: arrays and tuples as lists."""
+    return list(value) if isinstance(value, (list, tuple)) or hasattr(value, "tolist") else value
+
+
+def _put(trees: dict, key: str, value) -> None:
+    """``value`` placed at the dotted ``key`` of the nested mapping ``trees`` (its first part: the section)."""
+    *parents, leaf = key.split(".")
+    node = trees
+    for part in parents:
+        node = node.setdefault(part, {})
+    node[leaf] = value
+
+
 def joint_node_settings(arm: Arm, values: dict, controller: str) -> NodeSettings:
     """A ``controller`` joint controller's settings from its parameter ``values`` (dotted key -> value, a
     per-joint key one number) for ``arm``: every number checked as a config file's (ConfigError naming the key)
     and broadcast to every joint's row; a section it runs whole is typed, the others hold only its keys."""
     trees: dict[str, dict] = {}
     for key, spec in _joint_leaves(controller):
-        value = values[key]
-        value = list(value) if isinstance(value, (list, tuple)) or hasattr(value, "tolist") else value
-        checked = check_value(key, value, spec, arm.n_joints)
-        name, *parents, leaf = key.split(".")
-        node = trees.setdefault(name, {})
-        for part in parents:
-            node = node.setdefault(part, {})
-        node[leaf] = checked
+        _put(trees, key, check_value(key, _listed(values[key]), spec, arm.n_joints))
     classes = _section_classes()
     return NodeSettings(arm, {name: _typed(name, SCHEMA[name], tree, classes) for name, tree in trees.items()})
 
@@ -234,9 +241,8 @@ class NodeSettings:
     AttributeError naming it: a node runs nothing but its parameters."""
 
     def __init__(self, arm: Arm, sections: dict):
-        for name, section in sections.items():
-            if dataclasses.is_dataclass(section):  # a _Part's keys are checked one by one as it is made
-                check_value(name, dataclasses.asdict(section), SCHEMA[name], arm.n_joints)
+        # every value was checked for the arm's joints as the sections were made (node_settings,
+        # joint_node_settings): only what spans two keys is left
         sim = sections.get("simulation")
         if dataclasses.is_dataclass(sim) and sim.window_s[1] > sim.duration_s + 1e-12:
             raise ConfigError(f"simulation.window_s: ends at {sim.window_s[1]:g} s, after "
@@ -261,15 +267,10 @@ def node_settings(arm: Arm, values: dict, sections) -> Settings | NodeSettings:
     value is bad."""
     typed = {}
     for name in sections:
-        tree: dict = {}
+        trees: dict = {}
         for key, _spec in _leaves(SCHEMA[name], name):
-            value = values[key]
-            node = tree
-            *parents, leaf = key.split(".")[1:]
-            for part in parents:
-                node = node.setdefault(part, {})
-            node[leaf] = list(value) if isinstance(value, (list, tuple)) or hasattr(value, "tolist") else value
-        checked = check_value(name, tree, SCHEMA[name], arm.n_joints)
+            _put(trees, key, _listed(values[key]))
+        checked = check_value(name, trees[name], SCHEMA[name], arm.n_joints)
         typed[name] = SECTIONS[name].of(checked)
     if set(typed) == set(SECTIONS):
         return Settings(arm=arm, **typed)
