@@ -4,10 +4,11 @@ controller checkpoints and the wire monitor's record.
 """
 from __future__ import annotations
 
-import json
 import os
 from contextlib import contextmanager
 from pathlib import Path
+
+from .json_text import json_text
 
 
 @contextmanager
@@ -25,6 +26,6 @@ def atomic_path(path, suffix: str = ".tmp"):
 
 
 def write_json(path, obj, indent: int = 2) -> None:
-    """``obj`` as JSON into ``path``, atomically."""
-    with atomic_path(path) as tmp, open(tmp, "w") as f:
-        json.dump(obj, f, indent=indent)
+    """``obj`` as strict JSON (non-finite floats: null) into ``path``, atomically."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(json_text(obj, indent))

@@ -1,4 +1,5 @@
 """Bag files without ROS: what the writer produces, and a clear error (exit 2, no traceback) for each broken bag."""
+import json
 import os
 import subprocess
 import sys
@@ -99,7 +100,12 @@ def test_a_complete_run_bag_analyses(tmp_path):
     layout, /pa10/joint_states; the corruption tests use old bags)."""
     r = _analyse(_write_run_bag(tmp_path / "b", ns="/pa10"), tmp_path)
     assert r.returncode == 0, r.stderr
-    assert (tmp_path / "out" / "metrics.json").is_file()
+    m = json.loads((tmp_path / "out" / "metrics.json").read_text(), parse_constant=_not_json)
+    assert m["wall_time_s"] is None and m["real_time_factor"] is None   # a bag holds no wall time: null, not NaN
+
+
+def _not_json(name):
+    raise AssertionError(f"{name} in metrics.json: strict readers refuse it")
 
 
 def test_a_stopped_runs_bag_analyses_its_recorded_part(tmp_path):

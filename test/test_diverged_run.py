@@ -36,11 +36,12 @@ def test_absurd_gains_diverge_into_a_report_not_a_traceback(tmp_path):
                 "--out", out)
     assert r.returncode == 1, r.stderr
     assert "Traceback" not in r.stderr + r.stdout
-    m = json.loads((out / "pid" / "metrics.json").read_text())
+    m = _strict_json(out / "pid" / "metrics.json")
     d = m["diverged"]
     assert d is not None and 0 < d["step"] < 100 and d["joint"] in ("j1", "j2", "j3")
     assert d["time_s"] == d["step"] * m["dt_s"] and not m["all_finite"]
-    assert m["worst_rms_error_rad"] == float("inf")
+    assert m["worst_rms_error_rad"] is None   # undefined, written null: the file is strict JSON
+    assert _strict_json(out / "summary.json")["pid"]["worst_rms_error_rad"] is None
     assert "DIVERGED" in r.stdout and f"step {d['step']}" in r.stdout
     assert json.loads((out / "dnbs" / "metrics.json").read_text())["diverged"] is None
     report = (out / "report.md").read_text()
@@ -48,3 +49,10 @@ def test_absurd_gains_diverge_into_a_report_not_a_traceback(tmp_path):
     for name in ("arm.png", "tracking.png", "errors.png", "startup.png", "torques.png"):
         assert (out / "pid" / name).stat().st_size > 0, name
     assert (out / "errors_compare.png").is_file()
+
+
+def _strict_json(path):
+    """The file's JSON, read as RFC 8259 readers (jq, JavaScript's JSON.parse) read it: NaN and Infinity refused."""
+    def refuse(name):
+        raise AssertionError(f"{path}: {name} is not JSON")
+    return json.loads(path.read_text(), parse_constant=refuse)

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import struct
-from pathlib import Path
 
 from rosbags.typesys import Stores, get_typestore
 

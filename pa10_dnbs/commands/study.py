@@ -1,7 +1,6 @@
 """``pa10-dnbs study``: every scenario x controller x seed in parallel, study.json / study.md / study.png."""
 from __future__ import annotations
 
-import json
 import os
 import shlex
 import shutil
@@ -11,6 +10,7 @@ from pathlib import Path
 from ..accel.choice import resolve_kernel
 from .options import StudyOptions
 from ..config import ConfigError, default_config_path
+from ..json_text import json_text
 from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, on_second_sigint, outputs_written, say
 from ..report.outputs import atomic_output_dir, check_output_dir
 from ..report.progress import ProgressBar
@@ -70,7 +70,7 @@ def run_study_command(options: StudyOptions) -> int:
         return _keep_partial(o.out, o.force, done, list(product(scen, ctrl, range(o.seeds))), command, head)
     bar.close()
     with atomic_output_dir(o.out, o.force) as tmp:
-        (tmp / "study.json").write_text(json.dumps({**head, "rows": rows}, indent=2) + "\n")
+        (tmp / "study.json").write_text(json_text({**head, "rows": rows}))
         (tmp / "study.md").write_text(study_markdown(rows, command, o.duration_s,
                                                      {k: v.description for k, v in SCENARIOS.items()}, infeasible))
         study_figure(rows, tmp / "study.png")

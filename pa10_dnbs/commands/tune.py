@@ -8,7 +8,6 @@ resumes (a second Ctrl-C ends at once: pa10_dnbs/interrupt.py).
 """
 from __future__ import annotations
 
-import json
 import os
 import shlex
 import sys
@@ -19,6 +18,7 @@ from ..arm import load_arm, preset_names
 from ..atomic_file import atomic_path
 from ..config import ConfigError, default_config_path
 from .options import TuneOptions
+from ..json_text import json_text
 from ..interrupt import EXIT_INTERRUPTED, check, deferred, immediate, on_second_sigint, say
 from ..output_lock import lock_output
 from ..report.outputs import check_creatable
@@ -136,12 +136,12 @@ def _tune(state, spec, base, trials, out, storage, jobs, scheduler, train, seeds
     check()
     _write(out / "tune.md", tune_markdown(spec, study, best, start, command, where, wall, held, held_scen, held_seeds,
                                           storage, figures))
-    _write(out / "tune.json", json.dumps({
+    _write(out / "tune.json", json_text({
         "arm": the_arm.name, "controller": controller, "study": spec.study_name, "storage": storage,
         "options": spec.identity(), "trials": len(trials_done), "best_trial": best.number,
         "best_objective": best.value, "best_params": dict(spec.fixed, **best.params), "start_params": spec.start,
         "start_objective": start.value if start is not None else None,
-        "held_out_seeds": held_seeds if held else [], "held_out": held}, indent=2) + "\n")
+        "held_out_seeds": held_seeds if held else [], "held_out": held}))
     state["phase"] = "done"
     print(f"{len(trials_done)} trials; best trial {best.number}: objective {best.value:.3f}"
           + (f" (start {start.value:.3f})" if start is not None else "") + f"; wrote {out}/tuned.yaml, {out}/tune.md")

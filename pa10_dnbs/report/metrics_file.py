@@ -41,7 +41,8 @@ def metrics_dict(run: RunData, settings: dict, **extra) -> dict:
 
     ``diverged`` is None, or where the run went non-finite: ``{"step", "time_s", "joint"}``
     (:func:`pa10_dnbs.core.metrics.divergence`); a figure of a diverged joint that the non-finite samples
-    leave undefined (NaN) is Infinity, and so is that joint's max |e| over the run."""
+    leave undefined (NaN) is Infinity here, and so is that joint's max |e| over the run, so that the worst
+    joint is the diverged one; metrics.json writes every non-finite figure null (``json_text.py``)."""
     duration = run.n_steps * run.dt_s
     window_s = settings["window_s"]
     joints = joint_metrics(run.error_rad, run.torque_nm, run.torque_limit_nm, run.dt_s, window_s)

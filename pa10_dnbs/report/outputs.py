@@ -6,13 +6,13 @@ when everything was written; an existing directory is replaced only with
 """
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
+from ..json_text import json_text
 from ..kinematics.urdf_chain import UrdfChain
 from ..output_lock import lock_output, release_output
 from ..run_data import RunData
@@ -95,7 +95,7 @@ def write_run(directory: Path, run: RunData, metrics: dict, chain: UrdfChain | N
     """metrics.json, timeseries.npz and (unless ``figures`` is False) the figures of one run (the arm in 3D
     when ``chain`` is given); returns (caption, file) pairs."""
     directory.mkdir(parents=True, exist_ok=True)
-    (directory / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
+    (directory / "metrics.json").write_text(json_text(metrics))
     run.save_npz(directory / "timeseries.npz")
     if not figures:
         return []
@@ -144,7 +144,7 @@ def write_report(directory: Path, runs: list[RunData], metrics: list[dict], titl
                          [[j["settling_time_s"] for j in m["joints"]] for m in metrics])
             figs.insert(0, ("Tracking errors of " + " and ".join(r.controller.upper() for r in runs)
                             + " overlaid (metrics window shaded)", "errors_compare.png"))
-        (directory / "summary.json").write_text(json.dumps(
+        (directory / "summary.json").write_text(json_text(
             {m["controller"]: {"worst_rms_error_rad": m["worst_rms_error_rad"],
-                               "metrics": f"{m['controller']}/metrics.json"} for m in metrics}, indent=2) + "\n")
+                               "metrics": f"{m['controller']}/metrics.json"} for m in metrics}))
     (directory / "report.md").write_text(report_markdown(metrics, figs, title, notes))

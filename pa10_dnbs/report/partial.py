@@ -11,15 +11,16 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ..json_text import json_text
+
 PARTIAL_FILE = "interrupted.json"
 
 
 def write_partial_mark(directory: Path, command: str, completed: int, total: int, missing: list[str]) -> None:
     """``directory/interrupted.json``: ``completed`` of ``total`` units (runs, controllers) done; ``missing``
     names the others."""
-    (directory / PARTIAL_FILE).write_text(json.dumps(
-        {"interrupted": True, "completed": completed, "total": total, "missing": missing, "command": command},
-        indent=2) + "\n")
+    (directory / PARTIAL_FILE).write_text(json_text(
+        {"interrupted": True, "completed": completed, "total": total, "missing": missing, "command": command}))
 
 
 def partial_mark(out: Path) -> dict | None:

@@ -6,8 +6,9 @@ study.json / study.md / study.png: their medians, worst cases and targets need e
 """
 from __future__ import annotations
 
-import json
 from pathlib import Path
+
+from ..json_text import json_text
 
 from ..report.partial import partial_banner, write_partial_mark
 
@@ -28,9 +29,8 @@ def write_partial_study(directory: Path, rows: list[dict], all_runs: list[tuple[
     kept = [by_key[k] for k in all_runs if k in by_key]
     missing = [run_name(*k) for k in all_runs if k not in by_key]
     total = len(all_runs)
-    (directory / "study.partial.json").write_text(json.dumps(
-        {"interrupted": True, "completed": len(kept), "total": total, **head, "missing": missing, "rows": kept},
-        indent=2) + "\n")
+    (directory / "study.partial.json").write_text(json_text(
+        {"interrupted": True, "completed": len(kept), "total": total, **head, "missing": missing, "rows": kept}))
     lines = ["# Robustness study: PARTIAL (interrupted)", "", partial_banner(len(kept), total, "runs"), "",
              f"`{command}`", "",
              "| scenario | controller | seed | worst RMS [rad] | settled [s] | max abs [rad] | torque variation | "
