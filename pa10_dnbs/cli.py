@@ -71,10 +71,6 @@ def _launch_options(args: argparse.Namespace):
                          ("deadline_fraction", realtime, "only with --mode realtime (lockstep has no deadlines)"),
                          ("bag_compression", args.record is not None, "only with --record")])
     _live_defaults(args)
-    if args.plant == "mujoco" and args.robot is not None:
-        raise ConfigError("--plant mujoco: not with --robot external (it starts its own robot, behind the joint bus)")
-    if args.plant == "mujoco" and args.mode != "lockstep":
-        raise ConfigError("--plant mujoco: only --mode lockstep so far (the joint bus runs lockstep)")
     return LaunchOptions(
         out=args.out, config_path=args.config, mode=args.mode, controller=args.controller, duration_s=args.duration,
         force=args.force, progress=_progress(args), domain_id=args.domain_id, reliability=args.reliability,

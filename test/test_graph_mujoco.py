@@ -34,8 +34,8 @@ def test_launch_plant_mujoco_runs_reports_and_equals_the_in_process_engine(domai
 
 
 @pytest.mark.parametrize("flags, message", [
-    (["--robot", "external"], "--plant mujoco: not with --robot external"),
-    (["--mode", "realtime"], "--plant mujoco: only --mode lockstep"),
+    (["--robot", "external"], "--plant mujoco: not with an external robot (--robot external"),
+    (["--mode", "realtime"], "--plant mujoco: only in lockstep mode so far (--mode lockstep"),
 ])
 def test_launch_plant_mujoco_refuses_what_it_cannot_run_in_one_line(tmp_path, flags, message):
     r = run_cli("launch", "--arm", "iiwa", "--plant", "mujoco", "--duration", "1", "--out", tmp_path / "x", *flags)

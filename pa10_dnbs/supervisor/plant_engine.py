@@ -25,10 +25,11 @@ def plant_robot_options(plant: str, robot: RobotOptions | None, mode: str) -> Ro
     if plant == "pybullet":
         return robot
     if robot is not None:
-        raise ConfigError("plant mujoco: not with an external robot (it starts its own robot, behind the joint bus)",
-                          setting="plant")
+        raise ConfigError("plant mujoco: not with an external robot (--robot external; it starts its own robot, "
+                          "behind the joint bus)", setting="plant")
     if mode != "lockstep":
-        raise ConfigError("plant mujoco: only in lockstep mode so far (the joint bus runs lockstep)", setting="plant")
+        raise ConfigError("plant mujoco: only in lockstep mode so far (--mode lockstep; the joint bus runs lockstep)",
+                          setting="plant")
     return RobotOptions()
 
 
