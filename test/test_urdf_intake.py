@@ -2,6 +2,9 @@
 MuJoCo's reading of the same file (an independent rigid-body library) on the fixtures and, where
 example-robot-data is installed, on every serial arm of that collection."""
 import json
+import re
+import subprocess
+import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -158,3 +161,82 @@ def test_a_urdf_without_joints_is_refused_in_one_line(tmp_path):
     (tmp_path / "empty.urdf").write_text('<?xml version="1.0"?>\n<robot name="empty"/>\n')   # example-robot-data's ur3.urdf
     with pytest.raises(ArmError, match=r"empty.urdf: the URDF has no joints"):
         load_arm(tmp_path / "empty.urdf")
+
+
+# A URDF that is not one tree, or a malformed joint: refused by the intake (pa10_dnbs/kinematics/urdf_tree.py)
+# before PyBullet sees it. CRASHERS kill the process in PyBullet's importer (SIGSEGV, no message) when they get
+# through, so they run in a child process: on a crash the test fails with returncode -11, not the test session.
+NOT_A_TREE = {  # fixture -> what the one line must name
+    "duplicate_joint": "joint 'j2' is defined twice",
+    "two_parents": "link 'l3' is the child of two joints, 'j3' and 'j4'",
+    "stray_link": "two root links, 'base_link' and 'world'",
+    "duplicate_link": "link 'l2' is defined twice",
+    "missing_child": "joint 'j3': its child link 'l9' is not defined",
+    "missing_parent": "joint 'j3': its parent link 'l9' is not defined",
+    "bad_axis": "joint 'j2': <axis xyz=\"0 1\">: expected 3 finite numbers",
+    "nan_axis": "joint 'j2': <axis xyz=\"0 nan 1\">: expected 3 finite numbers",
+    "zero_axis": "joint 'j2': <axis xyz=\"0 0 0\">: zero axis",
+    "loop": "a kinematic loop through link 'l1' (l1 -> l2 -> l3 -> base_link -> l1; no root link)",
+    "detached_loop": "a kinematic loop through link 'l3' (l3 -> l2 -> l3; not reachable from the root link "
+                     "'base_link')",
+}
+CRASHERS = ("duplicate_joint", "two_parents", "stray_link")
+
+
+def _cli_child(*args) -> subprocess.CompletedProcess:
+    """``pa10-dnbs ARGS`` in a child process (a crash in PyBullet's C++ is its returncode, -11)."""
+    return subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", *map(str, args)], capture_output=True, text=True,
+                          timeout=300)
+
+
+def _refused_in_one_line(r, urdf: Path, what: str, out: Path) -> None:
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and "Traceback" not in r.stderr, (r.returncode, r.stderr[-2000:])
+    assert f"{urdf}: {what}" in lines[0], lines[0]
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("name", sorted(NOT_A_TREE))
+def test_a_urdf_that_is_not_one_tree_is_refused_in_one_line_naming_the_file_and_the_joint_or_link(name, tmp_path):
+    urdf, out = _fixture(name).resolve(), tmp_path / "out"
+    args = ("simulate", "--arm", urdf, "--duration", "0.2", "--no-figures", "--out", out)
+    r = _cli_child(*args) if name in CRASHERS else run_cli(*args)
+    _refused_in_one_line(r, urdf, NOT_A_TREE[name], out)
+    with pytest.raises(ArmError, match=re.escape(NOT_A_TREE[name])):
+        load_arm(urdf)
+
+
+def test_every_way_in_refuses_a_urdf_pybullet_would_crash_on(tmp_path):
+    """An arm file naming it, a config's ``arm``, the arm and robot commands, the MuJoCo engine."""
+    urdf = _fixture("two_parents").resolve()
+    (tmp_path / "arm.yaml").write_text(yaml.safe_dump({"name": "twop", "urdf": str(urdf),
+                                                       "sources": {"urdf": "a fixture"}}))
+    (tmp_path / "config.yaml").write_text(yaml.safe_dump({"arm": str(urdf)}))
+    what, out = NOT_A_TREE["two_parents"], tmp_path / "out"
+    for args in (("simulate", "--arm", tmp_path / "arm.yaml", "--duration", "0.2", "--out", out),
+                 ("simulate", "--config", tmp_path / "config.yaml", "--duration", "0.2", "--out", out),
+                 ("simulate", "--arm", urdf, "--engine", "mujoco", "--duration", "0.2", "--out", out),
+                 ("arm", "--arm", urdf), ("robot", "--arm", urdf)):
+        _refused_in_one_line(_cli_child(*args), urdf, what, out)
+
+
+def test_a_urdf_pybullet_still_cannot_load_is_one_line_naming_the_file(tmp_path):
+    urdf, out = _fixture("unloadable_geometry").resolve(), tmp_path / "out"
+    load_arm(urdf)                                 # a sound tree: the intake passes it
+    client = open_client()
+    try:
+        with pytest.raises(pybullet.error):        # PyBullet's own answer: "Cannot load URDF file."
+            client.loadURDF(str(urdf), useFixedBase=True)
+    finally:
+        client.disconnect()
+    r = run_cli("simulate", "--arm", urdf, "--duration", "0.2", "--no-figures", "--out", out)
+    _refused_in_one_line(r, urdf, "PyBullet cannot load this URDF", out)
+
+
+def test_a_binary_arm_file_or_urdf_is_refused_in_one_line(tmp_path):
+    for name in ("binary.yaml", "binary.urdf"):
+        path = tmp_path / name
+        path.write_bytes(b"\x89PNG\r\n\x1a\n\xff\xfe\x00\x80" * 8)
+        r = run_cli("arm", "--arm", path)
+        assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
+        assert f"{path}: not " in r.stderr and "not UTF-8" in r.stderr, r.stderr

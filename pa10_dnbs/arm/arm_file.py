@@ -3,7 +3,8 @@
 Every fault is an :class:`ArmError` (a ConfigError: the CLI prints its one line and exits 2) naming the
 file and the key or joint: a URDF that does not parse, a joint named in the file that is not in the URDF,
 a prismatic or floating joint among the actuated ones, a missing or zero effort limit with no override, a
-moving link without inertia, a list of the wrong length, a fact without its source.
+moving link without inertia, a list of the wrong length, a fact without its source, a file that is not text; a
+URDF that is not one tree of links and joints (pa10_dnbs.kinematics.urdf_tree: PyBullet would crash on some).
 """
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ import yaml
 
 from ..config_error import ConfigError
 from ..kinematics.urdf_chain import UrdfChain
+from ..kinematics.urdf_tree import UrdfError
 from ..paths import share_path
 from .arm import Arm
 from .chain_select import actuated_joints
@@ -79,6 +81,8 @@ def _load(path_text: str) -> Arm:
                              "sources": {"urdf": str(path)}}, bare=True)
     try:
         raw = yaml.safe_load(path.read_text())
+    except UnicodeDecodeError:
+        raise ArmError(f"{path}: not an arm file: not a text file (not UTF-8)") from None
     except yaml.YAMLError as exc:
         raise ArmError(f"{path}: not valid YAML: {str(exc).splitlines()[0]}") from None
     if not isinstance(raw, dict):
@@ -100,6 +104,10 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
         xml = urdf.read_text()
         chain = UrdfChain(xml)
         links = _links(xml)
+    except UrdfError as exc:  # not one tree, or a malformed joint: the message names the joint or link
+        raise ArmError(f"{urdf}: {exc}") from None
+    except UnicodeDecodeError:
+        raise ArmError(f"{urdf}: not a URDF: not a text file (not UTF-8)") from None
     except (ET.ParseError, ValueError, AttributeError, TypeError) as exc:
         raise ArmError(f"{urdf}: the URDF does not parse: {exc}") from None
     names = _names(path, raw, "joints")

@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .urdf_tree import JOINT_TYPES, UrdfError, number, tree_root, vector3
+
 
 @dataclass(frozen=True)
 class UrdfJoint:
@@ -74,43 +76,59 @@ def matrix_quaternion(r: np.ndarray) -> tuple[float, float, float, float]:
     return tuple(sign * c / n for c in q)
 
 
-def _floats(text: str | None, default: str) -> np.ndarray:
-    return np.array([float(v) for v in (text or default).split()], dtype=float)
+def _joint(el: ET.Element, i: int) -> UrdfJoint:
+    """The ``i``-th ``<joint>`` element, checked: a name, a URDF joint type, parent and child links, 3 finite
+    numbers in each of origin xyz/rpy and axis xyz (a unit axis; zero only for a fixed joint), numeric limits."""
+    name = el.get("name")
+    if not name:
+        raise UrdfError(f"<joint> number {i} has no name")
+    kind = el.get("type")
+    if kind not in JOINT_TYPES:
+        raise UrdfError(f"joint {name!r}: type={kind!r}: expected one of {', '.join(JOINT_TYPES)}")
+    ends = {}
+    for role in ("parent", "child"):
+        end = el.find(role)
+        if end is None or not end.get("link"):
+            raise UrdfError(f"joint {name!r}: no <{role} link=...>")
+        ends[role] = end.get("link")
+    origin, axis_el, limit = el.find("origin"), el.find("axis"), el.find("limit")
+    xyz = np.array(vector3(origin, "xyz", "0 0 0", name))
+    rpy = vector3(origin, "rpy", "0 0 0", name)
+    axis = np.array(vector3(axis_el, "xyz", "1 0 0", name))
+    norm = np.linalg.norm(axis)
+    if norm == 0.0:
+        if kind != "fixed":
+            raise UrdfError(f'joint {name!r}: <axis xyz="{axis_el.get("xyz")}">: zero axis (a {kind} joint needs '
+                            f'a direction)')
+        axis, norm = np.array([1.0, 0.0, 0.0]), 1.0  # a fixed joint's axis is never used
+    keys = (("lower", "upper", "velocity") if kind != "continuous" else ()) + ("effort",)
+    bounds = {k: number(limit, k, name) for k in keys if limit is not None and limit.get(k) is not None}
+    return UrdfJoint(name=name, kind=kind, parent=ends["parent"], child=ends["child"], origin_xyz=xyz,
+                     origin_rot=rpy_matrix(*rpy), axis=axis / norm, **bounds)
 
 
 class UrdfChain:
-    """The joints of a URDF and their transforms at given joint positions."""
+    """The joints of a URDF and their transforms at given joint positions.
+
+    Raises :class:`UrdfError` (a ValueError) naming the joint or link when the URDF is not one tree of
+    uniquely named links and joints with well-formed vectors and limits (:mod:`.urdf_tree`)."""
 
     def __init__(self, urdf_xml: str):
         root = ET.fromstring(urdf_xml)
         if root.tag != "robot":
             raise ValueError(f"not a URDF: root element is <{root.tag}>, expected <robot>")
         self.robot_name = root.get("name", "")
-        joints = []
-        for el in root.findall("joint"):
-            origin = el.find("origin")
-            xyz = _floats(origin.get("xyz") if origin is not None else None, "0 0 0")
-            rpy = _floats(origin.get("rpy") if origin is not None else None, "0 0 0")
-            axis_el = el.find("axis")
-            axis = _floats(axis_el.get("xyz") if axis_el is not None else None, "1 0 0")
-            norm = np.linalg.norm(axis)
-            if norm == 0.0:
-                if el.get("type") != "fixed":
-                    raise ValueError(f"joint {el.get('name')}: zero axis")
-                axis, norm = np.array([1.0, 0.0, 0.0]), 1.0  # a fixed joint's axis is never used
-            limit = el.find("limit")
-            bounds = {}
-            if limit is not None and el.get("type") != "continuous":
-                bounds = {k: float(limit.get(k)) for k in ("lower", "upper", "velocity") if limit.get(k) is not None}
-            if limit is not None and limit.get("effort") is not None:
-                bounds["effort"] = float(limit.get("effort"))
-            joints.append(UrdfJoint(name=el.get("name"), kind=el.get("type"), parent=el.find("parent").get("link"),
-                                    child=el.find("child").get("link"), origin_xyz=xyz,
-                                    origin_rot=rpy_matrix(*rpy), axis=axis / norm, **bounds))
+        links = []
+        for i, el in enumerate(root.findall("link"), 1):
+            if not el.get("name"):
+                raise UrdfError(f"<link> number {i} has no name")
+            links.append(el.get("name"))
+        joints = [_joint(el, i) for i, el in enumerate(root.findall("joint"), 1)]
+        self.links = tuple(links)
+        self.root_link = tree_root(links, [(j.name, j.parent, j.child) for j in joints])
         self.joints = joints
         self.movable = [j for j in joints if j.kind != "fixed"]
         self.fixed = [j for j in joints if j.kind == "fixed"]
-        self.root_link = next(iter({j.parent for j in joints} - {j.child for j in joints}), "")
         # per revolute/continuous joint: origin translation and rotation as a quaternion, for moving_transforms
         self._origin = {j.name: (tuple(float(v) for v in j.origin_xyz), matrix_quaternion(j.origin_rot),
                                  tuple(float(v) for v in j.axis))

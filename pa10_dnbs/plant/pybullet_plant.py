@@ -17,7 +17,7 @@ import os
 import numpy as np
 import pybullet
 
-from ..arm import Arm
+from ..arm import Arm, ArmError
 from .arm_plant_base import ArmPlantBase
 from .plant_params import PlantParams, as_joint_vector, checked_for_arm
 
@@ -109,11 +109,15 @@ class PyBulletArmPlant(ArmPlantBase):
         self._client = client
         self._params = params
         self._arm = arm
-        self._body = client.loadURDF(
-            urdf_path,
-            useFixedBase=True,
-            flags=pybullet.URDF_USE_INERTIA_FROM_FILE,
-        )
+        try:
+            self._body = client.loadURDF(
+                urdf_path,
+                useFixedBase=True,
+                flags=pybullet.URDF_USE_INERTIA_FROM_FILE,
+            )
+        except pybullet.error:  # what the intake's checks (pa10_dnbs.kinematics.urdf_tree) did not foresee
+            raise ArmError(f"{arm.urdf}: PyBullet cannot load this URDF"
+                           + (f" (its cleaned copy {urdf_path})" if arm.plant_urdf is not None else "")) from None
         self._n_links = client.getNumJoints(self._body)
         index_of, dofs = {}, []
         for j in range(self._n_links):
