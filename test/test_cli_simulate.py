@@ -88,7 +88,8 @@ def test_bad_duration_exits_2(tmp_path):
 def test_existing_output_needs_force(tmp_path):
     out = tmp_path / "out"
     out.mkdir()
-    (out / "keep.txt").write_text("mine")
+    (out / "report.md").write_text("a previous run's report")   # --force replaces only a previous output
+    (out / "keep.txt").write_text("mine")                        # (test_output_safety.py: not other folders)
     r = run_cli("simulate", "--controller", "pid", "--duration", "0.2", "--out", out)
     assert r.returncode == 2 and "--force" in r.stderr
     assert (out / "keep.txt").read_text() == "mine"

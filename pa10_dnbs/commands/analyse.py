@@ -48,7 +48,7 @@ def run_analyse(options: AnalyseOptions) -> int:
     ``options.progress``: a progress bar on stderr while the bag is read (report/progress.py; drawn on a terminal only).
     """
     o = options
-    check_output_dir(o.out, o.force, "--out")
+    check_output_dir(o.out, o.force, "--out", inputs={"BAG": o.bag_path, "--config": o.config_path})
     lock_output(o.bag_path, "bag")  # a bag another run is still recording (or replacing) is refused, not misread
     with Bag(o.bag_path) as bag:
         info = run_info(bag)

@@ -99,7 +99,8 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
             raise ConfigError(f"--init-from: {exc}") from None
         init_from = checkpoint_dir(o.init_from).resolve()
     out, force, controller, mode, record = o.out, o.force, o.controller, o.mode, o.record
-    check_output_dir(out, force, "--out")
+    check_output_dir(out, force, "--out", inputs={"--config": config_path, "--arm": the_arm.file, "--trajectory":
+                                                  trajectory, "--init-from": init_from, "--record": record})
     rt_priority, refused = granted_priority(o.rt_priority)
     if refused:  # said once here, rather than by each of the ten nodes in its log
         print(f"launch: {refused}", flush=True)

@@ -51,7 +51,8 @@ def run_simulate(options: SimulateOptions) -> int:
             init_states = load_joint_checkpoints(o.init_from, the_arm.joint_names)
         except ValueError as exc:
             raise ConfigError(f"--init-from: {exc}") from None
-    check_output_dir(o.out, o.force, "--out")
+    check_output_dir(o.out, o.force, "--out", inputs={"--config": config_path, "--arm": the_arm.file,
+                                                      "--trajectory": o.trajectory, "--init-from": o.init_from})
     if "dnbs" in kinds:
         settings = resolve_kernel(settings, say=print)  # dnbs.kernel: auto -> c or numpy, said in one line
     measured = metrics_settings(settings, duration_s)

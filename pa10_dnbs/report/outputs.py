@@ -2,15 +2,22 @@
 
 Files go to a temporary sibling directory that is renamed into place only
 when everything was written; an existing directory is replaced only with
-``force``.
+``force``, and only if it is empty or a previous pa10-dnbs output; never the
+current directory, its parents, the root, or a path that is, holds or lies in
+one of the run's inputs (check_output_dir).
 """
 from __future__ import annotations
 
+import contextlib
+import json
 import os
 import shutil
+import sqlite3
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
+
+import yaml
 
 from ..json_text import json_text
 from ..kinematics.urdf_chain import UrdfChain
@@ -20,28 +27,136 @@ from .arm_figure import arm_figure
 from .figures import error_figure, startup_figure, torque_figure, tracking_figure
 from .finite_view import until_step
 from .markdown import report_markdown
-from .partial import partial_mark
+from .partial import PARTIAL_FILE, partial_mark
 
 
 class OutputExistsError(FileExistsError):
     """The output directory exists and ``--force`` was not given, or cannot be written, or another run uses it."""
 
 
-def check_output_dir(out: Path, force: bool, flag: str = "out") -> None:
+# The files by which a folder is recognised as a previous pa10-dnbs output (one at its top is enough): simulate,
+# launch and analyse write report.md; study study.json/study.md (interrupted: study.partial.*); an interrupted
+# command interrupted.json (partial.py); tune tune.db, tune.json, tune.md, tuned.yaml.
+OUTPUT_MARKS = ("report.md", "study.json", "study.md", "study.partial.json", "study.partial.md", PARTIAL_FILE,
+                "tune.json", "tune.md", "tune.db", "tuned.yaml")
+
+# What ``tune`` keeps in its DIR (tune/report.py, commands/tune.py; SQLite's journal beside tune.db): a tune
+# resumes into a folder holding nothing else.
+TUNE_FILES = frozenset({"tune.db", "tune.db-journal", "tune.db-wal", "tune.db-shm", "tuned.yaml", "tune.md",
+                        "tune.json", "history.png", "importance.png"})
+
+
+def check_output_dir(out: Path, force: bool, flag: str = "--out", inputs: dict | None = None,
+                     resume: frozenset[str] | None = None) -> None:
     """Fail early, before any work, if ``out`` is in use by another run (output_lock.py: this process then
     holds it until the output is in place), exists and may not be replaced, or cannot be created. ``flag``:
-    how the message names the output (a command passes its flag)."""
+    how the message names the output (a command passes its flag).
+
+    Never an output, even with ``force``: the current directory, one of its parents or the root; a path equal
+    to, inside, or holding one of ``inputs`` ({flag or name: path or None}: the run's config, arm file, bag,
+    checkpoints, ...). ``force`` replaces only an empty folder or a previous pa10-dnbs output (OUTPUT_MARKS).
+    ``resume`` (tune): an existing ``out`` holding only these names is accepted without ``force`` (the command
+    then checks it is its own run's)."""
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise OutputExistsError(f"{flag}: {out} exists and is not a directory")
+    check_not_cwd(out, flag)
+    check_apart(out, inputs or {}, flag)
     check_creatable(out, flag)
     lock_output(out)
-    if out.exists() and not force:
+    if not out.exists():
+        return
+    if resume is not None:
+        if foreign := sorted(p.name for p in out.iterdir() if p.name not in resume):
+            raise OutputExistsError(f"{flag}: {out} holds files that are not this command's outputs "
+                                    f"({', '.join(foreign[:3])}{', ...' if len(foreign) > 3 else ''}): "
+                                    "choose another folder")
+        return
+    if not force:
         if (mark := partial_mark(out)) is not None:
             raise OutputExistsError(f"output directory exists: {out} holds the partial outputs of an interrupted "
                                     f"run ({mark.get('completed')} of {mark.get('total')} done; use --force to "
                                     "replace it with a complete run)")
         raise OutputExistsError(f"output directory exists: {out} (use --force to replace it)")
+    if any(out.iterdir()) and not is_previous_output(out):
+        raise OutputExistsError(f"{flag}: {out} holds files that are not a pa10-dnbs output: --force replaces only "
+                                "an empty folder or a previous output; remove it yourself or choose another folder")
+
+
+def is_previous_output(out: Path) -> bool:
+    """``out`` holds a pa10-dnbs command's output: one of OUTPUT_MARKS at its top."""
+    return any((Path(out) / name).is_file() for name in OUTPUT_MARKS)
+
+
+def check_not_cwd(out: Path, flag: str) -> None:
+    """``out`` is not the current directory, one of its parents or the root (``--out ""`` is ``.``)."""
+    where, cwd = Path(out).resolve(), Path.cwd().resolve()
+    if where == cwd or where in cwd.parents or where == Path(where.anchor):
+        raise OutputExistsError(f"{flag}: {str(out) or '(empty)'!s} is "
+                                + ("the filesystem root" if where == Path(where.anchor) else
+                                   "the current directory" if where == cwd else "a parent of the current directory")
+                                + ": give a folder of its own for the outputs")
+
+
+def check_apart(out: Path, inputs: dict, flag: str) -> None:
+    """``out`` is neither one of ``inputs`` ({name: path or None}; a config's ``extends`` files count too) nor
+    holds one nor lies inside one: an output never replaces or mixes with what its run reads."""
+    where = Path(out).resolve()
+    for name, path in inputs.items():
+        for given in ([] if path is None else config_files(path) if name == "--config" else [Path(path)]):
+            used = given.resolve()
+            how = "is" if used == where else "holds" if where in used.parents else \
+                "lies inside" if used in where.parents else None
+            if how is not None:
+                raise OutputExistsError(f"{flag}: {out} {how} this run's {name} {used}: an output never replaces "
+                                        "or mixes with what its run uses; choose another output folder")
+
+
+def config_files(path: Path) -> list[Path]:
+    """The config file ``path`` and the files its ``extends`` keys name, in turn (unreadable ones end the list:
+    loading the config reports them)."""
+    files: list[Path] = []
+    path = Path(path)
+    while path.resolve() not in files:
+        files.append(path.resolve())
+        try:
+            base = yaml.safe_load(path.read_text()).get("extends")
+        except (OSError, ValueError, AttributeError, yaml.YAMLError):
+            break
+        if not isinstance(base, str) or not base:
+            break
+        path = path.resolve().parent / base
+    return files
+
+
+def check_tune_dir(out: Path, study_name: str, identity: dict, refusal) -> None:
+    """``out`` holds no tune but this one: its tune.json (a finished tune) and tune.db (any tune) were made with
+    the options ``identity`` of study ``study_name``; ``refusal(name, stored, given)`` words a mismatch.
+    Raises OutputExistsError (one line)."""
+    out = Path(out)
+    try:
+        done = json.loads((out / "tune.json").read_text())
+    except (OSError, ValueError):
+        done = None
+    if isinstance(done, dict) and (done.get("study"), done.get("options")) != (study_name, identity):
+        raise OutputExistsError(refusal(done.get("study", "?"), done.get("options") or {}, identity)
+                                if done.get("study") == study_name else
+                                f"--out: {out} holds the tune {done.get('study')!r}, not {study_name!r}: "
+                                "give another --out for this tune")
+    if (out / "tune.db").is_file():
+        others = [n for n in _sqlite_study_names(out / "tune.db") if n != study_name]
+        if others:
+            raise OutputExistsError(f"--out: {out}/tune.db holds the tune {others[0]!r}, not {study_name!r}: "
+                                    "give another --out for this tune")
+
+
+def _sqlite_study_names(db: Path) -> list[str]:
+    """The Optuna study names in the SQLite storage ``db`` (read only; none if it is not one)."""
+    try:
+        with contextlib.closing(sqlite3.connect(f"{Path(db).resolve().as_uri()}?mode=ro", uri=True)) as con:
+            return [row[0] for row in con.execute("SELECT study_name FROM studies")]
+    except sqlite3.Error:
+        return []
 
 
 def check_creatable(path: Path, flag: str) -> None:

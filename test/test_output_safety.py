@@ -1,0 +1,131 @@
+"""--out never destroys what a run uses (report/outputs.py check_output_dir): not its inputs, not a folder of
+unrelated files, not the current directory, its parents or the root; ``tune`` resumes only into its own folder.
+Each refusal: exit 2, one line naming the flag, before any run (nothing printed to stdout), inputs byte-identical.
+Tiny runs (0.2 s, pid unless a warm start needs dnbs, no figures)."""
+from pathlib import Path
+
+import pytest
+from cli_runner import run_cli
+from test_bag_files import _write_run_bag
+
+REPO = Path(__file__).resolve().parent.parent
+TINY = ("--duration", "0.2", "--no-figures")
+TUNE = ("tune", "--trials", "1", "--duration", "0.2", "--seeds", "1", "--scenarios", "nominal",
+        "--held-out-seeds", "0", "--jobs", "1")
+
+
+def _tree(path: Path) -> dict:
+    """Every file under ``path`` (or the file itself) and its bytes."""
+    path = Path(path)
+    if path.is_file():
+        return {path.name: path.read_bytes()}
+    return {str(p.relative_to(path)): p.read_bytes() for p in sorted(path.rglob("*")) if p.is_file()}
+
+
+def _refused(r, *words):
+    """Exit 2, one line on stderr naming each of ``words``, before any run (nothing on stdout)."""
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1, (r.returncode, r.stdout, r.stderr)
+    assert "Traceback" not in r.stderr and r.stdout == "", (r.stdout, r.stderr)
+    for w in words:
+        assert w in lines[0], lines[0]
+
+
+def _simulate(out: Path, *extra, controller="pid"):
+    r = run_cli("simulate", "--controller", controller, *TINY, "--out", out, *extra)
+    assert r.returncode == 0, r.stderr
+    return out
+
+
+def test_analyse_force_into_its_own_bag_is_refused(tmp_path):
+    bag = _write_run_bag(tmp_path / "bag", ns="/pa10")
+    before = _tree(bag)
+    _refused(run_cli("analyse", bag, "--out", bag, "--force", "--no-figures"), "--out", "BAG")
+    _refused(run_cli("analyse", bag, "--out", bag / "analysis", "--force", "--no-figures"), "--out", "lies inside")
+    assert _tree(bag) == before
+
+
+def test_study_force_over_the_folder_of_its_config_is_refused(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "study.md").write_text("a previous study\n")
+    cfg = out / "cfg.yaml"
+    cfg.write_text((REPO / "config" / "default.yaml").read_text())
+    before = _tree(out)
+    r = run_cli("study", "--scenarios", "nominal", "--controllers", "pid", "--seeds", "1", "--duration", "0.2",
+                "--jobs", "1", "--config", cfg, "--out", out, "--force")
+    _refused(r, "--out", "--config", "holds")
+    assert _tree(out) == before
+
+
+def test_simulate_force_over_its_warm_start_is_refused(tmp_path):
+    prev = _simulate(tmp_path / "prev", controller="dnbs")
+    before = _tree(prev)
+    for init, out in ((prev / "checkpoints", prev), (prev / "checkpoints", prev / "checkpoints"),
+                      (prev / "checkpoints", prev / "checkpoints" / "new"), (prev, prev), (prev, prev / "new")):
+        r = run_cli("simulate", "--controller", "dnbs", *TINY, "--init-from", init, "--out", out, "--force")
+        _refused(r, "--out", "--init-from")
+    assert _tree(prev) == before
+
+
+def test_an_out_holding_an_extended_config_is_refused(tmp_path):
+    """The config's ``extends`` files are inputs too: a folder holding one is not replaced."""
+    out = _simulate(tmp_path / "out")
+    (out / "base.yaml").write_text((REPO / "config" / "default.yaml").read_text())
+    (tmp_path / "cfg.yaml").write_text(f"extends: {out / 'base.yaml'}\n")
+    before = _tree(out)
+    _refused(run_cli("simulate", "--controller", "pid", *TINY, "--config", tmp_path / "cfg.yaml", "--out", out,
+                     "--force"), "--out", "--config")
+    assert _tree(out) == before
+
+
+def test_force_does_not_wipe_a_folder_of_other_files(tmp_path):
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "keep").write_text("not a pa10-dnbs output\n")
+    _refused(run_cli("simulate", "--controller", "pid", *TINY, "--out", out, "--force"),
+             "--out", "not a pa10-dnbs output")
+    assert (out / "keep").read_text() == "not a pa10-dnbs output\n" and len(list(out.iterdir())) == 1
+
+
+@pytest.mark.parametrize("given", ["", ".", "..", "/"])
+def test_the_current_directory_its_parents_and_the_root_are_refused_up_front(tmp_path, monkeypatch, given):
+    here = tmp_path / "a" / "b"
+    here.mkdir(parents=True)
+    (here / "keep").write_text("x")
+    monkeypatch.chdir(here)
+    r = run_cli("simulate", "--controller", "pid", *TINY, "--out", given, "--force")
+    _refused(r, "--out")
+    assert _tree(tmp_path) == {"a/b/keep": b"x"}
+
+
+def test_force_replaces_a_previous_output_and_an_empty_folder(tmp_path):
+    out = _simulate(tmp_path / "out", controller="dnbs")
+    assert (out / "checkpoints").is_dir()
+    _simulate(out, "--force")   # a previous output: replaced by the pid run
+    assert (out / "report.md").is_file() and not (out / "checkpoints").exists()
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    _simulate(empty, "--force")
+    assert (empty / "report.md").is_file()
+
+
+def test_tune_resumes_only_into_its_own_folder(tmp_path):
+    sim = _simulate(tmp_path / "sim")
+    before = _tree(sim)
+    _refused(run_cli(*TUNE, "--controller", "pid", "--out", sim), "--out", "report.md")
+    assert _tree(sim) == before
+
+    tune = tmp_path / "tune"
+    r = run_cli(*TUNE, "--controller", "pid", "--out", tune)
+    assert r.returncode == 0, r.stderr
+    before = _tree(tune)
+    _refused(run_cli(*TUNE, "--controller", "dnbs", "--out", tune), "--out", "pa10-pid")   # another tune's folder
+    _refused(run_cli(*TUNE, "--controller", "pid", "--seed", "1", "--out", tune), "--seed")  # other options
+    _refused(run_cli(*TUNE, "--controller", "pid", "--config", tune / "tuned.yaml", "--out", tune),
+             "--out", "--config")                                                # its own result as config
+    assert _tree(tune) == before
+    (tune / "tune.json").unlink()   # an interrupted tune: only its storage tells which it is
+    _refused(run_cli(*TUNE, "--controller", "dnbs", "--out", tune), "--out", "pa10-pid")
+    r = run_cli(*TUNE, "--controller", "pid", "--trials", "2", "--out", tune)   # the same tune: resumes
+    assert r.returncode == 0 and "2 trials" in r.stdout, r.stderr
