@@ -129,3 +129,12 @@ def test_tune_resumes_only_into_its_own_folder(tmp_path):
     _refused(run_cli(*TUNE, "--controller", "dnbs", "--out", tune), "--out", "pa10-pid")
     r = run_cli(*TUNE, "--controller", "pid", "--trials", "2", "--out", tune)   # the same tune: resumes
     assert r.returncode == 0 and "2 trials" in r.stdout, r.stderr
+
+
+def test_a_tune_with_its_storage_in_its_out_resumes(tmp_path):
+    out = tmp_path / "t"
+    out.mkdir()
+    storage = f"sqlite:///{out / 'mine.db'}"
+    for trials in ("1", "2"):
+        r = run_cli(*TUNE, "--controller", "pid", "--trials", trials, "--storage", storage, "--out", out)
+        assert r.returncode == 0 and f"{trials} trials" in r.stdout, r.stderr

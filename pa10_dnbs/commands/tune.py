@@ -21,7 +21,7 @@ from .options import TuneOptions
 from ..json_text import json_text
 from ..interrupt import EXIT_INTERRUPTED, check, deferred, immediate, on_second_sigint, say
 from ..output_lock import lock_output
-from ..report.outputs import TUNE_FILES, check_creatable, check_output_dir, check_tune_dir
+from ..report.outputs import check_creatable, check_output_dir, check_tune_dir, tune_files
 from ..run_size import check_run_size, say_note
 from ..study.executor import Executor
 from ..study.scenarios import SCENARIOS
@@ -64,7 +64,8 @@ def run_tune(options: TuneOptions) -> int:
                     str(config_path.resolve()), o.seed, start_values(o.controller, base))
     command = _command(o.controller, o.trials, out, o.arm, config_path, o.storage, o.seed, o.scenarios, o.seeds, o.held_out_seeds,
                        o.duration_s, o.params)
-    check_output_dir(out, False, "--out", inputs={"--config": config_path, "--arm": the_arm.file}, resume=TUNE_FILES)
+    check_output_dir(out, False, "--out", inputs={"--config": config_path, "--arm": the_arm.file},
+                     resume=tune_files(out, o.storage))
     check_tune_dir(out, spec.study_name, spec.identity(), refusal)  # only this tune's own files: it resumes
     lock_output(out)  # a second tune into DIR at once is refused (the same command later resumes)
     where_kept = o.storage if o.storage is not None else str(out / "tune.db")

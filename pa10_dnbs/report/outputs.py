@@ -36,14 +36,26 @@ class OutputExistsError(FileExistsError):
 
 # The files by which a folder is recognised as a previous pa10-dnbs output (one at its top is enough): simulate,
 # launch and analyse write report.md; study study.json/study.md (interrupted: study.partial.*); an interrupted
-# command interrupted.json (partial.py); tune tune.db, tune.json, tune.md, tuned.yaml.
+# command interrupted.json (partial.py); tune tune.db, tune.json, tune.md, tuned.yaml; scripts/equal_budget.py
+# comparison.md.
 OUTPUT_MARKS = ("report.md", "study.json", "study.md", "study.partial.json", "study.partial.md", PARTIAL_FILE,
-                "tune.json", "tune.md", "tune.db", "tuned.yaml")
+                "tune.json", "tune.md", "tune.db", "tuned.yaml", "comparison.md")
 
 # What ``tune`` keeps in its DIR (tune/report.py, commands/tune.py; SQLite's journal beside tune.db): a tune
 # resumes into a folder holding nothing else.
 TUNE_FILES = frozenset({"tune.db", "tune.db-journal", "tune.db-wal", "tune.db-shm", "tuned.yaml", "tune.md",
                         "tune.json", "history.png", "importance.png"})
+
+
+def tune_files(out: Path, storage: str | None) -> frozenset[str]:
+    """TUNE_FILES, and the names of a ``--storage sqlite:///FILE`` that lies directly in ``out`` (and its
+    journals): what a tune's DIR may hold when it resumes."""
+    if not storage or not storage.startswith("sqlite:///"):
+        return TUNE_FILES
+    file = Path(storage[len("sqlite:///"):]).resolve()
+    if file.parent != Path(out).resolve():
+        return TUNE_FILES
+    return TUNE_FILES | {file.name + end for end in ("", "-journal", "-wal", "-shm")}
 
 
 def check_output_dir(out: Path, force: bool, flag: str = "--out", inputs: dict | None = None,
