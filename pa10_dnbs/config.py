@@ -11,9 +11,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from .config_error import ConfigError  # re-exported: the CLI and the nodes catch it from here
+from .config_yaml import read_config_yaml
 
 
 @dataclass(frozen=True)
@@ -235,10 +234,7 @@ def _read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict:
         raise ConfigError(f"config file not found: {path}")
     if path in seen:
         raise ConfigError(f"{path}: extends: circular ({' -> '.join(str(p) for p in seen + (path,))})")
-    try:
-        raw = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path}: not valid YAML: {exc}") from None
+    raw = read_config_yaml(path)  # one line for a file that is not text, not YAML, or gives a key twice
     if not isinstance(raw, dict):
         return raw
     arm = raw.get("arm")
@@ -250,6 +246,8 @@ def _read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict:
     base = raw.pop("extends")
     if not isinstance(base, str) or not base:
         raise ConfigError(f"{path}: extends: expected the path of a config file, got {base!r}")
+    if not (path.parent / base).is_file():
+        raise ConfigError(f"{path}: extends: {base}: no such config file ({(path.parent / base).resolve()})")
     parent = _read_yaml(path.parent / base, seen + (path,))
     if not isinstance(parent, dict):
         raise ConfigError(f"{path}: extends: {base} is not a mapping")

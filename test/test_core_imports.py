@@ -36,7 +36,7 @@ def test_launcher_does_not_load_rclpy():
 LAYERS = [
     {"__init__", "paths", "atomic_file", "run_data", "core", "wire", "kinematics", "faults",  # numpy-only data and maths
      "config_error", "interrupt", "cli_values", "output_lock", "number_text", "run_size", "json_text"},
-    {"arm", "config"},                                                         # an arm's files; a config file
+    {"arm", "config", "config_yaml"},                                          # an arm's files; a config file
     {"settings"},                                                              # a run's typed settings
     {"plant", "loop", "accel", "trajectory_file"},                             # physics, loop logic, compiled step
     {"derived_settings", "run_settings"},                                      # the rules; settings built once

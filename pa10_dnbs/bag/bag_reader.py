@@ -16,6 +16,8 @@ from typing import Iterator
 
 import yaml
 
+from ..config_yaml import yaml_error_line
+
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 
 
@@ -38,20 +40,18 @@ class Bag:
         self.path = _bag_dir(Path(path))
         meta = _load_metadata(self.path)
         info = meta["rosbag2_bagfile_information"]
-        files = [self.path / f for f in info.get("relative_file_paths") or []]
-        if not files:
-            raise BagError(f"{self.path}: metadata.yaml lists no storage files")
+        files = _storage_files(self.path, info)
         if info.get("storage_identifier") != "mcap":
             raise BagError(f"{self.path}: storage is {info.get('storage_identifier')!r}, expected mcap")
         for f in files:
             _check_mcap_file(f)
         self.crc_reports = [_check_crcs(f) for f in files]
-        expected = int(info.get("message_count", -1))
+        expected = _message_count(self.path, info)
         in_files = sum(_summary_message_count(f) for f in files)
         if expected != in_files:
             raise BagError(f"{self.path}: metadata.yaml counts {expected} messages but the MCAP "
                            f"summary holds {in_files}; the bag is inconsistent")
-        self.custom_data: dict[str, str] = dict(info.get("custom_data") or {})
+        self.custom_data: dict[str, str] = _custom_data(self.path, info)
         try:
             self._reader = Reader(self.path)
             self._reader.open()
@@ -116,12 +116,44 @@ def _bag_dir(path: Path) -> Path:
 
 def _load_metadata(bag: Path) -> dict:
     try:
-        meta = yaml.safe_load((bag / "metadata.yaml").read_text())
-    except (yaml.YAMLError, UnicodeDecodeError) as exc:
-        raise BagError(f"{bag}/metadata.yaml: not valid YAML: {exc}") from None
+        meta = yaml.safe_load((bag / "metadata.yaml").read_text(encoding="utf-8"))
+    except UnicodeDecodeError as exc:
+        raise BagError(f"{bag}/metadata.yaml: not valid YAML: not UTF-8 text (byte {exc.start})") from None
+    except yaml.YAMLError as exc:
+        raise BagError(yaml_error_line(bag / "metadata.yaml", exc)) from None
     if not isinstance(meta, dict) or not isinstance(meta.get("rosbag2_bagfile_information"), dict):
         raise BagError(f"{bag}/metadata.yaml: no rosbag2_bagfile_information mapping")
     return meta
+
+
+def _storage_files(bag: Path, info: dict) -> list[Path]:
+    """The storage files ``relative_file_paths`` lists (a list of file names); BagError naming the field."""
+    names = info.get("relative_file_paths")
+    field = f"{bag}/metadata.yaml: relative_file_paths"
+    if names is None or names == []:
+        raise BagError(f"{bag}: metadata.yaml lists no storage files")
+    if not isinstance(names, list):
+        raise BagError(f"{field}: expected a list of file names, got {type(names).__name__} {names!r}")
+    bad = [n for n in names if not isinstance(n, str) or not n]
+    if bad:
+        raise BagError(f"{field}: expected file names, got {bad[0]!r}")
+    return [bag / n for n in names]
+
+
+def _message_count(bag: Path, info: dict) -> int:
+    """``message_count``: a whole number >= 0 (-1 when absent: then it never matches the files')."""
+    count = info.get("message_count", -1)
+    if isinstance(count, bool) or not isinstance(count, int) or count < -1:
+        raise BagError(f"{bag}/metadata.yaml: message_count: expected a whole number, got {count!r}")
+    return count
+
+
+def _custom_data(bag: Path, info: dict) -> dict[str, str]:
+    """``custom_data``: a mapping of names to texts (absent: empty; a value YAML read as a number: its text; none: "")."""
+    data = info.get("custom_data") or {}
+    if not isinstance(data, dict) or any(isinstance(v, (dict, list)) for v in data.values()):
+        raise BagError(f"{bag}/metadata.yaml: custom_data: expected a mapping of names to texts, got {data!r:.80}")
+    return {str(k): v if isinstance(v, str) else "" if v is None else str(v) for k, v in data.items()}
 
 
 def _check_mcap_file(f: Path) -> None:

@@ -10,7 +10,7 @@ from ..accel.choice import resolve_kernel
 from ..bag.bag_writer import check_bag_path
 from ..config import ConfigError, default_config_path
 from ..controller_factory import load_reference_trajectory
-from ..core.checkpoint import checkpoint_dir, load_joint_checkpoints
+from ..core.checkpoint import checkpoint_dir, load_joint_checkpoints, network_degrees
 from ..live.options import check_live_options
 from ..loop.scheduling import granted_priority
 from ..output_lock import lock_output
@@ -94,7 +94,7 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
         if o.controller != "dnbs":
             raise ConfigError("--init-from: only the DNBS controllers have learned state to start from")
         try:
-            load_joint_checkpoints(o.init_from, joint_names)  # all there and readable, before anything starts
+            load_joint_checkpoints(o.init_from, joint_names, network_degrees(settings.dnbs))  # all there and readable, before anything starts
         except ValueError as exc:
             raise ConfigError(f"--init-from: {exc}") from None
         init_from = checkpoint_dir(o.init_from).resolve()

@@ -8,7 +8,7 @@ from ..accel.choice import resolve_kernel
 from .options import SimulateOptions
 from ..config import ConfigError, default_config_path
 from ..core.joint_trajectory import TrajectoryError
-from ..core.checkpoint import load_joint_checkpoints, save_checkpoint
+from ..core.checkpoint import load_joint_checkpoints, network_degrees, save_checkpoint
 from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, on_second_sigint, outputs_written, say
 from ..number_text import interval
 from ..report.markdown import report_markdown
@@ -48,7 +48,7 @@ def run_simulate(options: SimulateOptions) -> int:
         if "dnbs" not in kinds:
             raise ConfigError("--init-from: only the DNBS controllers have learned state to start from")
         try:
-            init_states = load_joint_checkpoints(o.init_from, the_arm.joint_names)
+            init_states = load_joint_checkpoints(o.init_from, the_arm.joint_names, network_degrees(settings.dnbs))
         except ValueError as exc:
             raise ConfigError(f"--init-from: {exc}") from None
     check_output_dir(o.out, o.force, "--out", inputs={"--config": config_path, "--arm": the_arm.file,

@@ -11,11 +11,16 @@ of CPU into one tick.
 from __future__ import annotations
 
 import io
+import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
 
 from ..atomic_file import atomic_path
+from .honn import monomial_exponents
+
+_NETWORKS = (("alpha", 2), ("torque", 3))   # each network's name in a state dict and its number of inputs
 
 
 def save_checkpoint(path: Path, state: dict, step: int) -> None:
@@ -41,8 +46,9 @@ def load_checkpoint(path: Path) -> tuple[dict, int]:
     try:
         with np.load(Path(path)) as z:
             state = {k: z[k] for k in z.files}
-    except (OSError, ValueError, EOFError) as exc:
-        raise ValueError(f"{path}: not a readable checkpoint ({exc})") from None
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as exc:
+        why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ValueError(f"{path}: not a readable checkpoint (truncated or not an .npz file: {why})") from None
     if "step" not in state:
         raise ValueError(f"{path}: not a checkpoint (no step)")
     return state, int(state.pop("step"))
@@ -54,10 +60,39 @@ def checkpoint_dir(path: Path) -> Path:
     return path / "checkpoints" if (path / "checkpoints").is_dir() else path
 
 
-def load_joint_checkpoints(path: Path, joint_names) -> list[dict]:
+def network_degrees(dnbs) -> tuple[int, int]:
+    """(alpha, torque) ``max_degree`` of the ``dnbs`` settings (``DnbsSettings``): what a checkpoint must fit."""
+    return int(dnbs.alpha_net.max_degree), int(dnbs.torque_net.max_degree)
+
+
+def check_controller_state(f: Path, state: dict, joint: int, degrees: tuple[int, int]) -> None:
+    """ValueError naming ``f`` unless ``state`` is a DNBS state of joint index ``joint`` for networks of
+    ``degrees`` (alpha, torque ``max_degree``): weights (L,), covariances (L, L), initial weights (L,), finite."""
+    missing = [f"{name}_{k}" for name, _ in _NETWORKS for k in ("w", "P", "w0") if f"{name}_{k}" not in state]
+    if missing:
+        raise ValueError(f"{f}: not a DNBS checkpoint (no {', '.join(missing)})")
+    if "joint" in state and (np.shape(state["joint"]) != () or int(state["joint"]) != joint):
+        raise ValueError(f"{f}: the checkpoint of joint index {state['joint']}, expected {joint}")
+    for (name, n_inputs), degree in zip(_NETWORKS, degrees):
+        n = len(monomial_exponents(n_inputs, degree))
+        shapes = tuple(np.shape(state[f"{name}_{k}"]) for k in ("w", "P", "w0"))
+        if shapes != ((n,), (n, n), (n,)):
+            raise ValueError(f"{f}: its {name} network has weights {shapes[0]} and covariance {shapes[1]}, "
+                             f"this config's dnbs.{name}_net (max_degree {degree}) has {n} weight{'s' * (n != 1)}: a checkpoint "
+                             "of another network")
+        for k, what in (("w", "weights"), ("P", "covariance"), ("w0", "initial weights")):
+            value = state[f"{name}_{k}"]
+            if value.dtype.kind not in "fiu":
+                raise ValueError(f"{f}: its {name} network's {what} are not numbers ({value.dtype})")
+            if not np.isfinite(value).all():
+                raise ValueError(f"{f}: its {name} network's {what} are not all finite (NaN or inf)")
+
+
+def load_joint_checkpoints(path: Path, joint_names, degrees: tuple[int, int] | None = None) -> list[dict]:
     """One controller state per joint from ``<dir>/<joint>.npz`` (see :func:`checkpoint_dir`).
 
-    ValueError naming the file when one is missing or unreadable.
+    ``degrees``: the (alpha, torque) ``max_degree`` the states must fit (:func:`check_controller_state`).
+    ValueError naming the file when one is missing, unreadable or does not fit.
     """
     d = checkpoint_dir(path)
     if not d.is_dir():
@@ -67,5 +102,8 @@ def load_joint_checkpoints(path: Path, joint_names) -> list[dict]:
         f = d / f"{name}.npz"
         if not f.is_file():
             raise ValueError(f"{f}: missing (a warm start needs one checkpoint per joint: {', '.join(joint_names)})")
-        states.append(load_checkpoint(f)[0])
+        state = load_checkpoint(f)[0]
+        if degrees is not None:
+            check_controller_state(f, state, len(states), degrees)
+        states.append(state)
     return states

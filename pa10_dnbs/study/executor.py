@@ -16,6 +16,7 @@ scheduler drops every run not started (a run already on a worker thread ends wit
 from __future__ import annotations
 
 import os
+import re
 import time
 import uuid
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -143,8 +144,70 @@ class Executor:
         return results
 
 
+# The address forms a Dask client reaches: [scheme://]host:port, host a name, an IPv4 or a bracketed IPv6 address
+_ADDRESS = re.compile(r"^(?:(?P<scheme>[a-z]+)://)?(?P<host>[A-Za-z0-9._-]+|\[[0-9A-Fa-f:.]+\]):(?P<port>[0-9]{1,5})$")
+_SCHEMES = ("tcp", "tls", "ws", "wss", "ucx")   # distributed's network comms (inproc is within one process)
+
+
+def check_address(address: str) -> str:
+    """``address`` as given, if it has a form a Dask client can reach (``tcp://host:port``); ConfigError else."""
+    m = _ADDRESS.match(address or "")
+    scheme = (m.group("scheme") or "tcp") if m else None
+    if m is None or scheme not in _SCHEMES or not 0 < int(m.group("port")) < 65536:
+        raise ConfigError(f"scheduler: {address!r} is not the address of a Dask scheduler (expected "
+                          f"tcp://host:port; schemes: {', '.join(_SCHEMES)})", setting="scheduler")
+    return address
+
+
+async def _identity(address: str) -> dict:
+    """The identity a Dask server at ``address`` gives (its ``type``: 'Scheduler' for a scheduler)."""
+    from distributed.comm import connect as comm_connect
+
+    comm = await comm_connect(address, timeout=CONNECT_TIMEOUT_S)
+    try:
+        await comm.write({"op": "identity", "reply": True})
+        return await comm.read()
+    finally:
+        comm.abort()
+
+
+def _probe(address: str) -> None:
+    """ConfigError unless a Dask scheduler answers at ``address`` within ``CONNECT_TIMEOUT_S`` (no Client yet:
+    a Client that failed to start closes itself only on garbage collection, 20 s later, with a traceback)."""
+    import asyncio
+    import socket
+
+    m = _ADDRESS.match(address)
+    if (m.group("scheme") or "tcp") != "ucx":   # a TCP port first: a refusal is said at once, not after retries
+        try:
+            socket.create_connection((m.group("host").strip("[]"), int(m.group("port"))), CONNECT_TIMEOUT_S).close()
+        except OSError as exc:
+            why = f"no answer within {CONNECT_TIMEOUT_S:g} s" if isinstance(exc, TimeoutError) else \
+                (exc.strerror or type(exc).__name__)
+            raise ConfigError(f"scheduler: cannot connect to {address}: {why}", setting="scheduler") from None
+    try:
+        reply = asyncio.run(asyncio.wait_for(_identity(address), CONNECT_TIMEOUT_S + 1.0))
+    except (asyncio.TimeoutError, TimeoutError):
+        why = f"no Dask answer within {CONNECT_TIMEOUT_S:g} s (is it a Dask scheduler's address?)"
+    except MemoryError:   # a length read from a reply that is not Dask's
+        why = "what answers there is not a Dask scheduler"
+    except Exception as exc:   # refused, reset, not Dask's protocol: said in one line
+        text = str(exc).splitlines()[0] if str(exc) else ""
+        why = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+    else:
+        kind = reply.get("type") if isinstance(reply, dict) else None
+        if kind == "Scheduler":
+            return
+        why = f"what answers there is not a Dask scheduler (a {kind})" if kind else \
+            "what answers there is not a Dask scheduler"
+    raise ConfigError(f"scheduler: cannot connect to {address}: {why}", setting="scheduler")
+
+
 def connect(address: str):
-    """A ``distributed.Client`` to ``address`` with at least one worker; ConfigError (exit 2) if unreachable."""
+    """A ``distributed.Client`` to ``address`` with at least one worker; ConfigError (exit 2) for an address
+    that is malformed, unreachable, or answered by something other than a Dask scheduler, within
+    ``CONNECT_TIMEOUT_S`` for each of: reaching the scheduler, its handshake, its first worker."""
+    check_address(address)
     try:
         from distributed import Client
     except ImportError:  # pragma: no cover - pinned in requirements.txt
@@ -153,9 +216,10 @@ def connect(address: str):
 
     for name in ("distributed.client", "distributed.comm", "distributed.core", "distributed.batched"):
         logging.getLogger(name).setLevel(logging.CRITICAL)  # its own connection errors: we say it in one line
+    _probe(address)
     try:
         client = Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as exc:
+    except Exception as exc:   # the scheduler went away since the probe
         raise ConfigError(f"scheduler: cannot connect to {address}: "
                           f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}", setting="scheduler") from None
     try:

@@ -1,0 +1,76 @@
+"""Read one config file's YAML document strictly: every mistake is one ConfigError line naming the file.
+
+- not UTF-8 text, or not valid YAML: ``FILE:LINE: not valid YAML: <problem>`` (one line, not PyYAML's several);
+- a key given twice in one mapping (PyYAML keeps the last silently, so a whole section could vanish):
+  ``FILE:LINE: key 'k' given twice in one mapping (first at line N)``;
+- ``1e-3``, ``1e3``, ``2.5e3`` are numbers (floats), as in YAML 1.2 and JSON: PyYAML's YAML 1.1 float rule
+  wants a dot and a signed exponent (``1.0e-3``) and reads the others as strings. Every value the 1.1 rule
+  reads is read exactly as before (the extra rule is tried after it), so existing files keep their values.
+"""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import yaml
+
+from .config_error import ConfigError
+
+# A number with an exponent that the YAML 1.1 float pattern misses: no dot or an unsigned exponent.
+_EXPONENT_FLOAT = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$")
+
+
+class DuplicateKeyError(yaml.constructor.ConstructorError):
+    """A key given twice in one mapping."""
+
+
+class StrictConfigLoader(yaml.SafeLoader):
+    """``yaml.SafeLoader`` that refuses a key given twice in one mapping and reads ``1e-3`` as a float."""
+
+    def construct_mapping(self, node, deep=False):
+        if isinstance(node, yaml.MappingNode):
+            first: dict = {}
+            for key_node, _ in node.value:
+                if key_node.tag == "tag:yaml.org,2002:merge":   # '<<': merged keys may be overridden
+                    continue
+                key = self.construct_object(key_node, deep=True)
+                try:
+                    seen = first.get(key)
+                except TypeError:   # an unhashable key: the base constructor says so
+                    continue
+                if seen is not None:
+                    raise DuplicateKeyError(
+                        None, None, f"key {key!r} given twice in one mapping (first at line {seen.line + 1})",
+                        key_node.start_mark)
+                first[key] = key_node.start_mark
+        return super().construct_mapping(node, deep=deep)
+
+
+StrictConfigLoader.add_implicit_resolver("tag:yaml.org,2002:float", _EXPONENT_FLOAT, list("-+0123456789."))
+
+
+def yaml_error_line(path: Path, exc: yaml.YAMLError) -> str:
+    """``FILE:LINE: not valid YAML: problem`` in one line (PyYAML's message spans several)."""
+    mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+    where = f"{path}:{mark.line + 1}" if mark is not None else str(path)
+    if isinstance(exc, DuplicateKeyError):
+        return f"{where}: {exc.problem}"
+    problem = getattr(exc, "problem", None) or (str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
+    context = getattr(exc, "context", None)
+    if context:
+        problem = f"{context}, {problem}"
+    return f"{where}: not valid YAML: {problem}"
+
+
+def read_config_yaml(path: Path):
+    """The YAML document of the config file ``path`` (any type; the caller checks it), read strictly."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{path}: not a text config file (not UTF-8: byte {exc.start})") from None
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    try:
+        return yaml.load(text, Loader=StrictConfigLoader)
+    except yaml.YAMLError as exc:
+        raise ConfigError(yaml_error_line(path, exc)) from None
