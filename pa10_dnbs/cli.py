@@ -17,7 +17,7 @@ from .supervisor.fault_flags import add_fault_arguments
 from .loop.scheduling import DEFAULT_RT_PRIORITY
 from .bag.bag_reader import BagError
 from .bag.bag_writer import BagExistsError
-from .cli_values import OneLineParser, nonnegative, number_in, positive, seconds, whole_in
+from .cli_values import MAX_REPLAY_CLOCK_HZ, OneLineParser, nonnegative, number_in, positive, seconds, whole_in
 from .output_lock import OutputInUseError, held, release_all
 from .report.outputs import OutputExistsError
 from .tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
@@ -318,8 +318,8 @@ def build_parser() -> argparse.ArgumentParser:
     rb.add_argument("--mode", choices=("lockstep", "paced"), default="lockstep",
                     help="lockstep: publish state k, wait for the command stamped k, step once; paced: step every "
                          "simulation.dt_s of wall time with the latest command")
-    rb.add_argument("--duration", type=nonnegative, default=None, metavar="SECONDS",
-                    help="robot time to run [s] (default: until Ctrl-C)")
+    rb.add_argument("--duration", type=seconds, default=None, metavar="SECONDS",
+                    help="robot time to run [s], > 0 (default: until Ctrl-C)")
     rb.add_argument("--state-topic", default="/robot_joint_states", metavar="TOPIC",
                     help="the robot's JointState topic (default /robot_joint_states)")
     rb.add_argument("--command-topic", default="/robot_joint_command", metavar="TOPIC",
@@ -391,8 +391,10 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--start-offset", type=nonnegative, default=0.0, metavar="SECONDS",
                     help="skip the bag's first SECONDS (of its own timeline)")
     rp.add_argument("--loop", action="store_true", help="play again and again until Ctrl-C")
-    rp.add_argument("--clock", type=nonnegative, nargs="?", const=100.0, default=0.0, metavar="HZ",
-                    help="publish /clock from the bag's timeline at HZ (default 100 when given); "
+    rp.add_argument("--clock", type=number_in(0.0, MAX_REPLAY_CLOCK_HZ, low_open=False), nargs="?", const=100.0,
+                    default=0.0, metavar="HZ",
+                    help=f"publish /clock from the bag's timeline at HZ of wall time, at most {MAX_REPLAY_CLOCK_HZ:g} "
+                         "(default 100 when given); "
                          "the recorded /clock is then not replayed")
     rp.add_argument("--wait-for-subscribers", type=nonnegative, default=0.0, metavar="SECONDS",
                     help="before playing, wait up to SECONDS until every topic has a subscriber (exit 1 if not)")

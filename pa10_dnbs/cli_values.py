@@ -10,6 +10,10 @@ import argparse
 import math
 import sys
 
+#: replay --clock's bound [Hz of wall time]: a /clock at most every millisecond (the plant's step on every preset),
+#: a rate the player's publisher keeps; a faster one only delays the bag's messages
+MAX_REPLAY_CLOCK_HZ = 1000.0
+
 
 class OneLineParser(argparse.ArgumentParser):
     """An ArgumentParser whose errors are ONE line (``prog: error: ...; see prog --help``), exit 2."""

@@ -5,9 +5,14 @@ config is checked): the reference (reference_rule.py, from the URDF limits alone
 from the arm's mass matrix along that reference). Only the keys nobody gave are taken from them; the PA10's arm
 file gives all, so nothing is derived for it. Both rules read one plant, the settings' own (its ``plant``
 section, the arm's facts resolved into it), opened once for them: they look nothing up.
+
+Around them, what the config alone cannot bound is checked against the arm and the step (ConfigError, one line
+naming the key): the reference given (:func:`check_reference`) before the rules sample it, the start state
+(:func:`check_start`) once every value is known.
 """
 from __future__ import annotations
 
+import math
 import sys
 
 import numpy as np
@@ -15,11 +20,13 @@ import numpy as np
 from .arm import Arm
 from .arm.gain_rule import SWEEP_STEP_S, gain_rule, report_rule
 from .arm.reference_rule import feasible_reference, reference_rule
+from .config import ConfigError
 from .core.reference import Reference
-from .plant.from_config import opened_plant, plant_params
+from .plant.from_config import initial_state, opened_plant, plant_params
 from .plant.inertia_sweep import inertia_sweep
 from .plant.pybullet_plant import PyBulletArmPlant
 from .plant.reference_torque import ReferenceTorque
+from .run_steps import countable_steps
 from .settings import PlantSettings, ReferenceSettings, RunSettings
 
 REFERENCE_KEYS = tuple(f"reference.{k}" for k in ("amplitude_rad", "envelope_rate_per_s3", "frequency_rad_s",
@@ -42,8 +49,15 @@ RULE_DEFAULTS = {"ctc": {"on_saturation": "scale_feedback"},
 def with_rule_values(arm: Arm, checked: dict, absent: tuple[str, ...], report: bool = True) -> dict:
     """The ``checked`` config (placeholders standing at the dotted keys ``absent``) with the rules' values for
     ``arm`` at those keys; ``report``: the rules print their table and warnings on stderr."""
-    if not absent:
-        return checked
+    check_reference(arm, checked, absent)
+    if absent:
+        checked = _with_rules(arm, checked, absent, report)
+    check_start(arm, checked)
+    return checked
+
+
+def _with_rules(arm: Arm, checked: dict, absent: tuple[str, ...], report: bool) -> dict:
+    """``checked`` with the rules' values at the dotted keys ``absent``."""
     run = RunSettings.of(checked["simulation"])
     values: dict = {}
     reference = dict(checked["reference"])
@@ -54,6 +68,61 @@ def with_rule_values(arm: Arm, checked: dict, absent: tuple[str, ...], report: b
         if any(key in absent for key in GAIN_KEYS):
             values = dict(values, **derived_gains(plant, ReferenceSettings.of(reference), run, report=report))
     return _placed(checked, values, absent)
+
+
+def _beyond(key: str, values, bound, arm: Arm, what: str, unit: str) -> None:
+    """ConfigError naming ``key`` and the first joint whose value is above ``bound`` (n,) (``what``: the bound
+    in words; ``unit``: both's)."""
+    values = np.asarray(values, dtype=float)
+    bad = ~(values <= np.broadcast_to(bound, values.shape))
+    if np.any(bad):
+        j = int(np.argmax(bad))
+        raise ConfigError(f"{key}: {values[j]:g} {unit} for joint {arm.joint_names[j]} is above {what} = "
+                          f"{np.broadcast_to(bound, values.shape)[j]:g} {unit}")
+
+
+def check_reference(arm: Arm, checked: dict, absent: tuple[str, ...] = ()) -> None:
+    """The eq. 27 reference given in ``checked`` (keys in ``absent`` left to the rules) bounded so that its
+    position, velocity and acceleration stay finite and it can be sampled at the step T = simulation.dt_s:
+    frequency w below the Nyquist rate pi / T, envelope rate d at most 1 / T^3 (the envelope rises within a few
+    steps), amplitude c at most the joint's range (upper - lower limit), centre inside the joint's limits; and
+    simulation.duration_s a countable number of steps (the rules sample the reference over it). ConfigError
+    naming the key and the joint."""
+    dt, ref = checked["simulation"]["dt_s"], checked["reference"]
+    countable_steps(checked["simulation"]["duration_s"], dt, "simulation.duration_s")
+    given = lambda k: f"reference.{k}" not in absent  # noqa: E731
+    if given("frequency_rad_s"):
+        w = np.asarray(ref["frequency_rad_s"], dtype=float)
+        nyquist = math.pi / dt
+        if np.any(w >= nyquist):
+            j = int(np.argmax(w >= nyquist))
+            raise ConfigError(f"reference.frequency_rad_s: {w[j]:g} rad/s for joint {arm.joint_names[j]} is at or "
+                              f"above the Nyquist rate pi / simulation.dt_s = {nyquist:g} rad/s")
+    if given("envelope_rate_per_s3"):
+        _beyond("reference.envelope_rate_per_s3", ref["envelope_rate_per_s3"], 1.0 / dt**3, arm,
+                "1 / simulation.dt_s^3", "1/s^3")
+    if given("amplitude_rad"):
+        _beyond("reference.amplitude_rad", ref["amplitude_rad"], arm.upper_rad - arm.lower_rad, arm,
+                "the joint's range, upper - lower limit,", "rad")
+    if given("centre_rad"):
+        _outside("reference.centre_rad", ref["centre_rad"], arm, "the centre")
+
+
+def _outside(key: str, q, arm: Arm, what: str) -> None:
+    """ConfigError naming ``key`` when a joint's position ``q`` (n,) [rad] lies outside its limits."""
+    q = np.asarray(q, dtype=float)
+    bad = ~((q >= arm.lower_rad) & (q <= arm.upper_rad))
+    if np.any(bad):
+        j = int(np.argmax(bad))
+        raise ConfigError(f"{key}: {what} {q[j]:g} rad of joint {arm.joint_names[j]} is outside its limits "
+                          f"[{arm.lower_rad[j]:g}, {arm.upper_rad[j]:g}] rad")
+
+
+def check_start(arm: Arm, checked: dict) -> None:
+    """The start position (plant/from_config.initial_state: the reference's centre + the offset) inside the
+    arm's limits: ConfigError naming simulation.initial_position_offset_rad otherwise."""
+    q0, _ = initial_state(RunSettings.of(checked["simulation"]), ReferenceSettings.of(checked["reference"]))
+    _outside("simulation.initial_position_offset_rad", q0, arm, "the start position (reference.centre_rad + offset)")
 
 
 def derived_reference(plant: PyBulletArmPlant, run: RunSettings, report: bool = True) -> dict:

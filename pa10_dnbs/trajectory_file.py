@@ -11,7 +11,7 @@ Format (docs/trajectories.md; example: config/trajectory_example.yaml)::
 
 JSON is read by the same YAML parser. ``load_trajectory_file`` checks the file against the arm as
 ``TrajectoryReference.start`` will (names, limits, timing) and raises ConfigError with one line naming the
-file and what is wrong.
+file and what is wrong (a point past ``MAX_TIME_FROM_START_S`` included).
 """
 from __future__ import annotations
 
@@ -21,6 +21,7 @@ import yaml
 
 from .config_error import ConfigError
 from .core.joint_trajectory import JointTrajectory, TrajectoryError, check_trajectory, trajectory_from_mapping
+from .core.trajectory_reference import check_span
 
 
 def read_trajectory(path: Path) -> JointTrajectory:
@@ -42,6 +43,7 @@ def load_trajectory_file(path: Path, arm) -> JointTrajectory:
     try:
         traj = read_trajectory(path)
         check_trajectory(traj, arm.joint_names, arm.lower_rad, arm.upper_rad)
+        check_span(traj)
     except TrajectoryError as exc:
         raise ConfigError(f"trajectory {path}: {exc}", setting="trajectory") from None
     except OSError as exc:

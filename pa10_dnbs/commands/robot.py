@@ -16,6 +16,7 @@ from pathlib import Path
 from ..config import ConfigError, default_config_path
 from .options import RobotCommandOptions
 from ..run_settings import build_settings
+from ..run_steps import run_steps
 from ..supervisor.shm_cleanup import remove_stale, shm_files
 from ..wire.clock_schedule import check_clock_hz
 
@@ -26,6 +27,8 @@ def robot_argv(options: RobotCommandOptions) -> list[str]:
     config_path = Path(o.config_path) if o.config_path else default_config_path()
     settings = build_settings(config_path, arm=o.arm)
     duration_s = 0.0 if o.duration_s is None else o.duration_s
+    if o.duration_s is not None:
+        run_steps(o.duration_s, settings.simulation.dt_s)  # > 0 (the flag), countable and two steps at least
     try:
         check_clock_hz(o.clock_hz, settings.simulation.dt_s)
     except ValueError as exc:

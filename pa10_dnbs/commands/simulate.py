@@ -17,6 +17,7 @@ from ..report.outputs import atomic_output_dir, check_output_dir, write_report, 
 from ..report.partial import partial_banner, write_partial_mark
 from ..run_settings import build_settings
 from ..run_size import check_run_size, say_note
+from ..run_steps import run_steps
 from ..sim.closed_loop import simulate
 from ..trajectory_file import load_trajectory_file
 
@@ -35,9 +36,8 @@ def run_simulate(options: SimulateOptions) -> int:
     settings = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
     the_arm = settings.arm
     duration_s = settings.simulation.duration_s if o.duration_s is None else o.duration_s
-    n_steps = int(round(duration_s / settings.simulation.dt_s))
-    if n_steps < 2:
-        raise ConfigError(f"duration_s: {duration_s} s is shorter than two steps", setting="duration_s")
+    n_steps = run_steps(duration_s, settings.simulation.dt_s,
+                        "simulation.duration_s" if o.duration_s is None else "duration_s")
     duration_s = n_steps * settings.simulation.dt_s
     kinds = CHOICES[o.controller]
     traj = load_trajectory_file(Path(o.trajectory), the_arm) if o.trajectory is not None else None  # its quintics: the run's

@@ -15,6 +15,7 @@ from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, on_second_sigint, outputs_
 from ..report.outputs import atomic_output_dir, check_output_dir
 from ..report.progress import ProgressBar
 from ..run_settings import build_settings
+from ..run_steps import run_steps
 from ..run_size import check_run_size, say_note
 from ..sim.closed_loop import CONTROLLERS
 from ..study.feasibility import infeasible_scenarios
@@ -33,7 +34,7 @@ def run_study_command(options: StudyOptions) -> int:
     ctrl = name_list("--controllers", o.controllers, CONTROLLERS)
     config_path = Path(o.config_path) if o.config_path else default_config_path()
     settings = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
-    n_runs, n_steps = len(scen) * len(ctrl) * o.seeds, int(round(o.duration_s / settings.simulation.dt_s))
+    n_runs, n_steps = len(scen) * len(ctrl) * o.seeds, run_steps(o.duration_s, settings.simulation.dt_s)
     at_once = 1 if o.scheduler is not None else min(n_runs, o.jobs or os.cpu_count() or 1)
     check_run_size(o.duration_s, n_steps, settings.n_joints, at_once=at_once,
                    total_runs=n_runs, say=say_note)
@@ -49,7 +50,7 @@ def run_study_command(options: StudyOptions) -> int:
         settings = resolve_kernel(settings, say=print)  # once here, not in each worker
     n = len(scen) * len(ctrl) * o.seeds
     dt = settings.simulation.dt_s
-    steps_per_run = int(round(o.duration_s / dt))
+    steps_per_run = n_steps
     bar = ProgressBar(n * steps_per_run, dt, f"study ({n} runs)", enabled=None if o.progress else False)
     done = []
 

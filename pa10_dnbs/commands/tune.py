@@ -30,6 +30,7 @@ from ..tune.report import held_out_table, held_out_verdict, tune_figures, tune_m
 from ..tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 from ..tune.space import select, start_values
 from ..run_settings import build_settings
+from ..run_steps import run_steps
 from ..tune.tuner import TrialProgress, TuneSpec, completed, held_out, open_storage, open_study, optimize, refusal
 
 HELD_OUT_SEED0 = 100   # held-out seeds are 100, 101, ...: never a training seed (0 .. --seeds - 1)
@@ -53,9 +54,7 @@ def run_tune(options: TuneOptions) -> int:
     config_path = Path(o.config_path) if o.config_path else default_config_path()
     base = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
     the_arm = base.arm
-    n_steps = int(round(o.duration_s / base.simulation.dt_s))
-    if n_steps < 2:
-        raise ConfigError(f"--duration: {o.duration_s} s is shorter than two steps")
+    n_steps = run_steps(o.duration_s, base.simulation.dt_s)
     runs_per_trial = len(train) * o.seeds
     at_once = 1 if o.scheduler is not None else min(runs_per_trial, o.jobs or os.cpu_count() or 1)
     check_run_size(o.duration_s, n_steps, len(the_arm.joint_names), at_once=at_once,

@@ -11,8 +11,10 @@ keep what they had; a later start replaces what an earlier trajectory planned fr
   it gives, else the current ones), points before the start are dropped, the later points follow;
 - one quintic per segment and joint (``QuinticSpline``; velocities and accelerations the points do not give
   come from ``knot_derivatives``); after the last point its position is held;
-- it is refused (``TrajectoryError``, one line, nothing changes) when ``check_trajectory`` refuses it, when no
-  point is left after the start, or when the interpolation passes a joint limit between the points.
+- it is refused (``TrajectoryError``, one line, nothing changes) when ``check_trajectory`` refuses it, when a
+  time_from_start lies past ``MAX_TIME_FROM_START_S``, when no point is left after the start, or when the
+  interpolation passes a joint limit at a step between the points (each quintic's extrema found analytically,
+  so the check costs the same for a trajectory of a second or of days).
 Numpy only.
 """
 from __future__ import annotations
@@ -24,7 +26,7 @@ import numpy as np
 from .joint_trajectory import JointTrajectory, QuinticSpline, TrajectoryError, check_trajectory, knot_derivatives
 from .reference import ReferenceSample
 
-CHECK_CHUNK = 100_000  # steps sampled at once when checking an interpolation against the limits
+MAX_TIME_FROM_START_S = 1.0e6  # [s] (11.6 days): the longest trajectory followed; a later point is refused
 
 
 @dataclass(frozen=True)
@@ -44,6 +46,32 @@ def received_start(first_free_step: int, stamp_s: float, dt_s: float) -> tuple[i
     if stamp_s == 0.0:
         return int(first_free_step), None
     return max(int(first_free_step), int(np.ceil(stamp_s / dt_s - 1e-9))), float(stamp_s)
+
+
+def check_span(traj: JointTrajectory) -> None:
+    """TrajectoryError (one line) when a point of ``traj`` lies past ``MAX_TIME_FROM_START_S``."""
+    t = np.asarray(traj.time_from_start_s, dtype=float)
+    if t.size and not t[-1] <= MAX_TIME_FROM_START_S:
+        i = int(np.argmax(~(t <= MAX_TIME_FROM_START_S)))
+        raise TrajectoryError(f"points[{i}].time_from_start = {t[i]:g} s is past the longest trajectory followed "
+                              f"({MAX_TIME_FROM_START_S:g} s)")
+
+
+def extremum_times(spline: QuinticSpline) -> np.ndarray:
+    """The times [s] inside each segment where a joint's quintic may turn (real parts of the roots of its
+    derivative, with the segment scaled to [0, 1]), flattened; a superset of its interior extrema."""
+    out = []
+    h = np.diff(spline.t)
+    for i, hi in enumerate(h):
+        scaled = spline.c[:, i, :] * (hi ** np.arange(6))[:, None]  # (6, n): coefficients in u = tau / h
+        for j in range(scaled.shape[1]):
+            d = np.arange(1, 6) * scaled[1:, j]  # derivative's coefficients, u^0 .. u^4
+            if not np.any(d[1:]):
+                continue  # a line: no interior extremum
+            u = np.roots(d[::-1]).real
+            u = u[(u >= 0.0) & (u <= 1.0)]
+            out.append(spline.t[i] + u * hi)
+    return np.concatenate(out) if out else np.empty(0)
 
 
 class TrajectoryReference:
@@ -74,6 +102,7 @@ class TrajectoryReference:
         the start step's time). Raises TrajectoryError (and changes nothing) on a trajectory that cannot be
         followed."""
         traj = check_trajectory(traj, self.joint_names, self.lower_rad, self.upper_rad)
+        check_span(traj)
         dt, start_step = self.dt_s, int(start_step)
         t_start = start_step * dt
         times = (t_start if origin_s is None else float(origin_s)) + traj.time_from_start_s
@@ -101,17 +130,40 @@ class TrajectoryReference:
         return Started(start_step, end_step, t.size, len(times) - later.size - int(first is not None))
 
     def _check_limits(self, spline: QuinticSpline, first: int, last: int) -> None:
-        """TrajectoryError when the interpolation leaves [lower_rad, upper_rad] at a step in [first, last]."""
-        for k0 in range(first, last + 1, CHECK_CHUNK):
-            k = np.arange(k0, min(k0 + CHECK_CHUNK, last + 1))
-            x = spline.evaluate(k * self.dt_s)
-            beyond = (x < self.lower_rad) | (x > self.upper_rad)
-            if np.any(beyond):
-                i, j = np.argwhere(beyond)[0]
-                lo, hi = self.lower_rad[j], self.upper_rad[j]
-                raise TrajectoryError(f"the interpolation of joint {self.joint_names[j]!r} reaches {x[i, j]:.6g} rad "
-                                      f"at t = {k[i] * self.dt_s:.3f} s, beyond its limits [{lo:.6g}, {hi:.6g}] rad "
-                                      "(give velocities, or points further inside)")
+        """TrajectoryError naming the first step in [first, last] where the interpolation leaves
+        [lower_rad, upper_rad].
+
+        Within a segment each joint's quintic is monotone between its turning points, so over the steps the
+        extremes lie at the steps next to a knot or a turning point (``extremum_times``), or at first / last:
+        only those are sampled (two steps either side, for rounding), which decides as sampling every step.
+        Between two such steps a joint is monotone, so its first step beyond is found by bisection."""
+        dt = self.dt_s
+        marks = np.concatenate([spline.t, extremum_times(spline)])
+        near = np.floor(marks / dt)[:, None] + np.arange(-2, 3)
+        k = np.unique(np.clip(near.ravel(), first, last).astype(np.int64))
+        k = np.union1d(k, [first, last])
+        x = spline.evaluate(k * dt)
+        beyond = (x < self.lower_rad) | (x > self.upper_rad)
+        if not np.any(beyond):
+            return
+        found = []  # (first step beyond, joint)
+        for j in np.flatnonzero(beyond.any(axis=0)):
+            i = int(np.argmax(beyond[:, j]))
+            lo_k, hi_k = (int(k[i - 1]), int(k[i])) if i > 0 else (int(k[i]) - 1, int(k[i]))
+            while hi_k - lo_k > 1:  # lo_k within the limits, hi_k beyond; monotone between them
+                mid = (lo_k + hi_k) // 2
+                xm = spline.evaluate(np.array([mid * dt]))[0, j]
+                if xm < self.lower_rad[j] or xm > self.upper_rad[j]:
+                    hi_k = mid
+                else:
+                    lo_k = mid
+            found.append((hi_k, int(j)))
+        step, j = min(found)
+        value = spline.evaluate(np.array([step * dt]))[0, j]
+        lo, hi = self.lower_rad[j], self.upper_rad[j]
+        raise TrajectoryError(f"the interpolation of joint {self.joint_names[j]!r} reaches {value:.6g} rad "
+                              f"at t = {step * dt:.3f} s, beyond its limits [{lo:.6g}, {hi:.6g}] rad "
+                              "(give velocities, or points further inside)")
 
     def _evaluate(self, k, derivative: int) -> np.ndarray:
         base = (self.base.position, self.base.velocity, self.base.acceleration)[derivative]
