@@ -174,6 +174,7 @@ def test_study_and_tune_with_ctc_refuse_a_huge_frequency(tmp_path):
 DURATION_CASES = [("simulate", "--controller", "pid", "--duration", "1e308"),
                   ("study", "--controllers", "pid", "--duration", "1e308"),
                   ("tune", "--controller", "pid", "--trials", "1", "--duration", "1e308"),
+                  ("launch", "--duration", "1e308"),
                   ("study", "--controllers", "pid", "--duration", "1e-9"),
                   ("study", "--controllers", "pid", "--duration", "0.001")]
 

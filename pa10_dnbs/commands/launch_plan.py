@@ -18,6 +18,7 @@ from ..report.metrics_file import metrics_settings
 from ..report.outputs import check_creatable, check_output_dir
 from ..run_settings import build_settings
 from ..run_size import check_run_size, say_note
+from ..run_steps import run_steps
 from ..settings import Settings
 from ..supervisor.fault_flags import apply_fault_flags
 from ..supervisor.graph_run import GraphOptions, loop_reliability, parse_netns
@@ -78,9 +79,7 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
         check_clock_hz(o.clock_hz, dt)
     except ValueError as exc:
         raise ConfigError(f"--clock-hz: {exc}") from None
-    n_steps = int(round(duration_s / dt))
-    if n_steps < 2:
-        raise ConfigError(f"--duration: {duration_s} s is shorter than two steps of {dt} s")
+    n_steps = run_steps(duration_s, dt, "simulation.duration_s" if o.duration_s is None else "--duration")
     check_run_size(duration_s, n_steps, len(joint_names), graph=True, say=say_note,
                    wall_s=n_steps * dt / o.real_time_factor if o.mode == "realtime" else None)
     trajectory = None
