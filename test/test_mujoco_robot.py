@@ -94,7 +94,7 @@ def test_the_robot_node_answers_lockstep_bit_for_bit_and_stops_on_sigint(domain,
 
 @pytest.mark.parametrize("flags, message", [
     (["--arm", "nope"], "arm: no arm called 'nope'"),
-    (["--duration", "-1"], "--duration: must be >= 0"),
+    (["--duration", "-1"], "--duration: must be a positive number of seconds"),
     (["--clock-hz", "5000"], "--clock-hz: must be in [0, 1000]"),
     (["--mode", "realtime"], "invalid choice: 'realtime'"),
 ])
