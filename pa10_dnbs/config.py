@@ -286,6 +286,12 @@ def _check_given(key: str, value: Any, spec: Any) -> None:
         check_value(key, value, spec, None)
 
 
+def check_arm_settings(settings: dict) -> None:
+    """An arm file's ``settings``: config keys but ``arm``, each given of its kind and within its bounds (list
+    lengths are checked with the arm's joints when the settings are built). ConfigError naming the key."""
+    _check_given("", settings, {k: v for k, v in SCHEMA.items() if k != "arm"})
+
+
 def merged(base: dict, over: dict) -> dict:
     """``base`` with ``over``'s keys replacing its own, mappings merged key by key."""
     return _merge(base, over)

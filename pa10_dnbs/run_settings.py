@@ -10,7 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .arm import DEFAULT_ARM, load_arm
-from .config import checked_layers, load_config
+from .config import ConfigError, check_arm_settings, checked_layers, load_config
 from .derived_settings import DERIVED_KEYS, RULE_DEFAULTS, with_rule_values
 from .settings import Settings
 
@@ -23,6 +23,10 @@ def build_settings(config_path: str | Path, arm: str | Path | None = None, repor
     table and warnings on stderr). ConfigError naming the key or file, ArmError naming the arm file."""
     document = load_config(config_path)
     the_arm = load_arm(arm if arm is not None else document.get("arm", DEFAULT_ARM))
+    try:
+        check_arm_settings(the_arm.settings)
+    except ConfigError as exc:   # said as the arm file's key, not taken for the config's
+        raise ConfigError(f"{the_arm.file}: settings.{exc}") from None
     facts = {"plant": {"torque_limit_nm": the_arm.torque_limit_nm.tolist(),
                        "rotor_inertia_kgm2": the_arm.rotor_inertia_kgm2.tolist(),
                        "viscous_nms_per_rad": the_arm.viscous_nms_per_rad.tolist(),

@@ -244,3 +244,35 @@ def test_scheduler_address_of_a_dask_worker(tmp_path):
         with Client(cluster.address, timeout=30) as client:
             worker = next(iter(client.scheduler_info(n_workers=-1)["workers"]))
         _one_line_error(_study_process(tmp_path, worker), "--scheduler", worker, "not a Dask scheduler (a Worker)")
+
+
+def _iiwa_arm_file(tmp_path, settings: str) -> Path:
+    """The iiwa's arm file (its URDF by absolute path) with ``settings`` lines appended under its settings."""
+    text = (REPO / "urdf" / "iiwa" / "arm.yaml").read_text()
+    text = text.replace("urdf: iiwa14.urdf", f"urdf: {REPO / 'urdf' / 'iiwa' / 'iiwa14.urdf'}")
+    path = tmp_path / "arm.yaml"
+    path.write_text(text + settings)
+    return path
+
+
+@pytest.mark.parametrize("settings, words", [
+    ("  reference:\n    amplitude_rad: -3\n", ("settings.reference.amplitude_rad: must be >= 0",)),
+    ("  foo: 1\n", ("settings.foo: unknown key",)),
+    ("  arm: pa10\n", ("settings.arm: unknown key",)),
+])
+def test_a_bad_key_in_an_arm_files_settings_is_named_as_the_arm_files(tmp_path, settings, words):
+    """It was said as the config's key (``reference.amplitude_rad: ...``), and ``arm`` was offered as allowed."""
+    arm = _iiwa_arm_file(tmp_path, settings)
+    r = run_cli("simulate", "--arm", arm, "--controller", "pid", *TINY, "--out", tmp_path / "o")
+    _one_line_error(r, f"{arm}: ", *words)
+    assert "allowed: arm" not in r.stderr and not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("value, words", [("null", "arm: empty"), ("''", "arm: expected a non-empty string"),
+                                          ("'  '", "arm: empty")])
+def test_an_empty_arm_key_says_so(tmp_path, value, words):
+    """``arm: null`` said "no arm called 'None'"."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(f"extends: {DEFAULT}\narm: {value}\n")
+    r = run_cli("simulate", "--config", cfg, "--controller", "pid", *TINY, "--out", tmp_path / "o")
+    _one_line_error(r, words)

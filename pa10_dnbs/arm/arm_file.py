@@ -45,8 +45,8 @@ def preset_names() -> list[str]:
 
 def arm_file_path(spec: str | Path) -> Path:
     """The file ``spec`` names: a preset's ``urdf/<name>/arm.yaml``, or the path itself (resolved)."""
-    text = str(spec)
-    if not text:
+    text = "" if spec is None else str(spec)
+    if not text.strip():
         raise ArmError("arm: empty (a preset name or the path of an arm file or URDF)")
     if is_package_uri(text):
         try:
