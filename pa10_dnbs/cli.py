@@ -17,7 +17,8 @@ from .supervisor.fault_flags import add_fault_arguments
 from .loop.scheduling import DEFAULT_RT_PRIORITY
 from .bag.bag_reader import BagError
 from .bag.bag_writer import BagExistsError
-from .cli_values import MAX_REPLAY_CLOCK_HZ, OneLineParser, nonnegative, number_in, positive, seconds, whole_in
+from .cli_values import (EFFORT_TIMEOUT_MAX_S, MAX_REPLAY_CLOCK_HZ, RTF_MAX, RTF_MIN, OneLineParser, nonnegative,
+                         number_in, positive, seconds, whole_in)
 from .output_lock import OutputInUseError, held, release_all
 from .report.outputs import OutputExistsError
 from .tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
@@ -244,7 +245,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="lockstep: the plant steps once every joint has answered (deterministic, as fast as the "
                          "graph goes); realtime: the plant steps on a wall-clock schedule with deadlines "
                          "(docs/timing.md)")
-    la.add_argument("--rtf", type=number_in(0, 100), default=None, metavar="R",
+    la.add_argument("--rtf", type=number_in(RTF_MIN, RTF_MAX, low_open=False), default=None, metavar="R",
                     help="realtime only: real-time factor, as Gazebo's real_time_factor: a step of dt takes dt / R of "
                          "wall time (1.0: 1 kHz; 0.5: half speed, a 2 ms tick)")
     la.add_argument("--deadline-fraction", type=number_in(0, 1), default=None, metavar="F",
@@ -271,7 +272,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="QoS of the per-joint state/effort topics (default: best_effort, depth 1 in realtime, "
                          "the sensor-data convention; in lockstep best_effort too, reliable when --record or "
                          "--netns is given; docs/timing.md)")
-    la.add_argument("--effort-timeout", type=seconds, default=None, metavar="SECONDS",
+    la.add_argument("--effort-timeout", type=number_in(0, EFFORT_TIMEOUT_MAX_S), default=None, metavar="SECONDS",
                     help="lockstep only: wall time to wait for a joint's effort before holding/zeroing it "
                          "(default 1)")
     la.add_argument("--on-missing-effort", choices=("hold", "zero"), default="hold",

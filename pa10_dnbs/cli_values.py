@@ -13,6 +13,11 @@ import sys
 #: replay --clock's bound [Hz of wall time]: a /clock at most every millisecond (the plant's step on every preset),
 #: a rate the player's publisher keeps; a faster one only delays the bag's messages
 MAX_REPLAY_CLOCK_HZ = 1000.0
+#: launch --rtf's range: a tick of dt / R [s of wall time] between 1000x faster and 1000x slower than real time
+#: (far below, the plant's wall-clock schedule overflows the platform's time_t; docs/timing.md)
+RTF_MIN, RTF_MAX = 1e-3, 100.0
+#: launch --effort-timeout's bound [s of wall time]: an hour's wait for one effort is a hang, not a timeout
+EFFORT_TIMEOUT_MAX_S = 3600.0
 
 
 class OneLineParser(argparse.ArgumentParser):

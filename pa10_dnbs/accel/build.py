@@ -51,12 +51,19 @@ def _compiler() -> str:
     return path
 
 
-def library_path() -> Path:
-    """The path of the built library (building it first if it is not there)."""
-    cc = _compiler()
+def library_target(cc: str | None = None) -> Path:
+    """Where the library built by compiler ``cc`` (a path; default: $CC found on PATH) is cached, built or not."""
+    cc = _compiler() if cc is None else cc
     key = hashlib.sha256(SOURCE.read_bytes() + "\0".join((cc, *FLAGS)).encode()).hexdigest()[:16]
-    target = cache_dir() / f"libdnbs_kernel-{key}.so"
-    if target.is_file():
+    return cache_dir() / f"libdnbs_kernel-{key}.so"
+
+
+def library_path(rebuild: bool = False) -> Path:
+    """The path of the built library (building it first if it is not there; ``rebuild``: built anew and renamed
+    over the cached one, for a cached file that does not load, e.g. truncated)."""
+    cc = _compiler()
+    target = library_target(cc)
+    if target.is_file() and not rebuild:
         return target
     tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
     try:

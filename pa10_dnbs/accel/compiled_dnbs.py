@@ -9,6 +9,7 @@ of ``DNBSControllers`` (test/test_compiled_dnbs.py).
 from __future__ import annotations
 
 import ctypes
+import sys
 import weakref
 
 import numpy as np
@@ -31,6 +32,12 @@ class _Config(ctypes.Structure):
                 + [(f, ctypes.c_long) for f in ("eta_is_ones", "anti_windup", "dead_zone", "printed")])
 
 
+def _first_line(exc: Exception, path) -> str:
+    """The first line of ``exc``'s message without the library's path (dlerror starts with it)."""
+    line = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+    return line.removeprefix(f"{path}: ")
+
+
 def _library() -> ctypes.CDLL:
     """The kernel's library, built on first use, loaded once per process."""
     global _LIB
@@ -38,9 +45,15 @@ def _library() -> ctypes.CDLL:
         path = library_path()
         try:
             lib = ctypes.CDLL(str(path))
-        except OSError as exc:
-            raise KernelBuildError(f"dnbs.kernel: c: cannot load {path}: {exc}",
-                                   reason=f"cannot load {path.name}: {exc}") from None
+        except OSError as exc:  # a cached file that does not load (truncated, damaged): built anew once
+            print(f"dnbs.kernel: the cached {path} did not load ({_first_line(exc, path)}); rebuilding it",
+                  file=sys.stderr, flush=True)
+            path = library_path(rebuild=True)
+            try:
+                lib = ctypes.CDLL(str(path))
+            except OSError as again:
+                why = f"cannot load {path.name} even after rebuilding it: {_first_line(again, path)}"
+                raise KernelBuildError(f"dnbs.kernel: c: {why} (use dnbs.kernel: numpy)", reason=why) from None
         lib.dnbs_new.restype, lib.dnbs_new.argtypes = _P, [ctypes.POINTER(_Config)]
         lib.dnbs_free.restype, lib.dnbs_free.argtypes = None, [_P]
         for name in ("dnbs_tanh_in", "dnbs_tanh_alpha"):

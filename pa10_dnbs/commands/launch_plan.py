@@ -25,7 +25,7 @@ from ..supervisor.graph_run import GraphOptions, loop_reliability, parse_netns
 from ..supervisor.plant_engine import plant_robot_options
 from ..supervisor.robot_options import check_robot_options, robot_domain
 from ..wire.clock_schedule import check_clock_hz
-from ..wire.topics import check_namespace, default_namespace
+from ..wire.topics import check_joint_name, check_namespace, default_namespace
 from .options import LaunchOptions
 
 
@@ -58,6 +58,11 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
     settings = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
     the_arm = settings.arm
     joint_names = the_arm.joint_names
+    for joint in joint_names:  # the graph names nodes and topics after the joints: checked before any node starts
+        try:
+            check_joint_name(joint)
+        except ValueError as exc:
+            raise ConfigError(f"--arm {the_arm.file or the_arm.name}: {exc}") from None
     namespace = default_namespace(the_arm.name) if o.namespace is None else o.namespace
     settings = apply_fault_flags(settings, o.faults)
     try:
@@ -98,8 +103,9 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
             raise ConfigError(f"--init-from: {exc}") from None
         init_from = checkpoint_dir(o.init_from).resolve()
     out, force, controller, mode, record = o.out, o.force, o.controller, o.mode, o.record
-    check_output_dir(out, force, "--out", inputs={"--config": config_path, "--arm": the_arm.file, "--trajectory":
-                                                  trajectory, "--init-from": init_from, "--record": record})
+    check_output_dir(out, force, "--out", inputs={"--config": config_path, "--arm": the_arm.file,
+                                                  "arm URDF": the_arm.urdf, "--trajectory": trajectory,
+                                                  "--init-from": init_from, "--record": record})
     rt_priority, refused = granted_priority(o.rt_priority)
     if refused:  # said once here, rather than by each of the ten nodes in its log
         print(f"launch: {refused}", flush=True)

@@ -19,6 +19,7 @@ from ..run_settings import build_settings
 from ..run_steps import run_steps
 from ..supervisor.shm_cleanup import remove_stale, shm_files
 from ..wire.clock_schedule import check_clock_hz
+from ..wire.topics import check_topic_name
 
 
 def robot_argv(options: RobotCommandOptions) -> list[str]:
@@ -34,8 +35,13 @@ def robot_argv(options: RobotCommandOptions) -> list[str]:
     except ValueError as exc:
         raise ConfigError(f"--clock-hz: {exc}") from None
     for flag, topic in (("--state-topic", o.state_topic), ("--command-topic", o.command_topic)):
-        if not topic or " " in topic:
-            raise ConfigError(f"{flag}: expected a topic name, got {topic!r}")
+        try:
+            check_topic_name(topic)
+        except ValueError as exc:
+            raise ConfigError(f"{flag}: {exc}") from None
+    if o.state_topic.lstrip("/") == o.command_topic.lstrip("/"):  # the node runs at the root: x is /x
+        raise ConfigError(f"--command-topic: must differ from --state-topic (both {o.command_topic!r}): the robot "
+                          f"would read its own states as commands")
     params = {"config_file": config_path.resolve(), "arm": settings.arm.file, "mode": o.mode, "duration_s": duration_s,
               "state_topic": o.state_topic, "command_topic": o.command_topic, "clock_hz": float(o.clock_hz)}
     args = [sys.executable, "-m", "pa10_dnbs.ros.mujoco_robot_node", "--ros-args", "-r", "__node:=mujoco_robot"]

@@ -11,8 +11,8 @@ import os
 from dataclasses import dataclass
 
 from ..config import ConfigError
-from ..wire.robot_interface import parse_robot_command
-from ..wire.topics import check_namespace
+from ..wire.robot_interface import default_state_topic, parse_robot_command
+from ..wire.topics import check_topic_name
 
 ROBOTS = ("external",)
 
@@ -29,10 +29,9 @@ class RobotOptions:
 def _check_topic(flag: str, topic: str) -> None:
     """A topic flag: an absolute ROS name (/a/b) or a relative one (resolved in the arm's namespace)."""
     try:
-        check_namespace(topic if topic.startswith("/") else "/" + topic)
-    except ValueError:
-        raise ConfigError(f"{flag}: expected a ROS topic name like /robot_joint_states, got {topic!r}",
-                          setting=flag) from None
+        check_topic_name(topic)
+    except ValueError as exc:
+        raise ConfigError(f"{flag}: {exc}", setting=flag) from None
 
 
 def check_robot_options(opt: RobotOptions, mode: str) -> dict:
@@ -40,13 +39,17 @@ def check_robot_options(opt: RobotOptions, mode: str) -> dict:
     the command line names its flag) when one is wrong."""
     if opt.robot not in ROBOTS:
         raise ConfigError(f"robot: expected {' or '.join(ROBOTS)}, got {opt.robot!r}", setting="robot")
-    try:
-        parse_robot_command(opt.command, opt.command_topic)
-    except ValueError as exc:
-        raise ConfigError(f"robot_command: {exc}", setting="robot_command") from None
     for flag, topic in (("robot_state_topic", opt.state_topic), ("robot_command_topic", opt.command_topic)):
         if topic is not None:
             _check_topic(flag, topic)
+    try:
+        command = parse_robot_command(opt.command, opt.command_topic)
+    except ValueError as exc:
+        raise ConfigError(f"robot_command: {exc}", setting="robot_command") from None
+    state = opt.state_topic or default_state_topic(command)
+    if state == command.topic:  # the graph would read its own commands as the robot's states
+        raise ConfigError(f"robot_state_topic: the robot's state topic {state!r} must differ from its command topic "
+                          f"{command.topic!r}", setting="robot_state_topic")
     if not (math.isfinite(opt.timeout_s) and opt.timeout_s > 0):
         raise ConfigError(f"robot_timeout: must be a positive number of seconds, got {opt.timeout_s}",
                           setting="robot_timeout")

@@ -29,6 +29,8 @@ TF_STATIC = "/tf_static"
 DIAGNOSTICS = "/diagnostics"
 
 _NS_RE = re.compile(r"/[A-Za-z0-9_]+(/[A-Za-z0-9_]+)*")
+_TOKEN_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")  # a node name, a topic name's token (rcl: rmw_validate_*)
+_TOKEN_RULE = "letters, digits and '_' (ASCII), not starting with a digit, as ROS 2 node and topic names need"
 
 
 def state_topic(joint: str) -> str:
@@ -53,6 +55,24 @@ def check_namespace(ns: str) -> str:
         raise ValueError(f"expected a ROS namespace like /pa10 or /lab/arm2 ('/'-separated names of letters, digits "
                          f"and '_', not starting with a digit; no '//' and no trailing '/'), got {ns!r}")
     return ns
+
+
+def check_joint_name(joint: str) -> str:
+    """``joint`` if the graph can name its node (``joint_controller_<joint>``) and topics (``<joint>/state``, ...)
+    after it, else ValueError naming the joint and the rule (checked before any node starts)."""
+    if not isinstance(joint, str) or not _TOKEN_RE.fullmatch(joint):
+        raise ValueError(f"joint {joint!r} cannot name a ROS node or topic: expected {_TOKEN_RULE}")
+    return joint
+
+
+def check_topic_name(topic: str) -> str:
+    """``topic`` if it is a valid ROS 2 topic name, absolute (/a/b) or relative (a/b): '/'-separated tokens of
+    ASCII letters, digits and '_', none starting with a digit; no '//', no trailing '/'. Else ValueError."""
+    body = topic[1:] if isinstance(topic, str) and topic.startswith("/") else topic
+    if not isinstance(body, str) or not body or any(not _TOKEN_RE.fullmatch(t) for t in body.split("/")):
+        raise ValueError(f"expected a ROS topic name like /robot_joint_states ('/'-separated tokens of "
+                         f"{_TOKEN_RULE}), got {topic!r}")
+    return topic
 
 
 def resolve(name: str, ns: str = DEFAULT_NS) -> str:

@@ -1,0 +1,166 @@
+"""Checks made before any ROS node starts (one line, exit 2, nothing written, no process left): joint names the
+graph cannot name nodes and topics after, robot topic names, --rtf and --effort-timeout out of range; and the
+compiled kernel's cache: a cached library that does not load is rebuilt once, else ``auto`` falls back to numpy.
+
+No ROS graph is started here: every launch below is refused before its first node.
+"""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from cli_runner import run_cli
+from test_arms import three_link_urdf, write_arm
+
+from pa10_dnbs.wire.topics import check_joint_name, check_topic_name
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+def _refused(r, words) -> str:
+    """Exit 2, one error line on stderr (the last; an arm file's gains table may come before it) containing every
+    one of ``words``, no traceback."""
+    lines = [line for line in r.stderr.strip().splitlines() if "error" in line]
+    assert r.returncode == 2, (r.returncode, r.stderr)
+    assert len(lines) == 1 and r.stderr.strip().endswith(lines[0]), r.stderr
+    assert "Traceback" not in r.stderr + r.stdout
+    for w in words:
+        assert w in lines[0], (w, lines[0])
+    return lines[0]
+
+
+def _no_pa10_children() -> None:
+    """No node of ours was started (the checks run before the first one)."""
+    ps = subprocess.run(["ps", "-o", "pid=,args=", "--ppid", str(os.getpid())], capture_output=True, text=True)
+    assert "pa10_dnbs.ros" not in ps.stdout, ps.stdout
+
+
+@pytest.mark.parametrize("bad", ["関節2", "j/2", "j 1", "2j", "j-1"])
+def test_a_joint_name_the_graph_cannot_use_is_refused_before_any_node(tmp_path, bad):
+    arm_dir = tmp_path / "arm"
+    arm_dir.mkdir()
+    arm = write_arm(arm_dir, three_link_urdf().replace('name="j2"', f'name="{bad}"'))
+    out = tmp_path / "out"
+    line = _refused(run_cli("launch", "--arm", arm, "--duration", "0.1", "--out", out), [repr(bad), "ROS"])
+    assert "--arm" in line
+    assert not out.exists() and not list(tmp_path.glob("*.failed")) and not list(tmp_path.glob("out*"))
+    _no_pa10_children()
+
+
+def test_the_in_process_simulation_still_takes_such_an_arm(tmp_path):
+    arm_dir = tmp_path / "arm"
+    arm_dir.mkdir()
+    arm = write_arm(arm_dir, three_link_urdf().replace('name="j2"', 'name="関節2"'))
+    r = run_cli("simulate", "--arm", arm, "--controller", "pid", "--duration", "0.05", "--out", tmp_path / "o",
+                "--no-figures")
+    assert r.returncode == 0, r.stderr
+
+
+def test_the_name_rules():
+    for good in ("s1", "panda_joint1", "_a", "A9"):
+        assert check_joint_name(good) == good
+    for bad in ("", "1a", "a b", "a/b", "é", "a-b"):
+        with pytest.raises(ValueError):
+            check_joint_name(bad)
+    for good in ("/robot_joint_states", "a/b", "/a/b_2"):
+        assert check_topic_name(good) == good
+    for bad in ("", "/", "//a", "/a/", "/関節", "/a b", "/1a", "a//b"):
+        with pytest.raises(ValueError):
+            check_topic_name(bad)
+
+
+@pytest.mark.parametrize("args,words", [
+    (("--state-topic", "/関節"), ["--state-topic", "'/関節'"]),
+    (("--command-topic", "/a//b"), ["--command-topic"]),
+    (("--state-topic", "/x", "--command-topic", "/x"), ["--command-topic", "--state-topic", "'/x'"]),
+    (("--state-topic", "x", "--command-topic", "/x"), ["--command-topic", "--state-topic"]),
+])
+def test_robot_topics_are_checked(args, words):
+    _refused(run_cli("robot", "--duration", "0.1", *args), words)
+    _no_pa10_children()
+
+
+@pytest.mark.parametrize("args,words", [
+    (("--robot-state-topic", "/関節"), ["--robot-state-topic", "'/関節'"]),
+    (("--robot-command-topic", "/a/"), ["--robot-command-topic"]),
+    (("--robot-state-topic", "/a", "--robot-command-topic", "/a"), ["--robot-state-topic", "'/a'"]),
+    (("--robot-state-topic", "/robot_joint_command"), ["--robot-state-topic", "/robot_joint_command"]),
+])
+def test_launch_robot_external_topics_are_checked(tmp_path, args, words):
+    out = tmp_path / "out"
+    _refused(run_cli("launch", "--robot", "external", *args, "--duration", "0.1", "--out", out), words)
+    assert not list(tmp_path.iterdir())
+    _no_pa10_children()
+
+
+@pytest.mark.parametrize("args,words", [
+    (("--mode", "realtime", "--rtf", "1e-300"), ["--rtf", "1e-300"]),
+    (("--mode", "realtime", "--rtf", "0.0009"), ["--rtf"]),
+    (("--mode", "realtime", "--rtf", "101"), ["--rtf"]),
+    (("--effort-timeout", "1e308"), ["--effort-timeout", "1e308"]),
+    (("--effort-timeout", "3601"), ["--effort-timeout"]),
+    (("--effort-timeout", "0"), ["--effort-timeout"]),
+])
+def test_rtf_and_effort_timeout_are_bounded(tmp_path, args, words):
+    out = tmp_path / "out"
+    _refused(run_cli("launch", *args, "--duration", "0.2", "--out", out), words)
+    assert not list(tmp_path.iterdir())
+    _no_pa10_children()
+
+
+_PROBE = """
+import numpy as np
+from pa10_dnbs.accel.choice import auto_kernel
+print(auto_kernel().kernel)
+"""
+
+
+def _truncated_cache(tmp_path: Path, env: dict) -> Path:
+    """A cache directory whose library (for $CC as ``env`` sets it) is a truncated copy of a real build (made by
+    this shell's compiler)."""
+    cache = tmp_path / "cache"
+    good = subprocess.run([sys.executable, "-m", "pa10_dnbs.accel.build"], capture_output=True, text=True,
+                          env={**os.environ, "PA10_DNBS_CACHE": str(tmp_path / "good")}, cwd=REPO)
+    assert good.returncode == 0, good.stderr
+    data = Path(good.stdout.strip()).read_bytes()
+    probe = "from pa10_dnbs.accel.build import library_target; print(library_target())"
+    where = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                           env={**env, "PA10_DNBS_CACHE": str(cache)}, cwd=REPO)
+    target = Path(where.stdout.strip())
+    target.parent.mkdir(parents=True)
+    target.write_bytes(data[:100])
+    return target
+
+
+def test_a_truncated_cached_kernel_is_rebuilt_once_and_says_so(tmp_path):
+    env = dict(os.environ)
+    target = _truncated_cache(tmp_path, env)
+    env["PA10_DNBS_CACHE"] = str(target.parent)
+    r = subprocess.run([sys.executable, "-c", _PROBE], capture_output=True, text=True, env=env, cwd=REPO)
+    assert r.returncode == 0 and r.stdout.strip() == "c", r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "rebuilding" in lines[0] and str(target) in lines[0], r.stderr
+    assert target.stat().st_size > 1000 and not list(target.parent.glob(".*.tmp"))
+    again = subprocess.run([sys.executable, "-c", _PROBE], capture_output=True, text=True, env=env, cwd=REPO)
+    assert again.stdout.strip() == "c" and again.stderr == "", again.stderr  # the rebuilt one loads as is
+
+
+def test_a_failed_rebuild_falls_back_to_numpy_under_auto_and_fails_in_one_line_under_c(tmp_path):
+    """A compiler that fails (``false``): auto says numpy in one line and the run goes on; kernel c: exit 2."""
+    env = {**os.environ, "CC": "false"}
+    target = _truncated_cache(tmp_path, env)
+    env["PA10_DNBS_CACHE"] = str(target.parent)
+    r = subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "simulate", "--controller", "dnbs", "--duration",
+                        "0.05", "--out", str(tmp_path / "o"), "--no-figures"], capture_output=True, text=True,
+                       env=env, cwd=REPO)
+    assert r.returncode == 0, r.stderr
+    assert "rebuilding" in r.stderr and "auto -> numpy" in r.stdout and "Traceback" not in r.stderr
+    c = subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "simulate", "--config", "config/compiled.yaml",
+                        "--controller", "dnbs", "--duration", "0.05", "--out", str(tmp_path / "c"), "--no-figures"],
+                       capture_output=True, text=True, env=env, cwd=REPO)
+    assert c.returncode == 2 and "Traceback" not in c.stderr, c.stderr
+    assert "compiling" in c.stderr and not (tmp_path / "c").exists()
