@@ -2,7 +2,8 @@
 
 - not UTF-8 text, or not valid YAML: ``FILE:LINE: not valid YAML: <problem>`` (one line, not PyYAML's several);
 - a key given twice in one mapping (PyYAML keeps the last silently, so a whole section could vanish):
-  ``FILE:LINE: key 'k' given twice in one mapping (first at line N)``;
+  ``FILE:LINE: key 'k' given twice in one mapping (first at line N)`` (two ``<<`` merge keys too);
+- an integer of more than Python's 4300 digits, or nesting too deep for the parser: one line too;
 - ``1e-3``, ``1e3``, ``2.5e3`` are numbers (floats), as in YAML 1.2 and JSON: PyYAML's YAML 1.1 float rule
   wants a dot and a signed exponent (``1.0e-3``) and reads the others as strings. Every value the 1.1 rule
   reads is read exactly as before (the extra rule is tried after it), so existing files keep their values.
@@ -31,9 +32,10 @@ class StrictConfigLoader(yaml.SafeLoader):
         if isinstance(node, yaml.MappingNode):
             first: dict = {}
             for key_node, _ in node.value:
-                if key_node.tag == "tag:yaml.org,2002:merge":   # '<<': merged keys may be overridden
-                    continue
-                key = self.construct_object(key_node, deep=True)
+                if key_node.tag == "tag:yaml.org,2002:merge":   # '<<': merged keys may be overridden, but
+                    key = "<<"                                   # a second '<<' in one mapping is a duplicate
+                else:
+                    key = self.construct_object(key_node, deep=True)
                 try:
                     seen = first.get(key)
                 except TypeError:   # an unhashable key: the base constructor says so
@@ -49,6 +51,26 @@ class StrictConfigLoader(yaml.SafeLoader):
 StrictConfigLoader.add_implicit_resolver("tag:yaml.org,2002:float", _EXPONENT_FLOAT, list("-+0123456789."))
 
 
+class UnusableYamlError(yaml.YAMLError):
+    """A document PyYAML parses but Python cannot hold: nesting too deep, an integer of too many digits."""
+
+    def __init__(self, problem: str):
+        super().__init__(problem)
+        self.problem = problem
+
+
+def load_strict(text: str):
+    """``text``'s YAML (or JSON) document read with :class:`StrictConfigLoader`; every fault a yaml.YAMLError
+    (:class:`UnusableYamlError` for nesting too deep or an integer past Python's 4300-digit limit)."""
+    try:
+        return yaml.load(text, Loader=StrictConfigLoader)
+    except RecursionError:
+        raise UnusableYamlError("nested too deeply") from None
+    except ValueError as exc:   # int('1' * 5000): Python's limit on the digits of an integer
+        why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise UnusableYamlError(f"a number out of range ({why})") from None
+
+
 def yaml_error_line(path: Path, exc: yaml.YAMLError) -> str:
     """``FILE:LINE: not valid YAML: problem`` in one line (PyYAML's message spans several)."""
     mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
@@ -62,15 +84,23 @@ def yaml_error_line(path: Path, exc: yaml.YAMLError) -> str:
     return f"{where}: not valid YAML: {problem}"
 
 
-def read_config_yaml(path: Path):
-    """The YAML document of the config file ``path`` (any type; the caller checks it), read strictly."""
+def read_yaml(path: Path, error_class: type[Exception] = ConfigError, what: str = "config file"):
+    """The YAML (or JSON) document of ``path`` (any type; the caller checks it), read strictly as UTF-8 with
+    :class:`StrictConfigLoader`; every fault is one ``error_class`` line naming the file (``what``: the kind of
+    file, in the message for a file that is not text). Any YAML 1.1 or JSON number is read, ``1e-05`` too."""
+    path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
-        raise ConfigError(f"{path}: not a text config file (not UTF-8: byte {exc.start})") from None
+        raise error_class(f"{path}: not a text {what} (not UTF-8: byte {exc.start})") from None
     except OSError as exc:
-        raise ConfigError(f"{path}: cannot read: {exc.strerror or exc}") from None
+        raise error_class(f"{path}: cannot read: {exc.strerror or exc}") from None
     try:
-        return yaml.load(text, Loader=StrictConfigLoader)
+        return load_strict(text)
     except yaml.YAMLError as exc:
-        raise ConfigError(yaml_error_line(path, exc)) from None
+        raise error_class(yaml_error_line(path, exc)) from None
+
+
+def read_config_yaml(path: Path):
+    """The YAML document of the config file ``path`` (any type; the caller checks it), read strictly."""
+    return read_yaml(path, ConfigError, "config file")

@@ -9,7 +9,8 @@ Format (docs/trajectories.md; example: config/trajectory_example.yaml)::
         velocities: [...]                       # optional [rad/s], for every point or none
         accelerations: [...]                    # optional [rad/s^2], for every point or none
 
-JSON is read by the same YAML parser. ``load_trajectory_file`` checks the file against the arm as
+JSON is read by the same strict YAML parser as the config (config_yaml.py: ``1e-05`` is a number, a key given
+twice is refused). ``load_trajectory_file`` checks the file against the arm as
 ``TrajectoryReference.start`` will (names, limits, timing) and raises ConfigError with one line naming the
 file and what is wrong (a point past ``MAX_TIME_FROM_START_S`` included).
 """
@@ -20,6 +21,7 @@ from pathlib import Path
 import yaml
 
 from .config_error import ConfigError
+from .config_yaml import load_strict
 from .core.joint_trajectory import JointTrajectory, TrajectoryError, check_trajectory, trajectory_from_mapping
 from .core.trajectory_reference import check_span
 
@@ -27,7 +29,7 @@ from .core.trajectory_reference import check_span
 def read_trajectory(path: Path) -> JointTrajectory:
     """The file's JointTrajectory (shapes and types checked), or TrajectoryError / OSError."""
     try:
-        data = yaml.safe_load(Path(path).read_text())
+        data = load_strict(Path(path).read_text(encoding="utf-8"))
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""

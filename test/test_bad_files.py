@@ -276,3 +276,164 @@ def test_an_empty_arm_key_says_so(tmp_path, value, words):
     cfg.write_text(f"extends: {DEFAULT}\narm: {value}\n")
     r = run_cli("simulate", "--config", cfg, "--controller", "pid", *TINY, "--out", tmp_path / "o")
     _one_line_error(r, words)
+
+
+# --- YAML/JSON that parses but Python cannot hold; the one strict reader for configs, arm files, trajectories ---
+
+BIG_INT = "1" * 5000              # past Python's 4300-digit limit on int(str): ValueError in the constructor
+DEEP = "[" * 50_000 + "]" * 50_000  # past the recursion limit of PyYAML's composer (and of json.loads)
+
+
+def _arm_file_with(tmp_path, line: str) -> Path:
+    """The iiwa's arm file (its URDF by absolute path) with ``line`` appended at the top level."""
+    text = (REPO / "urdf" / "iiwa" / "arm.yaml").read_text()
+    text = text.replace("urdf: iiwa14.urdf", f"urdf: {REPO / 'urdf' / 'iiwa' / 'iiwa14.urdf'}")
+    path = tmp_path / "arm.yaml"
+    path.write_text(text + line)
+    return path
+
+
+@pytest.mark.parametrize("value, words", [(BIG_INT, "4300"), (DEEP, "nested too deeply")], ids=["big_int", "deep"])
+def test_unusable_yaml_is_one_line_naming_the_file(tmp_path, value, words):
+    """A 5000-digit integer or 50k-deep nesting was a traceback (ValueError, RecursionError) in each reader."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(f"extends: {DEFAULT}\nsimulation:\n  seed: {value}\n")
+    _one_line_error(_simulate_with(tmp_path, cfg), cfg, words)
+    _one_line_error(run_cli("arm", "--config", cfg), cfg, words)
+    from test_bag_files import _write_run_bag
+    bag = _write_run_bag(tmp_path / "b", n=3)
+    if value is BIG_INT:  # deep: report/outputs.py config_files (the --out check, read first) is not this part's
+        _one_line_error(run_cli("analyse", bag, "--config", cfg, "--out", tmp_path / "o"), cfg, words)
+    arm = _arm_file_with(tmp_path, f"extra: {value}\n")
+    _one_line_error(run_cli("simulate", "--arm", arm, "--controller", "pid", *TINY, "--out", tmp_path / "o"),
+                    arm, words)
+    traj = tmp_path / "t.yaml"
+    traj.write_text(f"joint_names: {value}\npoints: []\n")
+    _one_line_error(run_cli("simulate", "--trajectory", traj, "--controller", "pid", *TINY, "--out", tmp_path / "o"),
+                    "trajectory", traj, words)
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_json_trajectory_from_json_dump_reads(tmp_path):
+    """json.dump writes 1e-05 and 1e+300 (no dot): plain safe_load read them as strings and refused the file."""
+    import json
+    from pa10_dnbs.arm import load_arm
+    from pa10_dnbs.trajectory_file import load_trajectory_file, read_trajectory
+    arm = load_arm("pa10")
+    f = tmp_path / "t.json"
+    points = [{"time_from_start": 1e-05, "positions": [0.0] * 7}, {"time_from_start": 2.0, "positions": [0.1] * 7}]
+    f.write_text(json.dumps({"joint_names": list(arm.joint_names), "points": points}))
+    assert "1e-05" in f.read_text()
+    assert load_trajectory_file(f, arm).time_from_start_s.tolist() == [1e-05, 2.0]
+    points[1]["time_from_start"] = 1e+300
+    f.write_text(json.dumps({"joint_names": list(arm.joint_names), "points": points}))
+    assert read_trajectory(f).time_from_start_s.tolist() == [1e-05, 1e300]
+    with pytest.raises(ConfigError) as err:   # a number now, refused as too far, not as "got '1e+300'"
+        load_trajectory_file(f, arm)
+    assert "'1e+300'" not in str(err.value), err.value
+    f.write_text('{"joint_names": ["s1"], "joint_names": ["s2"], "points": []}')
+    with pytest.raises(ConfigError, match="'joint_names' given twice"):
+        load_trajectory_file(f, arm)
+
+
+def test_an_arm_file_is_read_strictly(tmp_path):
+    """rotor_inertia_kgm2: [1e-3, ...] was refused ("got '1e-3'"); a key given twice passed silently."""
+    from pa10_dnbs.arm.arm_file import _load
+    arm = _arm_file_with(tmp_path, "")
+    arm.write_text(arm.read_text().replace("rotor_inertia_kgm2: [3.38176, 3.38176,", "rotor_inertia_kgm2: [1e-3, 2e-3,"))
+    assert _load(str(arm)).rotor_inertia_kgm2[:2].tolist() == [1e-3, 2e-3]
+    dup = arm.rename(tmp_path / "dup.yaml")
+    dup.write_text(dup.read_text() + "description: twice\n")
+    r = run_cli("simulate", "--arm", dup, "--controller", "pid", *TINY, "--out", tmp_path / "o")
+    _one_line_error(r, dup, "'description' given twice")
+
+
+def test_two_merge_keys_in_one_mapping_are_a_duplicate(tmp_path):
+    cfg = tmp_path / "merge.yaml"
+    cfg.write_text(f"extends: {DEFAULT}\na: &a {{seed: 1}}\nb: &b {{seed: 2}}\nsimulation:\n  <<: *a\n  <<: *b\n")
+    _one_line_error(_simulate_with(tmp_path, cfg), f"{cfg}:6", "'<<' given twice")
+
+
+@pytest.mark.parametrize("key, value, words", [
+    ("step", np.array([1, 2]), "step is not a whole number"), ("step", np.array(np.inf), "step is not a whole"),
+    ("step", np.array("x"), "step is not a whole"), ("step", np.array(np.nan), "step is not a whole"),
+    ("joint", np.array(1j), "joint index is not a whole"), ("joint", np.array(np.inf), "joint index is not"),
+    ("joint", np.array("s1"), "joint index is not a whole")])
+def test_checkpoint_step_or_joint_not_a_whole_number(tmp_path, checkpoints, key, value, words):
+    """A vector or inf step, a complex or inf joint were tracebacks; a string or NaN did not name the file."""
+    ck = _copy(checkpoints, tmp_path / "ck")
+    state = dict(np.load(ck / "s1.npz"))
+    state[key] = value
+    np.savez(ck / "s1.npz", **state)
+    for r in _warm_start(tmp_path, ck):
+        _one_line_error(r, "--init-from", ck / "s1.npz", words)
+
+
+@pytest.mark.parametrize("n", [0, 1])
+def test_a_bag_with_too_few_joint_states(tmp_path, n):
+    """1 or 2 joint states: the metrics' window held no sample (a ValueError traceback)."""
+    from test_bag_files import _write_run_bag
+    bag = _write_run_bag(tmp_path / "b", n=n)
+    r = run_cli("analyse", bag, "--out", tmp_path / "o")
+    _one_line_error(r, bag, f"the bag holds {n + 1} joint state", "at least 3 joint states")
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_bag_stamped_by_a_wall_clock(tmp_path):
+    """Stamps near 2^31 s imply ~2e12 steps: numpy's MemoryError (109 TiB) was a traceback."""
+    from rosbags.typesys import Stores, get_typestore
+    from test_bag_files import QOS, _write_run_bag
+    from pa10_dnbs.bag.bag_reader import Bag
+    from pa10_dnbs.bag.bag_writer import BagWriter
+    from pa10_dnbs.wire import joint_state_cdr
+    ok = _write_run_bag(tmp_path / "ok", n=3)
+    store = get_typestore(Stores.ROS2_JAZZY)
+    bag = tmp_path / "wall"
+    w = BagWriter(bag)
+    with Bag(ok) as src:
+        for name, topic in src.topics.items():
+            w.add_topic(name, topic.msgtype, [QOS])
+        for name, _, t, data in src.messages():
+            if name.endswith("joint_states"):
+                sec, nanosec, jn, pos, vel, eff = joint_state_cdr.decode(bytes(data))
+                data = joint_state_cdr.encode(2**31 - 10, nanosec, list(jn), pos, vel, eff)
+            w.write(name, t, bytes(data))
+    w.close()
+    r = run_cli("analyse", bag, "--out", tmp_path / "o")
+    _one_line_error(r, bag, "4 joint states", "wall clock")
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("value", [BIG_INT, DEEP], ids=["big_int", "deep"])
+def test_a_bags_stored_config_that_json_cannot_hold(tmp_path, value):
+    from test_bag_files import _write_run_bag
+    bag = _write_run_bag(tmp_path / "b", n=3, custom_data={"pa10_dnbs.config": f'{{"x": {value}}}'})
+    _one_line_error(run_cli("analyse", bag, "--out", tmp_path / "o"), bag, "pa10_dnbs.config", "not valid JSON")
+
+
+def test_every_shipped_arm_trajectory_and_docs_yaml_reads_as_before():
+    """The one strict reader (config_yaml.read_yaml, now also behind the arm files and trajectories) gives every
+    YAML file of the repository (urdf/*/arm.yaml, config/trajectory_example.yaml, ...) and every ```yaml block of
+    the docs that PyYAML reads the values safe_load gives; the shipped arms and the example trajectory load."""
+    import re
+    from pa10_dnbs.arm import load_arm
+    from pa10_dnbs.arm.arm_file import preset_names
+    from pa10_dnbs.config_yaml import read_yaml
+    from pa10_dnbs.trajectory_file import read_trajectory
+    files = [Path(f) for f in glob.glob(str(REPO / "**" / "*.yaml"), recursive=True) if "/.venv/" not in f]
+    assert {"arm.yaml", "trajectory_example.yaml"} <= {f.name for f in files}
+    for f in files:
+        assert _same(yaml.safe_load(f.read_text()), read_yaml(f)), f
+    blocks = 0
+    for md in [REPO / "README.md", *REPO.glob("docs/**/*.md")]:
+        for block in re.findall(r"```ya?ml\n(.*?)```", md.read_text(), flags=re.S):
+            try:
+                before = yaml.safe_load(block)
+            except yaml.YAMLError:
+                continue
+            blocks += 1
+            assert _same(before, yaml.load(block, Loader=StrictConfigLoader)), (md, block)
+    assert blocks > 0
+    for name in preset_names():
+        assert load_arm(name).joint_names, name
+    assert len(read_trajectory(REPO / "config" / "trajectory_example.yaml").time_from_start_s) == 5

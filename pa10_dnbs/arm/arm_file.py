@@ -16,9 +16,9 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from ..config_error import ConfigError
+from ..config_yaml import read_yaml
 from ..kinematics.urdf_chain import UrdfChain
 from ..kinematics.urdf_tree import UrdfError
 from ..paths import share_path
@@ -79,12 +79,7 @@ def _load(path_text: str) -> Arm:
     if path.suffix == ".urdf":
         return _build(path, {"name": path.stem, "urdf": path.name,
                              "sources": {"urdf": str(path)}}, bare=True)
-    try:
-        raw = yaml.safe_load(path.read_text())
-    except UnicodeDecodeError:
-        raise ArmError(f"{path}: not an arm file: not a text file (not UTF-8)") from None
-    except yaml.YAMLError as exc:
-        raise ArmError(f"{path}: not valid YAML: {str(exc).splitlines()[0]}") from None
+    raw = read_yaml(path, ArmError, "arm file")  # strict, as a config: a key given twice, 1e-3, one line per fault
     if not isinstance(raw, dict):
         raise ArmError(f"{path}: expected a mapping of arm facts")
     return _build(path, raw, bare=False)

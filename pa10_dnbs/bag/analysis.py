@@ -17,6 +17,8 @@ import struct
 from rosbags.typesys import Stores, get_typestore
 
 from ..wire.reference_buffer import ReferenceBuffer
+from ..config_error import ConfigError
+from ..run_size import check_run_size, run_bytes
 from ..wire.wire_record import WireRecord
 from ..wire import joint_state_cdr
 from ..wire.steps import StepClock, to_ns
@@ -34,7 +36,7 @@ def run_info(bag: Bag) -> dict:
     raw = info.pop("config", None)
     try:
         info["config"] = json.loads(raw) if raw else None
-    except json.JSONDecodeError:
+    except (ValueError, RecursionError):  # JSONDecodeError, an integer past 4300 digits, nesting too deep
         raise BagError(f"{bag.path}: custom_data {CUSTOM_CONFIG} is not valid JSON") from None
     return info
 
@@ -57,6 +59,21 @@ def bag_joint_names(bag: Bag, arm: ArmTopics | None = None) -> tuple[str, ...]:
         if names:
             return tuple(names)
     raise BagError(f"{bag.path}: no {arm.joint_states} message names the arm's joints")
+
+
+def _check_steps(bag: Bag, n: int, dt_s: float, n_joints: int, n_states: int) -> None:
+    """BagError naming the bag unless a record of steps 0..``n`` fits in memory (run_size.py): stamps from a
+    wall clock (~1.7e9 s) instead of the sim clock imply trillions of steps for a few joint states."""
+    if n < 0:
+        raise BagError(f"{bag.path}: its {n_states} joint states are stamped before 0 s (step {n}); a run's "
+                       "stamps start at 0 s (the sim clock)")
+    try:
+        check_run_size(n * dt_s, n, n_joints, graph=True)
+    except ConfigError:
+        need = run_bytes(n, n_joints, graph=True)
+        raise BagError(f"{bag.path}: its stamps reach {n * dt_s:g} s, {n:,} steps of {dt_s:g} s for "
+                       f"{n_states} joint states: about {need / 2**30:,.0f} GiB to hold, more than is available here "
+                       "(stamped by a wall clock instead of the sim clock?)") from None
 
 
 def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None, progress=None) -> WireRecord:
@@ -109,6 +126,7 @@ def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None, progress=No
     if not states:
         raise BagError(f"{bag.path}: no readable {arm.joint_states} message")
     n = n_steps if n_steps is not None else max(k for k, *_ in states)
+    _check_steps(bag, n, dt_s, nj, len(states))
     if watch is not None:
         progress(n, watch.worst_abs_error)
     rec = WireRecord(n, dt_s, nj)

@@ -15,6 +15,8 @@ from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..report.progress import ProgressBar
 from ..run_settings import build_settings
 
+MIN_STEPS = 2   # a run of fewer steps has no sample in its metrics window (the second half of the run)
+
 
 def _run_config(info: dict, config_path: Path | None, bag: Bag) -> tuple[dict, str]:
     if config_path is not None:
@@ -82,6 +84,11 @@ def run_analyse(options: AnalyseOptions) -> int:
             missing = rec.missing()
         if missing:
             raise BagError(f"{bag.path}: the bag does not hold the whole run: {missing}")
+        if rec.n < MIN_STEPS:  # the metrics' window (the run's second half at least) needs a sample
+            got = int(rec.got_state.sum())
+            raise BagError(f"{bag.path}: the bag holds {got} joint state{'s' * (got != 1)}, a run of {rec.n} "
+                           f"step{'s' * (rec.n != 1)}; at least {MIN_STEPS + 1} joint states ({MIN_STEPS} steps of "
+                           f"{dt:g} s) are needed for the metrics")
         controller = info.get("controller", "unknown")
         joints = bag_joint_names(bag)
         if len(cfg["plant"]["torque_limit_nm"]) != len(joints):

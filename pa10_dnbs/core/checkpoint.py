@@ -51,7 +51,18 @@ def load_checkpoint(path: Path) -> tuple[dict, int]:
         raise ValueError(f"{path}: not a readable checkpoint (truncated or not an .npz file: {why})") from None
     if "step" not in state:
         raise ValueError(f"{path}: not a checkpoint (no step)")
-    return state, int(state.pop("step"))
+    return state, _whole_number(path, state.pop("step"), "step")
+
+
+def _whole_number(path: Path, value: np.ndarray, what: str) -> int:
+    """``value`` (a stored array) as an int if it is one finite whole number, else ValueError naming ``path``."""
+    ok = np.shape(value) == () and value.dtype.kind in "iuf"
+    if ok and value.dtype.kind == "f":
+        ok = bool(np.isfinite(value)) and float(value) == int(value)
+    if not ok:
+        shown = np.array2string(np.asarray(value), threshold=6)[:60]
+        raise ValueError(f"{path}: not a checkpoint: its {what} is not a whole number ({shown}, {value.dtype})")
+    return int(value)
 
 
 def checkpoint_dir(path: Path) -> Path:
@@ -71,7 +82,7 @@ def check_controller_state(f: Path, state: dict, joint: int, degrees: tuple[int,
     missing = [f"{name}_{k}" for name, _ in _NETWORKS for k in ("w", "P", "w0") if f"{name}_{k}" not in state]
     if missing:
         raise ValueError(f"{f}: not a DNBS checkpoint (no {', '.join(missing)})")
-    if "joint" in state and (np.shape(state["joint"]) != () or int(state["joint"]) != joint):
+    if "joint" in state and _whole_number(f, state["joint"], "joint index") != joint:
         raise ValueError(f"{f}: the checkpoint of joint index {state['joint']}, expected {joint}")
     for (name, n_inputs), degree in zip(_NETWORKS, degrees):
         n = len(monomial_exponents(n_inputs, degree))
