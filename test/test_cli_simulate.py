@@ -89,6 +89,7 @@ def test_existing_output_needs_force(tmp_path):
     out = tmp_path / "out"
     out.mkdir()
     (out / "report.md").write_text("a previous run's report")   # --force replaces only a previous output
+    (out / ".pa10-dnbs-output").write_text("Written by pa10-dnbs\n")   # the mark of one (report/outputs.py)
     (out / "keep.txt").write_text("mine")                        # (test_output_safety.py: not other folders)
     r = run_cli("simulate", "--controller", "pid", "--duration", "0.2", "--out", out)
     assert r.returncode == 2 and "--force" in r.stderr

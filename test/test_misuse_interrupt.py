@@ -221,7 +221,8 @@ def test_study_ctrl_c_mid_run_keeps_the_completed_runs_marked_partial_and_a_reru
                      r"\(and \.json\), marked partial: rerun with --force for the whole study", one_line(err))
     assert m and 1 <= int(m[1]) < 40 and m[2] == str(out), err
     kept = int(m[1])
-    assert sorted(p.name for p in out.iterdir()) == ["interrupted.json", "study.partial.json", "study.partial.md"]
+    assert sorted(p.name for p in out.iterdir()) == [".pa10-dnbs-output", "interrupted.json", "study.partial.json",
+                                                      "study.partial.md"]
     data = json.loads((out / "study.partial.json").read_text())
     assert data["interrupted"] is True and data["completed"] == kept == len(data["rows"]) and data["total"] == 40
     assert len(data["missing"]) == 40 - kept and all(r["worst_rms_error_rad"] > 0 for r in data["rows"])
@@ -282,7 +283,7 @@ def test_simulate_all_ctrl_c_keeps_the_finished_controllers_marked_partial_and_a
     assert one_line(err) == (f"pa10-dnbs: interrupted during the pid run; kept the 1 finished of 3 controllers "
                              f"(dnbs) in {out}/report.md, marked partial (not complete: pid, ctc): rerun with --force "
                              "for the whole comparison"), err
-    assert sorted(p.name for p in out.iterdir()) == ["dnbs", "interrupted.json", "report.md"]   # no summary.json
+    assert sorted(p.name for p in out.iterdir()) == [".pa10-dnbs-output", "dnbs", "interrupted.json", "report.md"]  # no summary
     assert sorted(p.name for p in (out / "dnbs").iterdir()) == ["checkpoints", "metrics.json", "timeseries.npz"]
     assert json.loads((out / "dnbs" / "metrics.json").read_text())["duration_s"] == 60
     mark = json.loads((out / "interrupted.json").read_text())
@@ -298,12 +299,14 @@ def test_simulate_all_ctrl_c_keeps_the_finished_controllers_marked_partial_and_a
 
 def test_a_partial_output_is_refused_without_force_and_replaced_with_it(tmp_path):
     from pa10_dnbs.output_lock import release_all
-    from pa10_dnbs.report.outputs import OutputExistsError, atomic_output_dir, check_output_dir
+    from pa10_dnbs.report.outputs import (OUTPUT_MARK, OUTPUT_MARK_TEXT, OutputExistsError, atomic_output_dir,
+                                          check_output_dir)
     from pa10_dnbs.report.partial import partial_mark, write_partial_mark
 
     out = tmp_path / "o"
     out.mkdir()
     write_partial_mark(out, "cmd", 2, 5, ["a", "b", "c"])
+    (out / OUTPUT_MARK).write_text(OUTPUT_MARK_TEXT)   # as atomic_output_dir writes it
     try:
         with pytest.raises(OutputExistsError, match=r"holds the partial outputs of an interrupted run \(2 of 5"):
             check_output_dir(out, force=False)
@@ -311,7 +314,7 @@ def test_a_partial_output_is_refused_without_force_and_replaced_with_it(tmp_path
             (tmp / "whole.txt").write_text("x")
     finally:
         release_all()
-    assert partial_mark(out) is None and sorted(p.name for p in out.iterdir()) == ["whole.txt"]
+    assert partial_mark(out) is None and sorted(p.name for p in out.iterdir()) == [OUTPUT_MARK, "whole.txt"]
     (out / "interrupted.json").write_text('{"interrupted": false}')
     assert partial_mark(out) is None   # only a true mark counts
 

@@ -138,3 +138,73 @@ def test_a_tune_with_its_storage_in_its_out_resumes(tmp_path):
     for trials in ("1", "2"):
         r = run_cli(*TUNE, "--controller", "pid", "--trials", trials, "--storage", storage, "--out", out)
         assert r.returncode == 0 and f"{trials} trials" in r.stdout, r.stderr
+
+
+def test_force_does_not_wipe_a_folder_that_only_has_an_output_like_file_name(tmp_path):
+    """A report.md (or comparison.md, tuned.yaml) at a folder's top is no proof of a pa10-dnbs output: --force
+    replaces only a folder holding the mark its commands write (report/outputs.py OUTPUT_MARK)."""
+    thesis = tmp_path / "thesis"
+    (thesis / "chapters").mkdir(parents=True)
+    for name, text in (("report.md", "# my report\n"), ("chapters/ch1.tex", "\\chapter{One}\n"), ("data.csv", "1,2\n"),
+                       ("comparison.md", "mine\n"), ("tuned.yaml", "a: 1\n")):
+        (thesis / name).write_text(text)
+    before = _tree(thesis)
+    _refused(run_cli("simulate", "--controller", "pid", *TINY, "--out", thesis, "--force"),
+             "--out", "not a pa10-dnbs output")
+    assert _tree(thesis) == before
+    out = _simulate(tmp_path / "out")
+    assert (out / ".pa10-dnbs-output").read_text().startswith("Written by pa10-dnbs")
+
+
+def test_an_out_holding_the_arm_files_urdf_is_refused(tmp_path):
+    """The URDF an arm file names is an input too, even with --force into a previous output."""
+    arm_dir = _simulate(tmp_path / "armout")
+    (arm_dir / "arm.urdf").write_text((REPO / "urdf" / "pa10" / "pa10_7ce.urdf").read_text())
+    arm = tmp_path / "arm.yaml"
+    text = (REPO / "urdf" / "pa10" / "arm.yaml").read_text()
+    arm.write_text(text.replace("urdf: pa10_7ce.urdf", f"urdf: {arm_dir / 'arm.urdf'}"))
+    assert str(arm_dir / "arm.urdf") in arm.read_text()
+    before = _tree(arm_dir)
+    _refused(run_cli("simulate", "--controller", "pid", *TINY, "--arm", arm, "--out", arm_dir, "--force"),
+             "--out", "arm URDF")
+    assert _tree(arm_dir) == before
+
+
+def test_an_input_given_as_a_link_inside_out_is_refused(tmp_path):
+    """A --config or BAG given as a symbolic link that lies inside --out: the link is what the user named."""
+    prev = _simulate(tmp_path / "prev")
+    (tmp_path / "cfg.yaml").write_text((REPO / "config" / "default.yaml").read_text())
+    (prev / "cfg.yaml").symlink_to(tmp_path / "cfg.yaml")
+    before = _tree(prev)
+    _refused(run_cli("simulate", "--controller", "pid", *TINY, "--config", prev / "cfg.yaml", "--out", prev,
+                     "--force"), "--out", "--config")
+    assert _tree(prev) == before and (prev / "cfg.yaml").is_symlink()
+    bag = _write_run_bag(tmp_path / "bag", ns="/pa10")
+    holder = tmp_path / "bagh2"
+    holder.mkdir()
+    (holder / "thebag").symlink_to(bag)
+    bag_before = _tree(bag)
+    _refused(run_cli("analyse", holder / "thebag", "--out", holder, "--force", "--no-figures"), "--out", "BAG")
+    assert (holder / "thebag").is_symlink() and _tree(bag) == bag_before
+
+
+def test_out_paths_atomic_output_dir_cannot_replace_are_refused_up_front(tmp_path, monkeypatch):
+    """A symbolic link (dangling or not), a name too long for its temporary sibling, a component too long, and a
+    last component '..' (of a folder or a link, naming a previous output): refused before the run (exit 2, one
+    line naming --out), nothing changed or left behind."""
+    monkeypatch.chdir(tmp_path)
+    real = _simulate(tmp_path / "real")
+    (real / "X").mkdir()
+    (real / "lnk").symlink_to(real / "X")
+    before = _tree(real)
+    (tmp_path / "dang").symlink_to(tmp_path / "nowhere")
+    (tmp_path / "link").symlink_to(real)
+    for out, words, extra in (("dang", ("symbolic link",), ()), ("link", ("symbolic link",), ("--force",)),
+                              ("a" * 250, ("too long",), ()), (f"real/{'b' * 300}/c", ("too long",), ()),
+                              ("real/X/..", ("name the folder itself",), ("--force",)),
+                              ("real/lnk/..", ("name the folder itself",), ("--force",))):
+        _refused(run_cli("simulate", "--controller", "pid", *TINY, "--out", out, *extra), "--out", *words)
+    assert (tmp_path / "link").is_symlink() and (tmp_path / "dang").is_symlink() and _tree(real) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dang", "link", "real"]
+    assert sorted(p.name for p in real.iterdir()) == [".pa10-dnbs-output", "X", "lnk", "metrics.json", "report.md",
+                                                     "timeseries.npz"]

@@ -38,7 +38,8 @@ def run_study_command(options: StudyOptions) -> int:
     at_once = 1 if o.scheduler is not None else min(n_runs, o.jobs or os.cpu_count() or 1)
     check_run_size(o.duration_s, n_steps, settings.n_joints, at_once=at_once,
                    total_runs=n_runs, say=say_note)
-    check_output_dir(o.out, o.force, "--out", inputs={"--config": config_path, "--arm": settings.arm.file})
+    check_output_dir(o.out, o.force, "--out", inputs={"--config": config_path, "--arm": settings.arm.file,
+                                                      "arm URDF": settings.arm.urdf})
     infeasible = infeasible_scenarios(settings, scen, o.duration_s)   # before any run: one line each, not run
     for line in infeasible.values():
         print(f"study: {line}")

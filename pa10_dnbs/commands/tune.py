@@ -63,7 +63,8 @@ def run_tune(options: TuneOptions) -> int:
                     str(config_path.resolve()), o.seed, start_values(o.controller, base))
     command = _command(o.controller, o.trials, out, o.arm, config_path, o.storage, o.seed, o.scenarios, o.seeds, o.held_out_seeds,
                        o.duration_s, o.params)
-    check_output_dir(out, False, "--out", inputs={"--config": config_path, "--arm": the_arm.file},
+    check_output_dir(out, False, "--out", inputs={"--config": config_path, "--arm": the_arm.file,
+                                                   "arm URDF": the_arm.urdf},
                      resume=tune_files(out, o.storage))
     check_tune_dir(out, spec.study_name, spec.identity(), refusal)  # only this tune's own files: it resumes
     lock_output(out)  # a second tune into DIR at once is refused (the same command later resumes)

@@ -2,9 +2,9 @@
 
 Files go to a temporary sibling directory that is renamed into place only
 when everything was written; an existing directory is replaced only with
-``force``, and only if it is empty or a previous pa10-dnbs output; never the
-current directory, its parents, the root, or a path that is, holds or lies in
-one of the run's inputs (check_output_dir).
+``force``, and only if it is empty or a previous pa10-dnbs output (it holds
+OUTPUT_MARK); never the current directory, its parents, the root, or a path
+that is, holds or lies in one of the run's inputs (check_output_dir).
 """
 from __future__ import annotations
 
@@ -27,19 +27,25 @@ from .arm_figure import arm_figure
 from .figures import error_figure, startup_figure, torque_figure, tracking_figure
 from .finite_view import until_step
 from .markdown import report_markdown
-from .partial import PARTIAL_FILE, partial_mark
+from .partial import partial_mark
 
 
 class OutputExistsError(FileExistsError):
     """The output directory exists and ``--force`` was not given, or cannot be written, or another run uses it."""
 
 
-# The files by which a folder is recognised as a previous pa10-dnbs output (one at its top is enough): simulate,
-# launch and analyse write report.md; study study.json/study.md (interrupted: study.partial.*); an interrupted
-# command interrupted.json (partial.py); tune tune.db, tune.json, tune.md, tuned.yaml; scripts/equal_budget.py
-# comparison.md.
-OUTPUT_MARKS = ("report.md", "study.json", "study.md", "study.partial.json", "study.partial.md", PARTIAL_FILE,
-                "tune.json", "tune.md", "tune.db", "tuned.yaml", "comparison.md")
+# The file by which a folder is recognised as a previous pa10-dnbs output: atomic_output_dir writes it into every
+# output (simulate, study, launch, analyse; their interrupted partial outputs too) before the folder is renamed
+# into place. ``--force`` replaces only an empty folder or one holding it: a file name such as report.md at a
+# folder's top is no proof (a thesis folder may hold one).
+OUTPUT_MARK = ".pa10-dnbs-output"
+OUTPUT_MARK_TEXT = ("Written by pa10-dnbs: this folder is a pa10-dnbs output; a later run with --force replaces "
+                    "the folder whole.\n")
+
+# The longest file name (bytes) a folder may have: its temporary siblings ``.NAME.partial-XXXXXXXX`` and
+# ``.NAME.old-PID`` (atomic_output_dir) must fit in the filesystem's 255.
+NAME_MAX = 255
+NAME_ROOM = NAME_MAX - len(".") - max(len(".partial-") + 8, len(".old-") + 10)
 
 # What ``tune`` keeps in its DIR (tune/report.py, commands/tune.py; SQLite's journal beside tune.db): a tune
 # resumes into a folder holding nothing else.
@@ -66,13 +72,18 @@ def check_output_dir(out: Path, force: bool, flag: str = "--out", inputs: dict |
 
     Never an output, even with ``force``: the current directory, one of its parents or the root; a path equal
     to, inside, or holding one of ``inputs`` ({flag or name: path or None}: the run's config, arm file, bag,
-    checkpoints, ...). ``force`` replaces only an empty folder or a previous pa10-dnbs output (OUTPUT_MARKS).
+    checkpoints, ...; each compared as given, made absolute, and resolved). ``force`` replaces only an empty
+    folder or a previous pa10-dnbs output (OUTPUT_MARK). Refused up front too: an ``out`` that is a symbolic
+    link, ends in '.' or '..', or whose name is too long for its temporary siblings.
     ``resume`` (tune): an existing ``out`` holding only these names is accepted without ``force`` (the command
     then checks it is its own run's)."""
     out = Path(out)
+    check_name(out, flag)
     if out.exists() and not out.is_dir():
         raise OutputExistsError(f"{flag}: {out} exists and is not a directory")
     check_not_cwd(out, flag)
+    if (last := os.path.basename(str(out).rstrip("/"))) in (".", ".."):
+        raise OutputExistsError(f"{flag}: {out} ends in {last!r}: name the folder itself")
     check_apart(out, inputs or {}, flag)
     check_creatable(out, flag)
     lock_output(out)
@@ -96,8 +107,26 @@ def check_output_dir(out: Path, force: bool, flag: str = "--out", inputs: dict |
 
 
 def is_previous_output(out: Path) -> bool:
-    """``out`` holds a pa10-dnbs command's output: one of OUTPUT_MARKS at its top."""
-    return any((Path(out) / name).is_file() for name in OUTPUT_MARKS)
+    """``out`` holds a pa10-dnbs command's output: OUTPUT_MARK at its top (a file, not a link)."""
+    mark = Path(out) / OUTPUT_MARK
+    return mark.is_file() and not mark.is_symlink()
+
+
+def check_name(out: Path, flag: str) -> None:
+    """``out`` names a folder that atomic_output_dir can replace: every component at most NAME_MAX bytes and
+    its last one at most NAME_ROOM (its temporary siblings must fit); not a symbolic link (the link would be
+    replaced, not the folder it points to)."""
+    text = str(out)
+    last = os.path.basename(text.rstrip("/"))
+    for part in Path(out).parts[:-1]:
+        if len(os.fsencode(part)) > NAME_MAX:
+            raise OutputExistsError(f"{flag}: a folder name in the path is too long ({len(os.fsencode(part))} "
+                                    f"bytes; at most {NAME_MAX})")
+    if (size := len(os.fsencode(last))) > NAME_ROOM:
+        raise OutputExistsError(f"{flag}: the name is too long ({size} bytes; at most {NAME_ROOM} so that its "
+                                "temporary sibling fits)")
+    if os.path.islink(text.rstrip("/") or text):
+        raise OutputExistsError(f"{flag}: {out} is a symbolic link: give the folder itself")
 
 
 def check_not_cwd(out: Path, flag: str) -> None:
@@ -112,16 +141,26 @@ def check_not_cwd(out: Path, flag: str) -> None:
 
 def check_apart(out: Path, inputs: dict, flag: str) -> None:
     """``out`` is neither one of ``inputs`` ({name: path or None}; a config's ``extends`` files count too) nor
-    holds one nor lies inside one: an output never replaces or mixes with what its run reads."""
-    where = Path(out).resolve()
+    holds one nor lies inside one: an output never replaces or mixes with what its run reads. Each path is
+    compared both as given (made absolute, not resolved: a symbolic link inside ``out`` counts as inside) and
+    resolved (what it points to)."""
+    wheres = sorted(_both(out))
     for name, path in inputs.items():
-        for given in ([] if path is None else config_files(path) if name == "--config" else [Path(path)]):
-            used = given.resolve()
-            how = "is" if used == where else "holds" if where in used.parents else \
-                "lies inside" if used in where.parents else None
-            if how is not None:
-                raise OutputExistsError(f"{flag}: {out} {how} this run's {name} {used}: an output never replaces "
-                                        "or mixes with what its run uses; choose another output folder")
+        if path is None:
+            continue
+        given = config_files(path) + [Path(os.path.abspath(path))] if name == "--config" else [Path(path)]
+        for used in sorted({u for g in given for u in _both(g)}):
+            for where in wheres:
+                how = "is" if used == where else "holds" if where in used.parents else \
+                    "lies inside" if used in where.parents else None
+                if how is not None:
+                    raise OutputExistsError(f"{flag}: {out} {how} this run's {name} {used}: an output never "
+                                            "replaces or mixes with what its run uses; choose another output folder")
+
+
+def _both(path) -> set[Path]:
+    """``path`` made absolute and normalised (os.path.abspath: links kept) and resolved (links followed)."""
+    return {Path(os.path.abspath(path)), Path(path).resolve()}
 
 
 def config_files(path: Path) -> list[Path]:
@@ -198,6 +237,7 @@ def atomic_output_dir(out: Path, force: bool):
         raise
     try:
         yield tmp
+        (tmp / OUTPUT_MARK).write_text(OUTPUT_MARK_TEXT)   # what --force may later replace (is_previous_output)
         old = None
         if out.exists():
             old = out.with_name(f".{out.name}.old-{os.getpid()}")
