@@ -172,7 +172,7 @@ def config_files(path: Path) -> list[Path]:
         files.append(path.resolve())
         try:
             base = yaml.safe_load(path.read_text()).get("extends")
-        except (OSError, ValueError, AttributeError, yaml.YAMLError):
+        except (OSError, ValueError, AttributeError, RecursionError, yaml.YAMLError):
             break
         if not isinstance(base, str) or not base:
             break
