@@ -246,15 +246,6 @@ def test_scheduler_address_of_a_dask_worker(tmp_path):
         _one_line_error(_study_process(tmp_path, worker), "--scheduler", worker, "not a Dask scheduler (a Worker)")
 
 
-def _iiwa_arm_file(tmp_path, settings: str) -> Path:
-    """The iiwa's arm file (its URDF by absolute path) with ``settings`` lines appended under its settings."""
-    text = (REPO / "urdf" / "iiwa" / "arm.yaml").read_text()
-    text = text.replace("urdf: iiwa14.urdf", f"urdf: {REPO / 'urdf' / 'iiwa' / 'iiwa14.urdf'}")
-    path = tmp_path / "arm.yaml"
-    path.write_text(text + settings)
-    return path
-
-
 @pytest.mark.parametrize("settings, words", [
     ("  reference:\n    amplitude_rad: -3\n", ("settings.reference.amplitude_rad: must be >= 0",)),
     ("  foo: 1\n", ("settings.foo: unknown key",)),
@@ -262,7 +253,7 @@ def _iiwa_arm_file(tmp_path, settings: str) -> Path:
 ])
 def test_a_bad_key_in_an_arm_files_settings_is_named_as_the_arm_files(tmp_path, settings, words):
     """It was said as the config's key (``reference.amplitude_rad: ...``), and ``arm`` was offered as allowed."""
-    arm = _iiwa_arm_file(tmp_path, settings)
+    arm = _arm_file_with(tmp_path, settings)   # the iiwa's file ends in its settings: these lines join them
     r = run_cli("simulate", "--arm", arm, "--controller", "pid", *TINY, "--out", tmp_path / "o")
     _one_line_error(r, f"{arm}: ", *words)
     assert "allowed: arm" not in r.stderr and not (tmp_path / "o").exists()
@@ -285,7 +276,7 @@ DEEP = "[" * 50_000 + "]" * 50_000  # past the recursion limit of PyYAML's compo
 
 
 def _arm_file_with(tmp_path, line: str) -> Path:
-    """The iiwa's arm file (its URDF by absolute path) with ``line`` appended at the top level."""
+    """The iiwa's arm file (its URDF by absolute path) with ``line`` appended (its last key is ``settings``)."""
     text = (REPO / "urdf" / "iiwa" / "arm.yaml").read_text()
     text = text.replace("urdf: iiwa14.urdf", f"urdf: {REPO / 'urdf' / 'iiwa' / 'iiwa14.urdf'}")
     path = tmp_path / "arm.yaml"
