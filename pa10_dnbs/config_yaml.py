@@ -7,6 +7,9 @@
 - ``1e-3``, ``1e3``, ``2.5e3`` are numbers (floats), as in YAML 1.2 and JSON: PyYAML's YAML 1.1 float rule
   wants a dot and a signed exponent (``1.0e-3``) and reads the others as strings. Every value the 1.1 rule
   reads is read exactly as before (the extra rule is tried after it), so existing files keep their values.
+- ``1:30`` stays the string ``'1:30'``: YAML 1.1 reads it as a base-60 (sexagesimal) integer, 90, and ``1:30.5``
+  as the float 90.5, a time-of-day a user never meant as a number (YAML 1.2 dropped the rule). The string is
+  then refused by the key's own check, which names the key; ``!!int 1:30`` given explicitly is one line too.
 """
 from __future__ import annotations
 
@@ -25,8 +28,33 @@ class DuplicateKeyError(yaml.constructor.ConstructorError):
     """A key given twice in one mapping."""
 
 
+_INT, _FLOAT, _STR = "tag:yaml.org,2002:int", "tag:yaml.org,2002:float", "tag:yaml.org,2002:str"
+
+
 class StrictConfigLoader(yaml.SafeLoader):
-    """``yaml.SafeLoader`` that refuses a key given twice in one mapping and reads ``1e-3`` as a float."""
+    """``yaml.SafeLoader`` that refuses a key given twice in one mapping, reads ``1e-3`` as a float and leaves
+    a sexagesimal ``1:30`` a string."""
+
+    def resolve(self, kind, value, implicit):
+        """YAML 1.1's tag for a plain scalar, except a base-60 int or float (the only ones with a ':'): str."""
+        tag = super().resolve(kind, value, implicit)
+        if kind is yaml.ScalarNode and tag in (_INT, _FLOAT) and ":" in value:
+            return _STR
+        return tag
+
+    def _refuse_sexagesimal(self, node):
+        if ":" in self.construct_scalar(node):
+            raise yaml.constructor.ConstructorError(
+                None, None, f"{node.value!r} is a base-60 (sexagesimal) number, not read: give it in decimal",
+                node.start_mark)
+
+    def construct_yaml_int(self, node):
+        self._refuse_sexagesimal(node)
+        return super().construct_yaml_int(node)
+
+    def construct_yaml_float(self, node):
+        self._refuse_sexagesimal(node)
+        return super().construct_yaml_float(node)
 
     def construct_mapping(self, node, deep=False):
         if isinstance(node, yaml.MappingNode):
@@ -48,7 +76,9 @@ class StrictConfigLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep=deep)
 
 
-StrictConfigLoader.add_implicit_resolver("tag:yaml.org,2002:float", _EXPONENT_FLOAT, list("-+0123456789."))
+StrictConfigLoader.add_implicit_resolver(_FLOAT, _EXPONENT_FLOAT, list("-+0123456789."))
+StrictConfigLoader.add_constructor(_INT, StrictConfigLoader.construct_yaml_int)
+StrictConfigLoader.add_constructor(_FLOAT, StrictConfigLoader.construct_yaml_float)
 
 
 class UnusableYamlError(yaml.YAMLError):

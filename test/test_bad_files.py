@@ -144,6 +144,21 @@ def test_exponent_without_dot_is_a_number(tmp_path):
         load_config(cfg)
 
 
+def test_sexagesimal_is_not_a_number(tmp_path):
+    """YAML 1.1 read ``1:30`` as the integer 90 (base 60) and ``1:30.5`` as 90.5: now a string, refused by the
+    key's check (naming the key); an explicit ``!!int 1:30`` is one line naming the file; other numbers as before."""
+    from pa10_dnbs.config_yaml import load_strict
+    assert load_strict("a: [1:30, -1:30, 190:20:30.15, 1:30: 2]") == {"a": ["1:30", "-1:30", "190:20:30.15",
+                                                                               {"1:30": 2}]}
+    assert load_strict("a: [1_000, 0x1F, 017, 0b11, -3, 1.5, 1e-3, .inf]") == {
+        "a": [1000, 31, 15, 3, -3, 1.5, 1e-3, math.inf]}
+    cfg = tmp_path / "sexagesimal.yaml"
+    cfg.write_text(f"extends: {DEFAULT}\nsimulation:\n  duration_s: 1:30\n")
+    _one_line_error(_simulate_with(tmp_path, cfg), "simulation.duration_s", "'1:30'")
+    cfg.write_text(f"extends: {DEFAULT}\nsimulation:\n  seed: !!int 1:30\n")
+    _one_line_error(_simulate_with(tmp_path, cfg), f"{cfg}:3", "base-60")
+
+
 def _same(a, b) -> bool:
     """Equal, of the same types, floats bit for bit."""
     if type(a) is not type(b):
