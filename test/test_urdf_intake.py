@@ -206,6 +206,43 @@ def test_a_urdf_that_is_not_one_tree_is_refused_in_one_line_naming_the_file_and_
         load_arm(urdf)
 
 
+# A name with surrounding whitespace, or a number finite but absurd (bounds in pa10_dnbs/kinematics/urdf_tree.py):
+# the names were accepted, the origins of 1e300 m ended in a traceback, the 1e300 kg link ran.
+BAD_NAME_OR_SIZE = {
+    "blank_joint_name": "joint ' ': a name that is blank or has leading/trailing whitespace",
+    "padded_joint_name": "joint ' j2': a name that is blank or has leading/trailing whitespace",
+    "padded_link_name": "link 'l2 ': a name that is blank or has leading/trailing whitespace",
+    "huge_joint_origin": "joint 'j3': <origin xyz=\"0 0 1e300\">: each must be within +/-1000 m",
+    "huge_inertial_origin": "link 'l2': <origin xyz=\"0.01 0 1e300\">: each must be within +/-1000 m",
+    "huge_mass": "link 'l2': <mass value=\"1e300\">: expected a finite mass in [0, 100000] kg",
+    "huge_inertia": "link 'l2': <inertia ixx=\"1e300\">: expected a finite value within +/-1e+07 kg m^2",
+}
+
+
+@pytest.mark.parametrize("name", sorted(BAD_NAME_OR_SIZE))
+def test_a_blank_name_or_an_absurd_size_is_refused_in_one_line_naming_the_file_and_the_joint_or_link(name, tmp_path):
+    urdf, out = _fixture(name).resolve(), tmp_path / "out"
+    r = run_cli("simulate", "--arm", urdf, "--controller", "pid", "--duration", "0.05", "--no-figures", "--out", out)
+    _refused_in_one_line(r, urdf, BAD_NAME_OR_SIZE[name], out)
+
+
+def test_the_size_bounds_refuse_no_urdf_of_the_installed_collections():
+    """pybullet_data's and example-robot-data's URDFs (where installed) read as before the bounds."""
+    from pa10_dnbs.kinematics.urdf_chain import UrdfChain
+    from pa10_dnbs.kinematics.urdf_tree import UrdfError
+    import pybullet_data
+    roots = [Path(pybullet_data.getDataPath()), *([COLLECTION] if COLLECTION else [])]
+    files = [f for root in roots if root.is_dir() for f in root.rglob("*.urdf")]
+    assert len(files) > 100
+    for f in files:
+        try:
+            UrdfChain(f.read_text())
+        except UrdfError as exc:
+            assert not any(w in str(exc) for w in ("whitespace", "within", "finite mass")), (f, exc)
+        except (ValueError, ET.ParseError):
+            pass   # not a URDF this reader takes (refused before the bounds existed too)
+
+
 def test_every_way_in_refuses_a_urdf_pybullet_would_crash_on(tmp_path):
     """An arm file naming it, a config's ``arm``, the arm and robot commands, the MuJoCo engine."""
     urdf = _fixture("two_parents").resolve()

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .urdf_tree import JOINT_TYPES, UrdfError, number, tree_root, vector3
+from .urdf_tree import JOINT_TYPES, MAX_OFFSET_M, UrdfError, check_link, check_name, number, tree_root, vector3
 
 
 @dataclass(frozen=True)
@@ -77,11 +77,10 @@ def matrix_quaternion(r: np.ndarray) -> tuple[float, float, float, float]:
 
 
 def _joint(el: ET.Element, i: int) -> UrdfJoint:
-    """The ``i``-th ``<joint>`` element, checked: a name, a URDF joint type, parent and child links, 3 finite
-    numbers in each of origin xyz/rpy and axis xyz (a unit axis; zero only for a fixed joint), numeric limits."""
-    name = el.get("name")
-    if not name:
-        raise UrdfError(f"<joint> number {i} has no name")
+    """The ``i``-th ``<joint>`` element, checked: a name (no surrounding whitespace), a URDF joint type, parent
+    and child links, 3 finite numbers in each of origin xyz (within +/-MAX_OFFSET_M)/rpy and axis xyz (a unit
+    axis; zero only for a fixed joint), numeric limits."""
+    name = check_name("joint", el.get("name"), i)
     kind = el.get("type")
     if kind not in JOINT_TYPES:
         raise UrdfError(f"joint {name!r}: type={kind!r}: expected one of {', '.join(JOINT_TYPES)}")
@@ -92,7 +91,7 @@ def _joint(el: ET.Element, i: int) -> UrdfJoint:
             raise UrdfError(f"joint {name!r}: no <{role} link=...>")
         ends[role] = end.get("link")
     origin, axis_el, limit = el.find("origin"), el.find("axis"), el.find("limit")
-    xyz = np.array(vector3(origin, "xyz", "0 0 0", name))
+    xyz = np.array(vector3(origin, "xyz", "0 0 0", name, MAX_OFFSET_M))
     rpy = vector3(origin, "rpy", "0 0 0", name)
     axis = np.array(vector3(axis_el, "xyz", "1 0 0", name))
     norm = np.linalg.norm(axis)
@@ -118,11 +117,7 @@ class UrdfChain:
         if root.tag != "robot":
             raise ValueError(f"not a URDF: root element is <{root.tag}>, expected <robot>")
         self.robot_name = root.get("name", "")
-        links = []
-        for i, el in enumerate(root.findall("link"), 1):
-            if not el.get("name"):
-                raise UrdfError(f"<link> number {i} has no name")
-            links.append(el.get("name"))
+        links = [check_link(el, i) for i, el in enumerate(root.findall("link"), 1)]
         joints = [_joint(el, i) for i, el in enumerate(root.findall("joint"), 1)]
         self.links = tuple(links)
         self.root_link = tree_root(links, [(j.name, j.parent, j.child) for j in joints])

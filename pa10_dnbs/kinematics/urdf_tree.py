@@ -4,39 +4,98 @@ PyBullet's importer kills the process (SIGSEGV, no message) on a duplicate joint
 child of two joints or a second root link, and stops with "Cannot load URDF file." on an undefined link, a
 duplicate link name or a malformed vector. So :class:`~pa10_dnbs.kinematics.urdf_chain.UrdfChain` refuses
 them here first, each with a :class:`UrdfError` naming the joint or link. Standard library only.
+
+Names and magnitudes are checked here too (:func:`check_name`, :func:`check_link`): a joint or link name that is
+blank or has leading/trailing whitespace (a ROS joint name or /tf frame cannot carry it, and ``" j2"`` would
+silently differ from ``"j2"``), and numbers finite but absurd, which later overflowed (an origin of 1e300 m ended
+in a traceback from the eigen-solver) or ran as nonsense (a 1e300 kg link). The bounds, each far past any real
+arm yet far from where float64 loses the precision a run needs:
+
+- ``MAX_OFFSET_M``: every origin's xyz (joint, inertial, visual, collision) within 1 km. The largest serial arms
+  reach 4-5 m and a gantry tens of metres; at 1 km a float64 position still resolves 1e-13 m, and m d^2 with
+  the mass bound stays 1e11 kg m^2, far inside float64;
+- ``MAX_MASS_KG``: a link's mass in [0, 1e5 kg] (the heaviest industrial arms weigh about 10 t in all);
+- ``MAX_INERTIA_KGM2``: each inertia entry within 1e7 kg m^2 (1e5 kg at 10 m);
+- rpy: finite (any angle is meaningful; it is reduced modulo 2 pi).
 """
 from __future__ import annotations
 
 import math
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")  # the URDF spec's
+MAX_OFFSET_M = 1e3        # |x|, |y|, |z| of any <origin xyz> [m]
+MAX_MASS_KG = 1e5         # a link's <mass value> [kg]
+MAX_INERTIA_KGM2 = 1e7    # |each <inertia> entry| [kg m^2]
+INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 
 
 class UrdfError(ValueError):
     """A URDF that is not one tree of links and joints, or a malformed joint; the message names it."""
 
 
-def vector3(el, attr: str, default: str, joint: str) -> tuple[float, float, float]:
+def vector3(el, attr: str, default: str, joint: str, bound: float | None = None,
+            owner: str = "joint") -> tuple[float, float, float]:
     """The 3 finite numbers of attribute ``attr`` (xyz, rpy) of element ``el`` (``default`` when either is
-    absent or empty) of joint ``joint``; UrdfError naming the joint, the element and the text."""
+    absent or empty) of joint ``joint`` (of link ``joint`` when ``owner`` is "link"), each within +/-``bound``
+    when given; UrdfError naming the joint or link, the element and the text."""
     text = el.get(attr) if el is not None else None
     try:
         values = tuple(float(v) for v in (text or default).split())
     except ValueError:
         values = ()
     if len(values) != 3 or not all(math.isfinite(v) for v in values):
-        raise UrdfError(f'joint {joint!r}: <{el.tag} {attr}="{text}">: expected 3 finite numbers')
+        raise UrdfError(f'{owner} {joint!r}: <{el.tag} {attr}="{text}">: expected 3 finite numbers')
+    if bound is not None and max(abs(v) for v in values) > bound:
+        raise UrdfError(f'{owner} {joint!r}: <{el.tag} {attr}="{text}">: each must be within +/-{bound:g} m '
+                        f'(no arm is larger; see pa10_dnbs/kinematics/urdf_tree.py)')
     return values
 
 
-def number(el, attr: str, joint: str) -> float:
-    """Attribute ``attr`` of element ``el`` of joint ``joint`` as a float (inf and nan pass: the callers test
-    ranges); UrdfError naming the joint, the element and the text."""
+def number(el, attr: str, joint: str, owner: str = "joint") -> float:
+    """Attribute ``attr`` of element ``el`` of joint ``joint`` (of link ``joint`` when ``owner`` is "link") as
+    a float (inf and nan pass: the callers test ranges); UrdfError naming it, the element and the text."""
     text = el.get(attr)
     try:
         return float(text)
-    except ValueError:
-        raise UrdfError(f'joint {joint!r}: <{el.tag} {attr}="{text}">: expected a number') from None
+    except (TypeError, ValueError):
+        raise UrdfError(f'{owner} {joint!r}: <{el.tag} {attr}="{text}">: expected a number') from None
+
+
+def check_name(kind: str, name: str | None, i: int) -> str:
+    """``name`` of the ``i``-th ``<kind>`` (joint, link): UrdfError if it is missing, blank or has leading or
+    trailing whitespace."""
+    if not name:
+        raise UrdfError(f"<{kind}> number {i} has no name")
+    if name != name.strip():
+        raise UrdfError(f"{kind} {name!r}: a name that is blank or has leading/trailing whitespace (ROS joint "
+                        f"names and /tf frames cannot carry it)")
+    return name
+
+
+def check_link(el, i: int) -> str:
+    """The name of the ``i``-th ``<link>`` element, checked: a name (:func:`check_name`), every origin's xyz
+    finite within ``MAX_OFFSET_M`` and rpy finite, a ``<mass value>`` finite in [0, ``MAX_MASS_KG``], each
+    ``<inertia>`` entry finite within ``MAX_INERTIA_KGM2``. UrdfError naming the link, the element and the text."""
+    name = check_name("link", el.get("name"), i)
+    for origin in el.iter("origin"):
+        vector3(origin, "xyz", "0 0 0", name, MAX_OFFSET_M, owner="link")
+        vector3(origin, "rpy", "0 0 0", name, owner="link")
+    for mass in el.findall("inertial/mass"):
+        if mass.get("value") is None:
+            continue   # no value: the arm's own check names it where the mass matters (a moved link)
+        value = number(mass, "value", name, owner="link")
+        if not 0.0 <= value <= MAX_MASS_KG:
+            raise UrdfError(f'link {name!r}: <mass value="{mass.get("value")}">: expected a finite mass in '
+                            f'[0, {MAX_MASS_KG:g}] kg')
+    for inertia in el.findall("inertial/inertia"):
+        for key in INERTIA_KEYS:
+            if inertia.get(key) is None:
+                continue
+            value = number(inertia, key, name, owner="link")
+            if not abs(value) <= MAX_INERTIA_KGM2:
+                raise UrdfError(f'link {name!r}: <inertia {key}="{inertia.get(key)}">: expected a finite value '
+                                f'within +/-{MAX_INERTIA_KGM2:g} kg m^2')
+    return name
 
 
 def tree_root(links: list[str], joints: list[tuple[str, str, str]]) -> str:
