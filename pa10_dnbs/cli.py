@@ -17,7 +17,8 @@ from .supervisor.fault_flags import add_fault_arguments
 from .loop.scheduling import DEFAULT_RT_PRIORITY
 from .bag.bag_reader import BagError
 from .bag.bag_writer import BagExistsError
-from .cli_values import (EFFORT_TIMEOUT_MAX_S, MAX_REPLAY_CLOCK_HZ, RTF_MAX, RTF_MIN, OneLineParser, nonnegative,
+from .cli_values import (EFFORT_TIMEOUT_MAX_S, MAX_REPLAY_CLOCK_HZ, REPLAY_RATE_MAX, REPLAY_RATE_MIN, RTF_MAX,
+                         RTF_MIN, WAIT_FOR_SUBSCRIBERS_MAX_S, OneLineParser, nonnegative,
                          number_in, positive, seconds, whole_in)
 from .output_lock import OutputInUseError, held, release_all
 from .report.outputs import OutputExistsError
@@ -387,7 +388,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     rp = sub.add_parser("replay", help="publish a bag's topics with their recorded timing (like ros2 bag play)")
     rp.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 bag directory")
-    rp.add_argument("--rate", type=number_in(0, 1000), default=1.0, help="playback speed factor (default 1)")
+    rp.add_argument("--rate", type=number_in(REPLAY_RATE_MIN, REPLAY_RATE_MAX, low_open=False), default=1.0,
+                    help=f"playback speed factor in [{REPLAY_RATE_MIN:g}, {REPLAY_RATE_MAX:g}] (default 1)")
     rp.add_argument("--topics", nargs="+", default=None, metavar="TOPIC", help="only these topics (default: all)")
     rp.add_argument("--start-offset", type=nonnegative, default=0.0, metavar="SECONDS",
                     help="skip the bag's first SECONDS (of its own timeline)")
@@ -397,8 +399,10 @@ def build_parser() -> argparse.ArgumentParser:
                     help=f"publish /clock from the bag's timeline at HZ of wall time, at most {MAX_REPLAY_CLOCK_HZ:g} "
                          "(default 100 when given); "
                          "the recorded /clock is then not replayed")
-    rp.add_argument("--wait-for-subscribers", type=nonnegative, default=0.0, metavar="SECONDS",
-                    help="before playing, wait up to SECONDS until every topic has a subscriber (exit 1 if not)")
+    rp.add_argument("--wait-for-subscribers", type=number_in(0, WAIT_FOR_SUBSCRIBERS_MAX_S, low_open=False),
+                    default=0.0, metavar="SECONDS",
+                    help=f"before playing, wait up to SECONDS (at most {WAIT_FOR_SUBSCRIBERS_MAX_S:g}; 0: no wait) "
+                         f"until every topic has a subscriber (exit 1 if not)")
     rp.add_argument("--namespace", default=None, metavar="NS",
                     help="publish the arm's topics under NS (e.g. /arm2: /pa10/s1/state -> /arm2/s1/state); "
                          "/clock, /tf, /tf_static, /diagnostics stay global (default: as recorded)")

@@ -18,6 +18,11 @@ MAX_REPLAY_CLOCK_HZ = 1000.0
 RTF_MIN, RTF_MAX = 1e-3, 100.0
 #: launch --effort-timeout's bound [s of wall time]: an hour's wait for one effort is a hang, not a timeout
 EFFORT_TIMEOUT_MAX_S = 3600.0
+#: replay --rate's range: the bag played between 1000x slower (a millisecond of the bag per second, as launch
+#: --rtf's lower end) and 1000x faster; 1e-300 was accepted and a message's wall-clock time overflowed to inf
+REPLAY_RATE_MIN, REPLAY_RATE_MAX = 1e-3, 1000.0
+#: replay --wait-for-subscribers' bound [s of wall time] (0: no wait): as --effort-timeout, an hour is a hang
+WAIT_FOR_SUBSCRIBERS_MAX_S = 3600.0
 
 
 class OneLineParser(argparse.ArgumentParser):

@@ -4,7 +4,8 @@ config key, exit 2, nothing written, and quickly.
 A trajectory whose last point lies far in time (its limits check sampled every step up to there), a start
 position outside the joint limits, a reference whose frequency, envelope or amplitude make it non-finite, a
 duration of 1e308 s (an infinite step count) or shorter than two steps, ``robot --duration 0`` (ran forever)
-and ``replay --clock 1e308`` (hung). Fast tier.
+and ``replay --clock 1e308`` (hung), ``replay --rate 1e-300`` or ``--wait-for-subscribers 1e308`` (accepted).
+Fast tier.
 """
 from __future__ import annotations
 
@@ -215,3 +216,23 @@ def test_replay_clock_at_its_bound_passes_the_flag_check(tmp_path):
     for words in (["--clock", "1000"], ["--clock"]):
         r = run_cli("replay", bag, *words)
         assert r.returncode == 2 and "--clock" not in r.stderr and "Traceback" not in r.stderr, r.stderr
+
+
+# --- 8. replay --rate and --wait-for-subscribers (1e-300 and 1e308 were accepted) ---
+
+@pytest.mark.parametrize("flag,value", [("--rate", "1e-300"), ("--rate", "0.0009"), ("--rate", "1001"),
+                                        ("--wait-for-subscribers", "1e308"), ("--wait-for-subscribers", "3601"),
+                                        ("--wait-for-subscribers", "-1")])
+def test_replay_rate_and_wait_bounded(tmp_path, flag, value):
+    bag = tmp_path / "bag"
+    bag.mkdir()
+    _refused(tmp_path, flag, "replay", bag, flag, value)
+
+
+def test_replay_rate_and_wait_at_their_bounds_pass_the_flag_check(tmp_path):
+    bag = tmp_path / "bag"
+    bag.mkdir()
+    for flag, value in (("--rate", "0.001"), ("--rate", "1000"), ("--wait-for-subscribers", "3600"),
+                        ("--wait-for-subscribers", "0")):
+        r = run_cli("replay", bag, flag, value)   # refused for the bag (not one), not for the flag
+        assert r.returncode == 2 and flag not in r.stderr and "Traceback" not in r.stderr, r.stderr
