@@ -131,6 +131,24 @@ def test_tune_resumes_only_into_its_own_folder(tmp_path):
     assert r.returncode == 0 and "2 trials" in r.stdout, r.stderr
 
 
+def test_a_tune_does_not_resume_through_a_symlinked_tune_db(tmp_path):
+    """tune.db linked to another tune's database was resumed into (its trials added to the other folder's)."""
+    first = tmp_path / "first"
+    r = run_cli(*TUNE, "--controller", "pid", "--out", first)
+    assert r.returncode == 0, r.stderr
+    before = _tree(first)
+    second = tmp_path / "second"
+    second.mkdir()
+    (second / "tune.db").symlink_to(first / "tune.db")
+    _refused(run_cli(*TUNE, "--controller", "pid", "--trials", "2", "--out", second), "--out",
+             f"{second}/tune.db is a symbolic link")
+    assert _tree(first) == before and sorted(p.name for p in second.iterdir()) == ["tune.db"]
+    (second / "tune.db").unlink()
+    (second / "tune.db").symlink_to(tmp_path / "nowhere.db")   # dangling: would be created in another folder
+    _refused(run_cli(*TUNE, "--controller", "pid", "--out", second), "--out", "tune.db is a symbolic link")
+    assert not (tmp_path / "nowhere.db").exists()
+
+
 def test_a_tune_with_its_storage_in_its_out_resumes(tmp_path):
     out = tmp_path / "t"
     out.mkdir()

@@ -183,8 +183,13 @@ def config_files(path: Path) -> list[Path]:
 def check_tune_dir(out: Path, study_name: str, identity: dict, refusal) -> None:
     """``out`` holds no tune but this one: its tune.json (a finished tune) and tune.db (any tune) were made with
     the options ``identity`` of study ``study_name``; ``refusal(name, stored, given)`` words a mismatch.
-    Raises OutputExistsError (one line)."""
+    Raises OutputExistsError (one line), also for a tune file (tune.db, tune.json, ...) that is a symbolic link:
+    the tune would resume into (and write its reports through it to) another folder's files."""
     out = Path(out)
+    for name in sorted(TUNE_FILES):
+        if (out / name).is_symlink():
+            raise OutputExistsError(f"--out: {out}/{name} is a symbolic link (to {os.readlink(out / name)}): a tune "
+                                    "resumes only the files in its own folder; remove the link or give another --out")
     try:
         done = json.loads((out / "tune.json").read_text())
     except (OSError, ValueError):
