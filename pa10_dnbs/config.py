@@ -150,6 +150,10 @@ SCHEMA: dict[str, Any] = {
 }
 
 
+class MissingKeyError(ConfigError):
+    """A key no layer of the settings gives (the message names the key; the caller who knows the file adds it)."""
+
+
 def _number(key: str, value: Any, spec: Num) -> float | int:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ConfigError(f"{key}: expected a number, got {type(value).__name__} {value!r}")
@@ -183,7 +187,7 @@ def check_value(key: str, value: Any, spec: Any, n: int | None) -> Any:
         _check_mapping(key, value, spec)
         missing = sorted(set(spec) - set(value))
         if missing:
-            raise ConfigError(f"{key + '.' if key else ''}{missing[0]}: missing key")
+            raise MissingKeyError(f"{key + '.' if key else ''}{missing[0]}: missing key")
         return {k: check_value(f"{key}.{k}" if key else k, value[k], spec[k], n) for k in spec}
     if isinstance(spec, Num):
         return _number(key, value, spec)

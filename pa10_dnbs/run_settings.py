@@ -10,7 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .arm import DEFAULT_ARM, load_arm
-from .config import ConfigError, check_arm_settings, checked_layers, load_config
+from .config import ConfigError, MissingKeyError, check_arm_settings, checked_layers, default_config_path, load_config
 from .derived_settings import DERIVED_KEYS, RULE_DEFAULTS, with_rule_values
 from .settings import Settings
 
@@ -32,5 +32,9 @@ def build_settings(config_path: str | Path, arm: str | Path | None = None, repor
                        "viscous_nms_per_rad": the_arm.viscous_nms_per_rad.tolist(),
                        "coulomb_nm": the_arm.coulomb_nm.tolist()}}
     layers = [RULE_DEFAULTS, facts, the_arm.settings, dict(document, arm=str(the_arm.file))]
-    checked, absent = checked_layers(layers, the_arm.n_joints, DERIVED_KEYS)
+    try:
+        checked, absent = checked_layers(layers, the_arm.n_joints, DERIVED_KEYS)
+    except MissingKeyError as exc:   # the config file (and what it extends) is where the key belongs
+        raise ConfigError(f"{config_path}: {exc} (neither it nor a file it extends gives it; a config usually "
+                          f"starts with `extends: {default_config_path()}`)") from None
     return Settings.of(with_rule_values(the_arm, checked, absent, report), the_arm)

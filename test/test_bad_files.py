@@ -117,6 +117,16 @@ def test_extends_missing_file(tmp_path):
     _one_line_error(_simulate_with(tmp_path, cfg), cfg, "extends: nosuch.yaml", "no such config file")
 
 
+def test_a_config_that_does_not_extend_the_default_names_its_file(tmp_path):
+    """It said ``checkpoint: missing key`` without the file: now the file, the key and what to add."""
+    cfg = tmp_path / "alone.yaml"
+    cfg.write_text("simulation:\n  seed: 3\n")
+    _one_line_error(_simulate_with(tmp_path, cfg), f"{cfg}: checkpoint: missing key", "extends:")
+    child = tmp_path / "child.yaml"
+    child.write_text("extends: alone.yaml\n")   # the file given is named; the message says what it extends
+    _one_line_error(_simulate_with(tmp_path, child), f"{child}: checkpoint: missing key", "a file it extends")
+
+
 def test_invalid_yaml_one_line_with_its_line(tmp_path):
     cfg = tmp_path / "bad.yaml"
     cfg.write_text(f"extends: {DEFAULT}\nsimulation:\n  seed: 3\n  duration_s: [1\n")
