@@ -89,12 +89,26 @@ def test_robot_topics_are_checked(args, words):
     (("--robot-command-topic", "/a/"), ["--robot-command-topic"]),
     (("--robot-state-topic", "/a", "--robot-command-topic", "/a"), ["--robot-state-topic", "'/a'"]),
     (("--robot-state-topic", "/robot_joint_command"), ["--robot-state-topic", "/robot_joint_command"]),
+    # relative names resolve in the arm's namespace, where the joint bus runs (were compared as written)
+    (("--robot-state-topic", "x", "--robot-command-topic", "/pa10/x"), ["--robot-state-topic", "'x'", "/pa10/x"]),
+    (("--namespace", "/arm2", "--robot-state-topic", "/arm2/y", "--robot-command-topic", "y"),
+     ["--robot-state-topic", "both /arm2/y in the namespace /arm2"]),
 ])
 def test_launch_robot_external_topics_are_checked(tmp_path, args, words):
     out = tmp_path / "out"
     _refused(run_cli("launch", "--robot", "external", *args, "--duration", "0.1", "--out", out), words)
     assert not list(tmp_path.iterdir())
     _no_pa10_children()
+
+
+def test_robot_topics_are_compared_as_resolved_in_the_arms_namespace():
+    """``x`` in /pa10 is /pa10/x: it differs from /x (accepted) and equals /pa10/x (refused above)."""
+    from pa10_dnbs.supervisor.robot_options import RobotOptions, check_robot_options
+    for ns in ("/pa10", "/lab/arm2"):
+        fields = check_robot_options(RobotOptions(state_topic="x", command_topic="/x"), "lockstep", ns)
+        assert (fields["robot_state_topic"], fields["robot_command_topic"]) == ("x", "/x")
+    with pytest.raises(ValueError, match="both /lab/arm2/x in the namespace /lab/arm2"):
+        check_robot_options(RobotOptions(state_topic="/lab/arm2/x", command_topic="x"), "lockstep", "/lab/arm2")
 
 
 @pytest.mark.parametrize("args,words", [

@@ -73,7 +73,7 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
     duration_s = settings.simulation.duration_s if o.duration_s is None else o.duration_s
     own_robot = o.plant == "mujoco"
     robot = plant_robot_options(o.plant, o.robot, o.mode)
-    robot_fields = check_robot_options(robot, o.mode) if robot is not None else {}
+    robot_fields = check_robot_options(robot, o.mode, namespace) if robot is not None else {}
     if own_robot:
         robot_fields["plant_engine"] = "mujoco"
     domain_id = o.domain_id

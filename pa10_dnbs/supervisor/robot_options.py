@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 from ..config import ConfigError
 from ..wire.robot_interface import default_state_topic, parse_robot_command
-from ..wire.topics import check_topic_name
+from ..wire.topics import DEFAULT_NS, check_topic_name, resolve
 
 ROBOTS = ("external",)
 
@@ -34,9 +34,10 @@ def _check_topic(flag: str, topic: str) -> None:
         raise ConfigError(f"{flag}: {exc}", setting=flag) from None
 
 
-def check_robot_options(opt: RobotOptions, mode: str) -> dict:
+def check_robot_options(opt: RobotOptions, mode: str, namespace: str = DEFAULT_NS) -> dict:
     """The GraphOptions fields of ``opt``; ConfigError (one line, naming the setting: robot, robot_command, ...;
-    the command line names its flag) when one is wrong."""
+    the command line names its flag) when one is wrong. ``namespace``: the arm's, where the joint bus runs and a
+    relative topic resolves (the state and command topics are compared so: ``x`` in /pa10 is ``/pa10/x``)."""
     if opt.robot not in ROBOTS:
         raise ConfigError(f"robot: expected {' or '.join(ROBOTS)}, got {opt.robot!r}", setting="robot")
     for flag, topic in (("robot_state_topic", opt.state_topic), ("robot_command_topic", opt.command_topic)):
@@ -47,9 +48,10 @@ def check_robot_options(opt: RobotOptions, mode: str) -> dict:
     except ValueError as exc:
         raise ConfigError(f"robot_command: {exc}", setting="robot_command") from None
     state = opt.state_topic or default_state_topic(command)
-    if state == command.topic:  # the graph would read its own commands as the robot's states
+    if resolve(state, namespace) == resolve(command.topic, namespace):  # it would read its own commands as states
+        same = "" if state == command.topic else f" (both {resolve(state, namespace)} in the namespace {namespace})"
         raise ConfigError(f"robot_state_topic: the robot's state topic {state!r} must differ from its command topic "
-                          f"{command.topic!r}", setting="robot_state_topic")
+                          f"{command.topic!r}{same}", setting="robot_state_topic")
     if not (math.isfinite(opt.timeout_s) and opt.timeout_s > 0):
         raise ConfigError(f"robot_timeout: must be a positive number of seconds, got {opt.timeout_s}",
                           setting="robot_timeout")
