@@ -236,3 +236,23 @@ def test_replay_rate_and_wait_at_their_bounds_pass_the_flag_check(tmp_path):
                         ("--wait-for-subscribers", "0")):
         r = run_cli("replay", bag, flag, value)   # refused for the bag (not one), not for the flag
         assert r.returncode == 2 and flag not in r.stderr and "Traceback" not in r.stderr, r.stderr
+
+
+# --- 9. a study scenario's reference past the Nyquist rate (fast_reference's x1.5 was not checked) ---
+
+def test_a_scenario_reference_past_the_nyquist_rate_is_refused_before_any_run(tmp_path):
+    """2500 rad/s is below pi / T = 3141.6 rad/s; fast_reference's x1.5, 3750 rad/s, is not: study and tune
+    refuse in one line naming the scenario (the study ran it); the nominal scenario alone still passes the check."""
+    cfg = _config(tmp_path, "reference:\n  frequency_rad_s: 2500\n  amplitude_rad: 0.001")
+    common = ("--config", cfg, "--seeds", "1", "--duration", "0.2", "--jobs", "1", "--no-progress")
+    _refused(tmp_path, "scenario fast_reference", "study", "--scenarios", "nominal,fast_reference",
+             "--controllers", "pid", *common, "--out", tmp_path / "s")
+    _refused(tmp_path, "scenario fast_reference", "tune", "--controller", "pid", "--trials", "1",
+             "--scenarios", "fast_reference", *common, "--out", tmp_path / "t")
+    before = {p.name for p in tmp_path.iterdir()}
+    r = run_cli("tune", "--controller", "pid", "--trials", "1", "--scenarios", "nominal", *common,
+                "--out", tmp_path / "t")
+    _assert_refused(r, "--held-out-seeds 0", tmp_path, before)   # its held-out runs take every scenario
+    from pa10_dnbs.run_settings import build_settings
+    from pa10_dnbs.study.scenarios import check_scenario_references
+    check_scenario_references(build_settings(cfg, report=False), ["nominal"])

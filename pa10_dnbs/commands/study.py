@@ -21,7 +21,7 @@ from ..sim.closed_loop import CONTROLLERS
 from ..study.feasibility import infeasible_scenarios
 from ..study.partial_summary import write_partial_study
 from ..study.runner import run_study
-from ..study.scenarios import SCENARIOS
+from ..study.scenarios import SCENARIOS, check_scenario_references
 from .name_list import name_list
 from ..study.summary import study_figure, study_markdown
 
@@ -40,6 +40,7 @@ def run_study_command(options: StudyOptions) -> int:
                    total_runs=n_runs, say=say_note)
     check_output_dir(o.out, o.force, "--out", inputs={"--config": config_path, "--arm": settings.arm.file,
                                                       "arm URDF": settings.arm.urdf})
+    check_scenario_references(settings, scen)   # a reference past the Nyquist rate: one line, nothing runs
     infeasible = infeasible_scenarios(settings, scen, o.duration_s)   # before any run: one line each, not run
     for line in infeasible.values():
         print(f"study: {line}")

@@ -24,7 +24,7 @@ from ..output_lock import lock_output
 from ..report.outputs import check_creatable, check_output_dir, check_tune_dir, tune_files
 from ..run_size import check_run_size, say_note
 from ..study.executor import Executor
-from ..study.scenarios import SCENARIOS
+from ..study.scenarios import SCENARIOS, check_scenario_references
 from .name_list import name_list
 from ..tune.report import held_out_table, held_out_verdict, tune_figures, tune_markdown, tuned_yaml
 from ..tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
@@ -54,6 +54,13 @@ def run_tune(options: TuneOptions) -> int:
     config_path = Path(o.config_path) if o.config_path else default_config_path()
     base = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
     the_arm = base.arm
+    check_scenario_references(base, train)   # a reference past the Nyquist rate: one line, nothing runs
+    if o.held_out_seeds:
+        try:
+            check_scenario_references(base, [s for s in SCENARIOS if s not in train])
+        except ConfigError as exc:
+            raise ConfigError(f"{exc} (the held-out runs take every scenario; --held-out-seeds 0 leaves them out)") \
+                from None
     n_steps = run_steps(o.duration_s, base.simulation.dt_s)
     runs_per_trial = len(train) * o.seeds
     at_once = 1 if o.scheduler is not None else min(runs_per_trial, o.jobs or os.cpu_count() or 1)

@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
+from ..config import ConfigError
 from ..settings import Settings, replace_in
 from ..sim.closed_loop import Disturbances
 
@@ -52,6 +53,20 @@ SCENARIOS = {s.name: s for s in (
     Scenario("coulomb", f"Coulomb friction {COULOMB_FRACTION:.0%} of the torque limit on every joint", _coulomb),
     Scenario("fast_reference", "Table 1 frequencies x1.5", _fast_reference),
 )}
+
+
+def check_scenario_references(settings: Settings, scenarios) -> None:
+    """Each of ``scenarios``' references checked as a config's own is (``derived_settings.check_reference``: the
+    frequency below the Nyquist rate pi / T, the envelope rate, amplitude and centre bounded), before any run: a
+    scenario edits typed settings (``replace_in``), which check each value's kind and range but not these bounds
+    (fast_reference's x1.5 could put a frequency past pi / T). ConfigError naming the scenario."""
+    from ..derived_settings import check_reference
+    for name in scenarios:
+        changed, _ = scenario_settings(settings, name, 0)
+        try:
+            check_reference(changed.arm, changed.to_config())
+        except ConfigError as exc:
+            raise ConfigError(f"scenario {name} ({SCENARIOS[name].description}): {exc}") from None
 
 
 def scenario_settings(settings: Settings, scenario: str, seed: int) -> tuple[Settings, Disturbances | None]:
