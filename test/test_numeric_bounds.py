@@ -4,11 +4,12 @@ config key, exit 2, nothing written, and quickly.
 A trajectory whose last point lies far in time (its limits check sampled every step up to there), a start
 position outside the joint limits, a reference whose frequency, envelope or amplitude make it non-finite, a
 duration of 1e308 s (an infinite step count) or shorter than two steps, ``robot --duration 0`` (ran forever)
-and ``replay --clock 1e308`` (hung), ``replay --rate 1e-300`` or ``--wait-for-subscribers 1e308`` (accepted).
-Fast tier.
+and ``replay --clock 1e308`` (hung), ``replay --rate 1e-300`` or ``--wait-for-subscribers 1e308`` (accepted), a
+study scenario's reference past the Nyquist rate (run), a node's ``-p duration_s:=1e308`` (a traceback). Fast tier.
 """
 from __future__ import annotations
 
+import signal
 import subprocess
 import sys
 import time
@@ -256,3 +257,34 @@ def test_a_scenario_reference_past_the_nyquist_rate_is_refused_before_any_run(tm
     from pa10_dnbs.run_settings import build_settings
     from pa10_dnbs.study.scenarios import check_scenario_references
     check_scenario_references(build_settings(cfg, report=False), ["nominal"])
+
+
+# --- 10. a node started by hand with -p duration_s:=1e308 (an OverflowError traceback; the launcher refuses it) ---
+
+NODE_TIMEOUT_S = 60
+
+
+@pytest.mark.parametrize("value,words", [("1e308", "more than can be counted"), ("0.001", "shorter than two steps")])
+def test_a_nodes_duration_is_counted_as_the_launcher_counts_it(tmp_path, domain, value, words):
+    """The plant, wire monitor, reference and MuJoCo robot nodes (each in its own process, on the test's own
+    domain, in parallel): exit 2, one line naming the parameter, no traceback (run_steps' check)."""
+    from graph_harness import REPO as ROOT, ros_env
+    nodes = [("plant.node", ()), ("wire_monitor", (f"out_file:={tmp_path / 'wire.npz'}",)), ("reference_node", ()),
+             ("mujoco_robot_node", ())]
+    procs = [subprocess.Popen(["timeout", "-k", "5", str(NODE_TIMEOUT_S), sys.executable, "-m", f"pa10_dnbs.ros.{m}",
+                               "--ros-args", "-p", f"duration_s:={value}", *[a for p in extra for a in ("-p", p)]],
+                              cwd=ROOT, env=ros_env(domain), text=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+             for m, extra in nodes]
+    try:
+        for (module, _), p in zip(nodes, procs):
+            out, err = p.communicate(timeout=NODE_TIMEOUT_S + 10)
+            lines = [ln for ln in err.splitlines() if ln.strip()]
+            assert p.returncode == 2 and "Traceback" not in err, (module, p.returncode, out, err[-2000:])
+            assert len(lines) == 1 and "parameter duration_s" in lines[0] and words in lines[0], (module, err)
+    finally:   # a node that ran (the old code) must not outlive the test on its domain: SIGINT, then wait
+        for p in procs:
+            if p.poll() is None:
+                p.send_signal(signal.SIGINT)
+        for p in procs:
+            p.communicate(timeout=NODE_TIMEOUT_S + 10)
+    assert not (tmp_path / "wire.npz").exists()

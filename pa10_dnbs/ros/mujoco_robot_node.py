@@ -26,7 +26,7 @@ from ..loop.robot_stepper import MODES, RobotStepper
 from ..plant.engines import open_plant
 from ..wire import joint_state_cdr
 from ..wire.clock_schedule import DEFAULT_CLOCK_HZ, ClockSchedule, check_clock_hz
-from .params import SETTINGS_DEFAULTS, Param, ParameterError, check_choice, declare, declare_settings
+from .params import SETTINGS_DEFAULTS, Param, ParameterError, check_choice, declare, declare_settings, duration_steps
 from .plant.endpoints import CLOCK_CDR
 from .polled import PolledSubscription, SubscriptionWaitSet
 from .runtime import announce_ready
@@ -73,7 +73,7 @@ class MuJoCoRobotNode(Node):
         self.plant, self._close_plant = open_plant(settings, "mujoco")
         self.joint_names = self.plant.joint_names
         self.stepper = RobotStepper(self.plant, p["mode"], self.dt)
-        self.last_step = int(round(p["duration_s"] / self.dt)) if p["duration_s"] > 0 else 2**62
+        self.last_step = duration_steps(p["duration_s"], self.dt) if p["duration_s"] > 0 else 2**62
         self._state_pub = self.create_publisher(JointState, p["state_topic"], STATE_QOS)
         self._clock_pub = self.create_publisher(Clock, CLOCK, CLOCK_QOS) if p["clock_hz"] > 0 else None
         self._schedule = ClockSchedule(p["clock_hz"], self.dt, self.last_step) if p["clock_hz"] > 0 else None

@@ -22,6 +22,7 @@ from rclpy.node import Node
 from ..arm import ArmError, load_arm
 from ..config import ConfigError, default_config_path
 from ..run_settings import build_settings
+from ..run_steps import run_steps
 from ..settings import Settings
 from .settings_params import (ARM_FILE, ARM_FILE_DESCRIPTION, joint_node_settings, joint_params, joint_values,
                               node_settings, section_params, section_values)
@@ -178,6 +179,16 @@ def _plain_value(value):
 
 def _text(parameter) -> str | None:
     return parameter.value if parameter is not None and isinstance(parameter.value, str) else None
+
+
+def duration_steps(duration_s: float, dt_s: float, name: str = "duration_s") -> int:
+    """The steps of ``dt_s`` [s] in the node parameter ``name``'s duration ``duration_s`` [s] (> 0), counted as
+    the launcher counts them (``run_steps``): ParameterError naming the parameter for a duration too long to count
+    (1e308 s: an infinite step count, an OverflowError once rounded) or shorter than two steps."""
+    try:
+        return run_steps(duration_s, dt_s, f"parameter {name}")
+    except ConfigError as exc:
+        raise ParameterError(str(exc)) from None
 
 
 def check_choice(name: str, value, choices) -> None:

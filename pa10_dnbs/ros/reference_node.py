@@ -37,7 +37,8 @@ from ..wire.topics import TRAJECTORY
 from ..wire.trajectory_cdr import encode_one_joint
 from .diagnostics import DiagnosticsReporter, status, status_name
 from ..loop.scheduling import apply_batch, apply_fifo
-from .params import RT_PRIORITY, SCHED_BATCH, SETTINGS_DEFAULTS, Param, ParameterError, declare, declare_settings
+from .params import (RT_PRIORITY, SCHED_BATCH, SETTINGS_DEFAULTS, Param, ParameterError, declare, declare_settings,
+                     duration_steps)
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
 from .ready import announce_when_ready
@@ -96,7 +97,7 @@ class ReferenceNode(Node):
         self.clock_backwards = 0
         dt = settings.simulation.dt_s
         # a run of known length: nothing past its last step + lookahead (so a bag's count is fixed)
-        self.last_step = int(round(p["duration_s"] / dt)) + self.lookahead if p["duration_s"] > 0 else None
+        self.last_step = duration_steps(p["duration_s"], dt) + self.lookahead if p["duration_s"] > 0 else None
         self.joint_names = settings.arm.joint_names
         self._pubs = [self.create_publisher(JointTrajectory, reference_topic(j), reference_qos())
                       for j in self.joint_names]

@@ -23,7 +23,8 @@ from trajectory_msgs.msg import JointTrajectory
 from ..wire.wire_record import WireRecord
 from ..wire import joint_state_cdr, trajectory_cdr
 from ..loop.scheduling import apply_batch, apply_fifo
-from .params import RT_PRIORITY, SCHED_BATCH, SETTINGS_DEFAULTS, Param, ParameterError, declare, declare_settings
+from .params import (RT_PRIORITY, SCHED_BATCH, SETTINGS_DEFAULTS, Param, ParameterError, declare, declare_settings,
+                     duration_steps)
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
 from .ready import announce_when_ready
@@ -54,7 +55,7 @@ class WireMonitorNode(Node):
         dt_s = settings.simulation.dt_s
         duration = p["duration_s"] if p["duration_s"] > 0 else settings.simulation.duration_s
         self.joint_names = names = settings.arm.joint_names
-        self.record = WireRecord(int(round(duration / dt_s)), dt_s, len(names))
+        self.record = WireRecord(duration_steps(duration, dt_s), dt_s, len(names))
         self.out_file = p["out_file"]
         self.clock = StepClock(dt_s)
         self._announced = False

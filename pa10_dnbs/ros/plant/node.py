@@ -49,7 +49,8 @@ from ...wire.clock_schedule import DEFAULT_CLOCK_HZ, check_clock_hz
 from ...wire.robot_interface import default_state_topic, parse_robot_command
 from ...settings import Settings
 from ..diagnostics import DiagnosticsReporter
-from ..params import RT_PRIORITY, SETTINGS_DEFAULTS, Param, ParameterError, check_choice, declare, declare_settings
+from ..params import (RT_PRIORITY, SETTINGS_DEFAULTS, Param, ParameterError, check_choice, declare, declare_settings,
+                      duration_steps)
 from .lockstep import run_lockstep
 from .realtime import run_realtime
 from .stats import diagnostics_report, plant_stats
@@ -137,7 +138,7 @@ class PlantNode(Node):
         except ValueError as exc:
             raise ParameterError(f"parameter clock_hz {exc}") from None
         duration = p["duration_s"] if p["duration_s"] > 0 else settings.simulation.duration_s
-        self.n_steps = int(round(duration / self.dt))
+        self.n_steps = duration_steps(duration, self.dt)
         self.clock_ = StepClock(self.dt)
         self.plant = self._open_plant(settings)
         n = self.plant.n_joints
