@@ -10,12 +10,15 @@ Format (docs/trajectories.md; example: config/trajectory_example.yaml)::
         accelerations: [...]                    # optional [rad/s^2], for every point or none
 
 JSON is read by the same strict YAML parser as the config (config_yaml.py: ``1e-05`` is a number, a key given
-twice is refused). ``load_trajectory_file`` checks the file against the arm as
+twice is refused), or, when it is plain JSON, by ``json`` with the same rules (:func:`plain_json`: the same
+values, ~100x faster: 1e5 points in 0.3 s instead of ~35 s). ``load_trajectory_file`` checks the file against the arm as
 ``TrajectoryReference.start`` will (names, limits, timing) and raises ConfigError with one line naming the
 file and what is wrong (a point past ``MAX_TIME_FROM_START_S`` included).
 """
 from __future__ import annotations
 
+import json
+import re
 from pathlib import Path
 
 import yaml
@@ -26,10 +29,48 @@ from .core.joint_trajectory import JointTrajectory, TrajectoryError, check_traje
 from .core.trajectory_reference import check_span
 
 
+#: A character outside printable ASCII (and line breaks), or a backslash: ``plain_json`` leaves such a text to
+#: the YAML reader (it refuses some of them, e.g. a tab or DEL, and reads escapes and line separators its own way).
+_NOT_PLAIN = re.compile(r"[^\n\r\x20-\x7e]|\\")
+
+
+class _NotPlain(Exception):
+    """A JSON document the strict YAML reader must read: a key given twice, NaN or Infinity."""
+
+
+def _once(pairs: list) -> dict:
+    keys = [k for k, _ in pairs]
+    if len(set(keys)) != len(keys):
+        raise _NotPlain
+    return dict(pairs)
+
+
+def _no_constant(name: str):
+    raise _NotPlain
+
+
+def plain_json(text: str):
+    """``text``'s document read by ``json`` when it is plain JSON: printable ASCII without a backslash, no key
+    given twice in an object, no NaN or Infinity, not nested past Python's recursion limit, no integer past its
+    4300 digits; else None (read it with config_yaml.load_strict). load_strict reads such a document to the same
+    values (test/test_trajectory_intake_exact.py): numbers alike (an int, or a float of the same bits: ``-0.0``,
+    ``1e5``, ``1e999``), strings with nothing to unescape, true / false / null; the valid JSON layouts PyYAML
+    refuses (a key and its ':' on two lines, a key of over 1024 characters) are read. ~100x faster."""
+    if _NOT_PLAIN.search(text) is not None:
+        return None
+    try:
+        return json.loads(text, object_pairs_hook=_once, parse_constant=_no_constant)
+    except (ValueError, RecursionError, _NotPlain):   # not JSON (YAML), or what only load_strict says in one line
+        return None
+
+
 def read_trajectory(path: Path) -> JointTrajectory:
     """The file's JointTrajectory (shapes and types checked), or TrajectoryError / OSError."""
     try:
-        data = load_strict(Path(path).read_text(encoding="utf-8"))
+        text = Path(path).read_text(encoding="utf-8")
+        data = plain_json(text)
+        if data is None:
+            data = load_strict(text)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""

@@ -59,19 +59,41 @@ def check_span(traj: JointTrajectory) -> None:
 
 def extremum_times(spline: QuinticSpline) -> np.ndarray:
     """The times [s] inside each segment where a joint's quintic may turn (real parts of the roots of its
-    derivative, with the segment scaled to [0, 1]), flattened; a superset of its interior extrema."""
-    out = []
+    derivative, with the segment scaled to [0, 1]), flattened segment by segment, joint by joint; a superset of
+    its interior extrema.
+
+    The roots are ``np.roots``' (the eigenvalues of the companion matrix of the derivative, its leading and
+    trailing zero coefficients stripped, a root 0 per trailing zero), computed for every segment and joint at
+    once: the companion matrices of one shape go to one batched ``np.linalg.eigvals`` call (the same LAPACK
+    routine on the same matrices, so the same bits as one ``np.roots`` call per quintic, at 1e5 points ~100x
+    faster)."""
     h = np.diff(spline.t)
-    for i, hi in enumerate(h):
-        scaled = spline.c[:, i, :] * (hi ** np.arange(6))[:, None]  # (6, n): coefficients in u = tau / h
-        for j in range(scaled.shape[1]):
-            d = np.arange(1, 6) * scaled[1:, j]  # derivative's coefficients, u^0 .. u^4
-            if not np.any(d[1:]):
-                continue  # a line: no interior extremum
-            u = np.roots(d[::-1]).real
-            u = u[(u >= 0.0) & (u <= 1.0)]
-            out.append(spline.t[i] + u * hi)
-    return np.concatenate(out) if out else np.empty(0)
+    if h.size == 0:
+        return np.empty(0)
+    scaled = spline.c * (h[:, None] ** np.arange(6)).T[:, :, None]  # (6, m-1, n): coefficients in u = tau / h
+    d = np.arange(1, 6)[:, None, None] * scaled[1:]                  # (5, m-1, n): derivative's, u^0 .. u^4
+    poly = np.moveaxis(d[::-1], 0, -1)                                # (m-1, n, 5): np.roots' order, u^4 first
+    nonzero = poly != 0.0
+    curved = nonzero[..., :4].any(axis=-1)                            # not a line: may turn inside
+    lead = np.argmax(nonzero, axis=-1)                                # leading zeros (stripped)
+    trail = np.argmax(nonzero[..., ::-1], axis=-1)                    # trailing zeros: roots at u = 0
+    u = np.full(poly.shape[:2] + (4,), np.nan)                        # each quintic's 4 - lead roots, NaN after
+    for lz in range(4):
+        for tz in range(5 - lz):                                      # N = 5 - lz - tz >= 1 coefficients
+            at = np.flatnonzero((curved & (lead == lz) & (trail == tz)).ravel())
+            if at.size == 0:
+                continue
+            size = 4 - lz - tz                                        # companion matrix size (np.roots: N - 1)
+            coeffs = poly.reshape(-1, 5)[at, lz:5 - tz]
+            if size > 0:
+                companion = np.zeros((at.size, size, size))
+                companion[:, np.arange(1, size), np.arange(size - 1)] = 1.0
+                companion[:, 0, :] = -coeffs[:, 1:] / coeffs[:, :1]
+                u.reshape(-1, 4)[at, :size] = np.linalg.eigvals(companion).real
+            u.reshape(-1, 4)[at, size:size + tz] = 0.0
+    inside = (u >= 0.0) & (u <= 1.0)
+    times = spline.t[:-1, None, None] + u * h[:, None, None]
+    return times[inside]
 
 
 class TrajectoryReference:
@@ -139,9 +161,14 @@ class TrajectoryReference:
         Between two such steps a joint is monotone, so its first step beyond is found by bisection."""
         dt = self.dt_s
         marks = np.concatenate([spline.t, extremum_times(spline)])
-        near = np.floor(marks / dt)[:, None] + np.arange(-2, 3)
-        k = np.unique(np.clip(near.ravel(), first, last).astype(np.int64))
-        k = np.union1d(k, [first, last])
+        near = np.clip((np.floor(marks / dt)[:, None] + np.arange(-2, 3)).ravel(), first, last).astype(np.int64)
+        if last - first < 8 * near.size:   # the steps marked in a mask of the span: np.unique's set, sorted, faster
+            marked = np.zeros(last - first + 1, dtype=bool)
+            marked[near - first] = True
+            marked[[0, -1]] = True
+            k = np.flatnonzero(marked).astype(np.int64) + first
+        else:
+            k = np.union1d(np.unique(near), [first, last])
         x = spline.evaluate(k * dt)
         beyond = (x < self.lower_rad) | (x > self.upper_rad)
         if not np.any(beyond):

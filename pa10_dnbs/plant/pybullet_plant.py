@@ -301,6 +301,25 @@ class PyBulletArmPlant(ArmPlantBase):
         qd = as_joint_vector("qd", qd, self._n)
         return self._m_and_bias(q, qd)[1]
 
+    def torque_along(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+        """(k, n) tau = (M(q) + J) qdd + h(q, qd) + Fv qd + Fc tanh(qd / eps) [N m] at each row of q [rad],
+        qd [rad/s], qdd [rad/s^2] (k, n): row by row the bits of
+        ``mass_matrix(q) @ qdd + bias_torque(q, qd) + friction_torque(qd)``, from one mass-matrix and one
+        inverse-dynamics call per row (M(q) does not depend on qd) instead of two of each. ValueError as
+        theirs for a shape other than (k, n) or a value that is not finite."""
+        for name, x in (("q", q), ("qd", qd), ("qdd", qdd)):
+            if np.ndim(x) != 2 or np.shape(x)[1] != self._n or np.shape(x) != np.shape(q):
+                raise ValueError(f"{name}: expected shape (k, {self._n}) like q, got {np.shape(x)}")
+            if not np.all(np.isfinite(x)):
+                raise ValueError(f"{name}: values must be finite")
+        m_and_bias = self._m_and_bias
+        rows = []
+        for a, b, c in zip(q, qd, qdd):
+            m, bias = m_and_bias(a, b)
+            rows.append(m @ c + bias)
+        tau = np.array(rows, dtype=float).reshape(np.shape(q))
+        return tau + (self._fv * qd + self._fc * np.tanh(qd * self._inv_eps))
+
     def step_friction_torque(self, qd, qdd) -> np.ndarray:
         """(n,) the friction torque a step from speed qd with acceleration qdd meets, N m: viscous at qd (explicit),
         Coulomb at the end-of-step speed qd + dt qdd (implicit), as :meth:`step` applies them."""
