@@ -12,21 +12,13 @@ from pa10_dnbs.run_settings import build_settings
 LOCKSTEP_DURATION_S = 3.0
 
 
-_SHM_AT_START: set[str] = set()
-
-
-def pytest_configure(config):
-    from pa10_dnbs.supervisor.shm_cleanup import shm_files
-
-    _SHM_AT_START.update(shm_files())
-
-
 def pytest_unconfigure(config):
-    """Remove the /dev/shm files this session created that no other process maps: the LTTng-UST wait
-    files rcl creates in this process when a test loads rclpy (the launcher cleans up after its nodes)."""
+    """Remove the /dev/shm files of dead processes (shm_cleanup.py), this session's own in-process participants
+    counted as dead: the LTTng-UST wait files rcl creates here when a test loads rclpy, and what a test's
+    client left (the launcher cleans up after its nodes)."""
     from pa10_dnbs.supervisor.shm_cleanup import remove_stale, shm_files
 
-    remove_stale(shm_files() - _SHM_AT_START, ignore_pids=frozenset({os.getpid()}))
+    remove_stale(shm_files(), ignore_pids=frozenset({os.getpid()}))
 
 
 @pytest.fixture(scope="session")
@@ -45,16 +37,26 @@ def domain():
     """A ROS_DOMAIN_ID leased for this test alone: no other test, suite or launcher on the host has it meanwhile.
 
     At the end, the shared-memory files the test's ROS processes left are removed, as the launcher does
-    after a run (nodes leave without destroying their DDS participant, pa10_dnbs/ros/runtime.py): only
-    files created during the test that no live process maps.
+    after a run (nodes leave without destroying their DDS participant, pa10_dnbs/ros/runtime.py): every
+    file whose owner is dead and that no live process maps (shm_cleanup.py).
+
+    Every process the test started on the domain must be gone by then (within 30 s): one that outlives its
+    test would meet the next test's graph on the same domain.
     """
-    from pa10_dnbs.supervisor.domain_ids import lease_domain
+    import time
+
+    from pa10_dnbs.supervisor.domain_ids import is_occupied, lease_domain
     from pa10_dnbs.supervisor.shm_cleanup import remove_stale, shm_files
 
-    before = shm_files()
     with lease_domain() as lease:
         yield lease.domain_id
-    remove_stale(shm_files() - before)
+        deadline = time.monotonic() + 30.0
+        while is_occupied(lease.domain_id) and time.monotonic() < deadline:
+            time.sleep(0.2)
+        survivors = is_occupied(lease.domain_id)
+    remove_stale(shm_files())
+    assert not survivors, (f"a process started on domain {lease.domain_id} outlived its test "
+                           f"(its flock on {lease.domain_id}.busy: /proc/locks)")
 
 
 @pytest.fixture(scope="session")

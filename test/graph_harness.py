@@ -10,6 +10,8 @@ import threading
 import time
 from pathlib import Path
 
+from pa10_dnbs.supervisor.domain_ids import occupy
+
 REPO = Path(__file__).resolve().parent.parent
 
 
@@ -27,8 +29,12 @@ class Proc:
     def __init__(self, argv: list, domain_id: int):
         self.lines: list[str] = []
         self._cond = threading.Condition()
-        self.proc = subprocess.Popen([str(a) for a in argv], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                     text=True, env=ros_env(domain_id), cwd=REPO)
+        occupied = occupy(domain_id)  # no lease is granted on the domain while this process (or a child) lives
+        try:
+            self.proc = subprocess.Popen([str(a) for a in argv], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                         text=True, env=ros_env(domain_id), cwd=REPO, pass_fds=(occupied,))
+        finally:
+            os.close(occupied)
         self._t = threading.Thread(target=self._read, daemon=True)
         self._t.start()
 
@@ -116,15 +122,19 @@ def exit_codes(output: str) -> dict[str, int]:
     return {k: int(v) for k, v in (kv.split("=") for kv in m.group(1).split())}
 
 
-def assert_no_leftovers(pids, shm_before: set[str]) -> None:
+def assert_no_leftovers(pids, shm_before: set[str], settle_s: float = 20.0) -> None:
     """Post-shutdown check: every child process is gone and no shared-memory file it created is left behind.
 
-    Only unused new files count: another suite's graph running on the host at the same time keeps its own
-    segments mapped, and is none of this test's business.
+    Only new files whose owner is gone count: another graph running on the host at the same time keeps its
+    own segments locked and mapped, and is none of this test's business. Its nodes' files between their exit
+    and its launcher's clean-up a moment later are not either: a leftover is one still there after
+    ``settle_s`` [s].
     """
     from pa10_dnbs.supervisor.shm_cleanup import shm_files, unused
 
     alive_now = sorted(str(p) for p in pids if alive(p))
     assert not alive_now, f"processes still alive: {alive_now}"
-    leaked = unused(shm_files() - shm_before)
+    deadline = time.monotonic() + settle_s
+    while (leaked := unused(shm_files() - shm_before)) and time.monotonic() < deadline:
+        time.sleep(0.5)
     assert not leaked, f"shared-memory files left behind: {sorted(leaked)}"

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import os
 import re
-import shutil
 import signal
 import subprocess
 import time
@@ -50,8 +49,9 @@ def _cap(value: str, cap: float) -> str:
 
 
 # (pattern, replacement): how a block is shortened; the leased domain is filled in by _as_run
+DURATION_RULE = (re.compile(r"(--duration\s+)(\d+(?:\.\d+)?)"), lambda m: m[1] + _cap(m[2], CAP_S))
 SHORTEN = [
-    (re.compile(r"(--duration\s+)(\d+(?:\.\d+)?)"), lambda m: m[1] + _cap(m[2], CAP_S)),
+    DURATION_RULE,
     (re.compile(r"(duration_s:=)(\d+(?:\.\d+)?)"), lambda m: m[1] + _cap(m[2], CAP_S)),
     (re.compile(r"(end_stamp_ns:=)(\d+)"), lambda m: m[1] + str(min(int(m[2]), int(CAP_S * 1e9)))),
     (re.compile(r"(--seeds\s+)\d+"), lambda m: m[1] + "1"),
@@ -88,12 +88,19 @@ def _with_held_out(line: str) -> str:
     return TUNES.sub(lambda m: f"{m[1]} --held-out-seeds 1", line, count=1)
 
 
+# a graph started in the background, for a client of the block to find while it runs (docs/trajectories.md):
+# its duration is the block's design, not a cost to cut (discovery alone can take seconds under load)
+BACKGROUND_GRAPH = re.compile(r"pa10-dnbs\s+launch\b.*[^&]&$")
+
+
 def as_run(src: str, domain_id: int) -> str:
-    """The block as a docs test runs it: continuations joined, durations shortened, the leased domain."""
+    """The block as a docs test runs it: continuations joined, durations shortened (but a background graph's),
+    the leased domain."""
     lines = []
     for line in _logical_lines(src):
         line = _with_held_out(_with_duration(line))
-        for pattern, repl in SHORTEN:
+        keep = BACKGROUND_GRAPH.search(line.split(" #", 1)[0].rstrip())
+        for pattern, repl in [r for r in SHORTEN if r is not DURATION_RULE] if keep else SHORTEN:
             line = pattern.sub(repl, line)
         lines.append(re.sub(r"ROS_DOMAIN_ID=\d+", f"ROS_DOMAIN_ID={domain_id}", line))
     return "\n".join(lines) + "\n"
@@ -272,7 +279,8 @@ def test_as_run_shortens_durations_and_uses_the_leased_domain():
            "python -m pa10_dnbs.ros.reference_node --ros-args -p duration_s:=5.0 &\n"
            "bash scripts/run_main.sh     # the main job\n"
            "python -m pa10_dnbs.ros.recorder_node --ros-args -p end_stamp_ns:=3000000000 -p live_hz:=50\n"
-           ".venv/bin/pa10-dnbs tune --controller pid --trials 20 --out runs/tune_pid\n")
+           ".venv/bin/pa10-dnbs tune --controller pid --trials 20 --out runs/tune_pid\n"
+           ".venv/bin/pa10-dnbs launch --domain-id $ROS_DOMAIN_ID --duration 8 --out runs/t > launch.log &  # bg\n")
     assert as_run(src, 7).splitlines() == [
         "export ROS_DOMAIN_ID=7",
         ".venv/bin/pa10-dnbs launch --duration 1 --out runs/r1 --live 0 --record bags/r1",
@@ -281,7 +289,8 @@ def test_as_run_shortens_durations_and_uses_the_leased_domain():
         "python -m pa10_dnbs.ros.reference_node --ros-args -p duration_s:=1.0 &",
         "bash scripts/run_main.sh --duration 1     # the main job",
         "python -m pa10_dnbs.ros.recorder_node --ros-args -p end_stamp_ns:=1000000000 -p live_hz:=50",
-        ".venv/bin/pa10-dnbs tune --held-out-seeds 1 --duration 1 --controller pid --trials 2 --out runs/tune_pid"]
+        ".venv/bin/pa10-dnbs tune --held-out-seeds 1 --duration 1 --controller pid --trials 2 --out runs/tune_pid",
+        ".venv/bin/pa10-dnbs launch --domain-id $ROS_DOMAIN_ID --duration 8 --out runs/t > launch.log &  # bg"]
 
 
 def test_the_venv_check_is_the_bootstrap_stamp():

@@ -38,3 +38,30 @@ def test_an_id_held_by_another_process_is_busy_until_it_exits():
     lease = try_lease(mine.domain_id)  # the child exited: its lock went with it
     assert lease is not None
     lease.release()
+
+
+def test_an_id_stays_busy_while_a_process_started_on_it_outlives_the_lease():
+    """A launcher killed hard leaves its nodes running on the domain: no lease is granted on it until the last of
+    them has exited, so they never meet the next run's graph."""
+    from pa10_dnbs.supervisor.domain_ids import is_occupied, occupy
+    import os
+
+    with lease_domain() as mine:
+        taken = mine.domain_id
+        fd = occupy(taken)
+        try:
+            node = subprocess.Popen([sys.executable, "-c", "import sys; sys.stdin.readline()"],
+                                    stdin=subprocess.PIPE, pass_fds=(fd,), text=True)
+        finally:
+            os.close(fd)
+    try:
+        assert is_occupied(taken)
+        assert try_lease(taken) is None
+        with lease_domain() as other:
+            assert other.domain_id != taken
+    finally:
+        node.communicate("\n", timeout=30)
+    assert not is_occupied(taken)
+    lease = try_lease(taken)
+    assert lease is not None
+    lease.release()

@@ -10,7 +10,7 @@ import sys
 
 import pytest
 
-from pa10_dnbs.supervisor.shm_cleanup import SHM_DIR, remove_stale, shm_files
+from pa10_dnbs.supervisor.shm_cleanup import SHM_DIR, remove_stale, shm_files, unused
 
 
 HERE = frozenset({os.getpid()})
@@ -75,3 +75,51 @@ def test_snapshot_then_since_removes_only_the_new_unused_files(shm_file, tmp_pat
         if os.path.exists(new_path):
             os.unlink(new_path)
     assert main(["--since", str(tmp_path / "missing.txt")]) == 2
+
+
+@pytest.fixture
+def port_files():
+    """A Fast DDS port's three files, as a participant leaves them: segment, lock file, semaphore (unmapped)."""
+    owner = f"fastrtps_port_test_{os.getpid()}"
+    names = {owner, owner + "_el", f"sem.{owner}_mutex"}
+    for n in names:
+        with open(os.path.join(SHM_DIR, n), "wb") as fh:
+            fh.write(b"\0" * 64)
+    yield owner, names
+    for n in names:
+        if os.path.exists(os.path.join(SHM_DIR, n)):
+            os.unlink(os.path.join(SHM_DIR, n))
+
+
+def test_a_port_whose_creator_lives_is_kept_though_nobody_maps_it(port_files):
+    """A participant starting in a concurrent run has locked its port and created it, but not mapped it yet:
+    removing the name then would leave it deaf (the next sender makes a new segment under that name)."""
+    owner, names = port_files
+    code = (f"import fcntl, os, sys; fd = os.open({os.path.join(SHM_DIR, owner + '_el')!r}, os.O_RDWR); "
+            "fcntl.flock(fd, fcntl.LOCK_EX); print('locked', flush=True); sys.stdin.read()")
+    child = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout.readline().strip() == "locked"
+        assert unused(names, ignore_pids=HERE) == set()
+        assert remove_stale(names, ignore_pids=HERE) == []
+        assert all(os.path.exists(os.path.join(SHM_DIR, n)) for n in names)
+    finally:
+        child.stdin.close()
+        child.wait(timeout=10)
+    assert unused(names, ignore_pids=HERE) == names  # the creator is gone: the kernel dropped its lock
+    assert remove_stale(names, ignore_pids=HERE) == sorted(names)
+    assert not any(os.path.exists(os.path.join(SHM_DIR, n)) for n in names)
+
+
+def test_a_port_locked_by_an_ignored_process_goes(port_files):
+    """At a test session's end its own in-process participants' files count as gone (ignore_pids)."""
+    import fcntl
+
+    owner, names = port_files
+    fd = os.open(os.path.join(SHM_DIR, owner + "_el"), os.O_RDWR)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        assert remove_stale(names) == []
+        assert remove_stale(names, ignore_pids=HERE) == sorted(names)
+    finally:
+        os.close(fd)

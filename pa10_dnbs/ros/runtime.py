@@ -147,14 +147,16 @@ def _close(node, code: int) -> int:
     while the main thread holds the GIL in C) with ``code``, or 3 when that was 0; ``faulthandler`` writes
     every thread's stack just before ("Timeout (...)!" and the stacks, in the node's log). A node whose
     constructor failed has its half-built node freed here, under the same deadline: that removes its DDS
-    participant and so its shared-memory files (the one DDS teardown left; a failed start has no run to lose).
+    participant and so its shared-memory files (the one DDS teardown left; a failed start has no run to lose,
+    so no stacks either: under load the freeing can outlast the limit, and the user's one line stays alone).
     Returns the exit code (1 when close() raised).
     """
     limit_code = code if 0 < code <= 255 else (1 if code else 3)
     deadline = exit_deadline.arm(TEARDOWN_LIMIT_S, limit_code)
     if deadline is None:  # no POSIX timer threads here: SIGALRM (default action: terminate) ends a hang
         signal.alarm(int(TEARDOWN_LIMIT_S) + 2)
-    faulthandler.dump_traceback_later(TEARDOWN_LIMIT_S - TEARDOWN_DUMP_LEAD_S, file=sys.stderr)
+    if node is not None:  # a failed start's freeing cut short loses nothing: its one line stays the only one
+        faulthandler.dump_traceback_later(TEARDOWN_LIMIT_S - TEARDOWN_DUMP_LEAD_S, file=sys.stderr)
     if node is not None and hasattr(node, "close"):
         try:
             node.close()
@@ -164,7 +166,7 @@ def _close(node, code: int) -> int:
     if node is None and _KEPT_EXCEPTIONS:
         _KEPT_EXCEPTIONS.clear()
         gc.collect()
-    faulthandler.cancel_dump_traceback_later()
+    faulthandler.cancel_dump_traceback_later()  # a no-op when none was armed
     if deadline is None:
         signal.alarm(0)
     else:

@@ -6,6 +6,12 @@ when the holder exits, however it exits, so a crashed run never blocks an id.
 Launchers and test suites on one host take their domains here and so never
 share one. Ids come from 1..101, valid on every platform (0, the ROS
 default, is left to other users of the host).
+
+A lease ends when its holder lets go, but the processes of its run may not
+all be gone by then (a launcher killed hard leaves its nodes running, still
+publishing on the domain's topics). So every process started for a domain
+holds a shared ``flock`` on ``<id>.busy`` (:func:`occupy`, inherited through
+``pass_fds``), and no lease is granted on a domain while any of them lives.
 """
 from __future__ import annotations
 
@@ -41,13 +47,41 @@ class DomainLease:
         self.release()
 
 
-def try_lease(domain_id: int) -> DomainLease | None:
-    """Lease ``domain_id`` if no other holder has it, else None."""
+def _locked(path: Path, how: int) -> int | None:
+    """A descriptor of ``path`` holding ``flock(how)``, or None when another holder's lock is in the way (``how``
+    with LOCK_NB)."""
     LOCK_DIR.mkdir(parents=True, exist_ok=True)
-    fd = os.open(LOCK_DIR / f"{domain_id}.lock", os.O_RDWR | os.O_CREAT, 0o666)
+    fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
     try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        fcntl.flock(fd, how)
     except BlockingIOError:
+        os.close(fd)
+        return None
+    return fd
+
+
+def occupy(domain_id: int) -> int:
+    """A descriptor holding a shared lock on ``domain_id``'s occupancy file: pass it to a process started for the
+    domain (``pass_fds``) and close it here; the domain cannot be leased until that process (and whatever
+    inherited it) has exited."""
+    return _locked(LOCK_DIR / f"{domain_id}.busy", fcntl.LOCK_SH)
+
+
+def is_occupied(domain_id: int) -> bool:
+    """True while some process started for ``domain_id`` (:func:`occupy`) still lives."""
+    fd = _locked(LOCK_DIR / f"{domain_id}.busy", fcntl.LOCK_EX | fcntl.LOCK_NB)
+    if fd is None:
+        return True
+    os.close(fd)
+    return False
+
+
+def try_lease(domain_id: int) -> DomainLease | None:
+    """Lease ``domain_id`` if no other holder has it and no process of an earlier run on it lives, else None."""
+    fd = _locked(LOCK_DIR / f"{domain_id}.lock", fcntl.LOCK_EX | fcntl.LOCK_NB)
+    if fd is None:
+        return None
+    if is_occupied(domain_id):
         os.close(fd)
         return None
     return DomainLease(domain_id, fd)

@@ -51,12 +51,11 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print, on_hard_stop=None) ->
     restarts: list[dict] = []
     stats_file = workdir / "plant_stats.json"
     wire_file = workdir / "wire.npz"
-    shm_before = shm_files()
     t_start = time.monotonic()
     procs: list[ManagedProcess] = []
     failure: str | None = None
     stop = StopRequest()
-    stop.hard_stop = lambda: _hard_stop(procs, shm_before, lease, opt, on_hard_stop)
+    stop.hard_stop = lambda: _hard_stop(procs, lease, opt, on_hard_stop)
     previous = catch_signals(stop)
     try:
         for name, argv in node_commands(opt, stats_file, wire_file):
@@ -79,7 +78,7 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print, on_hard_stop=None) ->
             failure = watch(procs, opt, say, stop, Restarter(opt, workdir, env, restarts, say))
     finally:
         codes = stop_all(procs)
-        shm_removed = remove_stale(shm_files() - shm_before)
+        shm_removed = remove_stale(shm_files())  # the nodes' files, and any other dead process's
         for signum, handler in previous.items():
             signal.signal(signum, handler)
         if lease is not None:
@@ -87,7 +86,7 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print, on_hard_stop=None) ->
     if stop.signal_name:
         failure = f"interrupted ({stop.signal_name})"
     say("launch: stopped: " + " ".join(f"{n}={c}" for n, c in codes.items())
-        + (f"; removed the nodes' {len(shm_removed)} shared-memory files from /dev/shm" if shm_removed else ""))
+        + (f"; removed {len(shm_removed)} unused shared-memory files from /dev/shm" if shm_removed else ""))
     hung = [p.name for p in procs
             if p.log_path.is_file() and TEARDOWN_HUNG_MARK in p.log_path.read_text(errors="replace")]
     if hung:
@@ -113,11 +112,11 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print, on_hard_stop=None) ->
                        restarts=restarts, controllers=controllers)
 
 
-def _hard_stop(procs: list[ManagedProcess], shm_before: set[str], lease, opt: GraphOptions, on_hard_stop) -> None:
+def _hard_stop(procs: list[ManagedProcess], lease, opt: GraphOptions, on_hard_stop) -> None:
     """A second Ctrl-C: SIGKILL every node (and whatever it started) and reap it, remove the shared-memory files
     they left, drop the domain lease, one line, exit 130 (no grace, no report)."""
     killed = kill_now(procs)
-    removed = remove_stale(shm_files() - shm_before)
+    removed = remove_stale(shm_files())
     if lease is not None:
         lease.release()
     extra = ""

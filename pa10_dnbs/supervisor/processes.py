@@ -18,6 +18,8 @@ import threading
 import time
 from pathlib import Path
 
+from .domain_ids import occupy
+
 
 COMMANDS_FILE = "commands.sh"
 ENV_SHOWN = ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE")  # what places a child on the run's graph
@@ -41,8 +43,15 @@ class ManagedProcess:
         with open(log_path.parent / COMMANDS_FILE, "a") as fh:
             fh.write(f"# {name} (log: {log_path.name})\n{command_line(argv, env)} &\n")
         self._log = open(log_path, "w", buffering=1)
-        self.proc = subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                     stdin=subprocess.DEVNULL, text=True, errors="replace", bufsize=1)
+        # the domain is no one else's while this process lives (domain_ids.py)
+        occupied = (occupy(int(env["ROS_DOMAIN_ID"])),) if "ROS_DOMAIN_ID" in env else ()
+        try:
+            self.proc = subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                         stdin=subprocess.DEVNULL, text=True, errors="replace", bufsize=1,
+                                         pass_fds=occupied)
+        finally:
+            for fd in occupied:
+                os.close(fd)
         self._reader = threading.Thread(target=self._read, name=f"log-{name}", daemon=True)
         self._reader.start()
 

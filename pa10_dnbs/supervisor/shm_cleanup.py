@@ -1,23 +1,40 @@
-"""Remove the shared-memory files a run's ROS processes left behind, and only those.
+"""Remove the shared-memory files that dead ROS processes left behind, and never a live one's.
 
 Fast DDS keeps segments in /dev/shm (``fastrtps_<hex>``, ``fastrtps_port<N>``
 with ``_el`` lock files and ``sem.fastrtps_port<N>_mutex`` semaphores). A
 participant destroyed in order removes them; a killed process does not, and
 neither does a node of this graph, which leaves without destroying its node
-(``ros/runtime.py``: ``exit_process``). Port segments are numbered
-across all domains, so deleting by pattern would break other live graphs: a
-segment is removed only if it appeared during this run and no live process
-maps it (a semaphore counts as in use while its port segment is mapped).
+(``ros/runtime.py``: ``exit_process``). Left behind, they can disturb later
+runs. Port segments are shared across domains (the metatraffic ports
+``fastrtps_port7000``... are taken first-free by every domain on the host),
+so deleting by pattern would break other live graphs.
+
+A file goes only when its owner is dead, as Fast DDS itself tells it: the
+process that created segment ``X`` holds an exclusive ``flock`` on ``X_el``
+from before the segment exists until it exits (its participant segment and
+every port it listens on). The file is removed while this process holds that
+lock itself (so no participant can take the port meanwhile), and only if no
+live process maps the segment (a sender's cached mapping of a port must stay
+the file a new listener reopens). Mappings alone are not enough: a participant
+starting in a concurrent run has locked and created its port but not yet
+mapped it, and removing the name then leaves it deaf (the next sender creates
+a new segment under the name), so that run's discovery never completes.
+
+So a launcher sweeps every dead file at the end of its run (``remove_stale(shm_files())``),
+its own and those another run could not remove because this run still mapped
+them; ``--snapshot``/``--since`` remove only what appeared meanwhile.
 
 The ROS wheels' rcl and rmw also load LTTng-UST (tracetools), which creates
 ``lttng-ust-wait-<version>[-<uid>]`` (4 KB each, for waking traced apps when
-an LTTng session daemon starts) and never removes it. The same rule applies:
-removed if this run created it and no live process maps it.
+an LTTng session daemon starts) and never removes it. It has no lock file:
+removed when no live process maps it.
 """
 from __future__ import annotations
 
+import fcntl
 import glob
 import os
+from contextlib import contextmanager
 
 SHM_DIR = "/dev/shm"
 
@@ -57,30 +74,80 @@ def _owner(name: str) -> str:
     return name
 
 
-def unused(names: set[str], ignore_pids: frozenset[int] = frozenset()) -> set[str]:
-    """The files among ``names`` that no live process (other than ignore_pids) uses: a run's leftovers,
-    not the segments of other graphs running on the host at the same time."""
+def _lock_holders() -> dict[int, set[int]]:
+    """inode -> pids holding a flock on it, from /proc/locks (what a failed lock attempt cannot say: who)."""
+    holders: dict[int, set[int]] = {}
+    try:
+        with open("/proc/locks") as fh:
+            for line in fh:
+                parts = line.split()
+                if len(parts) > 5 and parts[1] == "FLOCK":
+                    holders.setdefault(int(parts[5].split(":")[2]), set()).add(int(parts[4]))
+    except (OSError, ValueError, IndexError):
+        pass
+    return holders
+
+
+@contextmanager
+def _dead_owner(owner: str, ignore_pids: frozenset[int]):
+    """Yield True while this process holds ``owner``'s Fast DDS lock file (its creator is gone, and no participant
+    can take it meanwhile), False if a live process other than ``ignore_pids`` holds it, None if it has none."""
+    path = os.path.join(SHM_DIR, owner + "_el")
+    try:
+        fd = os.open(path, os.O_RDWR | os.O_CLOEXEC)
+    except FileNotFoundError:
+        yield None
+        return
+    except OSError:
+        yield False  # another user's file
+        return
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            yield True
+        except BlockingIOError:
+            pids = _lock_holders().get(os.fstat(fd).st_ino, set())
+            yield bool(ignore_pids) and bool(pids) and pids <= ignore_pids
+    finally:
+        os.close(fd)  # drops the lock
+
+
+def _removable(names: set[str], ignore_pids: frozenset[int]):
+    """(owner, its files among ``names``, whether they may go) for each owner: dead (lock file free, or held only
+    by ``ignore_pids``) and unmapped; without a lock file, unmapped. The lock is held while the caller acts."""
+    groups: dict[str, set[str]] = {}
+    for n in names:
+        groups.setdefault(_owner(n), set()).add(n)
     busy = _mapped_segments(ignore_pids)
-    return {n for n in names if n not in busy and _owner(n) not in busy}
+    for owner, files in sorted(groups.items()):
+        with _dead_owner(owner, ignore_pids) as dead:
+            free = dead is not False and not (files | {owner}) & busy
+            yield owner, files, free
+
+
+def unused(names: set[str], ignore_pids: frozenset[int] = frozenset()) -> set[str]:
+    """The files among ``names`` whose owner is gone and that no live process (other than ignore_pids) maps: a
+    run's leftovers, not the segments of other graphs running on the host at the same time."""
+    return {f for _, files, free in _removable(names, ignore_pids) if free for f in files}
 
 
 def remove_stale(created_during_run: set[str], ignore_pids: frozenset[int] = frozenset()) -> list[str]:
-    """Delete the given files that no live process uses; return what was removed.
+    """Delete the given files whose owner is gone and that no live process uses; return what was removed.
 
-    ignore_pids: processes about to exit whose mappings do not count (a test
+    ignore_pids: processes about to exit whose mappings and locks do not count (a test
     session that loaded rclpy itself, at its end).
     """
-    busy = _mapped_segments(ignore_pids)
     removed = []
-    for name in sorted(created_during_run):
-        if name in busy or _owner(name) in busy:
+    for owner, files, free in _removable(created_during_run, ignore_pids):
+        if not free:
             continue
-        try:
-            os.unlink(os.path.join(SHM_DIR, name))
-            removed.append(name)
-        except OSError:
-            pass
-    return removed
+        for name in sorted(files, key=lambda f: f.endswith("_el")):  # the lock file last
+            try:
+                os.unlink(os.path.join(SHM_DIR, name))
+                removed.append(name)
+            except OSError:
+                pass
+    return sorted(removed)
 
 
 def main(argv: list[str] | None = None) -> int:
