@@ -133,7 +133,8 @@ def derived_reference(plant: PyBulletArmPlant, run: RunSettings, report: bool = 
     fragment = reference_rule(arm.lower_rad, arm.upper_rad)
     torque = ReferenceTorque(plant, run.duration_s, run.dt_s)
     limit = np.asarray(plant.params.torque_limit_nm)
-    fragment, lines = feasible_reference(fragment, arm.lower_rad, arm.upper_rad, limit, torque.peak, arm.joint_names)
+    fragment, lines = feasible_reference(fragment, arm.lower_rad, arm.upper_rad, limit, torque.peak, arm.joint_names,
+                                         sweep=torque.sweep)
     if report:
         for line in lines:
             print(f"warning: arm {arm.name}: {line}", file=sys.stderr)

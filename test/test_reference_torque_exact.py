@@ -57,16 +57,58 @@ def test_the_peak_torque_has_the_bits_of_the_per_step_sum(which, chain_arm):
 
 
 def test_the_search_finds_the_same_reference_with_the_oracle(chain_arm):
-    """feasible_reference on the weak chain, fast peak vs the per-step oracle: the same fragment, the same lines
-    (the search asks for some fragments twice: answered from the first)."""
+    """feasible_reference on the weak chain, its candidates read chunk by chunk only as far as the choice needs
+    (ReferenceTorque.sweep), vs every candidate's whole peak from the per-step oracle: the same fragment, the
+    same lines, with a fraction of the inverse-dynamics steps."""
     arm = chain_arm
     with opened_plant(arm, arm_plant_params(arm)) as plant:
         fragment = reference_rule(arm.lower_rad, arm.upper_rad)
         torque = ReferenceTorque(plant, SEARCH_DURATION_S, DT_S)
+        along, rows = plant.torque_along, []
+        plant.torque_along = lambda q, qd, qdd: rows.append(len(q)) or along(q, qd, qdd)
+        fast = feasible_reference(fragment, arm.lower_rad, arm.upper_rad, arm.torque_limit_nm, torque.peak,
+                                  arm.joint_names, sweep=torque.sweep)
+        del plant.torque_along
         asked = []
-        fast = feasible_reference(fragment, arm.lower_rad, arm.upper_rad, arm.torque_limit_nm,
-                                  lambda f: asked.append(1) or torque.peak(f), arm.joint_names)
         slow = feasible_reference(fragment, arm.lower_rad, arm.upper_rad, arm.torque_limit_nm,
-                                  lambda f: _per_step_peak(plant, f, SEARCH_DURATION_S), arm.joint_names)
+                                  lambda f: asked.append(1) or _per_step_peak(plant, f, SEARCH_DURATION_S),
+                                  arm.joint_names)
     assert fast == slow
-    assert len(fast[1]) >= 3 and len(torque._peaks) < len(asked)   # it moved joints; some fragments came twice
+    assert len(fast[1]) >= 3                                    # it moved joints, over both passes
+    assert sum(rows) < 0.5 * len(asked) * len(torque._steps)    # and read less than half the steps
+
+
+class _ChunkMaxima:
+    """A sweep over given chunk maxima (chunks, n) [N m]: the interface of plant/reference_torque.TorqueSweep."""
+
+    def __init__(self, maxima):
+        self._maxima, self._next, self.peak = maxima, 0, None
+
+    @property
+    def done(self):
+        return self._next == len(self._maxima)
+
+    def more(self):
+        part = self._maxima[self._next]
+        self.peak = part if self.peak is None else np.maximum(self.peak, part)
+        self._next += 1
+
+    def finish(self):
+        while not self.done:
+            self.more()
+        return self.peak.copy()
+
+
+def test_the_least_candidate_read_in_part_is_the_first_least_of_all():
+    """_first_least against min over the whole keys, on random candidates full of ties (ratios on a coarse grid
+    around TORQUE_FRACTION, amplitudes repeated): the same index every time."""
+    from pa10_dnbs.arm.reference_rule import _first_least, _key
+    rng = np.random.default_rng(5)
+    limit = np.array([10.0, 20.0, 5.0])
+    for _ in range(3000):
+        m = int(rng.integers(1, 15))
+        maxima = [np.round(rng.uniform(0.5, 1.0, (int(rng.integers(1, 6)), 3)), 1) * limit for _ in range(m)]
+        amplitudes = list(rng.choice([0.25, 0.5, 1.0], m))
+        keys = [_key(x.max(axis=0) / limit, a) for x, a in zip(maxima, amplitudes)]
+        want = min(range(m), key=lambda k: keys[k])
+        assert _first_least([_ChunkMaxima(x) for x in maxima], amplitudes, limit) == want

@@ -67,12 +67,47 @@ def _centres(lower: float, upper: float) -> np.ndarray:
     return lower + (upper - lower) * np.arange(1, CENTRE_GRID - 1) / (CENTRE_GRID - 1)
 
 
+def _key(r: np.ndarray, amplitude: float) -> tuple:
+    """A candidate's rank (lower is better) from its torque ratios r (n,): a feasible one by its amplitude
+    [rad] (larger first), an infeasible one by its worst joint's ratio."""
+    ok = r.max() <= TORQUE_FRACTION
+    return not ok, -amplitude if ok else r.max()
+
+
+def _first_least(sweeps, amplitudes, limit) -> int:
+    """The index of the first candidate of least :func:`_key` (as ``min`` over the candidates' keys in order),
+    reading the candidates' TorqueSweeps only as far as needed: each one's key is bounded below by its steps
+    done (no step: it may be feasible; a ratio above TORQUE_FRACTION: infeasible, at least that ratio), and the
+    candidate whose (bound, index) is least gets its next chunk, until that candidate is done. A NaN torque met:
+    every sweep is finished and ``min`` decides (one in a chunk not read is not seen: PyBullet's torques are
+    finite for the finite states torque_along takes, short of overflow)."""
+    while True:
+        bounds = []
+        for i, (s, a) in enumerate(zip(sweeps, amplitudes)):
+            if s.peak is None:
+                bounds.append(((False, -a), i))
+                continue
+            r = s.peak / limit
+            if np.isnan(r).any():
+                keys = [_key(t.finish() / limit, b) for t, b in zip(sweeps, amplitudes)]
+                return min(range(len(keys)), key=lambda k: keys[k])
+            worst = r.max()
+            bounds.append((_key(r, a) if s.done else ((False, -a) if worst <= TORQUE_FRACTION else (True, worst)), i))
+        _, i = min(bounds)
+        if sweeps[i].done:
+            return i
+        sweeps[i].more()
+
+
 def feasible_reference(fragment: dict, lower_rad, upper_rad, torque_limit_nm, peak_torque: Callable[[dict], np.ndarray],
-                       joint_names) -> tuple[dict, list[str]]:
+                       joint_names, sweep: Callable | None = None) -> tuple[dict, list[str]]:
     """(the reference fragment, lines): ``fragment`` itself where ``peak_torque(fragment)`` (n,) [N m] stays
     within TORQUE_FRACTION of every limit; else the first fragment of a coordinate search over the joints'
     centres (and halved amplitudes) that does, or the one that asks least of its worst joint, with one line
-    per joint still over."""
+    per joint still over.
+
+    ``sweep`` (plant/reference_torque.py ReferenceTorque.sweep): a candidate's peak read chunk by chunk, as far
+    as telling the search's choice needs (:func:`_first_least`): the same choice, fewer inverse-dynamics steps."""
     limit = np.asarray(torque_limit_nm, float)
     best, best_r = fragment, peak_torque(fragment) / limit
     if best_r.max() <= TORQUE_FRACTION:
@@ -81,14 +116,20 @@ def feasible_reference(fragment: dict, lower_rad, upper_rad, torque_limit_nm, pe
     for _ in range(SEARCH_PASSES):
         for j in np.argsort(-best_r):
             # every candidate of joint j: a feasible one with the largest amplitude, else the least asking one
-            trials = []
-            for centre in _centres(float(lower_rad[j]), float(upper_rad[j])):
-                for scale in AMPLITUDE_SCALES:
-                    trial = _with_centre(best, int(j), float(centre), scale, float(lower_rad[j]), float(upper_rad[j]))
-                    r = peak_torque(trial) / limit
-                    ok = r.max() <= TORQUE_FRACTION
-                    trials.append(((not ok, -trial["amplitude_rad"][j] if ok else r.max()), trial, r))
-            key, trial, r = min(trials, key=lambda t: t[0])
+            trials = [_with_centre(best, int(j), float(centre), scale, float(lower_rad[j]), float(upper_rad[j]))
+                      for centre in _centres(float(lower_rad[j]), float(upper_rad[j])) for scale in AMPLITUDE_SCALES]
+            amplitudes = [t["amplitude_rad"][j] for t in trials]
+            if sweep is None:
+                ratios = [peak_torque(t) / limit for t in trials]
+                keys = [_key(r, a) for r, a in zip(ratios, amplitudes)]
+                pick = min(range(len(trials)), key=lambda k: keys[k])
+                trial, r = trials[pick], ratios[pick]
+            else:
+                sweeps = [sweep(t) for t in trials]
+                pick = _first_least(sweeps, amplitudes, limit)
+                trial, r = trials[pick], sweeps[pick].finish() / limit
+                for s in sweeps:
+                    s.release()
             if r.max() < best_r.max() - 1e-9:
                 best, best_r = trial, r
             if best_r.max() <= TORQUE_FRACTION:
