@@ -27,6 +27,9 @@ from .config_error import ConfigError
 from .config_yaml import load_strict
 from .core.joint_trajectory import JointTrajectory, TrajectoryError, check_trajectory, trajectory_from_mapping
 from .core.trajectory_reference import check_span
+from .run_size import say_note
+
+SAY_YAML_BYTES = 1_000_000   # a YAML trajectory text longer than this is announced before it is read
 
 
 #: A character outside printable ASCII (and line breaks), or a backslash: ``plain_json`` leaves such a text to
@@ -64,12 +67,16 @@ def plain_json(text: str):
         return None
 
 
-def read_trajectory(path: Path) -> JointTrajectory:
-    """The file's JointTrajectory (shapes and types checked), or TrajectoryError / OSError."""
+def read_trajectory(path: Path, say=None) -> JointTrajectory:
+    """The file's JointTrajectory (shapes and types checked), or TrajectoryError / OSError; ``say(line)``: told
+    before a YAML text of over SAY_YAML_BYTES is read (the YAML reader is pure Python, ~2 s per MB)."""
     try:
         text = Path(path).read_text(encoding="utf-8")
         data = plain_json(text)
         if data is None:
+            if say is not None and len(text) > SAY_YAML_BYTES:
+                say(f"trajectory {path}: {len(text) / 1e6:.0f} MB of YAML: the YAML reader takes about 2 s per MB "
+                    f"(the same points as plain JSON read in about 0.1 s per MB)")
             data = load_strict(text)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
@@ -80,11 +87,11 @@ def read_trajectory(path: Path) -> JointTrajectory:
     return trajectory_from_mapping(data)
 
 
-def load_trajectory_file(path: Path, arm) -> JointTrajectory:
+def load_trajectory_file(path: Path, arm, say=say_note) -> JointTrajectory:
     """The file's trajectory, checked against ``arm`` (an Arm: joint names, URDF limits); ConfigError
-    ``trajectory <path>: <what is wrong>`` (setting ``trajectory``) otherwise."""
+    ``trajectory <path>: <what is wrong>`` (setting ``trajectory``) otherwise. ``say``: a long read's note."""
     try:
-        traj = read_trajectory(path)
+        traj = read_trajectory(path, say)
         check_trajectory(traj, arm.joint_names, arm.lower_rad, arm.upper_rad)
         check_span(traj)
     except TrajectoryError as exc:

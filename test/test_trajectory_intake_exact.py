@@ -125,3 +125,19 @@ def test_what_plain_json_leaves_to_the_strict_yaml_reader(text):
     """A key given twice, NaN, nesting past the recursion limit, a 5000-digit integer, an escape, a tab, DEL,
     not JSON: the strict YAML reader reads it (or says what is wrong in its one line), as before."""
     assert plain_json(text) is None
+
+
+def test_a_long_yaml_file_is_announced_and_plain_json_is_not(cfg, tmp_path, monkeypatch):
+    import yaml
+
+    import pa10_dnbs.trajectory_file as trajectory_file
+    arm = cfg.arm
+    doc = long_trajectory(arm.joint_names, arm.lower_rad, arm.upper_rad, 40, seed=2)
+    monkeypatch.setattr(trajectory_file, "SAY_YAML_BYTES", 1000)
+    said = []
+    for suffix, text in (("yaml", yaml.safe_dump(doc)), ("json", json.dumps(doc))):
+        path = tmp_path / f"t.{suffix}"
+        path.write_text(text)
+        traj = load_trajectory_file(path, arm, say=said.append)
+        assert traj.positions_rad.shape == (40, 7)
+    assert len(said) == 1 and said[0].startswith(f"trajectory {tmp_path / 't.yaml'}: 0 MB of YAML")
