@@ -104,10 +104,11 @@ def _dead_owner(owner: str, ignore_pids: frozenset[int]):
     try:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            yield True
+            dead = True
         except BlockingIOError:
             pids = _lock_holders().get(os.fstat(fd).st_ino, set())
-            yield bool(ignore_pids) and bool(pids) and pids <= ignore_pids
+            dead = bool(ignore_pids) and bool(pids) and pids <= ignore_pids
+        yield dead
     finally:
         os.close(fd)  # drops the lock
 
