@@ -107,6 +107,21 @@ def test_a_gripper_at_the_chain_end_is_locked_unless_kept(tmp_path):
         load_arm(tmp_path / "bad.yaml")
 
 
+def test_a_mimic_joint_is_refused_as_an_actuated_joint_and_locked_when_excluded(tmp_path):
+    """A URDF ``<mimic>`` joint follows another and has no actuator of its own: driving it by a controller of its
+    own is another robot. Refused in one line naming it (it was actuated as an independent joint); excluded, it is
+    locked. The collection's mimic joints (the Panda's and the TALOS arm's fingers) are in the gripper, locked."""
+    with pytest.raises(ArmError, match=r"mimic_joint.urdf: .*joint 'j3' mimics joint 'j2' \(<mimic>\).*exclude_joints"):
+        load_arm(_fixture("mimic_joint"))
+    r = run_cli("arm", "--arm", _fixture("mimic_joint"))
+    assert r.returncode == 2 and "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "joint 'j3' mimics joint 'j2'" in r.stderr, r.stderr
+    (tmp_path / "arm.yaml").write_text(yaml.safe_dump({"name": "coupled", "urdf": str(_fixture("mimic_joint")),
+                                                       "exclude_joints": ["j3"], "sources": {"urdf": "a fixture"}}))
+    arm = load_arm(tmp_path / "arm.yaml")
+    assert arm.joint_names == ("j1", "j2") and arm.locked_joints == ("j3",)
+
+
 def test_package_meshes_that_do_not_resolve_neither_fail_nor_warn(capfd):
     client = open_client()
     try:

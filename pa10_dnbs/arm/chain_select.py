@@ -80,7 +80,8 @@ def actuated_joints(chain: UrdfChain, exclude: tuple[str, ...] = (), tip_link: s
     ``names``: the actuated joints given explicitly (each must be a movable joint on the chain, in chain
     order); else every movable chain joint not in ``exclude`` and, unless ``keep_gripper``, not in the
     gripper at the chain's end (:func:`gripper_joints`). Raises ValueError naming the joint for an
-    unknown name, or an actuated joint that is not revolute or continuous (prismatic, floating, planar).
+    unknown name, or an actuated joint that is not revolute or continuous (prismatic, floating, planar) or
+    that mimics another (a URDF ``<mimic>``: a coupled joint with no actuator of its own).
     """
     if not chain.joints:
         raise ValueError("the URDF has no joints")
@@ -105,6 +106,9 @@ def actuated_joints(chain: UrdfChain, exclude: tuple[str, ...] = (), tip_link: s
         if j.kind not in ACTUATABLE:
             raise ValueError(f"joint {j.name!r} is {j.kind}: only revolute or continuous joints can be actuated "
                              f"(list it in exclude_joints to lock it)")
+        if j.mimics is not None:  # its motor is another joint's: driving it on its own is not this robot
+            raise ValueError(f"joint {j.name!r} mimics joint {j.mimics!r} (<mimic>): it has no actuator of its own "
+                             f"and cannot be controlled as one (list it in exclude_joints to lock it)")
     if not actuated:
         raise ValueError(f"no revolute joint on the chain from {chain.root_link}")
     chosen = {j.name for j in actuated}

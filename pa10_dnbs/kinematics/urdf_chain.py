@@ -31,6 +31,7 @@ class UrdfJoint:
     upper: float = math.inf
     velocity: float = math.inf  # <limit velocity> [rad/s or m/s]
     effort: float = math.nan    # <limit effort> [N m or N]; NaN when absent
+    mimics: str | None = None   # <mimic joint=...>: the joint whose position this one follows (no own actuator)
 
 
 @dataclass(frozen=True)
@@ -102,8 +103,10 @@ def _joint(el: ET.Element, i: int) -> UrdfJoint:
         axis, norm = np.array([1.0, 0.0, 0.0]), 1.0  # a fixed joint's axis is never used
     keys = (("lower", "upper", "velocity") if kind != "continuous" else ()) + ("effort",)
     bounds = {k: number(limit, k, name) for k in keys if limit is not None and limit.get(k) is not None}
+    mimic = el.find("mimic")
     return UrdfJoint(name=name, kind=kind, parent=ends["parent"], child=ends["child"], origin_xyz=xyz,
-                     origin_rot=rpy_matrix(*rpy), axis=axis / norm, **bounds)
+                     origin_rot=rpy_matrix(*rpy), axis=axis / norm, **bounds,
+                     mimics=None if mimic is None else (mimic.get("joint") or ""))
 
 
 class UrdfChain:
