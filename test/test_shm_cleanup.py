@@ -1,4 +1,5 @@
-"""The /dev/shm cleanup removes only files nobody maps, and counts a mapping in another process.
+"""The /dev/shm cleanup removes only files nobody maps and whose creator is gone (Fast DDS's lock on the ``_el``
+file is free), and counts a mapping or that lock in another process.
 
 The test file stays mapped by this process while a test runs: another test's clean-up (a parallel worker's
 ``domain`` fixture, a launcher) counts that mapping and leaves it alone, and these tests ignore it
@@ -7,6 +8,7 @@ import mmap
 import os
 import subprocess
 import sys
+from contextlib import contextmanager
 
 import pytest
 
@@ -43,18 +45,25 @@ def test_file_mapped_here_is_kept_unless_this_process_is_ignored(shm_file):
     assert not os.path.exists(path)
 
 
-def test_file_mapped_by_another_process_is_kept(shm_file):
-    name, path = shm_file
-    code = (f"import mmap, sys; fh = open({path!r}, 'r+b'); m = mmap.mmap(fh.fileno(), {mmap.PAGESIZE}); "
-            "print('mapped', flush=True); sys.stdin.read()")
-    child = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+@contextmanager
+def another_process(code: str):
+    """A child running ``code`` (which prints one line when it holds what it takes, then waits on stdin) until the
+    block ends."""
+    child = subprocess.Popen([sys.executable, "-c", code + "; print('holding', flush=True); sys.stdin.read()"],
+                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     try:
-        assert child.stdout.readline().strip() == "mapped"
-        assert remove_stale({name}, ignore_pids=HERE) == []
-        assert os.path.exists(path)
+        assert child.stdout.readline().strip() == "holding"
+        yield child
     finally:
         child.stdin.close()
         child.wait(timeout=10)
+
+
+def test_file_mapped_by_another_process_is_kept(shm_file):
+    name, path = shm_file
+    with another_process(f"import mmap, sys; fh = open({path!r}, 'r+b'); m = mmap.mmap(fh.fileno(), {mmap.PAGESIZE})"):
+        assert remove_stale({name}, ignore_pids=HERE) == []
+        assert os.path.exists(path)
     assert remove_stale({name}, ignore_pids=HERE) == [name]
 
 
@@ -95,17 +104,11 @@ def test_a_port_whose_creator_lives_is_kept_though_nobody_maps_it(port_files):
     """A participant starting in a concurrent run has locked its port and created it, but not mapped it yet:
     removing the name then would leave it deaf (the next sender makes a new segment under that name)."""
     owner, names = port_files
-    code = (f"import fcntl, os, sys; fd = os.open({os.path.join(SHM_DIR, owner + '_el')!r}, os.O_RDWR); "
-            "fcntl.flock(fd, fcntl.LOCK_EX); print('locked', flush=True); sys.stdin.read()")
-    child = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
-    try:
-        assert child.stdout.readline().strip() == "locked"
+    with another_process(f"import fcntl, os, sys; fd = os.open({os.path.join(SHM_DIR, owner + '_el')!r}, "
+                         "os.O_RDWR); fcntl.flock(fd, fcntl.LOCK_EX)"):
         assert unused(names, ignore_pids=HERE) == set()
         assert remove_stale(names, ignore_pids=HERE) == []
         assert all(os.path.exists(os.path.join(SHM_DIR, n)) for n in names)
-    finally:
-        child.stdin.close()
-        child.wait(timeout=10)
     assert unused(names, ignore_pids=HERE) == names  # the creator is gone: the kernel dropped its lock
     assert remove_stale(names, ignore_pids=HERE) == sorted(names)
     assert not any(os.path.exists(os.path.join(SHM_DIR, n)) for n in names)
