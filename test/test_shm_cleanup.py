@@ -126,3 +126,24 @@ def test_a_port_locked_by_an_ignored_process_goes(port_files):
         assert remove_stale(names, ignore_pids=HERE) == sorted(names)
     finally:
         os.close(fd)
+
+
+@pytest.mark.parametrize("flag, path, why", [
+    ("--snapshot", "", "give the snapshot file's path"),
+    ("--since", "", "give the snapshot file's path"),
+    ("--snapshot", "{tmp}", "cannot write it"),                  # a directory
+    ("--snapshot", "{tmp}/missing/snap.txt", "cannot write it"),  # its folder is missing
+    ("--since", "{tmp}", "cannot read it"),
+    ("--since", "{tmp}/binary.bin", "not a snapshot"),
+    ("--since", "{tmp}/other.txt", "not a snapshot"),             # text, but no snapshot of this module
+])
+def test_a_path_it_cannot_use_is_one_line_and_exit_2(flag, path, why, tmp_path, capsys):
+    """The hand-start clean-up's own mistakes: no traceback (``--snapshot ''`` fell through to --since with None,
+    a directory or a binary file raised), and --since removes nothing it was not given a snapshot for."""
+    from pa10_dnbs.supervisor.shm_cleanup import main
+
+    (tmp_path / "binary.bin").write_bytes(bytes(range(256)))
+    (tmp_path / "other.txt").write_text("fastrtps_port7000\n")
+    assert main([flag, path.format(tmp=tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"shm_cleanup: {flag} ") and why in err[0], err

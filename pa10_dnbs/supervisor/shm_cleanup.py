@@ -151,9 +151,13 @@ def remove_stale(created_during_run: set[str], ignore_pids: frozenset[int] = fro
     return sorted(removed)
 
 
+SNAPSHOT_HEADER = "# pa10_dnbs.supervisor.shm_cleanup snapshot of /dev/shm"
+
+
 def main(argv: list[str] | None = None) -> int:
     """``python -m pa10_dnbs.supervisor.shm_cleanup --snapshot FILE`` before a hand-started session writes the names
-    present; ``--since FILE`` after it removes the files that appeared since and that no live process maps."""
+    present; ``--since FILE`` after it removes the files that appeared since, whose creator is gone and that no
+    live process maps. A path that cannot be written or read, or a file that is no snapshot: one line, exit 2."""
     import argparse
     import sys
 
@@ -162,17 +166,31 @@ def main(argv: list[str] | None = None) -> int:
     group.add_argument("--snapshot", metavar="FILE", help="write the Fast DDS / LTTng-UST names in /dev/shm now")
     group.add_argument("--since", metavar="FILE", help="remove the unused files that are not in this snapshot")
     args = ap.parse_args(argv)
-    if args.snapshot:
-        with open(args.snapshot, "w") as fh:
-            fh.write("".join(f"{name}\n" for name in sorted(shm_files())))
+    flag, path = ("--snapshot", args.snapshot) if args.snapshot is not None else ("--since", args.since)
+
+    def refuse(why: str) -> int:
+        print(f"shm_cleanup: {flag} {path!r}: {why}", file=sys.stderr)
+        return 2
+
+    if not path:
+        return refuse("give the snapshot file's path")
+    if flag == "--snapshot":
+        try:
+            with open(path, "w") as fh:
+                fh.write("".join(f"{line}\n" for line in [SNAPSHOT_HEADER, *sorted(shm_files())]))
+        except OSError as exc:
+            return refuse(f"cannot write it: {exc.strerror or exc}")
         return 0
     try:
-        with open(args.since) as fh:
-            before = set(fh.read().split())
+        with open(path, encoding="utf-8") as fh:
+            lines = fh.read().splitlines()
     except OSError as exc:
-        print(f"shm_cleanup: --since: cannot read the snapshot: {exc}", file=sys.stderr)
-        return 2
-    removed = remove_stale(shm_files() - before)
+        return refuse(f"cannot read it: {exc.strerror or exc}")
+    except UnicodeDecodeError:
+        lines = []
+    if not lines or lines[0] != SNAPSHOT_HEADER:
+        return refuse("not a snapshot this module wrote (--snapshot FILE writes one)")
+    removed = remove_stale(shm_files() - set(lines[1:]))
     print(f"shm_cleanup: removed {len(removed)} files from {SHM_DIR}" + (f": {' '.join(removed)}" if removed else ""))
     return 0
 
