@@ -12,7 +12,6 @@ plus ``close()``: CPU per message [us] and per simulated second [ms], best of ``
 """
 from __future__ import annotations
 
-import argparse
 import sys
 import tempfile
 import time
@@ -26,6 +25,7 @@ import bench_record  # noqa: E402
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime  # noqa: E402
 
 from pa10_dnbs.arm import load_arm  # noqa: E402
+from pa10_dnbs.cli_values import OneLineParser, seconds, whole_in  # noqa: E402
 from pa10_dnbs.bag.bag_writer import BagWriter  # noqa: E402
 from pa10_dnbs.wire import joint_state_cdr  # noqa: E402
 
@@ -72,9 +72,9 @@ def run(n_steps: int, compression: str) -> tuple[float, float, int, int]:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seconds", type=float, default=20.0)
-    ap.add_argument("--repeat", type=int, default=3)
+    ap = OneLineParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seconds", type=seconds, default=20.0)
+    ap.add_argument("--repeat", type=whole_in(1), default=3)
     ap.add_argument("--compression", default="zstd", choices=("zstd", "none"))
     bench_record.add_argument(ap)
     a = ap.parse_args()

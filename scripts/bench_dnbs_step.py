@@ -17,7 +17,6 @@ Figures only; asserts nothing (shared, noisy machines: the load average is print
 """
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 from pathlib import Path
@@ -25,6 +24,10 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from flag_values import names_in  # noqa: E402
+from pa10_dnbs.cli_values import OneLineParser, positive, seconds, whole_in  # noqa: E402
 
 from pa10_dnbs.config import default_config_path  # noqa: E402
 from pa10_dnbs.run_settings import build_settings  # noqa: E402
@@ -111,11 +114,12 @@ def _plant_pass(cfg, run) -> float:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--duration", type=float, default=5.0, help="simulated seconds of the replayed run")
-    ap.add_argument("--repeat", type=int, default=5, help="passes per part; the best is printed")
-    ap.add_argument("--target", type=float, default=1.5, help="a DNBS/PID run ratio to show the budget of")
-    ap.add_argument("--kernels", default="numpy,c", help="DNBS kernels to time (numpy: parts of the step; c: compiled)")
+    ap = OneLineParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--duration", type=seconds, default=5.0, help="simulated seconds of the replayed run")
+    ap.add_argument("--repeat", type=whole_in(1), default=5, help="passes per part; the best is printed")
+    ap.add_argument("--target", type=positive, default=1.5, help="a DNBS/PID run ratio to show the budget of")
+    ap.add_argument("--kernels", type=names_in(("numpy", "c")), default="numpy,c",
+                    help="DNBS kernels to time (numpy: parts of the step; c: compiled)")
     args = ap.parse_args()
     cfg = build_settings(default_config_path())
     run = simulate(cfg, "dnbs", args.duration)
@@ -131,7 +135,7 @@ def main() -> int:
     print(f"  plant (PyBullet step, state, torques)   {plant:6.1f} us")
     print(f"  PID bank of 7, guarded                  {pid:6.1f} us")
     steps = {}
-    for kernel in args.kernels.split(","):
+    for kernel in args.kernels:
         banks = {}
         for label, rows in ((f"bank of {nj}", list(range(nj))),
                             *((f"bank of 1 ({joint_names[j]})", [j]) for j in one_rows)):

@@ -26,7 +26,6 @@ is the recorder run, an older flag).
 """
 from __future__ import annotations
 
-import argparse
 import os
 import re
 import statistics
@@ -39,7 +38,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_record  # noqa: E402
 
-from pa10_dnbs.config import default_config_path  # noqa: E402
+from pa10_dnbs.cli_values import RTF_MAX, RTF_MIN, OneLineParser, number_in, seconds, whole_in  # noqa: E402
+from pa10_dnbs.config import ConfigError, default_config_path  # noqa: E402
 from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.supervisor.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
 from pa10_dnbs.supervisor.realtime_advice import ON_TIME_TARGET  # noqa: E402
@@ -99,16 +99,18 @@ def med(xs):
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--duration", type=float, default=10.0, help="simulated seconds per run (default 10)")
-    ap.add_argument("--repeat", type=int, default=2, help="runs per mode and factor (default 2; medians)")
-    ap.add_argument("--factors", type=float, nargs="+", default=[1.0, 0.75, 0.5, 0.35])
+    ap = OneLineParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--duration", type=seconds, default=10.0, help="simulated seconds per run (default 10)")
+    ap.add_argument("--repeat", type=whole_in(1), default=2, help="runs per mode and factor (default 2; medians)")
+    ap.add_argument("--factors", type=number_in(RTF_MIN, RTF_MAX, low_open=False), nargs="+",
+                    default=[1.0, 0.75, 0.5, 0.35],
+                    help=f"real-time factors of the realtime runs, each in [{RTF_MIN:g}, {RTF_MAX:g}] (launch --rtf's range)")
     ap.add_argument("--no-lockstep", action="store_true", help="realtime runs only")
     ap.add_argument("--record", action="store_true",
                     help="also lockstep with the recorder as the observer (what launch --record runs)")
     ap.add_argument("--reliability", default=None, choices=["reliable", "best_effort"],
                     help="QoS of the per-joint topics (default: the mode's own)")
-    ap.add_argument("--rt-priority", type=int, default=DEFAULT_RT_PRIORITY,
+    ap.add_argument("--rt-priority", type=whole_in(0, 99), default=DEFAULT_RT_PRIORITY,
                     help=f"as launch's (default {DEFAULT_RT_PRIORITY} where the OS allows SCHED_FIFO; "
                          "0: the default policy)")
     ap.add_argument("--sched-batch", action="store_true",
@@ -123,7 +125,10 @@ def main() -> int:
     args = ap.parse_args()
     record = bench_record.Record.start("bench_graph")
     args.config = args.config.resolve()
-    args.joint_names = build_settings(args.config).arm.joint_names  # a bad config fails here, not in every run
+    try:
+        args.joint_names = build_settings(args.config).arm.joint_names  # a bad config fails here, not in every run
+    except ConfigError as exc:
+        ap.error(f"argument --config: {exc}")
     check_priority(args.rt_priority)
     if args.sched_batch and args.rt_priority:
         print("--sched-batch: every node but the plant under SCHED_BATCH, so no SCHED_FIFO (--rt-priority 0)",
@@ -157,6 +162,10 @@ def main() -> int:
             line += (f", CPU {sum(cpu.values()) / 1e3:.2f} ms per tick in all, plant woken "
                      f"{stats['effort_wakeups_per_step']:.2f}x per tick for its 7 efforts; load {load()}")
             print(line, flush=True)
+    if all(stats is None for case in runs.values() for stats, _ in case):
+        print(f"bench_graph: every run failed every attempt (load {load()}): no figures, no record written",
+              file=sys.stderr, flush=True)
+        return 1
 
     print("\nCPU per tick [us] (median of runs; inside each process, start-up excluded)")
     names = ["plant"] + [f"joint_controller_{j}" for j in args.joint_names] + ["reference", "wire_monitor"]

@@ -24,6 +24,10 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "scripts"))
+
+from bench_record import record_path  # noqa: E402
+from pa10_dnbs.cli_values import OneLineParser, seconds, whole_in  # noqa: E402
 
 from pa10_dnbs.supervisor.domain_ids import lease_domain  # noqa: E402
 from pa10_dnbs.run_data import RunData  # noqa: E402
@@ -89,13 +93,21 @@ class _Keep:
         return None
 
 
+def _workdir(text: str) -> Path:
+    """``--workdir``'s argparse type: a directory, or a path to make one at (not an existing file)."""
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is a file, not a directory")
+    return path
+
+
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--duration", type=float, default=3.0)
-    ap.add_argument("--rounds", type=int, default=2)
-    ap.add_argument("--json", type=Path, default=None)
-    ap.add_argument("--workdir", type=Path, default=None, help="keep every run's output here (default: a temporary "
-                    "folder, removed at the end)")
+    ap = OneLineParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--duration", type=seconds, default=3.0)
+    ap.add_argument("--rounds", type=whole_in(1), default=2)
+    ap.add_argument("--json", type=record_path, default=None)
+    ap.add_argument("--workdir", type=_workdir, default=None, help="keep every run's output here (default: a "
+                    "temporary folder, removed at the end)")
     a = ap.parse_args()
     results = []
     if a.workdir is not None:

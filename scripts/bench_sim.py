@@ -18,8 +18,6 @@ Figures only; asserts nothing (the machines are shared and noisy: the load avera
 """
 from __future__ import annotations
 
-import argparse
-import copy
 import statistics
 import sys
 from pathlib import Path
@@ -28,10 +26,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_record  # noqa: E402
+from flag_values import names_in  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from pa10_dnbs.accel.choice import auto_kernel  # noqa: E402
+from pa10_dnbs.accel.choice import KERNELS, auto_kernel  # noqa: E402
+from pa10_dnbs.cli_values import OneLineParser, seconds, whole_in  # noqa: E402
 from pa10_dnbs.config import default_config_path  # noqa: E402
 from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.settings import replace_in  # noqa: E402
@@ -49,15 +49,16 @@ def _load() -> str:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--duration", type=float, default=20.0, help="simulated seconds")
-    ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--kernels", default="numpy,auto", help="comma-separated DNBS kernels to run: numpy, c, auto")
+    ap = OneLineParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--duration", type=seconds, default=20.0, help="simulated seconds")
+    ap.add_argument("--repeat", type=whole_in(1), default=5)
+    ap.add_argument("--kernels", type=names_in(KERNELS), default="numpy,auto",
+                    help="comma-separated DNBS kernels to run: numpy, c, auto")
     bench_record.add_argument(ap)
     args = ap.parse_args()
     record = bench_record.Record.start("bench_sim")
     settings = build_settings(default_config_path())
-    kernels = [k.strip() for k in args.kernels.split(",") if k.strip()]
+    kernels = args.kernels
     print(f"in-process closed loop, {args.duration:g} s simulated, T = {settings.simulation.dt_s * 1e3:g} ms, "
           f"{args.repeat} interleaved runs per controller; load average {_load()}")
     if "auto" in kernels:

@@ -17,7 +17,6 @@ Worst joint's RMS over the second half [rad]. Figures only; nothing asserted (do
 """
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 from pathlib import Path
@@ -25,8 +24,11 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from pa10_dnbs.config import default_config_path  # noqa: E402
+from flag_values import list_of  # noqa: E402
+from pa10_dnbs.cli_values import OneLineParser, positive, seconds, whole_in  # noqa: E402
+from pa10_dnbs.config import ConfigError, default_config_path  # noqa: E402
 from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.sim import closed_loop  # noqa: E402
 from pa10_dnbs.study.scenarios import scenario_settings  # noqa: E402
@@ -78,17 +80,21 @@ def worst_rms(settings, controller: str, seed: int, duration_s: float, filt) -> 
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = OneLineParser(description=__doc__.splitlines()[0])
     ap.add_argument("--arm", default="urdf/collection/twodof/arm.yaml", help="preset name, arm file or URDF")
-    ap.add_argument("--seeds", type=int, default=3)
-    ap.add_argument("--duration", type=float, default=20.0, help="simulated seconds per run")
-    ap.add_argument("--cutoffs", default="200,50", help="velocity low-pass cut-offs to try [rad/s]")
+    ap.add_argument("--seeds", type=whole_in(1), default=3)
+    ap.add_argument("--duration", type=seconds, default=20.0, help="simulated seconds per run")
+    ap.add_argument("--cutoffs", type=list_of(positive, allow_empty=True), default="200,50",
+                    help="velocity low-pass cut-offs to try [rad/s]")
     a = ap.parse_args()
-    settings = build_settings(default_config_path(), a.arm, report=False)
+    try:
+        settings = build_settings(default_config_path(), a.arm, report=False)
+    except ConfigError as exc:  # ArmError included: a missing or bad arm, in one line
+        ap.error(f"argument --arm: {exc}")
     _, dist = scenario_settings(settings, "encoder_noise", 0)
     gain = kalman_gain(settings.simulation.dt_s, dist.position_noise_std_rad, dist.velocity_noise_std_rad_s)
     variants = [("none", None), (f"position (L = {gain:.4f})", (gain, None))]
-    variants += [(f"position+lowpass {float(c):g} rad/s", (gain, float(c))) for c in a.cutoffs.split(",") if c]
+    variants += [(f"position+lowpass {float(c):g} rad/s", (gain, c)) for c in a.cutoffs]
     print(f"encoder_noise on {settings.arm.name}, {a.duration:g} s, seeds 0-{a.seeds - 1}: worst-joint RMS over "
           "the second half [rad]\n\n| filter | DNBS | PID |\n|---|---|---|")
     for name, filt in variants:

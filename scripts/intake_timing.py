@@ -25,11 +25,14 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "test"))
+sys.path.insert(0, str(ROOT / "scripts"))
 
 import yaml  # noqa: E402
 
 from chain_urdf import chain_urdf  # noqa: E402
+from flag_values import list_of  # noqa: E402
 from long_trajectory import long_trajectory  # noqa: E402
+from pa10_dnbs.cli_values import OneLineParser, positive, whole_in  # noqa: E402
 from pa10_dnbs.config import default_config_path  # noqa: E402
 from pa10_dnbs.controller_factory import load_reference_trajectory  # noqa: E402
 from pa10_dnbs.run_settings import build_settings  # noqa: E402
@@ -60,15 +63,24 @@ def _arm_seconds(urdf: Path, repeat: int) -> float:
     return _best(repeat, run)
 
 
+def _point_count(text: str) -> int:
+    """A trajectory length: a whole number >= 1, written plainly or as 1e4."""
+    v = positive(text)
+    if v != int(v):
+        raise argparse.ArgumentTypeError(f"must be a whole number of points, got {text!r}")
+    return int(v)
+
+
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--joints", default="7,20,40", help="comma-separated chain lengths ('' for none)")
-    ap.add_argument("--points", default="1e3,1e4,1e5", help="comma-separated trajectory lengths ('' for none)")
-    ap.add_argument("--repeat", type=int, default=1)
+    ap = OneLineParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--joints", type=list_of(whole_in(1), allow_empty=True), default="7,20,40",
+                    help="comma-separated chain lengths ('' for none)")
+    ap.add_argument("--points", type=list_of(_point_count, allow_empty=True), default="1e3,1e4,1e5",
+                    help="comma-separated trajectory lengths ('' for none)")
+    ap.add_argument("--repeat", type=whole_in(1), default=1)
     ap.add_argument("--yaml", action="store_true", help="also time each trajectory written as YAML (slow)")
     args = ap.parse_args()
-    joints = [int(x) for x in args.joints.split(",") if x.strip()]
-    points = [int(float(x)) for x in args.points.split(",") if x.strip()]
+    joints, points = args.joints, args.points
     print(f"load average before: {_load()}")
     with tempfile.TemporaryDirectory(prefix="intake_timing_") as tmp:
         tmp = Path(tmp)

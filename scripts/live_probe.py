@@ -14,11 +14,31 @@ import json
 import struct
 import sys
 import time
+from pathlib import Path
+from urllib.parse import urlsplit
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
+from pa10_dnbs.cli_values import OneLineParser, number_in, seconds  # noqa: E402
+
 SUBPROTOCOLS = ["foxglove.websocket.v1", "foxglove.sdk.v1"]
+#: --wait's bound [s]: an hour of retries is a hang, not a wait (as replay --wait-for-subscribers)
+WAIT_MAX_S = 3600.0
+
+
+def ws_url(text: str) -> str:
+    """The url argument's argparse type: ws://host[:port][/path] or wss://..."""
+    try:
+        parts = urlsplit(text)
+        parts.port  # noqa: B018  (raises ValueError on a port that is not a number in 0..65535)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(f"not a WebSocket URL ({exc}), got {text!r}") from None
+    if parts.scheme not in ("ws", "wss") or not parts.hostname:
+        raise argparse.ArgumentTypeError(f"expected a WebSocket URL like ws://127.0.0.1:8765, got {text!r}")
+    return text
 
 
 def _connect(url: str, wait_s: float):
@@ -34,10 +54,11 @@ def _connect(url: str, wait_s: float):
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("url", nargs="?", default="ws://127.0.0.1:8765")
-    ap.add_argument("--seconds", type=float, default=600.0, help="stop after this long (default 600)")
-    ap.add_argument("--wait", type=float, default=120.0, help="keep trying to connect this long (default 120)")
+    ap = OneLineParser(description=__doc__.splitlines()[0])
+    ap.add_argument("url", nargs="?", type=ws_url, default="ws://127.0.0.1:8765")
+    ap.add_argument("--seconds", type=seconds, default=600.0, help="stop after this long (default 600)")
+    ap.add_argument("--wait", type=number_in(0.0, WAIT_MAX_S), default=120.0,
+                    help=f"keep trying to connect this long, in (0, {WAIT_MAX_S:g}] s (default 120)")
     args = ap.parse_args()
     try:
         ws = _connect(args.url, args.wait)

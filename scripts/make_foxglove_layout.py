@@ -15,22 +15,38 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "scripts"))
 
-from pa10_dnbs.config import default_config_path  # noqa: E402
+from bench_record import record_path  # noqa: E402
+from pa10_dnbs.arm.arm_file import ArmError  # noqa: E402
+from pa10_dnbs.cli_values import OneLineParser  # noqa: E402
+from pa10_dnbs.config import ConfigError, default_config_path  # noqa: E402
 from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.live.layout import layout_json  # noqa: E402
 from pa10_dnbs.arm import DEFAULT_ARM  # noqa: E402
-from pa10_dnbs.wire.topics import arm_topics, default_namespace  # noqa: E402
+from pa10_dnbs.wire.topics import arm_topics, check_namespace, default_namespace  # noqa: E402
+
+
+def namespace(text: str) -> str:
+    """``--namespace``'s argparse type: a ROS namespace by the graph's rule (wire/topics.py)."""
+    try:
+        return check_namespace(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()))
+    ap = OneLineParser(description=" ".join(__doc__.split("\n\n")[0].split()))
     ap.add_argument("--config", type=Path, default=default_config_path())
     ap.add_argument("--arm", default=None, help="an arm preset or arm file (default: the config's, pa10)")
-    ap.add_argument("--namespace", default=None, help="the arm's namespace (default /<arm name>, /pa10)")
-    ap.add_argument("--out", type=Path, default=ROOT / "config" / "foxglove_layout.json")
+    ap.add_argument("--namespace", type=namespace, default=None,
+                    help="the arm's namespace (default /<arm name>, /pa10)")
+    ap.add_argument("--out", type=record_path, default=ROOT / "config" / "foxglove_layout.json")
     args = ap.parse_args()
-    settings = build_settings(args.config, arm=args.arm)
+    try:
+        settings = build_settings(args.config, arm=args.arm)
+    except ConfigError as exc:  # a bad config file or arm, in one line naming the flag
+        ap.error(f"argument {'--arm' if isinstance(exc, ArmError) and args.arm else '--config'}: {exc}")
     arm = settings.arm
     text = layout_json(arm.joint_names, settings.plant.torque_limit_nm, arm.chain.root_link,
                        arm_topics(args.namespace or default_namespace(arm.name)),

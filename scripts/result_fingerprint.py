@@ -33,8 +33,11 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from bench_record import record_path  # noqa: E402
 from pa10_dnbs.accel.choice import KERNELS, auto_kernel  # noqa: E402
+from pa10_dnbs.cli_values import OneLineParser  # noqa: E402
 from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.settings import replace_in  # noqa: E402
 from pa10_dnbs.controller_factory import dnbs_params  # noqa: E402
@@ -116,11 +119,28 @@ def fingerprints(kernel: str = "auto") -> dict[str, str]:
     return {name: digest(make()) for name, make in scenarios.items()}
 
 
+def saved_prints(text: str) -> dict[str, str]:
+    """``--compare``'s argparse type: the {scenario: digest} a --save wrote, read before the runs start."""
+    try:
+        before = json.loads(Path(text).read_text())
+    except IsADirectoryError:
+        raise argparse.ArgumentTypeError(f"{text!r} is a directory, not a file written by --save") from None
+    except OSError as exc:
+        raise argparse.ArgumentTypeError(f"cannot read {text!r}: {exc.strerror}") from None
+    except (UnicodeDecodeError, json.JSONDecodeError):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a JSON file written by --save") from None
+    if not (isinstance(before, dict) and before and all(isinstance(k, str) and isinstance(v, str)
+                                                        for k, v in before.items())):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a file written by --save (scenario: digest)")
+    return before
+
+
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = OneLineParser(description=__doc__.splitlines()[0])
     group = ap.add_mutually_exclusive_group()
-    group.add_argument("--save", type=Path, help="write the fingerprints to this JSON file")
-    group.add_argument("--compare", type=Path, help="compare with a file written by --save; exit 1 on a difference")
+    group.add_argument("--save", type=record_path, help="write the fingerprints to this JSON file")
+    group.add_argument("--compare", type=saved_prints,
+                       help="compare with a file written by --save; exit 1 on a difference")
     ap.add_argument("--kernel", choices=KERNELS, default="auto", help="the DNBS step's kernel (dnbs.kernel)")
     args = ap.parse_args()
     if args.kernel == "auto":
@@ -131,7 +151,7 @@ def main() -> int:
     if args.save:
         args.save.write_text(json.dumps(prints, indent=1) + "\n")
     if args.compare:
-        before = json.loads(args.compare.read_text())
+        before = args.compare
         differ = sorted(n for n in prints.keys() | before.keys() if prints.get(n) != before.get(n))
         print(f"{len(prints)} scenarios, {len(differ)} differ" + (f": {', '.join(differ)}" if differ else ""))
         return 1 if differ else 0
