@@ -23,7 +23,6 @@ are shared and noisy).
 """
 from __future__ import annotations
 
-import argparse
 import re
 import resource
 import statistics
@@ -34,6 +33,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from pa10_dnbs.cli_values import OneLineParser, seconds, whole_in  # noqa: E402
 from pa10_dnbs.config import default_config_path  # noqa: E402
 from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.supervisor.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
@@ -115,9 +115,9 @@ def one_run(mode: str, duration: float, reliability: str | None) -> tuple[dict, 
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--duration", type=float, default=10.0)
-    ap.add_argument("--repeat", type=int, default=3)
+    ap = OneLineParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--duration", type=seconds, default=10.0)
+    ap.add_argument("--repeat", type=whole_in(1), default=3)
     ap.add_argument("--modes", nargs="+", default=["lockstep", "record", "live"],
                     choices=["lockstep", "record", "record-none", "live"])
     ap.add_argument("--reliability", default=None, choices=["reliable", "best_effort"],

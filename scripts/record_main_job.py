@@ -10,16 +10,18 @@ arguments go to run_main.sh (i.e. to ``pa10-dnbs launch``). Exit code: the main 
 """
 from __future__ import annotations
 
-import argparse
 import json
 import shlex
 import subprocess
 import sys
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_record  # noqa: E402
+
+from pa10_dnbs.cli_values import OneLineParser  # noqa: E402
 
 ROOT = bench_record.ROOT
 
@@ -37,7 +39,7 @@ def figures(out: Path, bag: Path) -> dict:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = OneLineParser(description=__doc__.splitlines()[0])
     bench_record.add_argument(ap)
     ap.add_argument("launch_args", nargs="*", help="passed to scripts/run_main.sh (after --)")
     args = ap.parse_args()

@@ -10,7 +10,6 @@ as it comes. Exit code: pytest's; the record is written either way (its figures 
 """
 from __future__ import annotations
 
-import argparse
 import shlex
 import subprocess
 import sys
@@ -18,9 +17,12 @@ import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_record  # noqa: E402
+
+from pa10_dnbs.cli_values import OneLineParser  # noqa: E402
 
 
 def junit_figures(xml_file: Path) -> dict:
@@ -35,7 +37,7 @@ def junit_figures(xml_file: Path) -> dict:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = OneLineParser(description=__doc__.splitlines()[0])
     bench_record.add_argument(ap)
     ap.add_argument("pytest_args", nargs="*", help="passed to scripts/run_tests.sh (after --), e.g. -m 'not graph'")
     args = ap.parse_args()
