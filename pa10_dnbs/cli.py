@@ -148,6 +148,8 @@ def _replay_options(args: argparse.Namespace):
     """The ``replay`` command's options from its parsed flags."""
     from .commands.options import ReplayOptions
 
+    _unused_flags(args, [("config", args.live is not None, "only with --live (the live view's torque limits and step; "
+                                                           "the bag is replayed as recorded)")])
     _live_defaults(args)
     return ReplayOptions(
         bag_path=args.bag, rate=args.rate, topics=args.topics, start_offset_s=args.start_offset, loop=args.loop,

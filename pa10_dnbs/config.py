@@ -73,12 +73,17 @@ def _switch(**settings) -> dict:
     return {"enabled": Flag(), **settings}
 
 
+# The longest injected delay or jitter of one message [ms]: 1 s, the default --effort-timeout. A message later than
+# that is a lost one (--drop-*: the plant re-sends after the timeout); 1e308 ms made every lockstep step wait.
+LINK_DELAY_MAX_MS = 1000.0
+
+
 def _link_faults() -> dict:
     """Faults injected on one direction of each joint's link (plant -> controller states, or efforts back)."""
     return {
         "drop_fraction": Joints(FRACTION),
-        "delay_ms": Joints(NONNEG),
-        "jitter_ms": Joints(NONNEG),
+        "delay_ms": Joints(Num(0.0, strict=False, high=LINK_DELAY_MAX_MS)),
+        "jitter_ms": Joints(Num(0.0, strict=False, high=LINK_DELAY_MAX_MS)),
         "corrupt_fraction": Joints(FRACTION),
         "corrupt_kind": Text(("nan", "inf", "out_of_range")),
     }

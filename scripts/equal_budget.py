@@ -24,7 +24,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from pa10_dnbs.cli import main as cli_main  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser, seconds, whole_in  # noqa: E402
 from pa10_dnbs.output_lock import OutputInUseError, lock_output, release_output  # noqa: E402
-from pa10_dnbs.report.outputs import OutputExistsError, check_creatable  # noqa: E402
+from pa10_dnbs.report.outputs import OutputExistsError, check_output_dir  # noqa: E402
 from pa10_dnbs.tune.comparison import comparison_markdown  # noqa: E402
 from pa10_dnbs.tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS  # noqa: E402
 
@@ -81,7 +81,8 @@ def tune_arguments(args: argparse.Namespace) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
-        check_creatable(args.out, "--out")
+        check_output_dir(args.out, False, "--out", inputs={"--config": args.config},   # never "" (the cwd), ...;
+                         resume=frozenset(CONTROLLERS) | {"comparison.md"})           # the same command resumes
         lock_output(args.out, "comparison directory")
     except (OutputExistsError, OutputInUseError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)

@@ -95,6 +95,29 @@ def test_writer_refuses_an_existing_path_without_force(tmp_path):
         assert b.message_count == 0
 
 
+def test_force_replaces_only_an_empty_folder_or_a_bag_of_ours(tmp_path):
+    """A bag carries OUTPUT_MARK (rosbag2 readers ignore the extra file: it opens as before); ``force`` replaces
+    such a bag or an empty folder, never a folder of other files nor a file."""
+    from pa10_dnbs.output_mark import OUTPUT_MARK
+
+    bag = _write_bag(tmp_path / "b")
+    assert (bag / OUTPUT_MARK).is_file()
+    with Bag(bag) as b:
+        assert b.message_count == 200
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "keep.txt").write_text("mine")
+    with pytest.raises(BagExistsError, match="not a pa10-dnbs bag"):
+        BagWriter(mine, force=True)
+    (tmp_path / "file").write_text("mine")
+    with pytest.raises(BagExistsError, match="not a folder"):
+        BagWriter(tmp_path / "file", force=True)
+    assert (mine / "keep.txt").read_text() == "mine" and (tmp_path / "file").read_text() == "mine"
+    (tmp_path / "empty").mkdir()
+    BagWriter(tmp_path / "empty", force=True).close()
+    assert (tmp_path / "empty" / "metadata.yaml").is_file()
+
+
 def test_a_complete_run_bag_analyses(tmp_path):
     """The baseline for the corruption tests below: undamaged, the same bag analyses with exit 0 (the current
     layout, /pa10/joint_states; the corruption tests use old bags)."""

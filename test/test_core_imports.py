@@ -35,7 +35,7 @@ def test_launcher_does_not_load_rclpy():
 # Layers from the ground up: a module may import its own layer and the ones below, never one above.
 LAYERS = [
     {"__init__", "paths", "atomic_file", "run_data", "core", "wire", "kinematics", "faults",  # numpy-only data and maths
-     "config_error", "interrupt", "cli_values", "output_lock", "number_text", "run_size", "run_steps",
+     "config_error", "interrupt", "cli_values", "output_lock", "output_mark", "number_text", "run_size", "run_steps",
      "json_text"},
     {"arm", "config", "config_yaml"},                                          # an arm's files; a config file
     {"settings"},                                                              # a run's typed settings

@@ -112,7 +112,8 @@ def _bag(tmp_path: Path) -> Path:
 
 REPLAY_CASES = [(["--rate", "0"], "--rate"), (["--rate", "nan"], "--rate"), (["--start-offset", "-1"], "--start-offset"),
                 (["--queue-depth", "0"], "--queue-depth"), (["--wait-for-subscribers", "inf"], "--wait-for-subscribers"),
-                (["--live-hz", "5"], "--live-hz"), (["--clock", "-100"], "--clock")]
+                (["--live-hz", "5"], "--live-hz"), (["--clock", "-100"], "--clock"),
+                (["--config", "garbage.bin"], "--config")]   # without --live: was silently ignored
 
 
 @pytest.mark.parametrize("words,flag", REPLAY_CASES, ids=[" ".join(w) for w, _ in REPLAY_CASES])

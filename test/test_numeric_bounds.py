@@ -288,3 +288,40 @@ def test_a_nodes_duration_is_counted_as_the_launcher_counts_it(tmp_path, domain,
         for p in procs:
             p.communicate(timeout=NODE_TIMEOUT_S + 10)
     assert not (tmp_path / "wire.npz").exists()
+
+
+LINK_CASES = [("--delay-states", "1e308"), ("--jitter-efforts", "1e308"), ("--delay-efforts", "1000.5"),
+              ("--jitter-states", "nan")]
+
+
+@pytest.mark.parametrize("flag,value", LINK_CASES, ids=[" ".join(c) for c in LINK_CASES])
+def test_launch_link_delay_and_jitter_bounded(tmp_path, flag, value):
+    """1e308 ms was accepted: every lockstep step then waited --effort-timeout (a 0.5 s run took ~500 s). A delay
+    or jitter is at most 1000 ms (config.py LINK_DELAY_MAX_MS; later is a lost message, --drop-*)."""
+    _refused(tmp_path, flag, "launch", "--duration", "0.5", flag, value, "--out", tmp_path / "run", "--no-progress")
+
+
+def test_config_link_delay_bounded(tmp_path):
+    cfg = _config(tmp_path, "faults: {state: {delay_ms: 1.0e+308}}")
+    _refused(tmp_path, "faults.state.delay_ms", "launch", "--duration", "0.5", "--config", cfg,
+             "--out", tmp_path / "run", "--no-progress")
+
+
+@pytest.mark.parametrize("value", ["1e308", "inf", "0.5", "7"])
+def test_launch_kill_time_within_the_run(tmp_path, value):
+    """``--kill s1@1e308`` started the graph, then the joint's controller raised OverflowError (rc 1, a .failed
+    folder): a kill time is finite and within the run, 0 <= SECONDS < duration, checked before any node."""
+    _refused(tmp_path, "--kill", "launch", "--duration", "0.5", "--kill", f"s1@{value}", "--out", tmp_path / "run",
+             "--no-progress")
+
+
+def test_config_kill_time_within_the_run(tmp_path):
+    cfg = _config(tmp_path, "faults: {kill_controller_at_s: [1.0e+308, -1, -1, -1, -1, -1, -1]}")
+    _refused(tmp_path, "faults.kill_controller_at_s", "launch", "--duration", "0.5", "--config", cfg,
+             "--out", tmp_path / "run", "--no-progress")
+
+
+def test_launch_kill_of_one_joint_twice_refused(tmp_path):
+    """``--kill s1@0.1 --kill s1@0.2`` silently kept only the last."""
+    _refused(tmp_path, "--kill", "launch", "--duration", "0.5", "--kill", "s1@0.1", "--kill", "s1@0.2", "--restart",
+             "--out", tmp_path / "run", "--no-progress")

@@ -2,6 +2,8 @@
 unrelated files, not the current directory, its parents or the root; ``tune`` resumes only into its own folder.
 Each refusal: exit 2, one line naming the flag, before any run (nothing printed to stdout), inputs byte-identical.
 Tiny runs (0.2 s, pid unless a warm start needs dnbs, no figures)."""
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -97,6 +99,43 @@ def test_the_current_directory_its_parents_and_the_root_are_refused_up_front(tmp
     r = run_cli("simulate", "--controller", "pid", *TINY, "--out", given, "--force")
     _refused(r, "--out")
     assert _tree(tmp_path) == {"a/b/keep": b"x"}
+
+
+@pytest.mark.parametrize("given", ["", ".", ".."])
+def test_launch_record_is_never_the_current_directory_or_its_parents(tmp_path, monkeypatch, given):
+    """``launch --record "" --force`` emptied the current directory and wrote the bag there: --record follows the
+    rule of --out (refused before any node starts)."""
+    here = tmp_path / "a" / "b"
+    here.mkdir(parents=True)
+    (here / "keep").write_text("x")
+    monkeypatch.chdir(here)
+    _refused(run_cli("launch", "--duration", "0.1", "--out", tmp_path / "o", "--record", given, "--force"),
+             "--record")
+    assert _tree(tmp_path) == {"a/b/keep": b"x"}
+
+
+def test_launch_record_force_does_not_wipe_a_folder_of_other_files(tmp_path):
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "keep").write_text("not a bag\n")
+    _refused(run_cli("launch", "--duration", "0.1", "--out", tmp_path / "o", "--record", mine, "--force"),
+             "--record", "not a pa10-dnbs output")
+    _refused(run_cli("launch", "--duration", "0.1", "--out", tmp_path / "o", "--record", mine), "--record", "--force")
+    assert _tree(mine) == {"keep": b"not a bag\n"} and not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("given", ["", ".", "mine"])
+def test_equal_budget_out_is_never_the_current_directory_nor_a_folder_of_other_files(tmp_path, monkeypatch, given):
+    """``scripts/equal_budget.py --out ""`` wrote pid/, dnbs/, ctc/ and comparison.md into the current directory:
+    its --out follows the rule of every --out (a folder of its own tunes and comparison.md is resumed)."""
+    here = tmp_path / "a"
+    (here / "mine").mkdir(parents=True)
+    (here / "mine" / "keep").write_text("x")
+    monkeypatch.chdir(here)
+    r = subprocess.run([sys.executable, str(REPO / "scripts" / "equal_budget.py"), "--out", given, "--duration",
+                        "0.1", "--trials", "1", "--scenarios", "nominal"], capture_output=True, text=True, timeout=120)
+    _refused(r, "--out")
+    assert _tree(tmp_path) == {"a/mine/keep": b"x"}
 
 
 def test_force_replaces_a_previous_output_and_an_empty_folder(tmp_path):

@@ -32,6 +32,7 @@ from rosbags.rosbag2.metadata import dump_qos_v9
 from rosbags.typesys import Stores, get_typestore
 
 from .. import __version__
+from ..output_mark import OUTPUT_MARK, OUTPUT_MARK_TEXT, is_previous_output
 from .mcap_file import McapFileWriter
 
 ROSBAG2_VERSION = 9
@@ -54,10 +55,16 @@ def typestore():
 
 
 def check_bag_path(path: Path, force: bool) -> None:
-    """Refuse an existing path unless ``force``; raises BagExistsError."""
+    """Refuse an existing path unless ``force``, and even with ``force`` anything but an empty folder or a bag this
+    writer made (it holds OUTPUT_MARK): a user's folder is never emptied for a bag. Raises BagExistsError."""
     path = Path(path)
-    if path.exists() and not force:
+    if os.path.lexists(path) and not force:
         raise BagExistsError(f"{path} exists; pass --force to replace it")
+    if os.path.lexists(path) and (path.is_symlink() or not path.is_dir()):
+        raise BagExistsError(f"{path} exists and is not a folder: --force replaces only a bag folder")
+    if path.is_dir() and any(path.iterdir()) and not is_previous_output(path):
+        raise BagExistsError(f"{path} holds files that are not a pa10-dnbs bag: --force replaces only an empty "
+                             "folder or a bag pa10-dnbs recorded; remove it yourself or choose another folder")
     if not path.parent.is_dir():
         raise FileNotFoundError(f"{path.parent}: no such directory for the bag")
 
@@ -76,11 +83,9 @@ class BagWriter:
         path = Path(path)
         check_bag_path(path, force)
         if path.exists():
-            if path.is_dir() and not path.is_symlink():
-                shutil.rmtree(path)
-            else:
-                path.unlink()
+            shutil.rmtree(path)   # an empty folder or a bag of ours (check_bag_path)
         path.mkdir(mode=0o755)
+        (path / OUTPUT_MARK).write_text(OUTPUT_MARK_TEXT)   # what a later --force may replace (check_bag_path)
         self.path = path
         self.mcap_path = path / f"{path.name}.mcap"
         self.compression = compression

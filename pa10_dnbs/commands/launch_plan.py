@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..accel.choice import resolve_kernel
-from ..bag.bag_writer import check_bag_path
+from ..bag.bag_writer import BagExistsError, check_bag_path
 from ..config import ConfigError, default_config_path
 from ..controller_factory import load_reference_trajectory
 from ..core.checkpoint import checkpoint_dir, load_joint_checkpoints, network_degrees
@@ -15,12 +15,12 @@ from ..live.options import check_live_options
 from ..loop.scheduling import granted_priority
 from ..output_lock import lock_output
 from ..report.metrics_file import metrics_settings
-from ..report.outputs import check_creatable, check_output_dir
+from ..report.outputs import check_output_dir
 from ..run_settings import build_settings
 from ..run_size import check_run_size, say_note
 from ..run_steps import run_steps
 from ..settings import Settings
-from ..supervisor.fault_flags import apply_fault_flags
+from ..supervisor.fault_flags import apply_fault_flags, check_kill_times
 from ..supervisor.graph_run import GraphOptions, loop_reliability, parse_netns
 from ..supervisor.plant_engine import plant_robot_options
 from ..supervisor.robot_options import check_robot_options, robot_domain
@@ -85,6 +85,7 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
     except ValueError as exc:
         raise ConfigError(f"--clock-hz: {exc}") from None
     n_steps = run_steps(duration_s, dt, "simulation.duration_s" if o.duration_s is None else "--duration")
+    check_kill_times(settings.faults, joint_names, n_steps * dt, o.faults.kill)  # before any node starts
     check_run_size(duration_s, n_steps, len(joint_names), graph=True, say=say_note,
                    wall_s=n_steps * dt / o.real_time_factor if o.mode == "realtime" else None)
     trajectory = None
@@ -110,14 +111,21 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
     if refused:  # said once here, rather than by each of the ten nodes in its log
         print(f"launch: {refused}", flush=True)
     if record is not None:
-        record = Path(record).resolve()
+        given, record = Path(record), Path(record).resolve()
         if record == Path(out).resolve() or Path(out).resolve() in record.parents:
             raise ConfigError(f"--record: the bag {record} must not be inside the output directory {out}")
         if not record.parent.is_dir():
             raise ConfigError(f"--record: {record.parent} is not a directory (the bag's folder must exist)")
-        check_creatable(record, "--record")
         lock_output(record, "bag")
-        check_bag_path(record, force)
+        # the rule of --out: never the current directory, its parents, the root, a link or one of the run's
+        # inputs; --force replaces only an empty folder or a bag pa10-dnbs recorded (its OUTPUT_MARK)
+        check_output_dir(given, force, "--record", inputs={"--config": config_path, "--arm": the_arm.file,
+                                                           "arm URDF": the_arm.urdf, "--trajectory": trajectory,
+                                                           "--init-from": init_from})
+        try:
+            check_bag_path(record, force)
+        except BagExistsError as exc:
+            raise ConfigError(f"--record: {exc}") from None
     if controller == "dnbs":  # auto resolved (and c built) once here, before the joint controllers start; the
         # nodes read the resolved kernel from their params (ros_params.yaml) (KernelBuildError if c cannot be built)
         settings = resolve_kernel(settings, say=lambda line: print(f"launch: {line}", flush=True))

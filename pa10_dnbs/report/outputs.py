@@ -22,6 +22,7 @@ import yaml
 from ..json_text import json_text
 from ..kinematics.urdf_chain import UrdfChain
 from ..output_lock import lock_output, release_output
+from ..output_mark import OUTPUT_MARK, OUTPUT_MARK_TEXT, is_previous_output  # noqa: F401 (their home before)
 from ..run_data import RunData
 from .arm_figure import arm_figure
 from .figures import error_figure, startup_figure, torque_figure, tracking_figure
@@ -34,13 +35,8 @@ class OutputExistsError(FileExistsError):
     """The output directory exists and ``--force`` was not given, or cannot be written, or another run uses it."""
 
 
-# The file by which a folder is recognised as a previous pa10-dnbs output: atomic_output_dir writes it into every
-# output (simulate, study, launch, analyse; their interrupted partial outputs too) before the folder is renamed
-# into place. ``--force`` replaces only an empty folder or one holding it: a file name such as report.md at a
-# folder's top is no proof (a thesis folder may hold one).
-OUTPUT_MARK = ".pa10-dnbs-output"
-OUTPUT_MARK_TEXT = ("Written by pa10-dnbs: this folder is a pa10-dnbs output; a later run with --force replaces "
-                    "the folder whole.\n")
+# OUTPUT_MARK (output_mark.py): atomic_output_dir writes it into every output (simulate, study, launch, analyse;
+# their interrupted partial outputs too) before the folder is renamed into place; the bag writer into every bag.
 
 # The longest file name (bytes) a folder may have: its temporary siblings ``.NAME.partial-XXXXXXXX`` and
 # ``.NAME.old-PID`` (atomic_output_dir) must fit in the filesystem's 255.
@@ -100,16 +96,11 @@ def check_output_dir(out: Path, force: bool, flag: str = "--out", inputs: dict |
             raise OutputExistsError(f"output directory exists: {out} holds the partial outputs of an interrupted "
                                     f"run ({mark.get('completed')} of {mark.get('total')} done; use --force to "
                                     "replace it with a complete run)")
-        raise OutputExistsError(f"output directory exists: {out} (use --force to replace it)")
+        raise OutputExistsError(f"output directory exists: {out} (use --force to replace it)" if flag == "--out" else
+                                f"{flag}: {out} exists; pass --force to replace it")
     if any(out.iterdir()) and not is_previous_output(out):
         raise OutputExistsError(f"{flag}: {out} holds files that are not a pa10-dnbs output: --force replaces only "
                                 "an empty folder or a previous output; remove it yourself or choose another folder")
-
-
-def is_previous_output(out: Path) -> bool:
-    """``out`` holds a pa10-dnbs command's output: OUTPUT_MARK at its top (a file, not a link)."""
-    mark = Path(out) / OUTPUT_MARK
-    return mark.is_file() and not mark.is_symlink()
 
 
 def check_name(out: Path, flag: str) -> None:

@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 from dataclasses import dataclass, fields
 
-from ..config import ConfigError
+from ..config import LINK_DELAY_MAX_MS, ConfigError
 from ..faults.link_faults import CORRUPT_KINDS
 from ..settings import FaultSettings, Settings, replace_in
 
@@ -48,15 +48,16 @@ def add_fault_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--fault-joints", default=None, metavar="J,J", help="joints the flags below apply to (default all)")
     g.add_argument("--drop-states", type=float, metavar="FRACTION", help="drop this fraction of state messages")
     g.add_argument("--drop-efforts", type=float, metavar="FRACTION", help="drop this fraction of effort messages")
-    g.add_argument("--delay-states", type=float, metavar="MS", help="delay every state message by MS")
-    g.add_argument("--delay-efforts", type=float, metavar="MS", help="delay every effort message by MS")
-    g.add_argument("--jitter-states", type=float, metavar="MS", help="plus a uniform random 0..MS")
-    g.add_argument("--jitter-efforts", type=float, metavar="MS", help="plus a uniform random 0..MS")
+    g.add_argument("--delay-states", type=float, metavar="MS", help="delay every state message by MS (0-1000)")
+    g.add_argument("--delay-efforts", type=float, metavar="MS", help="delay every effort message by MS (0-1000)")
+    g.add_argument("--jitter-states", type=float, metavar="MS", help="plus a uniform random 0..MS (MS 0-1000)")
+    g.add_argument("--jitter-efforts", type=float, metavar="MS", help="plus a uniform random 0..MS (MS 0-1000)")
     g.add_argument("--corrupt-states", metavar="KIND:FRACTION",
                    help=f"replace the position in this fraction of states by KIND ({', '.join(CORRUPT_KINDS)})")
     g.add_argument("--corrupt-efforts", metavar="KIND:FRACTION", help="replace the torque in this fraction of efforts")
     g.add_argument("--kill", action="append", default=[], metavar="JOINT@SECONDS",
-                   help="the joint's controller process dies (SIGKILL) at this simulated time; repeatable")
+                   help="the joint's controller process dies (SIGKILL) at this simulated time (0 <= SECONDS < "
+                        "duration); repeatable, once per joint")
     g.add_argument("--fault-seed", type=int, default=None, metavar="N", help="seed of the injected faults")
 
 
@@ -97,8 +98,9 @@ def apply_fault_flags(settings: Settings, args: FaultFlags) -> Settings:
         flag = "--" + dest.replace("_", "-")
         if key == "drop_fraction":
             value = _fraction(flag, str(value))
-        elif not (value >= 0.0 and value < float("inf")):
-            raise ConfigError(f"{flag}: expected milliseconds >= 0, got {value!r}")
+        elif not 0.0 <= value <= LINK_DELAY_MAX_MS:
+            raise ConfigError(f"{flag}: expected milliseconds in [0, {LINK_DELAY_MAX_MS:g}] (a later message is a lost "
+                              f"one: --drop-*), got {value!r}")
         _set(faults[direction], key, joints, float(value))
     for dest, direction in (("corrupt_states", "state"), ("corrupt_efforts", "effort")):
         spec = getattr(args, dest)
@@ -111,21 +113,38 @@ def apply_fault_flags(settings: Settings, args: FaultFlags) -> Settings:
                               f"got {spec!r}")
         faults[direction]["corrupt_kind"] = kind
         _set(faults[direction], "corrupt_fraction", joints, _fraction(flag, frac))
+    killed = set()
     for spec in args.kill:
         joint, sep, t = spec.partition("@")
         try:
             t_s = float(t)
         except ValueError:
             t_s = float("nan")
-        if not sep or joint not in joint_names or not t_s >= 0.0:
+        if not sep or joint not in joint_names or not 0.0 <= t_s < float("inf"):
             raise ConfigError(f"--kill: expected JOINT@SECONDS with a joint of {', '.join(joint_names)} "
-                              f"and SECONDS >= 0, got {spec!r}")
+                              f"and finite SECONDS >= 0, got {spec!r}")
+        if joint in killed:  # a joint's controller dies once: a second time would silently replace the first
+            raise ConfigError(f"--kill: joint {joint} given twice (a joint's controller is killed once per run), "
+                              f"got {spec!r}")
+        killed.add(joint)
         _set(faults, "kill_controller_at_s", [joint_names.index(joint)], t_s)
     if args.fault_seed is not None:
         if args.fault_seed < 0:
             raise ConfigError(f"--fault-seed: expected an integer >= 0, got {args.fault_seed}")
         faults["seed"] = args.fault_seed
     return replace_in(settings, "faults", FaultSettings.of(faults))
+
+
+def check_kill_times(faults: FaultSettings, joint_names, duration_s: float, kill: tuple[str, ...] = ()) -> None:
+    """Every kill time (``faults.kill_controller_at_s``, < 0: never) lies within the run, 0 <= t < ``duration_s``
+    [s]: a later (or infinite) one would never happen, and the node counts its step from it. ConfigError naming
+    --kill when the joint was named by one of ``kill`` (the flag's JOINT@SECONDS items), else the config key."""
+    from_flag = {spec.partition("@")[0] for spec in kill}
+    for joint, t_s in zip(joint_names, faults.kill_controller_at_s):
+        if t_s >= 0.0 and not t_s < duration_s:
+            where = "--kill" if joint in from_flag else "faults.kill_controller_at_s"
+            raise ConfigError(f"{where}: joint {joint}'s controller would be killed at {t_s:g} s, not within the "
+                              f"{duration_s:g} s run (0 <= SECONDS < duration; < 0 in the config: never)")
 
 
 def faults_active(faults: FaultSettings) -> bool:
