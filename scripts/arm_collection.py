@@ -17,7 +17,6 @@ joint, the torque it needs and its limit; not run: study/feasibility.py).
 """
 from __future__ import annotations
 
-import argparse
 import subprocess
 import sys
 import time
@@ -27,6 +26,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from pa10_dnbs.atomic_file import atomic_path, write_json  # noqa: E402
+from pa10_dnbs.cli_values import OneLineParser  # noqa: E402
 from pa10_dnbs.interrupt import EXIT_INTERRUPTED  # noqa: E402
 from pa10_dnbs.study.collection import (ARMS, COLLECTION_VERSION, MODES, arm_file, collection_root,  # noqa: E402
                                         compact_table, markdown_table, run_row, study_summary, study_table)
@@ -35,7 +35,7 @@ REQUIREMENTS = ROOT / "requirements-collection.txt"
 
 
 def _args(argv):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = OneLineParser(description=__doc__.splitlines()[0])
     ap.add_argument("--arms", default=",".join(ARMS), help=f"comma-separated, of: {', '.join(ARMS)}")
     ap.add_argument("--modes", default=",".join(MODES), help="bare, arm_file or both")
     ap.add_argument("--duration", type=float, default=20.0, help="s per run (the window is [10, 20) s at 20 s)")

@@ -10,7 +10,6 @@ bus run equals the plain run bit for bit (timeseries.npz). Each run on its own l
 """
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import re
@@ -27,6 +26,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "scripts"))
 
 from bench_record import record_path  # noqa: E402
+from flag_values import folder  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser, seconds, whole_in  # noqa: E402
 
 from pa10_dnbs.supervisor.domain_ids import lease_domain  # noqa: E402
@@ -93,20 +93,12 @@ class _Keep:
         return None
 
 
-def _workdir(text: str) -> Path:
-    """``--workdir``'s argparse type: a directory, or a path to make one at (not an existing file)."""
-    path = Path(text)
-    if path.exists() and not path.is_dir():
-        raise argparse.ArgumentTypeError(f"{text!r} is a file, not a directory")
-    return path
-
-
 def main() -> int:
     ap = OneLineParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=seconds, default=3.0)
     ap.add_argument("--rounds", type=whole_in(1), default=2)
     ap.add_argument("--json", type=record_path, default=None)
-    ap.add_argument("--workdir", type=_workdir, default=None, help="keep every run's output here (default: a "
+    ap.add_argument("--workdir", type=folder, default=None, help="keep every run's output here (default: a "
                     "temporary folder, removed at the end)")
     a = ap.parse_args()
     results = []

@@ -12,7 +12,6 @@ arm differs by more than ``--tolerance``.
 """
 from __future__ import annotations
 
-import argparse
 import sys
 import sysconfig
 from pathlib import Path
@@ -20,6 +19,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from pa10_dnbs.arm import load_arm  # noqa: E402
+from pa10_dnbs.cli_values import OneLineParser, positive, whole_in  # noqa: E402
 from pa10_dnbs.config_error import ConfigError  # noqa: E402
 from pa10_dnbs.plant.dynamics_check import compare_with_mujoco  # noqa: E402
 
@@ -39,11 +39,11 @@ def collection_root() -> Path | None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = OneLineParser(description=__doc__.splitlines()[0])
     ap.add_argument("arms", nargs="*", help="preset names, arm files or URDFs")
     ap.add_argument("--collection", action="store_true", help="every serial arm of example-robot-data")
-    ap.add_argument("--states", type=int, default=20, help="random states per arm (default 20)")
-    ap.add_argument("--tolerance", type=float, default=TOLERANCE, help=f"largest relative difference allowed "
+    ap.add_argument("--states", type=whole_in(1), default=20, help="random states per arm (default 20)")
+    ap.add_argument("--tolerance", type=positive, default=TOLERANCE, help=f"largest relative difference allowed "
                     f"(default {TOLERANCE:g})")
     args = ap.parse_args(argv)
     specs: list[str] = list(args.arms)

@@ -8,13 +8,13 @@ Exit 1 when a target is not met or a run left the torque limits or went non-fini
 """
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from pa10_dnbs.arm import ArmError  # noqa: E402
+from pa10_dnbs.cli_values import OneLineParser, seconds  # noqa: E402
 from pa10_dnbs.config import ConfigError  # noqa: E402
 from pa10_dnbs.sim.engine_comparison import engine_table, run_engines, target_lines  # noqa: E402
 
@@ -22,10 +22,10 @@ CONTROLLERS = ("dnbs", "pid", "ctc")
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = OneLineParser(description=__doc__.splitlines()[0])
     parser.add_argument("--arms", default="pa10,iiwa,panda", help="comma-separated arms (default pa10,iiwa,panda)")
     parser.add_argument("--controllers", default=",".join(CONTROLLERS), help="comma-separated, of dnbs,pid,ctc")
-    parser.add_argument("--duration", type=float, default=20.0, metavar="SECONDS", help="simulated time (default 20)")
+    parser.add_argument("--duration", type=seconds, default=20.0, metavar="SECONDS", help="simulated time (default 20)")
     args = parser.parse_args(argv)
     controllers = [c for c in args.controllers.split(",") if c]
     bad = [c for c in controllers if c not in CONTROLLERS]

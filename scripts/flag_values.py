@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Callable, Sequence
+from pathlib import Path
 
 
 def names_in(choices: Sequence[str]):
@@ -37,3 +38,11 @@ def list_of(item: Callable[[str], object], allow_empty: bool = False):
         return [item(p) for p in parts]  # each item's error names its text
     check.__name__ = "list"
     return check
+
+
+def folder(text: str) -> Path:
+    """A folder to keep output in: an existing directory, or a path to make one at (not an existing file)."""
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is a file, not a directory")
+    return path

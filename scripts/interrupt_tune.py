@@ -13,7 +13,6 @@ interrupted try then runs the same command again and checks that it completes (r
 """
 from __future__ import annotations
 
-import argparse
 import datetime
 import json
 import os
@@ -27,6 +26,12 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "scripts"))
+
+from bench_record import record_path  # noqa: E402
+from pa10_dnbs.cli_values import OneLineParser, seconds, whole_in  # noqa: E402
+
 HANG_S = 60.0   # a try not ended this long after its SIGINT counts as a hang (then killed)
 
 
@@ -107,20 +112,18 @@ def resume(cmd: list[str], env: dict, out: Path, trials: int) -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--tries", type=int, default=50,
+    p = OneLineParser(description=__doc__.splitlines()[0])
+    p.add_argument("--tries", type=whole_in(1), default=50,
                    help="interrupted runs (default 50); a run that ends before its SIGINT does not count, and is "
                         "listed (at most --tries of them)")
     p.add_argument("--seed", type=int, default=0, help="seed of the random moments (default 0)")
-    p.add_argument("--trials", type=int, default=3, help="--trials of each tune (default 3)")
-    p.add_argument("--duration", type=float, default=1.0, help="--duration of each tune [s] (default 1)")
-    p.add_argument("--resume-every", type=int, default=5, metavar="K",
+    p.add_argument("--trials", type=whole_in(1), default=3, help="--trials of each tune (default 3)")
+    p.add_argument("--duration", type=seconds, default=1.0, help="--duration of each tune [s] (default 1)")
+    p.add_argument("--resume-every", type=whole_in(1), default=5, metavar="K",
                    help="run the same command again after every K-th try, to completion (default 5; 1: every try)")
-    p.add_argument("--out", type=Path, default=None, metavar="FILE",
+    p.add_argument("--out", type=record_path, default=None, metavar="FILE",
                    help="write the table and summary: Markdown if FILE ends in .md, else JSON")
     args = p.parse_args(argv)
-    if args.tries < 1 or args.resume_every < 1 or args.trials < 1 or not args.duration > 0:
-        p.error("--tries, --resume-every, --trials must be >= 1 and --duration > 0")
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))   # stopped: the try's processes and folder go too
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     rng = random.Random(args.seed)

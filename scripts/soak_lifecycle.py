@@ -32,7 +32,6 @@ timed out an effort, hit a deadline or left something behind.
 """
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import re
@@ -47,7 +46,12 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "scripts"))
 
+from bench_record import record_path  # noqa: E402
+from flag_values import folder  # noqa: E402
+
+from pa10_dnbs.cli_values import OneLineParser, positive, seconds, whole_in  # noqa: E402
 from pa10_dnbs.supervisor.shm_cleanup import shm_files, unused  # noqa: E402
 
 HUNG_MARK = "Timeout ("  # faulthandler's header when a node's teardown outlived its limit
@@ -203,21 +207,19 @@ def _median(xs: list[float]) -> float | None:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--runs", type=int, default=20, help="back-to-back runs (default 20)")
-    ap.add_argument("--duration", type=float, default=1.0, help="simulated seconds per run (default 1)")
-    ap.add_argument("--busy", type=int, default=0, help="CPU-bound processes beside the soak (default 0)")
+    ap = OneLineParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", type=whole_in(1), default=20, help="back-to-back runs (default 20)")
+    ap.add_argument("--duration", type=seconds, default=1.0, help="simulated seconds per run (default 1)")
+    ap.add_argument("--busy", type=whole_in(0), default=0, help="CPU-bound processes beside the soak (default 0)")
     ap.add_argument("--config", type=Path, help="the launcher's --config")
-    ap.add_argument("--json", type=Path, default=Path("soak_lifecycle.json"), help="where the JSON goes")
-    ap.add_argument("--keep", type=Path, help="copy the output of every run that went wrong here")
+    ap.add_argument("--json", type=record_path, default=Path("soak_lifecycle.json"), help="where the JSON goes")
+    ap.add_argument("--keep", type=folder, help="copy the output of every run that went wrong here")
     ap.add_argument("--catch-hangs", action="store_true",
                     help="gdb / py-spy stacks of a node whose teardown outlasts --catch-after (needs --keep)")
-    ap.add_argument("--catch-after", type=float, default=1.5, help="seconds after its CPU line (default 1.5)")
-    ap.add_argument("--run-timeout", type=float, default=300.0, help="wall seconds before a run is stopped")
+    ap.add_argument("--catch-after", type=positive, default=1.5, help="seconds after its CPU line (default 1.5)")
+    ap.add_argument("--run-timeout", type=positive, default=300.0, help="wall seconds before a run is stopped")
     ap.add_argument("extra", nargs="*", help="more launcher arguments (after --)")
     args = ap.parse_args()
-    if args.runs < 1 or args.busy < 0 or not args.duration > 0:
-        ap.error("need --runs >= 1, --busy >= 0 and --duration > 0")
     if args.catch_hangs and args.keep is None:
         ap.error("--catch-hangs needs --keep DIR")
     if args.keep is not None:

@@ -14,7 +14,6 @@ then takes two of wall time.
 """
 from __future__ import annotations
 
-import argparse
 import json
 import re
 import subprocess
@@ -24,6 +23,9 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from pa10_dnbs.cli_values import RTF_MAX, RTF_MIN, OneLineParser, number_in, positive  # noqa: E402
 
 
 def rss_kb(pid: int) -> int | None:
@@ -37,16 +39,12 @@ def rss_kb(pid: int) -> int | None:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--minutes", type=float, default=10.0, help="simulated minutes (default 10)")
-    ap.add_argument("--rtf", type=float, default=0.5,
-                    help="real-time factor of the paced run (launch --rtf; default 0.5, sustainable here)")
+    ap = OneLineParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--minutes", type=positive, default=10.0, help="simulated minutes (default 10)")
+    ap.add_argument("--rtf", type=number_in(RTF_MIN, RTF_MAX, low_open=False), default=0.5,
+                    help="real-time factor of the paced run (launch --rtf's range; default 0.5, sustainable here)")
     ap.add_argument("--out", type=Path, default=ROOT / "runs" / "soak")
     args = ap.parse_args()
-    if not (args.minutes > 0 and 0 < args.rtf <= 100):
-        print(f"soak_realtime: --minutes must be > 0 and --rtf in (0, 100], got {args.minutes:g} and {args.rtf:g}",
-              file=sys.stderr)
-        return 2
     duration = args.minutes * 60.0
     cmd = [sys.executable, "-m", "pa10_dnbs.cli", "launch", "--mode", "realtime", "--rtf", str(args.rtf),
            "--duration", str(duration),
