@@ -22,9 +22,12 @@ import shlex
 import sys
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_record  # noqa: E402
+
+from pa10_dnbs.cli_values import OneLineParser  # noqa: E402
 
 BEGIN = "<!-- figures: begin (scripts/readme_figures.py) -->"
 END = "<!-- figures: end -->"
@@ -168,11 +171,19 @@ def render(readme: str, block: list[str]) -> str:
     return "\n".join(lines[:i + 1] + block + lines[j:])
 
 
+def records_folder(text: str) -> Path:
+    """``--records``' argparse type: an existing folder (a missing one would render an empty block)."""
+    path = Path(text)
+    if not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is not a folder of benchmark records")
+    return path
+
+
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = OneLineParser(description=__doc__.splitlines()[0])
     ap.add_argument("--check", action="store_true", help="exit 1 if the README's block differs from the records'")
     ap.add_argument("--readme", type=Path, default=bench_record.ROOT / "README.md")
-    ap.add_argument("--records", type=Path, default=bench_record.RECORDS, help="the records' folder (benchmarks/)")
+    ap.add_argument("--records", type=records_folder, default=bench_record.RECORDS, help="the records' folder (benchmarks/)")
     args = ap.parse_args(argv)
     try:
         old = args.readme.read_text()

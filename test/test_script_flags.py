@@ -59,6 +59,7 @@ CASES = [
     ("dynamics_check", ["--tolerance", "nan"], "--tolerance"),
     ("engine_comparison", ["--duration", "inf"], "--duration"),
     ("arm_collection", ["--jobs", "abc", "--out", "{out}"], "--jobs"),
+    ("readme_figures", ["--records", "{missing}", "--check"], "--records"),
     ("intake_timing", ["--joints", "abc"], "--joints"),
     ("intake_timing", ["--points", "-5"], "--points"),
     ("intake_timing", ["--points", "0"], "--points"),
