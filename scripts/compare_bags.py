@@ -10,13 +10,13 @@ hold, how many payloads differ, and the stamps only one bag has. Exit 0 when eve
 """
 from __future__ import annotations
 
-import argparse
 import struct
 import sys
 from pathlib import Path
 
 from pa10_dnbs.bag.analysis import bag_arm, bag_joint_names
 from pa10_dnbs.bag.bag_reader import Bag, BagError
+from pa10_dnbs.cli_values import OneLineParser
 
 STAMP = struct.Struct("<iI")  # std_msgs/Header stamp after the 4-byte CDR encapsulation: sec, nanosec
 
@@ -31,7 +31,7 @@ def stamped(bag: Bag, topic: str) -> dict[int, bytes]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = OneLineParser(description=__doc__.splitlines()[0])
     ap.add_argument("bag_a", type=Path)
     ap.add_argument("bag_b", type=Path)
     ap.add_argument("--topics", nargs="+", default=None,

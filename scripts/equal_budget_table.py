@@ -9,15 +9,15 @@ Each DIR is the --out of one ``scripts/equal_budget.py``. Exit 2 with one line w
 """
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
 from pa10_dnbs.tune.comparison import arms_table
+from pa10_dnbs.cli_values import OneLineParser
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()))
+    parser = OneLineParser(description=" ".join(__doc__.split("\n\n")[0].split()))
     parser.add_argument("dirs", nargs="+", type=Path, metavar="DIR", help="comparison directories, one per arm")
     args = parser.parse_args(argv)
     try:

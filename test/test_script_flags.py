@@ -60,6 +60,7 @@ CASES = [
     ("engine_comparison", ["--duration", "inf"], "--duration"),
     ("arm_collection", ["--jobs", "abc", "--out", "{out}"], "--jobs"),
     ("readme_figures", ["--records", "{missing}", "--check"], "--records"),
+    ("compare_bags", ["{dir}", "{dir}", "--topics"], "--topics"),
     ("intake_timing", ["--joints", "abc"], "--joints"),
     ("intake_timing", ["--points", "-5"], "--points"),
     ("intake_timing", ["--points", "0"], "--points"),
