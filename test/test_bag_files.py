@@ -118,6 +118,26 @@ def test_force_replaces_only_an_empty_folder_or_a_bag_of_ours(tmp_path):
     assert (tmp_path / "empty" / "metadata.yaml").is_file()
 
 
+def test_force_replaces_a_bag_of_ours_recorded_before_bags_were_marked(tmp_path):
+    """runs/main_bag of an earlier scripts/run_main.sh has no mark: known by its two files and its MCAP header
+    (library pa10_dnbs), it is replaced as before; the same two files written by another tool are not."""
+    from pa10_dnbs.output_mark import OUTPUT_MARK
+
+    bag = _write_bag(tmp_path / "b")
+    (bag / OUTPUT_MARK).unlink()
+    BagWriter(bag, force=True).close()
+    assert (bag / OUTPUT_MARK).is_file()
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "metadata.yaml").write_text("rosbag2_bagfile_information: {}\n")
+    profile, library = b"ros2", b"ros2 bag record"
+    header = len(profile).to_bytes(4, "little") + profile + len(library).to_bytes(4, "little") + library
+    (other / "other.mcap").write_bytes(b"\x89MCAP0\r\n" + bytes([1]) + len(header).to_bytes(8, "little") + header)
+    with pytest.raises(BagExistsError, match="not a pa10-dnbs bag"):
+        BagWriter(other, force=True)
+    assert sorted(f.name for f in other.iterdir()) == ["metadata.yaml", "other.mcap"]
+
+
 def test_a_complete_run_bag_analyses(tmp_path):
     """The baseline for the corruption tests below: undamaged, the same bag analyses with exit 0 (the current
     layout, /pa10/joint_states; the corruption tests use old bags)."""
