@@ -21,20 +21,23 @@ import json
 import re
 from pathlib import Path
 
+import numpy as np
 import yaml
 
 from .config_error import ConfigError
 from .config_yaml import load_strict
 from .core.joint_trajectory import JointTrajectory, TrajectoryError, check_trajectory, trajectory_from_mapping
-from .core.trajectory_reference import check_span
+from .core.trajectory_reference import MAX_TIME_FROM_START_S, check_span
 from .run_size import say_note
 
 SAY_YAML_BYTES = 1_000_000   # a YAML trajectory text longer than this is announced before it is read
 
 
-#: A character outside printable ASCII (and line breaks), or a backslash: ``plain_json`` leaves such a text to
-#: the YAML reader (it refuses some of them, e.g. a tab or DEL, and reads escapes and line separators its own way).
-_NOT_PLAIN = re.compile(r"[^\n\r\x20-\x7e]|\\")
+#: A character outside printable ASCII (and tabs and line breaks: JSON whitespace), or a backslash: ``plain_json``
+#: leaves such a text to the YAML reader (it refuses some of them, e.g. DEL, and reads escapes and line separators
+#: its own way). A tab is JSON's whitespace (``json.dumps(d, indent="\t")``, ``jq --tab``) but not YAML's
+#: indentation: ``json`` reads it (a tab inside a string is refused by ``json`` and left to the YAML reader).
+_NOT_PLAIN = re.compile(r"[^\t\n\r\x20-\x7e]|\\")
 
 
 class _NotPlain(Exception):
@@ -53,12 +56,13 @@ def _no_constant(name: str):
 
 
 def plain_json(text: str):
-    """``text``'s document read by ``json`` when it is plain JSON: printable ASCII without a backslash, no key
+    """``text``'s document read by ``json`` when it is plain JSON: printable ASCII or tabs without a backslash, no key
     given twice in an object, no NaN or Infinity, not nested past Python's recursion limit, no integer past its
     4300 digits; else None (read it with config_yaml.load_strict). load_strict reads such a document to the same
     values (test/test_trajectory_intake_exact.py): numbers alike (an int, or a float of the same bits: ``-0.0``,
     ``1e5``, ``1e999``), strings with nothing to unescape, true / false / null; the valid JSON layouts PyYAML
-    refuses (a key and its ':' on two lines, a key of over 1024 characters) are read. ~100x faster."""
+    refuses (a key and its ':' on two lines, a key of over 1024 characters, tabs between tokens) are read.
+    ~100x faster."""
     if _NOT_PLAIN.search(text) is not None:
         return None
     try:
@@ -85,6 +89,29 @@ def read_trajectory(path: Path, say=None) -> JointTrajectory:
     except UnicodeDecodeError:
         raise TrajectoryError("not a text file") from None
     return trajectory_from_mapping(data)
+
+
+def check_times(traj: JointTrajectory) -> None:
+    """TrajectoryError (one line) for a time_from_start that ``load_trajectory_file`` refuses whatever the arm:
+    not finite, before 0, or past ``MAX_TIME_FROM_START_S`` (every point, in any order)."""
+    t = np.asarray(traj.time_from_start_s, dtype=float)
+    bad = ~((t >= 0) & (t <= MAX_TIME_FROM_START_S))   # NaN included
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        raise TrajectoryError(f"points[{i}].time_from_start = {t[i]:g} s is out of range (finite, from 0 to the "
+                              f"longest trajectory followed, {MAX_TIME_FROM_START_S:g} s)")
+
+
+def read_sendable(path: Path) -> JointTrajectory:
+    """The file's trajectory for the trajectory sender, read as ``--trajectory`` reads it (``read_trajectory``)
+    with its times checked (``check_times``): the checks against an arm are the receiving node's. TrajectoryError
+    ``trajectory <path>: <what is wrong>`` or OSError otherwise."""
+    try:
+        traj = read_trajectory(path)
+        check_times(traj)
+    except TrajectoryError as exc:
+        raise TrajectoryError(f"trajectory {path}: {exc}") from None
+    return traj
 
 
 def load_trajectory_file(path: Path, arm, say=say_note) -> JointTrajectory:

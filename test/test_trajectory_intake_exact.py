@@ -120,9 +120,10 @@ def test_plain_json_reads_what_the_strict_yaml_reader_reads(cfg):
 
 @pytest.mark.parametrize("text", ['{"a": 1, "a": 2}', '{"a": {"b": 1, "b": 1}}', '{"a": NaN}', '{"a": -Infinity}',
                                   "[" * 5000 + "]" * 5000, '{"a": ' + "1" * 5000 + "}", '{"a": "\\u00e9"}',
-                                  '{"a":\t1}', '{"a": "\x7f"}', '{"a": 1} x', "", "a: 1", '\ufeff{"a": 1}'])
+                                  '{"a": "x\ty"}', '{"a": "\x7f"}', '{"a": 1} x', "", "a: 1", '\ufeff{"a": 1}'])
 def test_what_plain_json_leaves_to_the_strict_yaml_reader(text):
-    """A key given twice, NaN, nesting past the recursion limit, a 5000-digit integer, an escape, a tab, DEL,
+    """A key given twice, NaN, nesting past the recursion limit, a 5000-digit integer, an escape, a tab in a string
+    (a tab between tokens is JSON's whitespace: test_trajectory_misuse.py), DEL,
     not JSON: the strict YAML reader reads it (or says what is wrong in its one line), as before."""
     assert plain_json(text) is None
 

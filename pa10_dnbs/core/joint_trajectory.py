@@ -35,26 +35,57 @@ class JointTrajectory:
         return float(self.time_from_start_s[-1])
 
 
+_FLOAT_OVERFLOW = 2**1024 - 2**970   # the least whole number that float() refuses (it would round to 2**1024)
+
+
+def _too_large(value, where: str) -> TrajectoryError:
+    """The one line for a whole number past the largest float (~1.8e308): its size, not its digits."""
+    bits = abs(value).bit_length()   # str() of an int past 4300 digits raises (Python's int_max_str_digits)
+    digits = len(str(abs(value))) if bits <= 14_000 else f"about {int(bits * 0.30103)}"
+    return TrajectoryError(f"{where}: a whole number of {digits} digits is too large for a float (at most ~1.8e308)")
+
+
 def _seconds(value, where: str) -> float:
-    """time_from_start as seconds (a number) or {sec, nanosec} (builtin_interfaces/Duration)."""
+    """time_from_start as seconds (a number) or {sec, nanosec} (builtin_interfaces/Duration; at least one)."""
     if isinstance(value, dict):
         unknown = set(value) - {"sec", "nanosec"}
         if unknown:
             raise TrajectoryError(f"{where}: unknown key {sorted(unknown)[0]!r} (expected sec, nanosec)")
+        if not value:
+            raise TrajectoryError(f"{where}: {{}} gives no time (expected sec and nanosec)")
         sec, nanosec = value.get("sec", 0), value.get("nanosec", 0)
         if not all(isinstance(v, int) and not isinstance(v, bool) for v in (sec, nanosec)) or not 0 <= nanosec < 10**9:
             raise TrajectoryError(f"{where}: sec and nanosec must be integers, nanosec in [0, 1e9)")
-        return sec + nanosec * 1e-9
+        try:
+            return sec + nanosec * 1e-9
+        except OverflowError:
+            raise _too_large(sec, f"{where}.sec") from None
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise TrajectoryError(f"{where}: expected seconds (a number) or {{sec, nanosec}}, got {value!r}")
-    return float(value)
+        raise TrajectoryError(f"{where}: expected seconds (a number) or {{sec, nanosec}}, got {_short(value)}")
+    try:
+        return float(value)
+    except OverflowError:
+        raise _too_large(value, where) from None
 
 
 def _numbers(value, where: str) -> list[float]:
     if not isinstance(value, (list, tuple)) or any(isinstance(v, bool) or not isinstance(v, (int, float))
                                                   for v in value):
-        raise TrajectoryError(f"{where}: expected a list of numbers, got {value!r}")
-    return [float(v) for v in value]
+        raise TrajectoryError(f"{where}: expected a list of numbers, got {_short(value)}")
+    try:
+        return [float(v) for v in value]
+    except OverflowError:
+        i, v = next((i, v) for i, v in enumerate(value) if isinstance(v, int) and abs(v) >= _FLOAT_OVERFLOW)
+        raise _too_large(v, f"{where}[{i}]") from None
+
+
+def _short(value) -> str:
+    """``value``'s repr, cut to 80 characters (a message stays one readable line)."""
+    try:
+        text = repr(value)
+    except ValueError:   # an int past Python's 4300 digits in it
+        return "a value too long to show"
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 POINT_KEYS = ("positions", "velocities", "accelerations", "effort", "time_from_start")
@@ -70,6 +101,8 @@ def trajectory_from_mapping(data) -> JointTrajectory:
     unknown = set(data) - {"joint_names", "points", "header"}
     if unknown:
         raise TrajectoryError(f"unknown key {sorted(unknown)[0]!r} (expected joint_names, points)")
+    if "header" in data and not isinstance(data["header"], dict):
+        raise TrajectoryError(f"header: expected a mapping (stamp, frame_id) or none, got {_short(data['header'])}")
     names = data.get("joint_names")
     if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
         raise TrajectoryError("joint_names: expected a non-empty list of joint names")

@@ -11,11 +11,15 @@ has reached S s of simulated time; then it sends the files in order, ``--gap`` s
 ``--clock-gap`` s of simulated time apart (/clock: independent of how fast the graph runs), reliable, so none
 is lost and they arrive in order. ``--stamp S``: header.stamp (0, the default: the trajectory starts
 at the first step the reference node has not yet published). Prints one ``sent FILE`` line per file. Exit 0
-once every message is acknowledged, 1 on a timeout, 2 on a file it cannot read.
+once every message is acknowledged, 1 on a timeout, 2 on a file it cannot read or a flag out of range (one
+line, before ROS starts), 130 on Ctrl-C. It refuses a file whose times --trajectory would refuse as out of range
+(not finite, before 0, past ``MAX_TIME_FROM_START_S``: ``trajectory_file.read_sendable``), so no time wraps on
+the wire (builtin_interfaces' sec is an int32), and a --stamp past what header.stamp carries.
 """
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 import threading
@@ -30,15 +34,45 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from ..core.joint_trajectory import JointTrajectory as Trajectory
 from ..core.joint_trajectory import TrajectoryError
-from ..trajectory_file import read_trajectory
-from ..wire.topics import CLOCK, DEFAULT_NS, TRAJECTORY, resolve
+from ..trajectory_file import read_sendable
+from ..wire.topics import CLOCK, DEFAULT_NS, TRAJECTORY, check_topic_name, resolve
 from .reference_node import TRAJECTORY_QOS
+
+
+INT32_MAX = 2**31 - 1   # builtin_interfaces Time/Duration sec is an int32: a larger one wraps on the wire
+MAX_WAIT_S = 3600.0     # the longest --wait [s]
+SAY_WAITING_S = 1.0     # a wait for the subscriber or /clock longer than this is said in one line (stderr)
+
+
+def _stamp_ns(stamp_s: float) -> int:
+    """--stamp [s] as whole nanoseconds, or ValueError: it must be finite, >= 0 and its sec fit an int32."""
+    if not math.isfinite(stamp_s) or stamp_s < 0:
+        raise ValueError(f"--stamp: expected simulated seconds, finite and >= 0, got {stamp_s:g}")
+    ns = int(round(stamp_s * 1e9)) if stamp_s < 2.0**31 else 2**31 * 10**9
+    if ns // 10**9 > INT32_MAX:
+        raise ValueError(f"--stamp: {stamp_s:g} s is past what header.stamp carries ({INT32_MAX} s, int32 sec)")
+    return ns
+
+
+def check_args(args) -> None:
+    """ValueError (one line naming the flag) for a flag out of range; nothing of ROS has started yet."""
+    try:
+        check_topic_name(args.namespace)
+    except ValueError as exc:
+        raise ValueError(f"--namespace: {exc}") from None
+    if not (math.isfinite(args.wait) and 0 < args.wait <= MAX_WAIT_S):
+        raise ValueError(f"--wait: expected seconds in (0, {MAX_WAIT_S:g}], got {args.wait:g}")
+    for flag in ("after_clock", "gap", "clock_gap"):
+        value = getattr(args, flag)
+        if not (math.isfinite(value) and value >= 0):
+            raise ValueError(f"--{flag.replace('_', '-')}: expected seconds, finite and >= 0, got {value:g}")
+    _stamp_ns(args.stamp)
 
 
 def message(traj: Trajectory, stamp_s: float) -> JointTrajectory:
     """The ROS message of ``traj`` with header.stamp ``stamp_s`` [s]."""
     msg = JointTrajectory()
-    msg.header.stamp.sec, ns = divmod(int(round(stamp_s * 1e9)), 10**9)
+    msg.header.stamp.sec, ns = divmod(_stamp_ns(stamp_s), 10**9)
     msg.header.stamp.nanosec = ns
     msg.joint_names = list(traj.joint_names)
     for i, t in enumerate(traj.time_from_start_s):
@@ -70,7 +104,12 @@ def main(argv=None) -> int:
                     help="wall time to wait for the subscriber, /clock and each acknowledgement (default 60)")
     args = ap.parse_args(argv)
     try:
-        msgs = [(f, message(read_trajectory(f), args.stamp)) for f in args.files]
+        check_args(args)
+    except ValueError as exc:
+        print(f"trajectory_sender: error: {exc}", file=sys.stderr)
+        return 2
+    try:
+        msgs = [(f, message(read_sendable(f), args.stamp)) for f in args.files]
     except (TrajectoryError, OSError) as exc:
         print(f"trajectory_sender: error: {exc}", file=sys.stderr)
         return 2
@@ -78,6 +117,9 @@ def main(argv=None) -> int:
     node = rclpy.create_node("trajectory_sender")
     try:
         return _send(node, msgs, args)
+    except KeyboardInterrupt:
+        print(INTERRUPTED, file=sys.stderr, flush=True)
+        return EXIT_INTERRUPTED
     finally:  # a short-lived client: its participant is destroyed, so Fast DDS removes its /dev/shm files; a
         # teardown that blocks (ros/runtime.py says how it can) is left after 5 s
         closing = threading.Thread(target=lambda: (node.destroy_node(), rclpy.try_shutdown()), daemon=True)
@@ -93,7 +135,13 @@ def _send(node, msgs, args) -> int:
                              QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
                                         reliability=ReliabilityPolicy.BEST_EFFORT))
     deadline = time.monotonic() + args.wait
+    say_at = time.monotonic() + SAY_WAITING_S
     while pub.get_subscription_count() < 1 or clock[0] < args.after_clock:
+        if say_at is not None and time.monotonic() > say_at:
+            print(f"trajectory_sender: waiting up to {args.wait:g} s for "
+                  + (f"a subscriber on {topic}" if pub.get_subscription_count() < 1
+                     else f"/clock to reach {args.after_clock:g} s"), file=sys.stderr, flush=True)
+            say_at = None
         if time.monotonic() > deadline:
             what = (f"no subscriber on {topic}" if pub.get_subscription_count() < 1
                     else f"/clock at {clock[0]:g} s, not yet {args.after_clock:g} s")
@@ -117,15 +165,27 @@ def _send(node, msgs, args) -> int:
         pub.publish(msg)
         print(f"sent {f}" + (f" at /clock {clock[0]:.3f} s" if clock[0] >= 0 else ""), flush=True)
     # the acknowledgements come with the writer's next heartbeat exchange (up to a few seconds): waited once
-    if not pub.wait_for_all_acked(Duration(seconds=args.wait)):
+    # (waited in 0.2 s slices: a Ctrl-C is taken between two, not after the whole --wait)
+    acked_by = time.monotonic() + args.wait
+    while not (acked := pub.wait_for_all_acked(Duration(seconds=0.2))) and time.monotonic() < acked_by:
+        pass
+    if not acked:
         print(f"trajectory_sender: not acknowledged within {args.wait:g} s", file=sys.stderr, flush=True)
         return 1
     return 0
 
 
+INTERRUPTED = "trajectory_sender: interrupted (the files above marked sent were sent)"
+EXIT_INTERRUPTED = 130   # 128 + SIGINT, as the project's other commands (interrupt.py)
+
+
 if __name__ == "__main__":
     sys.stdout.flush()
-    code = main()
+    try:
+        code = main()
+    except KeyboardInterrupt:   # Ctrl-C while ROS starts or while the participant is destroyed
+        print(INTERRUPTED, file=sys.stderr, flush=True)
+        code = EXIT_INTERRUPTED
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)  # no interpreter finalization: rclpy's threads may still be in a teardown left behind
