@@ -177,3 +177,11 @@ def test_ctrl_c_while_the_sender_waits_is_one_line_and_130(domain):
     assert "Traceback" not in sender.output and sender.lines[-1] == (
         "trajectory_sender: interrupted (the files above marked sent were sent)"), sender.output
     assert not any(line.startswith("sent ") for line in sender.lines), sender.output
+
+
+@pytest.mark.parametrize("field", ["positions", "sec"])
+def test_the_sender_refuses_a_whole_number_too_large_for_a_float(tmp_path, field):
+    f = tmp_path / "huge.json"
+    f.write_text(_text("json", field))
+    rc, err = _sender(f)
+    _one_line(rc, err, "trajectory_sender: error:", f, "too large for a float")
