@@ -34,6 +34,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from ..core.joint_trajectory import JointTrajectory as Trajectory
 from ..core.joint_trajectory import TrajectoryError
+from ..interrupt import EXIT_INTERRUPTED
 from ..trajectory_file import read_sendable
 from ..wire.topics import CLOCK, DEFAULT_NS, TRAJECTORY, check_topic_name, resolve
 from .reference_node import TRAJECTORY_QOS
@@ -176,7 +177,6 @@ def _send(node, msgs, args) -> int:
 
 
 INTERRUPTED = "trajectory_sender: interrupted (the files above marked sent were sent)"
-EXIT_INTERRUPTED = 130   # 128 + SIGINT, as the project's other commands (interrupt.py)
 
 
 if __name__ == "__main__":

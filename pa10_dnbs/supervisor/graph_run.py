@@ -19,6 +19,7 @@ import signal
 import time
 from pathlib import Path
 
+from ..interrupt import EXIT_INTERRUPTED
 from .domain_ids import lease_domain
 from .graph_options import GraphFailure, GraphOptions, GraphResult, loop_reliability
 from .netns import in_netns, node_env, parse_netns
@@ -133,4 +134,4 @@ def _hard_stop(procs: list[ManagedProcess], lease, opt: GraphOptions, on_hard_st
         os.write(2, line.encode())
     except OSError:
         pass
-    os._exit(130)
+    os._exit(EXIT_INTERRUPTED)
