@@ -299,8 +299,8 @@ def test_simulate_all_ctrl_c_keeps_the_finished_controllers_marked_partial_and_a
 
 def test_a_partial_output_is_refused_without_force_and_replaced_with_it(tmp_path):
     from pa10_dnbs.output_lock import release_all
-    from pa10_dnbs.report.outputs import (OUTPUT_MARK, OUTPUT_MARK_TEXT, OutputExistsError, atomic_output_dir,
-                                          check_output_dir)
+    from pa10_dnbs.output_mark import OUTPUT_MARK, OUTPUT_MARK_TEXT
+    from pa10_dnbs.report.outputs import OutputExistsError, atomic_output_dir, check_output_dir
     from pa10_dnbs.report.partial import partial_mark, write_partial_mark
 
     out = tmp_path / "o"

@@ -22,7 +22,7 @@ import yaml
 from ..json_text import json_text
 from ..kinematics.urdf_chain import UrdfChain
 from ..output_lock import lock_output, release_output
-from ..output_mark import OUTPUT_MARK, OUTPUT_MARK_TEXT, is_previous_output  # noqa: F401 (their home before)
+from ..output_mark import OUTPUT_MARK, OUTPUT_MARK_TEXT, is_previous_output
 from ..run_data import RunData
 from .arm_figure import arm_figure
 from .figures import error_figure, startup_figure, torque_figure, tracking_figure
