@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from ..config import ConfigError
+from ..derived_settings import check_reference
 from ..settings import Settings, replace_in
 from ..sim.closed_loop import Disturbances
 
@@ -60,7 +61,6 @@ def check_scenario_references(settings: Settings, scenarios) -> None:
     frequency below the Nyquist rate pi / T, the envelope rate, amplitude and centre bounded), before any run: a
     scenario edits typed settings (``replace_in``), which check each value's kind and range but not these bounds
     (fast_reference's x1.5 could put a frequency past pi / T). ConfigError naming the scenario."""
-    from ..derived_settings import check_reference
     for name in scenarios:
         changed, _ = scenario_settings(settings, name, 0)
         try:
