@@ -19,7 +19,7 @@ from ..run_settings import build_settings
 from ..run_steps import run_steps
 from ..supervisor.shm_cleanup import remove_stale, shm_files
 from ..wire.clock_schedule import check_clock_hz
-from ..wire.topics import check_topic_name
+from ..wire.topics import check_topic_name, resolve
 
 
 def robot_argv(options: RobotCommandOptions) -> list[str]:
@@ -39,7 +39,7 @@ def robot_argv(options: RobotCommandOptions) -> list[str]:
             check_topic_name(topic)
         except ValueError as exc:
             raise ConfigError(f"{flag}: {exc}") from None
-    if o.state_topic.lstrip("/") == o.command_topic.lstrip("/"):  # the node runs at the root: x is /x
+    if resolve(o.state_topic, "") == resolve(o.command_topic, ""):  # the node runs at the root: x is /x
         raise ConfigError(f"--command-topic: must differ from --state-topic (both {o.command_topic!r}): the robot "
                           f"would read its own states as commands")
     params = {"config_file": config_path.resolve(), "arm": settings.arm.file, "mode": o.mode, "duration_s": duration_s,
