@@ -19,6 +19,7 @@ about at most once per ``warn_period_s`` (``loop/miss_warnings.py``).
 """
 from __future__ import annotations
 
+import math
 import time
 
 from ...loop.miss_warnings import MissWarnings
@@ -38,14 +39,11 @@ def run_realtime(node, executor, stop) -> None:
     next_housekeeping = clock() + HOUSEKEEPING_S
     # Handshake: the first ``handshake_steps`` steps wait until every joint has answered (the first messages
     # on new DDS connections and the controllers' first steps, which load numpy's linear algebra, take
-    # milliseconds), each at most effort_timeout_s; the tick schedule starts after them. A joint still silent
-    # then misses that step like any other.
+    # milliseconds), each at most effort_timeout_s (start_timeout_s for a robot, whose effort_timeout_s is
+    # infinite); the tick schedule starts after them. A joint still silent then misses that step like any other.
     for k in range(min(p["handshake_steps"], node.n_steps)):
         node.publish_state(k, observed=False)
-        t_end = clock() + p["effort_timeout_s"]
-        ready = None
-        while not node.take_efforts(ready) and not stop.done() and clock() < t_end:
-            ready = node.endpoints.wait(max(0.0, min(SLICE_S, t_end - clock())))
+        _await_handshake(node, k, stop, clock)
         if stop.done():
             return
         warnings.missed(k, node.gate.missing)
@@ -62,6 +60,28 @@ def run_realtime(node, executor, stop) -> None:
         text = warnings.poll(float("inf"))  # what happened since the last warning
         if text:
             log.warning(text)
+
+
+def _await_handshake(node, k: int, stop, clock) -> None:
+    """Wait for every joint's answer to handshake state ``k``, sending the state again to the joints still
+    missing every ``resend_s``: a state that went out before a reader had matched its writer is lost (a
+    best-effort reader: the joint bus's, realtime controllers'), and without a resend the plant and its readers
+    would wait for each other until the timeout."""
+    p = node.p
+    limit_s = p["effort_timeout_s"] if math.isfinite(p["effort_timeout_s"]) else p["start_timeout_s"]
+    t_end = clock() + limit_s
+    next_resend = clock() + p["resend_s"]
+    ready = None
+    while not node.take_efforts(ready) and not stop.done() and clock() < t_end:
+        if clock() >= next_resend:
+            missing = node.gate.missing
+            for j in missing:
+                node.resends[j] += 1
+                if not node.resent_steps[j] or node.resent_steps[j][-1] != k:
+                    node.resent_steps[j].append(k)
+            node.publish_state(k, joints=missing, observed=False)
+            next_resend = clock() + p["resend_s"]
+        ready = node.endpoints.wait(max(0.0, min(SLICE_S, t_end - clock(), next_resend - clock())))
 
 
 def _ticks(node, executor, stop, sched, warnings, clock, next_housekeeping) -> None:
