@@ -117,59 +117,89 @@ def _markdown_files() -> list[Path]:
 
 
 def _run_block(example) -> None:
-    """Sybil's evaluator of a shell block: run it in the document's folder (``example.namespace['ctx']``)."""
+    """Sybil's evaluator of a shell block: run it in the document's folder (``example.namespace['ctx']``).
+
+    The block's shell holds the leased domain's occupancy lock (``domain_ids.occupy``), and so does every
+    process it starts: a node the block leaves running keeps the domain from the next test's lease, and the
+    ``domain`` fixture names it."""
+    from pa10_dnbs.supervisor.domain_ids import occupy
+
     ctx = example.namespace["ctx"]
     script = as_run(example.parsed, ctx["domain_id"])
     where = f"{Path(example.path).relative_to(ROOT)}:{example.line}"
     t0 = time.monotonic()
+    started = time.time()
     log = Path(ctx["workdir"]) / f".block_{example.line}.log"  # a file, not a pipe: a node left running
-    with open(log, "w") as out:                                   # in the background must not hold the test
-        proc = subprocess.Popen(["bash", "-euo", "pipefail", "-c", script], cwd=ctx["workdir"], env=ctx["env"],
-                                stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                                start_new_session=True)
-        try:
-            proc.wait(timeout=BLOCK_TIMEOUT_S)
-        except subprocess.TimeoutExpired:
-            pass
-        finally:
-            left = _stop_group(proc)
+    occupied = occupy(ctx["domain_id"])                          # in the background must not hold the test
+    try:
+        with open(log, "w") as out:
+            proc = subprocess.Popen(["bash", "-euo", "pipefail", "-c", script], cwd=ctx["workdir"], env=ctx["env"],
+                                    stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                    start_new_session=True, pass_fds=(occupied,))
+    finally:
+        os.close(occupied)
+    try:
+        proc.wait(timeout=BLOCK_TIMEOUT_S)
+    except subprocess.TimeoutExpired:
+        pass
+    finally:
+        left = _stop_session(proc)
     ctx["times"][where] = time.monotonic() - t0
     report = (f"{where}, as run in {ctx['workdir']}:\n{script}--- output (end) ---\n"
-              f"{log.read_text(errors='replace')[-6000:]}")
+              f"{log.read_text(errors='replace')[-6000:]}{_logs_written(Path(ctx['workdir']), started, log)}")
     assert proc.returncode == 0, f"exit code {proc.returncode}: {report}"
     assert not left, f"the block left processes running ({', '.join(left)}): {report}"
 
 
-def _stop_group(proc: subprocess.Popen) -> list[str]:
-    """End the block's shell and whatever it left in its process group (SIGINT, then SIGKILL); the names of
-    the processes that were still running after the shell had exited."""
+def _logs_written(workdir: Path, since: float, own: Path) -> str:
+    """The ends of the ``*.log`` files the block wrote in its folder (a node started in the background logs
+    there: ``> robot.log``), for the report of a failed block."""
+    out = ""
+    for f in sorted(workdir.glob("*.log")):
+        try:
+            if f != own and f.stat().st_mtime >= since:
+                out += f"--- {f.name} (end) ---\n{f.read_text(errors='replace')[-3000:]}\n"
+        except OSError:
+            continue
+    return out
+
+
+def _stop_session(proc: subprocess.Popen) -> list[str]:
+    """End the block's shell and whatever it started (SIGINT, then SIGKILL); the names of the processes that
+    were still running after the shell had exited. By session, not process group: ``timeout`` puts its
+    command in a group of its own, which a signal to the shell's group does not reach."""
     if proc.poll() is None:
         os.killpg(proc.pid, signal.SIGKILL)
         proc.wait()
-    left = _group_members(proc.pid)
+    left = _session_members(proc.pid)
     for sig, grace in ((signal.SIGINT, 10.0), (signal.SIGKILL, 5.0)):
-        if not _group_members(proc.pid):
+        members = _session_members(proc.pid)
+        if not members:
             break
-        os.killpg(proc.pid, sig)
+        for pid in members:
+            try:
+                os.kill(pid, sig)
+            except ProcessLookupError:
+                pass
         end = time.monotonic() + grace
-        while time.monotonic() < end and _group_members(proc.pid):
+        while time.monotonic() < end and _session_members(proc.pid):
             time.sleep(0.1)
-    return left
+    return [left[pid] for pid in sorted(left)]
 
 
-def _group_members(pgid: int) -> list[str]:
-    """Names of the live (not zombie) processes of process group ``pgid``."""
-    names = []
+def _session_members(sid: int) -> dict[int, str]:
+    """pid -> name of the live (not zombie) processes of session ``sid``."""
+    members = {}
     for stat in Path("/proc").glob("[0-9]*/stat"):
         try:
             text = stat.read_text()
             name, rest = text.split("(", 1)[1].rsplit(")", 1)
             fields = rest.split()
-            if int(fields[2]) == pgid and fields[0] != "Z":
-                names.append(name)
+            if int(fields[3]) == sid and fields[0] != "Z":
+                members[int(stat.parent.name)] = name
         except (OSError, IndexError, ValueError):
             continue
-    return names
+    return members
 
 
 SYBIL = Sybil(parsers=[*(CodeBlockParser(language, _run_block) for language in SHELL_LANGUAGES), SkipParser()])
@@ -305,3 +335,18 @@ def test_the_docs_have_shell_blocks_to_run():
     files = {Path(d.path).relative_to(ROOT).as_posix() for d, _, _ in BLOCKS}
     assert {"README.md", "docs/graph.md", "docs/bags.md"} <= files
     assert len(BLOCKS) >= 10
+
+
+def test_a_block_is_stopped_whole_even_what_timeout_put_in_a_group_of_its_own(tmp_path):
+    """``timeout CMD &`` leaves the shell's process group; the block's end still stops it and names it."""
+    script = "timeout 120 sleep 60 &\necho started\n"
+    proc = subprocess.Popen(["bash", "-euo", "pipefail", "-c", script], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stdin=subprocess.DEVNULL, start_new_session=True, text=True)
+    assert proc.stdout.readline().strip() == "started"
+    proc.wait(timeout=30)
+    t0 = time.monotonic()
+    while not _session_members(proc.pid) and time.monotonic() - t0 < 5:
+        time.sleep(0.05)
+    assert sorted(_session_members(proc.pid).values()) == ["sleep", "timeout"]
+    assert sorted(_stop_session(proc)) == ["sleep", "timeout"]
+    assert _session_members(proc.pid) == {}
