@@ -68,8 +68,8 @@ PARAMS = {
     "duration_s": Param(0.0, "simulated time to run [s]; 0 = simulation.duration_s of the config", 0.0),
     "clock_hz": Param(DEFAULT_CLOCK_HZ, "/clock rate [Hz of simulated time]; 0 = no /clock", 0.0, 1e6),
     "effort_timeout_s": Param(1.0, "lockstep: wall time to wait for an effort before replacing it [s]", 0.0),
-    "resend_s": Param(0.25, "lockstep and the realtime handshake: wall time before a missing effort's state is sent "
-                            "again [s]", 0.0),
+    "resend_s": Param(0.25, "lockstep (and a robot's realtime handshake): wall time before a missing effort's state "
+                            "is sent again [s]", 0.0),
     "on_missing_effort": Param("hold", "what replaces a missing effort: hold (last torque) or zero"),
     "reliability": Param("", "per-joint state/effort QoS: reliable, best_effort; '' = the mode's default"),
     "stats_file": Param("", "JSON file for timing figures and counters at exit; '' = none"),

@@ -39,8 +39,8 @@ def run_realtime(node, executor, stop) -> None:
     next_housekeeping = clock() + HOUSEKEEPING_S
     # Handshake: the first ``handshake_steps`` steps wait until every joint has answered (the first messages
     # on new DDS connections and the controllers' first steps, which load numpy's linear algebra, take
-    # milliseconds), each at most effort_timeout_s (start_timeout_s for a robot, whose effort_timeout_s is
-    # infinite); the tick schedule starts after them. A joint still silent then misses that step like any other.
+    # milliseconds), each at most effort_timeout_s (a robot: start_timeout_s, resending, ``_await_handshake``);
+    # the tick schedule starts after them. A joint still silent then misses that step like any other.
     for k in range(min(p["handshake_steps"], node.n_steps)):
         node.publish_state(k, observed=False)
         _await_handshake(node, k, stop, clock)
@@ -63,14 +63,16 @@ def run_realtime(node, executor, stop) -> None:
 
 
 def _await_handshake(node, k: int, stop, clock) -> None:
-    """Wait for every joint's answer to handshake state ``k``, sending the state again to the joints still
-    missing every ``resend_s``: a state that went out before a reader had matched its writer is lost (a
-    best-effort reader: the joint bus's, realtime controllers'), and without a resend the plant and its readers
-    would wait for each other until the timeout."""
+    """Wait for every joint's answer to handshake state ``k``. A robot on the standard interface sends the state
+    again every ``resend_s`` while its command is missing, and waits at most ``start_timeout_s`` (its
+    ``effort_timeout_s`` is infinite): a state that went out before the joint bus's best-effort reader had
+    matched the robot's writer is lost, and without a resend the robot and the bus would wait for each other.
+    The per-joint plant waits ``effort_timeout_s`` and sends nothing again: a lost answer there is a miss of
+    its joint, as on any tick."""
     p = node.p
-    limit_s = p["effort_timeout_s"] if math.isfinite(p["effort_timeout_s"]) else p["start_timeout_s"]
-    t_end = clock() + limit_s
-    next_resend = clock() + p["resend_s"]
+    robot = p["interface"] == "standard"
+    t_end = clock() + (p["start_timeout_s"] if robot else p["effort_timeout_s"])
+    next_resend = clock() + p["resend_s"] if robot else math.inf
     ready = None
     while not node.take_efforts(ready) and not stop.done() and clock() < t_end:
         if clock() >= next_resend:
