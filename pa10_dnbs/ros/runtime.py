@@ -17,8 +17,12 @@ the node's code, or 3 when it was 0: a hung close() is a failure), ``faulthandle
 before; the launcher names such a node.
 rclpy's own signal handling is off (it raises KeyboardInterrupt wherever the
 interpreter is, including inside callbacks run by the C++ executor): SIGINT
-and SIGTERM complete a ``stop`` future that every spin loop checks; the node
-then closes and exits 0. A Python handler runs only when the main thread
+and SIGTERM mark a ``stop`` future (``SignalStop``) that every spin loop checks;
+the node then closes and exits 0. The handler only sets an attribute: it runs
+between two bytecodes of the main thread, which may hold the future's lock
+(``spin_until_future_complete`` adds and removes a done callback), and
+``set_result`` there waited for that lock for ever (seen once in CI: a wire
+monitor that had completed, stuck in its SIGINT handler until SIGKILL). A Python handler runs only when the main thread
 is back in Python, so a node stuck in C code ignores SIGINT: SIGUSR1 makes
 ``faulthandler`` (C level, no GIL needed) write every thread's Python stack
 into the node's log, and the launcher sends it to a node that is still
@@ -52,6 +56,35 @@ TEARDOWN_LIMIT_S = 5.0  # a close() (or the freeing of a half-built node) that t
 TEARDOWN_DUMP_LEAD_S = 0.5  # the stacks of a hung close() are written this long before it is cut short
 
 
+class SignalStop(Future):
+    """The stop request of ``run_node``: done once a signal handler has called ``request`` (lock-free: a plain
+    attribute) or ``set_result`` was called. Spin loops see it within ``SLICE_S``."""
+
+    def __init__(self):
+        super().__init__()
+        self.signal_name: str | None = None
+
+    def request(self, signal_name: str) -> None:
+        """From a signal handler: no lock, no callback."""
+        self.signal_name = signal_name
+
+    def done(self) -> bool:
+        return self.signal_name is not None or super().done()
+
+    def result(self):
+        return self.signal_name if self.signal_name is not None else super().result()
+
+
+def stop_on_signal(stop: SignalStop) -> Callable:
+    """The SIGINT / SIGTERM handler of ``run_node``: marks ``stop`` with the signal's name, taking no lock."""
+
+    def on_signal(signum, _frame):
+        if not stop.done():
+            stop.request(signal.Signals(signum).name)
+
+    return on_signal
+
+
 _STOP: list[Future] = []  # the stop future of run_node, for code that runs before a node has its loop
 
 
@@ -79,13 +112,9 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
     must return once ``stop`` is done) and ``close()`` (write files, report).
     """
     rclpy.init(args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
-    stop = Future()
+    stop = SignalStop()
     _STOP.append(stop)
-
-    def on_signal(signum, _frame):
-        if not stop.done():
-            stop.set_result(signal.Signals(signum).name)
-
+    on_signal = stop_on_signal(stop)
     signal.signal(signal.SIGINT, on_signal)
     signal.signal(signal.SIGTERM, on_signal)
     faulthandler.register(signal.SIGUSR1, file=sys.stderr, all_threads=True)  # where a stuck node is stuck
