@@ -23,6 +23,7 @@ import re
 import signal
 import subprocess
 import time
+import unittest
 from pathlib import Path
 
 import pytest
@@ -125,6 +126,7 @@ def _run_block(example) -> None:
     from pa10_dnbs.supervisor.domain_ids import occupy
 
     ctx = example.namespace["ctx"]
+    example.namespace.setdefault("ran", set()).add(example.line)
     script = as_run(example.parsed, ctx["domain_id"])
     where = f"{Path(example.path).relative_to(ROOT)}:{example.line}"
     t0 = time.monotonic()
@@ -278,9 +280,27 @@ def test_doc_block_runs_as_written(doc, skip, block, doc_folders, domain, block_
     env["PATH"] = os.pathsep.join(p for p in env.get("PATH", "").split(os.pathsep) if "/.venv/" not in p + "/")
     env.pop("ROS_LOCALHOST_ONLY", None)
     doc.namespace["ctx"] = {"workdir": doc_folders(doc), "domain_id": domain, "env": env, "times": block_times}
-    if skip is not None:
-        skip.evaluate()  # Sybil's skipper: raises SkipTest with the reason, or lets the block run
+    for earlier_skip, earlier in _not_yet_run_before(doc, block):
+        # a later block may use an earlier one's runs/: the tier or the xdist worker may not have run it
+        if earlier_skip is not None:
+            earlier_skip.evaluate()
+        try:
+            earlier.evaluate()
+        except unittest.SkipTest:
+            continue
+    if skip is not None:  # Sybil's skipper: the next block evaluated raises SkipTest with the reason, or runs
+        skip.evaluate()
     block.evaluate()
+
+
+def _not_yet_run_before(doc, block) -> list:
+    """(skip directive or None, block) of ``doc``'s blocks before ``block`` that this process has not run: those
+    a tier (``-m graph``) deselected or another xdist worker ran. A block that starts no ROS process never has a
+    graph block run for it (the fast tier starts none)."""
+    graph = bool(GRAPH.search(block.parsed))
+    return [(sk, ex) for d, sk, ex in BLOCKS
+            if d is doc and ex.line < block.line and ex.line not in doc.namespace.setdefault("ran", set())
+            and (graph or not GRAPH.search(ex.parsed))]
 
 
 def test_every_skip_gives_its_reason_and_precedes_a_shell_block():
