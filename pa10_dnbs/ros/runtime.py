@@ -21,8 +21,9 @@ and SIGTERM mark a ``stop`` future (``SignalStop``) that every spin loop checks;
 the node then closes and exits 0. The handler only sets an attribute: it runs
 between two bytecodes of the main thread, which may hold the future's lock
 (``spin_until_future_complete`` adds and removes a done callback), and
-``set_result`` there waited for that lock for ever (seen once in CI: a wire
-monitor that had completed, stuck in its SIGINT handler until SIGKILL). A Python handler runs only when the main thread
+``set_result`` there waited for that lock for ever (seen once in a fresh-clone
+CI run: a wire monitor that had completed, stuck in its SIGINT handler until
+SIGKILL). A Python handler runs only when the main thread
 is back in Python, so a node stuck in C code ignores SIGINT: SIGUSR1 makes
 ``faulthandler`` (C level, no GIL needed) write every thread's Python stack
 into the node's log, and the launcher sends it to a node that is still
