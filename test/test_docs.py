@@ -364,8 +364,8 @@ def test_a_block_is_stopped_whole_even_what_timeout_put_in_a_group_of_its_own(tm
                             stdin=subprocess.DEVNULL, start_new_session=True, text=True)
     assert proc.stdout.readline().strip() == "started"
     proc.wait(timeout=30)
-    t0 = time.monotonic()
-    while not _session_members(proc.pid) and time.monotonic() - t0 < 5:
+    t0 = time.monotonic()  # until timeout's child has exec'd sleep (forked, it is named timeout for a moment)
+    while sorted(_session_members(proc.pid).values()) != ["sleep", "timeout"] and time.monotonic() - t0 < 10:
         time.sleep(0.05)
     assert sorted(_session_members(proc.pid).values()) == ["sleep", "timeout"]
     assert sorted(_stop_session(proc)) == ["sleep", "timeout"]
