@@ -14,6 +14,7 @@ import pytest
 
 pytest.importorskip("rclpy")  # the plant package imports rclpy
 
+from pa10_dnbs.ros.plant.node import PlantNode  # noqa: E402
 from pa10_dnbs.ros.plant.realtime import _await_handshake  # noqa: E402
 
 
@@ -53,6 +54,8 @@ class _LossyLink:
 
     def take_efforts(self, joints=None) -> bool:
         return not self.gate.missing
+
+    resend_state = PlantNode.resend_state  # the plant's own: counts, then publish_state to the missing joints
 
 
 def test_a_robot_sends_a_lost_handshake_state_again_and_is_answered():

@@ -55,12 +55,7 @@ def run_lockstep(node, executor, stop) -> None:
             node.step(gate.take_lockstep(timed_out=True))
             publish(gate.step)
         elif action == "resend":
-            missing = gate.missing
-            for j in missing:
-                node.resends[j] += 1
-                if not node.resent_steps[j] or node.resent_steps[j][-1] != gate.step:
-                    node.resent_steps[j].append(gate.step)
-            node.publish_state(gate.step, joints=missing)
+            node.resend_state(gate.step)
         if now >= next_housekeeping:
             executor.spin_once(timeout_sec=0.0)
             next_housekeeping = now + HOUSEKEEPING_S

@@ -204,6 +204,16 @@ class PlantNode(Node):
             if not observed:
                 self._observed = (k, q.tolist(), qd.tolist(), self.gate.applied.tolist())
 
+    def resend_state(self, k: int) -> None:
+        """State ``k`` again to the joints whose effort for it is missing, counted per joint (``resends``, and
+        ``resent_steps`` once per step)."""
+        missing = self.gate.missing
+        for j in missing:
+            self.resends[j] += 1
+            if not self.resent_steps[j] or self.resent_steps[j][-1] != k:
+                self.resent_steps[j].append(k)
+        self.publish_state(k, joints=missing)
+
     def publish_observed(self) -> None:
         """joint_states and /clock of the last state published with ``observed=False`` (once)."""
         if self._observed is not None:

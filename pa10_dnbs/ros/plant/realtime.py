@@ -76,12 +76,7 @@ def _await_handshake(node, k: int, stop, clock) -> None:
     ready = None
     while not node.take_efforts(ready) and not stop.done() and clock() < t_end:
         if clock() >= next_resend:
-            missing = node.gate.missing
-            for j in missing:
-                node.resends[j] += 1
-                if not node.resent_steps[j] or node.resent_steps[j][-1] != k:
-                    node.resent_steps[j].append(k)
-            node.publish_state(k, joints=missing, observed=False)
+            node.resend_state(k)
             next_resend = clock() + p["resend_s"]
         ready = node.endpoints.wait(max(0.0, min(SLICE_S, t_end - clock(), next_resend - clock())))
 
