@@ -11,17 +11,14 @@ from pathlib import Path
 from . import interrupt
 _startup_sigint = interrupt.quiet_start()   # Ctrl-C while the modules load: one line, exit 130
 
-from .accel.build import KernelBuildError
 from .config import ConfigError, default_config_path
 from .supervisor.fault_flags import add_fault_arguments
 from .loop.scheduling import DEFAULT_RT_PRIORITY
-from .bag.bag_reader import BagError
-from .bag.bag_writer import BagExistsError
 from .cli_values import (EFFORT_TIMEOUT_MAX_S, MAX_REPLAY_CLOCK_HZ, REPLAY_RATE_MAX, REPLAY_RATE_MIN, RTF_MAX,
                          RTF_MIN, WAIT_FOR_SUBSCRIBERS_MAX_S, OneLineParser, nonnegative,
                          number_in, positive, seconds, whole_in)
-from .output_lock import OutputInUseError, held, release_all
-from .report.outputs import OutputExistsError
+from .output_lock import held, release_all
+from .refused import Refused
 from .tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 
 if __name__ != "__main__" and not sys.argv[0].endswith("pa10-dnbs"):   # imported by a caller: its own Ctrl-C
@@ -426,7 +423,7 @@ def main(argv: list[str] | None = None) -> int:
     except ConfigError as exc:
         print(f"pa10-dnbs: error: {exc.named(SETTING_FLAGS.get(exc.setting))}", file=sys.stderr)
         return 2
-    except (KernelBuildError, OutputExistsError, OutputInUseError, BagExistsError, BagError) as exc:
+    except Refused as exc:   # an output in the way, a bag, a kernel (refused.py)
         print(f"pa10-dnbs: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:

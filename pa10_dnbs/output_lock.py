@@ -15,8 +15,10 @@ import os
 import tempfile
 from pathlib import Path
 
+from .refused import Refused
 
-class OutputInUseError(FileExistsError):
+
+class OutputInUseError(FileExistsError, Refused):
     """Another run holds the output path."""
 
 

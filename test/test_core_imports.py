@@ -1,4 +1,4 @@
-"""The numeric core imports only numpy (and the standard library); the launcher imports no rclpy."""
+"""The numeric core imports only numpy (and the standard library); the launcher imports no rclpy; the CLI loads\nno plotting or bag library before a command needs it."""
 import subprocess
 import sys
 
@@ -32,11 +32,40 @@ def test_launcher_does_not_load_rclpy():
     assert out.stdout.strip() == "", f"the launcher imported: {out.stdout.strip()}"
 
 
+CHECKS_ONLY = """
+import sys
+import pa10_dnbs.cli, pa10_dnbs.commands.simulate, pa10_dnbs.commands.study, pa10_dnbs.commands.tune
+print(','.join(sorted({m.split('.')[0] for m in sys.modules} & {'matplotlib', 'rosbags', 'optuna', 'dask'})))
+"""
+
+NO_FIGURES = """
+import sys
+from pa10_dnbs.cli import main
+code = main(['simulate', '--duration', '0.05', '--no-figures', '--out', sys.argv[1]])
+print(code, 'matplotlib' in sys.modules)
+"""
+
+
+def test_the_cli_and_a_commands_checks_load_no_plotting_no_bags():
+    """The CLI, and what simulate, study and tune import before they run (their input checks), load neither
+    matplotlib nor rosbags (about 0.3 s), nor Optuna or Dask: ``--help`` and a refused input answer at once, and the test tiers' hundreds of such calls
+    stay cheap. The errors the CLI ends on derive from refused.Refused, so it need not import their modules."""
+    out = subprocess.run([sys.executable, "-c", CHECKS_ONLY], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "", f"imported before any run: {out.stdout.strip()}"
+
+
+def test_a_run_without_figures_never_loads_matplotlib(tmp_path):
+    out = subprocess.run([sys.executable, "-c", NO_FIGURES, str(tmp_path / "out")], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.splitlines()[-1] == "0 False", out.stdout + out.stderr
+    assert (tmp_path / "out" / "metrics.json").is_file() and not list((tmp_path / "out").glob("*.png"))
+
+
 # Layers from the ground up: a module may import its own layer and the ones below, never one above.
 LAYERS = [
     {"__init__", "paths", "atomic_file", "run_data", "core", "wire", "kinematics", "faults",  # numpy-only data and maths
-     "config_error", "interrupt", "cli_values", "output_lock", "output_mark", "number_text", "run_size", "run_steps",
-     "json_text"},
+     "config_error", "refused", "interrupt", "cli_values", "output_lock", "output_mark", "number_text", "run_size",
+     "run_steps", "json_text"},
     {"arm", "config", "config_yaml"},                                          # an arm's files; a config file
     {"settings"},                                                              # a run's typed settings
     {"plant", "loop", "accel", "trajectory_file"},                             # physics, loop logic, compiled step

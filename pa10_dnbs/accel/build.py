@@ -18,12 +18,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+from ..refused import Refused
+
 SOURCE = Path(__file__).with_name("dnbs_kernel.c")
 # -ffp-contract=off: no fused multiply-add (it would change result bits); no -ffast-math for the same reason
 FLAGS = ("-O3", "-ffp-contract=off", "-fno-fast-math", "-fPIC", "-shared")
 
 
-class KernelBuildError(RuntimeError):
+class KernelBuildError(RuntimeError, Refused):
     """The compiled kernel cannot be built or loaded here; the message says why and what to do.
 
     ``reason``: why, in a few words on one line (``dnbs.kernel: auto`` says it when it falls back to numpy).

@@ -17,11 +17,12 @@ from typing import Iterator
 import yaml
 
 from ..config_yaml import yaml_error_line
+from ..refused import Refused
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 
 
-class BagError(Exception):
+class BagError(Refused):
     """The bag is missing, not a bag, truncated, corrupt, or lacks what is needed."""
 
 

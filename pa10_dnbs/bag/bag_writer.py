@@ -33,6 +33,7 @@ from rosbags.typesys import Stores, get_typestore
 
 from .. import __version__
 from ..output_mark import OUTPUT_MARK, OUTPUT_MARK_TEXT, is_previous_output
+from ..refused import Refused
 from .mcap_file import McapFileWriter
 
 ROSBAG2_VERSION = 9
@@ -42,7 +43,7 @@ ZSTD_LEVEL = 3  # zstd's default level, what rosbags and the MCAP writers use
 _TYPESTORE = None
 
 
-class BagExistsError(FileExistsError):
+class BagExistsError(FileExistsError, Refused):
     """The bag path exists and ``force`` was not given."""
 
 

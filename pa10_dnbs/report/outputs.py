@@ -5,6 +5,9 @@ when everything was written; an existing directory is replaced only with
 ``force``, and only if it is empty or a previous pa10-dnbs output (it holds
 OUTPUT_MARK); never the current directory, its parents, the root, or a path
 that is, holds or lies in one of the run's inputs (check_output_dir).
+
+matplotlib (about 0.25 s to import) is loaded only when figures are drawn: the output checks every command
+makes first, a run without figures (``--no-figures``) and the CLI never load it.
 """
 from __future__ import annotations
 
@@ -23,15 +26,14 @@ from ..json_text import json_text
 from ..kinematics.urdf_chain import UrdfChain
 from ..output_lock import lock_output, release_output
 from ..output_mark import OUTPUT_MARK, OUTPUT_MARK_TEXT, is_previous_output
+from ..refused import Refused
 from ..run_data import RunData
-from .arm_figure import arm_figure
-from .figures import error_figure, startup_figure, torque_figure, tracking_figure
 from .finite_view import until_step
 from .markdown import report_markdown
 from .partial import partial_mark
 
 
-class OutputExistsError(FileExistsError):
+class OutputExistsError(FileExistsError, Refused):
     """The output directory exists and ``--force`` was not given, or cannot be written, or another run uses it."""
 
 
@@ -262,6 +264,9 @@ def write_run(directory: Path, run: RunData, metrics: dict, chain: UrdfChain | N
     run.save_npz(directory / "timeseries.npz")
     if not figures:
         return []
+    from .arm_figure import arm_figure   # matplotlib: only when drawing (module docstring)
+    from .figures import error_figure, startup_figure, torque_figure, tracking_figure
+
     run = _shown(run, metrics)
     tag = run.controller.upper()
     settling = [j["settling_time_s"] for j in metrics["joints"]]
@@ -302,6 +307,8 @@ def write_report(directory: Path, runs: list[RunData], metrics: list[dict], titl
             figs += [(c, f"{sub}/{f}") for c, f in write_run(directory / sub, run, m, chain, figures)]
     if len(runs) > 1:
         if figures:
+            from .figures import error_figure
+
             error_figure([_shown(r, m) for r, m in zip(runs, metrics)], directory / "errors_compare.png",
                          tuple(metrics[0]["window_s"]),
                          [[j["settling_time_s"] for j in m["joints"]] for m in metrics])
