@@ -37,8 +37,8 @@ def test_a_killed_workers_task_is_redone_and_counted_once(tmp_path):
 
         with Executor(scheduler=cluster.address) as ex:
             assert ex.jobs == 2
-            # k0 is short: when it is done, the other worker is 2.5 s into a 3 s task, whatever the load
-            results = ex.run(logged_sleep, {k: (k, str(log), 0.5 if k == "k0" else 3.0) for k in keys}, on_done)
+            # k0 is short: when it is done, the other worker has 1.5 s of a 2 s task left, whatever the load
+            results = ex.run(logged_sleep, {k: (k, str(log), 0.5 if k == "k0" else 2.0) for k in keys}, on_done)
         pids = cluster.pids
     assert not pids(), "processes of the cluster left behind"
     assert results == {k: f"{k} done" for k in keys} and sorted(seen) == keys   # none lost, none twice
