@@ -1,4 +1,5 @@
-"""The numeric core imports only numpy (and the standard library); the launcher imports no rclpy; the CLI loads\nno plotting or bag library before a command needs it."""
+"""The numeric core imports only numpy (and the standard library); the launcher imports no rclpy; the CLI loads
+no plotting or bag library before a command needs it."""
 import subprocess
 import sys
 
@@ -48,8 +49,9 @@ print(code, 'matplotlib' in sys.modules)
 
 def test_the_cli_and_a_commands_checks_load_no_plotting_no_bags():
     """The CLI, and what simulate, study and tune import before they run (their input checks), load neither
-    matplotlib nor rosbags (about 0.3 s), nor Optuna or Dask: ``--help`` and a refused input answer at once, and the test tiers' hundreds of such calls
-    stay cheap. The errors the CLI ends on derive from refused.Refused, so it need not import their modules."""
+    matplotlib nor rosbags (about 0.3 s), nor Optuna or Dask: ``--help`` and a refused input answer at once, and
+    the test tiers' hundreds of such calls stay cheap. The errors the CLI ends on derive from refused.Refused, so
+    it need not import their modules."""
     out = subprocess.run([sys.executable, "-c", CHECKS_ONLY], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "", f"imported before any run: {out.stdout.strip()}"
 
