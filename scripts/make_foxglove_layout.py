@@ -23,7 +23,6 @@ from pa10_dnbs.cli_values import OneLineParser  # noqa: E402
 from pa10_dnbs.config import ConfigError, default_config_path  # noqa: E402
 from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.live.layout import layout_json  # noqa: E402
-from pa10_dnbs.arm import DEFAULT_ARM  # noqa: E402
 from pa10_dnbs.wire.topics import arm_topics, check_namespace, default_namespace  # noqa: E402
 
 
@@ -48,9 +47,8 @@ def main() -> int:
     except ConfigError as exc:  # a bad config file or arm, in one line naming the flag
         ap.error(f"argument {'--arm' if isinstance(exc, ArmError) and args.arm else '--config'}: {exc}")
     arm = settings.arm
-    text = layout_json(arm.joint_names, settings.plant.torque_limit_nm, arm.chain.root_link,
-                       arm_topics(args.namespace or default_namespace(arm.name)),
-                       "PA10-7CE" if arm.name == DEFAULT_ARM else arm.description)
+    text = layout_json(arm.joint_names, settings.plant.torque_limit_nm, arm.description, arm.chain.root_link,
+                       arm_topics(args.namespace or default_namespace(arm.name)))
     args.out.write_text(text)
     print(f"wrote {args.out}")
     return 0

@@ -257,14 +257,15 @@ def test_layout_file_is_current_and_uses_only_served_channels(_default_cfg):
 
     path = Path(__file__).resolve().parents[1] / "config" / "foxglove_layout.json"
     chain = UrdfChain(URDF.read_text())
-    assert path.read_text() == layout_json(JOINT_NAMES, _default_cfg.plant.torque_limit_nm, chain.root_link), \
+    title = load_arm("pa10").description
+    assert path.read_text() == layout_json(JOINT_NAMES, _default_cfg.plant.torque_limit_nm, title, chain.root_link), \
         "config/foxglove_layout.json is stale: run scripts/make_foxglove_layout.py"
     lay = json.loads(path.read_text())
     assert sorted(_leaves(lay["layout"])) == sorted(lay["configById"])
     served = {c.topic for c in live_channels()}
     three_d = lay["configById"]["3D!arm"]
     assert three_d["topics"]["/pa10/robot_description"]["visible"] and three_d["followTf"] == "base_link"
-    assert lay["configById"]["DiagnosticSummary!pa10"]["topicToRender"] == "/diagnostics"
+    assert lay["configById"]["DiagnosticSummary!diagnostics"]["topicToRender"] == "/diagnostics"
     plotted = []
     for pid, cfg in lay["configById"].items():
         if pid.startswith("Plot!"):

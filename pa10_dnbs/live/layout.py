@@ -33,16 +33,16 @@ def _plot(title: str, paths: list[dict], y_min=None, y_max=None) -> dict:
     return panel
 
 
-def layout(joint_names, torque_limit_nm, root_frame: str = "base_link", arm: ArmTopics = ArmTopics(),
-           title: str = "PA10-7CE") -> dict:
-    """The layout of ``arm``'s topics as a JSON-ready dict."""
+def layout(joint_names, torque_limit_nm, title: str, root_frame: str = "base_link",
+           arm: ArmTopics = ArmTopics()) -> dict:
+    """The layout of ``arm``'s topics as a JSON-ready dict (``title``: the arm's, on the 3D panel)."""
     errors = [_series(arm.tracking, "error_rad", j, name, COLOURS[j % len(COLOURS)]) for j, name in enumerate(joint_names)]
     torques = [_series(arm.tracking, "torque_over_limit", j, f"{name} (limit {lim:g} N m)", COLOURS[j % len(COLOURS)])
                for j, (name, lim) in enumerate(zip(joint_names, torque_limit_nm))]
     torques += [_series(arm.tracking, "torque_fraction_limits", i, f"torque limit ({sign})", LIMIT_COLOUR)
                 for i, sign in enumerate(("-", "+"))]
     three_d = {
-        "foxglovePanelTitle": f"{title} (URDF from {arm.robot_description}, posed by /tf)",
+        "foxglovePanelTitle": f"{title}: URDF from {arm.robot_description}, posed by /tf",
         "cameraState": {"perspective": True, "distance": 3.5, "phi": 60, "thetaOffset": 45,
                         "targetOffset": [0, 0, 0.8], "target": [0, 0, 0], "targetOrientation": [0, 0, 0, 1],
                         "fovy": 45, "near": 0.01, "far": 500},
@@ -60,9 +60,9 @@ def layout(joint_names, torque_limit_nm, root_frame: str = "base_link", arm: Arm
         "3D!arm": three_d,
         "Plot!errors": _plot(f"Tracking error e = x_d - x [rad] ({arm.tracking})", errors),
         "Plot!torques": _plot("Torque / torque limit (limits at -1 and +1)", torques, -1.1, 1.1),
-        "DiagnosticSummary!pa10": {"topicToRender": DIAGNOSTICS, "minLevel": 0, "pinnedIds": [],
+        "DiagnosticSummary!diagnostics": {"topicToRender": DIAGNOSTICS, "minLevel": 0, "pinnedIds": [],
                                    "hardwareIdFilter": "", "sortByLevel": True},
-        "DiagnosticStatusPanel!pa10": {"topicToRender": DIAGNOSTICS, "collapsedSections": [],
+        "DiagnosticStatusPanel!diagnostics": {"topicToRender": DIAGNOSTICS, "collapsedSections": [],
                                        "selectedHardwareId": "plant"},
     }
     tree = {
@@ -70,7 +70,7 @@ def layout(joint_names, torque_limit_nm, root_frame: str = "base_link", arm: Arm
         "second": {
             "first": {"first": "Plot!errors", "second": "Plot!torques", "direction": "column",
                       "splitPercentage": 50},
-            "second": {"first": "DiagnosticSummary!pa10", "second": "DiagnosticStatusPanel!pa10",
+            "second": {"first": "DiagnosticSummary!diagnostics", "second": "DiagnosticStatusPanel!diagnostics",
                        "direction": "row", "splitPercentage": 50},
             "direction": "column", "splitPercentage": 72,
         },
@@ -80,7 +80,7 @@ def layout(joint_names, torque_limit_nm, root_frame: str = "base_link", arm: Arm
             "layout": tree}
 
 
-def layout_json(joint_names, torque_limit_nm, root_frame: str = "base_link", arm: ArmTopics = ArmTopics(),
-                title: str = "PA10-7CE") -> str:
+def layout_json(joint_names, torque_limit_nm, title: str, root_frame: str = "base_link",
+                arm: ArmTopics = ArmTopics()) -> str:
     """The layout as the JSON file Foxglove imports (``title``: the arm's, on the 3D panel)."""
-    return json.dumps(layout(joint_names, torque_limit_nm, root_frame, arm, title), indent=2) + "\n"
+    return json.dumps(layout(joint_names, torque_limit_nm, title, root_frame, arm), indent=2) + "\n"
