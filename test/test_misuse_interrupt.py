@@ -121,9 +121,26 @@ def test_tune_ctrl_c_at_start_up_says_nothing_was_kept(tmp_path):
     line = one_line(err)
     assert rc == 130 and seconds < BOUND_S, (rc, seconds)
     assert re.fullmatch(r"pa10-dnbs: interrupted (while starting, before any work: nothing changed|before the first "
-                        r"trial; no trial kept: run the same command to start|before it wrote anything \(outputs are "
-                        r"written whole, at the end\): run the same command again)", line), line
+                        r"trial; no trial kept: run the same command to start|while checking its input, before any "
+                        r"trial: nothing written or changed; run the same command again)", line), line
     assert completed_trials(tmp_path / "t" / "tune.db") == 0
+
+
+def test_tune_ctrl_c_while_it_checks_its_input_says_nothing_was_written(monkeypatch, capsys, tmp_path):
+    """Between loading and the first trial the tune checks its input: a Ctrl-C there writes nothing and says so in
+    the tune's words (not the generic line of a command that writes its outputs whole at the end)."""
+    from pa10_dnbs.commands import tune as tune_command
+    from pa10_dnbs.commands.options import TuneOptions
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt   # where a SIGINT raises it: in the checks, after the settings are built
+
+    monkeypatch.setattr(tune_command, "check_scenario_references", interrupted)
+    out = tmp_path / "t"
+    assert tune_command.run_tune(TuneOptions("pid", out, trials=2, duration_s=0.5, scenarios="nominal")) == 130
+    assert one_line(capsys.readouterr().err) == ("pa10-dnbs: interrupted while checking its input, before any trial: "
+                                                 "nothing written or changed; run the same command again")
+    assert not out.exists()
 
 
 def test_tune_ctrl_c_mid_run_keeps_the_completed_trials_says_how_many_and_resumes(tmp_path):

@@ -43,8 +43,19 @@ def _write(path: Path, text: str) -> None:
 
 def run_tune(options: TuneOptions) -> int:
     """Tune the controller of ``options`` (its values checked by the command line's parsing) on its arm;
-    returns the exit code."""
-    o = options
+    returns the exit code. A Ctrl-C says how far it got (:func:`_interrupted_line`) and exits 130."""
+    state = {"study": None, "phase": "checks", "bar": None, "had_storage": False, "where_kept": None}
+    try:
+        return _checked_tune(options, state)
+    except KeyboardInterrupt:
+        if state["bar"] is not None:
+            state["bar"].close()
+        say(_interrupted_line(state, options.trials))
+        return EXIT_INTERRUPTED
+
+
+def _checked_tune(o: TuneOptions, state: dict) -> int:
+    """Check every input of ``o`` (nothing written), then tune; ``state`` says how far it got."""
     param_list = select(o.controller, None if o.params is None else [n.strip() for n in o.params.split(",") if n.strip()])
     train = name_list("--scenarios", o.scenarios, list(SCENARIOS))
     out = Path(o.out)
@@ -78,23 +89,20 @@ def run_tune(options: TuneOptions) -> int:
     where_kept = o.storage if o.storage is not None else str(out / "tune.db")
     on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; the completed trials stay in {where_kept}; "
                      "run the same command to resume")
-    state = {"study": None, "phase": "start", "bar": None,
-             "had_storage": o.storage is not None or (out / "tune.db").exists()}
-    try:
-        with deferred():   # a Ctrl-C stops the tune between two storage operations, never inside one
-            with immediate():   # seconds of imports on a busy machine: a Ctrl-C stops them at once
-                import optuna  # noqa: F401
-            return _tune(state, spec, base, o.trials, out, o.storage, o.jobs, o.scheduler, train, o.seeds, o.held_out_seeds,
-                         o.controller, the_arm, config_path, command, o.progress)
-    except KeyboardInterrupt:
-        if state["bar"] is not None:
-            state["bar"].close()
-        say(_interrupted_line(state, o.trials, where_kept))
-        return EXIT_INTERRUPTED
+    state.update(phase="start", where_kept=where_kept, had_storage=o.storage is not None or (out / "tune.db").exists())
+    with deferred():   # a Ctrl-C stops the tune between two storage operations, never inside one
+        with immediate():   # seconds of imports on a busy machine: a Ctrl-C stops them at once
+            import optuna  # noqa: F401
+        return _tune(state, spec, base, o.trials, out, o.storage, o.jobs, o.scheduler, train, o.seeds, o.held_out_seeds,
+                     o.controller, the_arm, config_path, command, o.progress)
 
 
-def _interrupted_line(state: dict, trials: int, where_kept: str) -> str:
+def _interrupted_line(state: dict, trials: int) -> str:
     """The truth after a Ctrl-C: how many trials the storage keeps, where, and what the same command does."""
+    where_kept = state["where_kept"]
+    if state["phase"] == "checks":
+        return ("pa10-dnbs: interrupted while checking its input, before any trial: nothing written or changed; "
+                "run the same command again")
     if state["study"] is None:
         if state["had_storage"]:
             return (f"pa10-dnbs: interrupted before this run's first trial; {where_kept} keeps the trials it held: "
