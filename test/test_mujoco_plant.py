@@ -159,3 +159,16 @@ def test_a_short_closed_loop_follows_pybullets_run():
     assert np.abs(pb.position_rad - mj.position_rad).max() < 2e-3
     assert np.abs(pb.position_rad - mj.position_rad)[500:].max() < 1e-4
     assert np.abs(pb.position_rad - mj.position_rad).max() > 0.0  # two engines, not one run twice
+
+
+@pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
+def test_a_huge_finite_torque_is_applied_not_taken_for_nan(client, engine):
+    """Limits of 1e200 N m (a config may give them): the torque's square overflowed the plant's NaN test, which
+    then refused a finite torque as NaN (a traceback from simulate). One NaN among finite entries is refused."""
+    arm = load_arm("pa10")
+    params = arm_plant_params(arm, gravity_mps2=0.0, torque_limit_nm=(1e200,) * 7)
+    plant = PyBulletArmPlant(client, arm, params) if engine == "pybullet" else MuJoCoArmPlant(arm, params)
+    plant.step(np.full(7, 1e200))
+    np.testing.assert_array_equal(plant.applied_torque_nm, np.full(7, 1e200))
+    with pytest.raises(ValueError, match="NaN"):
+        plant.step(np.array([1e200] * 6 + [np.nan]))

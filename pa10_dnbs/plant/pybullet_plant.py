@@ -232,7 +232,7 @@ class PyBulletArmPlant(ArmPlantBase):
             raise ValueError(f"torque_nm: expected shape ({self._n},), got {tau.shape}")
         applied = self._tau_scratch
         np.minimum(np.maximum(tau, self._neg_tau_max, out=applied), self._tau_max, out=applied)
-        if not math.isfinite(applied @ applied):  # only NaN survives the saturation
+        if not math.isfinite(applied.sum()) and np.isnan(applied).any():  # only NaN survives the saturation
             raise ValueError("torque_nm: values must not be NaN")
         self._tau_scratch, self._applied = self._applied, applied
         q, qd = self._q, self._qd
