@@ -172,3 +172,19 @@ def test_a_huge_finite_torque_is_applied_not_taken_for_nan(client, engine):
     np.testing.assert_array_equal(plant.applied_torque_nm, np.full(7, 1e200))
     with pytest.raises(ValueError, match="NaN"):
         plant.step(np.array([1e200] * 6 + [np.nan]))
+
+
+def test_a_urdf_mujoco_cannot_parse_is_one_line_naming_it(tmp_path):
+    """PyBullet and the intake let a two-number box size pass (the plant needs no geometry); MuJoCo's parser
+    refuses it: one line naming the URDF and MuJoCo's reason, exit 2, nothing written (was a traceback)."""
+    bad = three_link_urdf().replace('<link name="l1">',
+                                    '<link name="l1"><collision><geometry><box size="1 1"/></geometry></collision>')
+    assert bad != three_link_urdf()
+    arm = write_arm(tmp_path, bad)
+    r = run_cli("simulate", "--engine", "mujoco", "--arm", arm, "--controller", "pid", "--duration", 0.02,
+                "--no-figures", "--no-progress", "--out", tmp_path / "out")
+    last = r.stderr.strip().splitlines()[-1]
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    assert last.startswith(f"pa10-dnbs: error: {tmp_path / 'arm.urdf'}: MuJoCo cannot load this URDF") \
+        and "size" in last, last
+    assert not (tmp_path / "out").exists()

@@ -21,7 +21,7 @@ import os
 
 import numpy as np
 
-from ..arm import Arm
+from ..arm import Arm, ArmError
 
 MIN_PAYLOAD_INERTIA_KGM2 = 1e-9  # a point mass still needs a valid inertia (the PyBullet plant's value)
 
@@ -34,7 +34,13 @@ def build_model(arm: Arm, params):
     urdf_path = os.fspath(arm.physics_urdf)
     if not os.path.isfile(urdf_path):
         raise FileNotFoundError(f"URDF file not found: {urdf_path}")
-    spec = mujoco.MjSpec.from_file(urdf_path)
+    try:
+        spec = mujoco.MjSpec.from_file(urdf_path)
+    except ValueError as exc:  # an XML error PyBullet's importer and the intake's checks let pass
+        why = " ".join(str(exc).split())
+        raise ArmError(f"{arm.urdf}: MuJoCo cannot load this URDF"
+                       + (f" (its cleaned copy {urdf_path})" if arm.plant_urdf is not None else "")
+                       + f": {why}") from None
     spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
     for geom in list(spec.geoms):
         spec.delete(geom)
