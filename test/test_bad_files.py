@@ -452,3 +452,14 @@ def test_every_shipped_arm_trajectory_and_docs_yaml_reads_as_before():
     for name in preset_names():
         assert load_arm(name).joint_names, name
     assert len(read_trajectory(REPO / "config" / "trajectory_example.yaml").time_from_start_s) == 5
+
+
+def test_init_from_the_output_of_a_run_of_several_controllers_finds_its_dnbs_checkpoints(tmp_path):
+    """``simulate --controller all`` keeps DNBS's checkpoints in DIR/dnbs/checkpoints; ``--init-from DIR`` (its
+    output directory, as --help and docs/controller.md say) warm-starts from them (was: "DIR/s1.npz: missing")."""
+    run = tmp_path / "all"
+    assert run_cli("simulate", "--controller", "both", *TINY, "--out", run).returncode == 0
+    r = run_cli("simulate", "--controller", "dnbs", *TINY, "--init-from", run, "--out", tmp_path / "warm")
+    assert r.returncode == 0, r.stderr
+    report = (tmp_path / "warm" / "report.md").read_text()
+    assert "DNBS warm-started from the checkpoints in" in report and str(run) in report

@@ -66,9 +66,13 @@ def _whole_number(path: Path, value: np.ndarray, what: str) -> int:
 
 
 def checkpoint_dir(path: Path) -> Path:
-    """The directory holding ``<joint>.npz`` files: ``path`` itself, or ``path/checkpoints`` (a run's output)."""
+    """The directory holding ``<joint>.npz`` files: ``path`` itself, ``path/checkpoints`` (a run's output), or
+    ``path/dnbs/checkpoints`` (the output of a run of several controllers: ``simulate --controller all``)."""
     path = Path(path)
-    return path / "checkpoints" if (path / "checkpoints").is_dir() else path
+    for inside in (path / "checkpoints", path / "dnbs" / "checkpoints"):
+        if inside.is_dir():
+            return inside
+    return path
 
 
 def network_degrees(dnbs) -> tuple[int, int]:
