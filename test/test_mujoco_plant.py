@@ -188,3 +188,17 @@ def test_a_urdf_mujoco_cannot_parse_is_one_line_naming_it(tmp_path):
     assert last.startswith(f"pa10-dnbs: error: {tmp_path / 'arm.urdf'}: MuJoCo cannot load this URDF") \
         and "size" in last, last
     assert not (tmp_path / "out").exists()
+
+
+def test_a_step_that_blows_up_keeps_its_state_and_writes_no_log(tmp_path, monkeypatch):
+    """MuJoCo resets a state whose accelerations are huge or non-finite to the zero pose and goes on, writing
+    MUJOCO_LOG.TXT into the working directory: a run would then track from a state the physics never reached. The
+    plant keeps the state the step reached (here every joint driven to one of its limits) and writes nothing."""
+    monkeypatch.chdir(tmp_path)
+    arm = load_arm("pa10")
+    plant = MuJoCoArmPlant(arm, arm_plant_params(arm, torque_limit_nm=(1e300,) * 7))
+    plant.reset(0.5 * arm.upper_rad, np.zeros(7))
+    plant.step(np.full(7, 1e300))
+    q, _ = plant.state
+    assert np.all((q == arm.upper_rad) | (q == arm.lower_rad)), q
+    assert list(tmp_path.iterdir()) == []

@@ -66,7 +66,24 @@ def build_model(arm: Arm, params):
     opt.gravity = [0.0, 0.0, -float(params.gravity_mps2)]
     opt.integrator = mujoco.mjtIntegrator.mjINT_EULER
     opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT) | int(mujoco.mjtDisableBit.mjDSBL_LIMIT)
+    # A step whose accelerations blow up (non-finite or huge) keeps the state it reached, as the PyBullet plant
+    # does, for the loop to see and report: MuJoCo would otherwise reset the state to the model's zero pose
+    # and go on, silently.
+    opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
+    _quiet_warnings(mujoco)
     return spec.compile()
+
+
+def _ignore_warning(text: str) -> None:
+    """MuJoCo's run-time warnings (a state or acceleration gone bad) show in the plant's state, which the loop
+    reports; nothing is written to the working directory."""
+
+
+def _quiet_warnings(mujoco) -> None:
+    """MuJoCo's warnings handled in this process instead of by its default handler, which prints them and writes
+    MUJOCO_LOG.TXT into the working directory (a run writes only into its output folder)."""
+    if mujoco.get_mju_user_warning() is None:
+        mujoco.set_mju_user_warning(_ignore_warning)
 
 
 def _scale_and_load(spec, arm: Arm, params) -> None:
