@@ -48,12 +48,15 @@ def test_simulate_both_writes_metrics_figures_report_timeseries(tmp_path):
 
 def test_no_figures_writes_data_and_report_without_png(tmp_path):
     out = tmp_path / "run"
-    r = run_cli("simulate", "--controller", "pid", "--duration", "0.2", "--out", out, "--no-progress", "--no-figures")
+    r = run_cli("simulate", "--controller", "pid", "--duration", "0.1", "--out", out, "--no-progress", "--no-figures")
     assert r.returncode == 0, r.stderr
     assert (out / "metrics.json").is_file() and (out / "timeseries.npz").is_file()
     assert not list(out.rglob("*.png"))
     report = (out / "report.md").read_text()
     assert "--no-figures" in report and ".png" not in report
+    # 0.1 s of PID from 0.1 rad off: not settled, said as the console says it (not "after never s")
+    assert json.loads((out / "metrics.json").read_text())["worst_settling_time_s"] is None
+    assert "settled (|e| < 0.01 rad) never;" in report and "after never" not in report
 
 
 def _bad_config(tmp_path, edit):

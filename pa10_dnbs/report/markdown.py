@@ -8,6 +8,11 @@ def _settle(v) -> str:
     return "never" if v is None else f"{v:.3f}"
 
 
+def _settled_after(v) -> str:
+    """'after 0.190 s', or 'never' (a run that did not settle)."""
+    return "never" if v is None else f"after {v:.3f} s"
+
+
 def metrics_table(metrics: list[dict]) -> str:
     """Window figures: one row per joint, RMS / max |e| / max |torque| per run side by side."""
     tags = [m["controller"].upper() for m in metrics]
@@ -72,7 +77,7 @@ def report_markdown(metrics: list[dict], figures: list[tuple[str, str]], title: 
     for m in metrics:
         rtf = m.get("real_time_factor")
         lines.append(f"- **{m['controller'].upper()}**: worst-joint RMS {m['worst_rms_error_rad']:.3e} rad; settled "
-                     f"(|e| < {m['settle_band_rad']:g} rad) after {_settle(m['worst_settling_time_s'])} s; "
+                     f"(|e| < {m['settle_band_rad']:g} rad) {_settled_after(m['worst_settling_time_s'])}; "
                      f"all values finite: {m['all_finite']}; torques within the limits: {m['torques_within_limits']}; "
                      + _wall_time(m['wall_time_s'], rtf) + _diverged(m))
     lines += [""] + [f"- {n}" for n in notes]
