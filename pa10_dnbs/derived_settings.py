@@ -125,10 +125,10 @@ def check_start(arm: Arm, checked: dict) -> None:
     _outside("simulation.initial_position_offset_rad", q0, arm, "the start position (reference.centre_rad + offset)")
 
 
-def derived_reference(plant: PyBulletArmPlant, run: RunSettings, report: bool = True) -> dict:
+def derived_reference(plant: PyBulletArmPlant, run: RunSettings, report: bool = True, stream=None) -> dict:
     """The ``reference`` fragment of the reference rule for the arm of ``plant``, made feasible
     (reference_rule.feasible_reference: the torque it asks of ``plant`` over ``run.duration_s``, inverse dynamics
-    with gravity, within the plant's limits); ``report``: its lines on stderr."""
+    with gravity, within the plant's limits); ``report``: its lines on ``stream`` (stderr when None)."""
     arm = plant.arm
     fragment = reference_rule(arm.lower_rad, arm.upper_rad)
     torque = ReferenceTorque(plant, run.duration_s, run.dt_s)
@@ -137,7 +137,7 @@ def derived_reference(plant: PyBulletArmPlant, run: RunSettings, report: bool = 
                                          sweep=torque.sweep)
     if report:
         for line in lines:
-            print(f"warning: arm {arm.name}: {line}", file=sys.stderr)
+            print(f"warning: arm {arm.name}: {line}", file=sys.stderr if stream is None else stream)
     return {"reference": fragment}
 
 

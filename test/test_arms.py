@@ -179,3 +179,11 @@ def test_a_locked_finger_is_held_exactly(tmp_path):
             np.testing.assert_allclose(a.bias_torque(q, qd), b.bias_torque(q, qd), rtol=1e-12, atol=1e-12)
     finally:
         client.disconnect()
+
+
+def test_the_arm_command_prints_its_report_once_on_stdout():
+    """``pa10-dnbs arm`` is a report: facts, sources, the inertia sweep and the rule's gains, all on stdout (a user
+    keeps it with ``> arm.txt``), the table once (the rules' build-time copy on stderr doubled it)."""
+    r = run_cli("arm", "--arm", "iiwa")
+    assert r.returncode == 0 and r.stderr == "", r.stderr
+    assert r.stdout.count("J light-heavy [kg m^2]") == 1 and "sources:" in r.stdout and "runs with:" in r.stdout

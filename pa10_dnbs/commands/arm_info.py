@@ -6,6 +6,7 @@ file's settings or the config's where they differ): so that a placeholder or a m
 """
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -20,19 +21,22 @@ from ..run_settings import build_settings
 
 def run_arm_info(options: ArmInfoOptions) -> int:
     """Print the arm's facts, sources, inertia sweep and gains; returns 0 (bad input raises ConfigError)."""
-    from ..derived_settings import derived_gains, inertia_sweep_along
+    from ..derived_settings import derived_gains, derived_reference, inertia_sweep_along
 
     o = options
-    settings = build_settings(Path(o.config_path) if o.config_path else default_config_path(), arm=o.arm)
+    # the rules' own report is printed below, once and on stdout (the command's output), not while building
+    settings = build_settings(Path(o.config_path) if o.config_path else default_config_path(), arm=o.arm,
+                              report=False)
     the_arm, run = settings.arm, settings.simulation
     print(arm_line(the_arm).replace("; ", ";\n  "))
     print("sources:")
     for key, text in the_arm.sources.items():
         print(f"  {key}: {text}")
     with opened_plant(the_arm, plant_params(settings.plant, run.dt_s)) as plant:
+        derived_reference(plant, run, stream=sys.stdout)   # what the reference rule moved or cannot fit, if any
         sweep = inertia_sweep_along(plant, settings.reference, run)
         rule = derived_gains(plant, settings.reference, run, report=False, sweep=sweep)
-    report_rule(the_arm, sweep, rule, run.dt_s, stream=None)
+    report_rule(the_arm, sweep, rule, run.dt_s, stream=sys.stdout)
     run_ku = np.array(settings.dnbs.remedies.robust_term.torque_gain_nms_per_rad)
     rule_ku = np.array(rule["dnbs"]["remedies"]["robust_term"]["torque_gain_nms_per_rad"])
     same = np.allclose(run_ku, rule_ku, rtol=1e-12)
