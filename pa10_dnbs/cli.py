@@ -26,7 +26,8 @@ if __name__ != "__main__" and not sys.argv[0].endswith("pa10-dnbs"):   # importe
 
 LIVE_PORT = 8765  # Foxglove's default WebSocket port
 #: The flag of each setting a library's error can name (ConfigError.setting): the command line says it as given.
-SETTING_FLAGS = {"trajectory": "--trajectory", "duration_s": "--duration", "jobs": "--jobs", "controller": "--controller",
+SETTING_FLAGS = {"arm": "--arm",
+                 "trajectory": "--trajectory", "duration_s": "--duration", "jobs": "--jobs", "controller": "--controller",
                  "params": "--params", "storage": "--storage", "scheduler": "--scheduler", "live_port": "--live",
                  "live_host": "--live-host", "live_hz": "--live-hz", "netns": "--netns", "plant": "--plant",
                  "robot": "--robot", "robot_command": "--robot-command", "robot_state_topic": "--robot-state-topic",

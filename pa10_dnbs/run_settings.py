@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .arm import DEFAULT_ARM, load_arm
+from .arm import DEFAULT_ARM, ArmError, load_arm
 from .config import ConfigError, MissingKeyError, check_arm_settings, checked_layers, default_config_path, load_config
 from .derived_settings import DERIVED_KEYS, RULE_DEFAULTS, with_rule_values
 from .settings import Settings
@@ -22,7 +22,12 @@ def build_settings(config_path: str | Path, arm: str | Path | None = None, repor
     count; then the rules' values (docs/arms.md) for the keys nobody gives (``report``: the rules print their
     table and warnings on stderr). ConfigError naming the key or file, ArmError naming the arm file."""
     document = load_config(config_path)
-    the_arm = load_arm(arm if arm is not None else document.get("arm", DEFAULT_ARM))
+    try:
+        the_arm = load_arm(arm if arm is not None else document.get("arm", DEFAULT_ARM))
+    except ArmError as exc:
+        if arm is not None and exc.setting is None:   # "arm: ..." is the caller's option (the CLI says --arm)
+            exc.setting = "arm"
+        raise
     try:
         check_arm_settings(the_arm.settings)
     except ConfigError as exc:   # said as the arm file's key, not taken for the config's

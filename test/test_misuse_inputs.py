@@ -125,6 +125,7 @@ def test_replay_refuses_bad_values_in_one_line(tmp_path, words, flag):
 def test_arm_and_analyse_name_what_is_wrong(tmp_path):
     r = run_cli("arm", "--arm", "nope")
     _assert_one_line(r.returncode, r.stdout, r.stderr, "nope")
+    assert r.stderr.startswith("pa10-dnbs: error: --arm: no arm called 'nope'"), r.stderr   # the flag typed
     r = run_cli("analyse", tmp_path / "missing_bag", "--out", tmp_path / "again")
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
     assert not (tmp_path / "again").exists()
