@@ -285,20 +285,23 @@ def load_config(path: str | Path) -> dict:
     return raw
 
 
-def _check_given(key: str, value: Any, spec: Any) -> None:
-    """The keys ``value`` gives checked against ``spec`` (missing keys are left to the arm and the rules)."""
+def _check_given(key: str, value: Any, spec: Any, n: int | None = None, null_ok: bool = True) -> None:
+    """The keys ``value`` gives checked against ``spec`` (missing keys are left to the arm and the rules; ``n``:
+    the arm's joints, the length of every per-joint list, None: any length; ``null_ok``: a null passes)."""
     if isinstance(spec, dict):
         _check_mapping(key, value, spec)
         for k, v in value.items():
-            _check_given(f"{key}.{k}" if key else k, v, spec[k])
+            _check_given(f"{key}.{k}" if key else k, v, spec[k], n, null_ok)
     elif value is not None:
-        check_value(key, value, spec, None)
+        check_value(key, value, spec, n)
+    elif not null_ok:
+        raise ConfigError(f"{key}: null (leave the key out for the rule's or a config's value)")
 
 
-def check_arm_settings(settings: dict) -> None:
-    """An arm file's ``settings``: config keys but ``arm``, each given of its kind and within its bounds (list
-    lengths are checked with the arm's joints when the settings are built). ConfigError naming the key."""
-    _check_given("", settings, {k: v for k, v in SCHEMA.items() if k != "arm"})
+def check_arm_settings(settings: dict, n_joints: int) -> None:
+    """An arm file's ``settings`` for its arm of ``n_joints`` joints: config keys but ``arm``, each given (not
+    null) of its kind, within its bounds and, per joint, of the arm's length. ConfigError naming the key."""
+    _check_given("", settings, {k: v for k, v in SCHEMA.items() if k != "arm"}, n_joints, null_ok=False)
 
 
 def merged(base: dict, over: dict) -> dict:

@@ -127,6 +127,22 @@ def test_a_bad_arm_is_one_line_naming_it_exit_2_nothing_written(tmp_path, change
     assert not out.exists()
 
 
+@pytest.mark.parametrize("settings, message", [
+    ({"pid": {"kp": [1.0, 2.0]}}, "settings.pid.kp: expected 3 values (one per joint of the arm), got 2"),
+    ({"dnbs": {"remedies": {"robust_term": {"alpha_gain_per_s": [1.0]}}}},
+     "settings.dnbs.remedies.robust_term.alpha_gain_per_s: expected 3 values"),
+    ({"pid": {"kp": None}}, "settings.pid.kp: null"),
+])
+def test_an_arm_files_setting_of_the_wrong_length_or_null_names_the_arm_file(tmp_path, settings, message):
+    """Checked with the arm's joint count where the arm file is known (it was said as a bare config key, as if
+    the user's config gave it)."""
+    arm = write_arm(tmp_path, three_link_urdf(), settings=settings)
+    r = run_cli("simulate", "--arm", arm, "--duration", "0.1", "--out", tmp_path / "out")
+    assert r.returncode == 2 and r.stderr.startswith(f"pa10-dnbs: error: {arm}: {message}"), r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert not (tmp_path / "out").exists()
+
+
 def _apply(text, changes):
     for old, new in changes.items():
         text = text.replace(old, new)
