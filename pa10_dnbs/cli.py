@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 from . import interrupt
 _startup_sigint = interrupt.quiet_start()   # Ctrl-C while the modules load: one line, exit 130
@@ -16,7 +15,7 @@ from .supervisor.fault_flags import add_fault_arguments
 from .loop.scheduling import DEFAULT_RT_PRIORITY
 from .cli_values import (EFFORT_TIMEOUT_MAX_S, MAX_REPLAY_CLOCK_HZ, REPLAY_RATE_MAX, REPLAY_RATE_MIN, RTF_MAX,
                          RTF_MIN, WAIT_FOR_SUBSCRIBERS_MAX_S, OneLineParser, nonnegative,
-                         number_in, positive, seconds, whole_in)
+                         number_in, path_arg, positive, seconds, utf8_text, whole_in)
 from .output_lock import held, release_all
 from .refused import Refused
 from .tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
@@ -185,7 +184,7 @@ def _run(args: argparse.Namespace) -> int:
 
 def add_arm_argument(p: argparse.ArgumentParser) -> None:
     """``--arm NAME|PATH``: the same flag on every command that runs an arm."""
-    p.add_argument("--arm", default=None, metavar="NAME|PATH",
+    p.add_argument("--arm", type=utf8_text, default=None, metavar="NAME|PATH",
                    help="the arm: a preset of urdf/ (pa10, iiwa, panda) or the path of an arm file (arm.yaml) or a "
                         "bare URDF (default: the config's arm, pa10; docs/arms.md)")
 
@@ -200,17 +199,17 @@ def add_parallel_arguments(p: argparse.ArgumentParser, what: str) -> None:
 
 
 def _add_run_args(p: argparse.ArgumentParser, controllers: tuple[str, ...], help_controller: str) -> None:
-    p.add_argument("--config", type=Path, default=None, help=f"YAML config (default: {default_config_path()})")
+    p.add_argument("--config", type=path_arg, default=None, help=f"YAML config (default: {default_config_path()})")
     add_arm_argument(p)
     p.add_argument("--controller", choices=controllers, default="dnbs", help=help_controller)
     p.add_argument("--duration", type=seconds, default=None, metavar="SECONDS",
                    help="simulated time [s] (default: simulation.duration_s of the config, 20 s)")
-    p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
+    p.add_argument("--out", type=path_arg, required=True, metavar="DIR", help="output directory")
     p.add_argument("--force", action="store_true", help="replace an existing output (never one a running command writes)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-figures", action="store_true",
                    help="write metrics, time series and report.md without figures (batch runs; ~3 s less)")
-    p.add_argument("--trajectory", type=Path, default=None, metavar="FILE",
+    p.add_argument("--trajectory", type=path_arg, default=None, metavar="FILE",
                    help="follow this JointTrajectory (YAML or JSON) from t = 0 instead of eq. 27 "
                         "(docs/trajectories.md; example: config/trajectory_example.yaml)")
 
@@ -233,7 +232,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_run_args(sim, ("dnbs", "pid", "ctc", "both", "all"),
                   "dnbs (the paper's, with the configured remedies), pid (decentralized baseline), ctc (centralized "
                   "computed torque with the plant's model: the reference), both (dnbs, pid), all (dnbs, pid, ctc)")
-    sim.add_argument("--init-from", type=Path, default=None, metavar="CHECKPOINTS",
+    sim.add_argument("--init-from", type=path_arg, default=None, metavar="CHECKPOINTS",
                      help="warm start: the DNBS weights and covariances of an earlier run (its output directory or "
                           "its checkpoints/ directory); reported as such")
     sim.add_argument("--engine", choices=("pybullet", "mujoco"), default="pybullet",
@@ -278,7 +277,7 @@ def build_parser() -> argparse.ArgumentParser:
                          "(default 1)")
     la.add_argument("--on-missing-effort", choices=("hold", "zero"), default="hold",
                     help="what replaces a missing effort: the joint's last applied torque (hold) or zero")
-    la.add_argument("--record", type=Path, default=None, metavar="BAG_DIR",
+    la.add_argument("--record", type=path_arg, default=None, metavar="BAG_DIR",
                     help="record every topic into a rosbag2 MCAP bag (replaced only with --force)")
     la.add_argument("--restart", nargs="?", const="resume", choices=("resume", "fresh"), default=None,
                     help="restart a joint controller that dies (up to 3 times per joint), resuming from its "
@@ -286,7 +285,7 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--netns", action="append", default=[], metavar="GROUP=NAMESPACE",
                     help="run a node group (observer, reference, controllers, plant) in a network namespace "
                          "(ip netns), with discovery range SUBNET: several hosts on one machine; repeatable")
-    la.add_argument("--init-from", type=Path, default=None, metavar="CHECKPOINTS",
+    la.add_argument("--init-from", type=path_arg, default=None, metavar="CHECKPOINTS",
                     help="warm start: the DNBS weights and covariances of an earlier run (its output directory or "
                          "its checkpoints/ directory); reported as such")
     la.add_argument("--bag-compression", choices=("zstd", "none"), default=None,
@@ -315,7 +314,7 @@ def build_parser() -> argparse.ArgumentParser:
     rb = sub.add_parser("robot", help="the arm in MuJoCo as an external robot: a ROS 2 node on the standard robot "
                                       "interface (docs/engines.md, docs/your_robot.md)")
     rb.add_argument("--engine", choices=("mujoco",), default="mujoco", help="the simulator (mujoco)")
-    rb.add_argument("--config", type=Path, default=None, help=f"YAML config (default: {default_config_path()})")
+    rb.add_argument("--config", type=path_arg, default=None, help=f"YAML config (default: {default_config_path()})")
     add_arm_argument(rb)
     rb.add_argument("--mode", choices=("lockstep", "paced"), default="lockstep",
                     help="lockstep: publish state k, wait for the command stamped k, step once; paced: step every "
@@ -337,8 +336,8 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("--controllers", default="dnbs,pid", metavar="LIST", help="comma-separated: dnbs, pid, ctc")
     st.add_argument("--seeds", type=whole_in(1, 100000), default=1, help="seeds 0..N-1 of the DNBS initial weights and the noise")
     st.add_argument("--duration", type=seconds, default=20.0, metavar="SECONDS", help="simulated time per run")
-    st.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
-    st.add_argument("--config", type=Path, default=None, help="YAML config the scenarios start from")
+    st.add_argument("--out", type=path_arg, required=True, metavar="DIR", help="output directory")
+    st.add_argument("--config", type=path_arg, default=None, help="YAML config the scenarios start from")
     add_arm_argument(st)
     add_parallel_arguments(st, "runs")
     st.add_argument("--force", action="store_true", help="replace an existing output (never one a running command writes)")
@@ -346,7 +345,7 @@ def build_parser() -> argparse.ArgumentParser:
     st.set_defaults(func=_run, func_name="study")
 
     ar = sub.add_parser("arm", help="an arm's facts, sources, effective inertias and gains (docs/arms.md)")
-    ar.add_argument("--config", type=Path, default=None, help="YAML config (default: the shipped default)")
+    ar.add_argument("--config", type=path_arg, default=None, help="YAML config (default: the shipped default)")
     add_arm_argument(ar)
     ar.set_defaults(func=_run, func_name="arm")
 
@@ -354,10 +353,10 @@ def build_parser() -> argparse.ArgumentParser:
     tu.add_argument("--controller", required=True, metavar="NAME", help="dnbs, pid or ctc")
     tu.add_argument("--trials", type=whole_in(1, 1000000), default=20, metavar="N",
                     help="completed trials the study should hold (a resumed tune runs the rest; default 20)")
-    tu.add_argument("--out", type=Path, required=True, metavar="DIR",
+    tu.add_argument("--out", type=path_arg, required=True, metavar="DIR",
                     help="tuned.yaml, tune.md, tune.json, figures, and the study's SQLite storage tune.db")
     add_arm_argument(tu)
-    tu.add_argument("--config", type=Path, default=None,
+    tu.add_argument("--config", type=path_arg, default=None,
                     help="YAML config the search starts from (default: the shipped default)")
     tu.add_argument("--storage", default=None, metavar="URL",
                     help="Optuna storage URL (default: sqlite:///DIR/tune.db), e.g. postgresql://host/db")
@@ -377,9 +376,9 @@ def build_parser() -> argparse.ArgumentParser:
     tu.set_defaults(func=_run, func_name="tune")
 
     an = sub.add_parser("analyse", help="metrics, figures and report of a recorded run, from its bag alone")
-    an.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 bag directory (metadata.yaml + .mcap)")
-    an.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
-    an.add_argument("--config", type=Path, default=None,
+    an.add_argument("bag", type=path_arg, metavar="BAG", help="rosbag2 bag directory (metadata.yaml + .mcap)")
+    an.add_argument("--out", type=path_arg, required=True, metavar="DIR", help="output directory")
+    an.add_argument("--config", type=path_arg, default=None,
                     help="YAML config (default: the one stored in the bag, else the shipped default)")
     an.add_argument("--force", action="store_true", help="replace an existing output (never one a running command writes)")
     an.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -387,7 +386,7 @@ def build_parser() -> argparse.ArgumentParser:
     an.set_defaults(func=_run, func_name="analyse")
 
     rp = sub.add_parser("replay", help="publish a bag's topics with their recorded timing (like ros2 bag play)")
-    rp.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 bag directory")
+    rp.add_argument("bag", type=path_arg, metavar="BAG", help="rosbag2 bag directory")
     rp.add_argument("--rate", type=number_in(REPLAY_RATE_MIN, REPLAY_RATE_MAX, low_open=False), default=1.0,
                     help=f"playback speed factor in [{REPLAY_RATE_MIN:g}, {REPLAY_RATE_MAX:g}] (default 1)")
     rp.add_argument("--topics", nargs="+", default=None, metavar="TOPIC", help="only these topics (default: all)")
@@ -409,7 +408,7 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--queue-depth", type=whole_in(1, 1000000), default=1000,
                     help="keep_last depth of each publisher, at least (default 1000)")
     _add_live_args(rp)
-    rp.add_argument("--config", type=Path, default=None,
+    rp.add_argument("--config", type=path_arg, default=None,
                     help="with --live: config for the torque limits (default: the one stored in the bag)")
     rp.set_defaults(func=_run, func_name="replay")
     return parser

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from pathlib import Path
 
 #: replay --clock's bound [Hz of wall time]: a /clock at most every millisecond (the plant's step on every preset),
 #: a rate the player's publisher keeps; a faster one only delays the bag's messages
@@ -23,6 +24,23 @@ EFFORT_TIMEOUT_MAX_S = 3600.0
 REPLAY_RATE_MIN, REPLAY_RATE_MAX = 1e-3, 1000.0
 #: replay --wait-for-subscribers' bound [s of wall time] (0: no wait): as --effort-timeout, an hour is a hang
 WAIT_FOR_SUBSCRIBERS_MAX_S = 3600.0
+
+
+def utf8_text(text: str) -> str:
+    """A flag's text that names a file or an arm: valid UTF-8 (a name of bytes in another encoding would end the
+    command with a traceback where its report names it, after the run)."""
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        shown = text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+        raise argparse.ArgumentTypeError(f"'{shown}': the name is not valid UTF-8 (bytes of another encoding): "
+                                         "rename it") from None
+    return text
+
+
+def path_arg(text: str) -> Path:
+    """A path flag's value (:func:`utf8_text`)."""
+    return Path(utf8_text(text))
 
 
 class OneLineParser(argparse.ArgumentParser):

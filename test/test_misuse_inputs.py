@@ -465,3 +465,18 @@ def test_analyse_of_a_bag_another_run_is_recording_is_refused(tmp_path):
         holder.send_signal(2)
         holder.wait(timeout=60)
     assert not (tmp_path / "again").exists()
+
+
+@pytest.mark.parametrize("flag", ["--config", "--trajectory", "--init-from", "--out", "--arm"])
+def test_a_file_name_that_is_not_utf8_is_refused_before_the_run(tmp_path, flag):
+    """A name in another encoding (Latin-1 'e acute', byte 0xE9: Python's surrogate escape) ran the whole
+    simulation, then ended in a UnicodeEncodeError traceback where the report names it, the work lost."""
+    latin1 = str(tmp_path / "caf\udce9")
+    args = {"--config": ("--config", latin1 + ".yaml"), "--trajectory": ("--trajectory", latin1 + ".yaml"),
+            "--init-from": ("--init-from", latin1), "--out": (), "--arm": ("--arm", latin1 + ".urdf")}[flag]
+    out = latin1 if flag == "--out" else tmp_path / "out"
+    before = {p.name for p in tmp_path.iterdir()}
+    r = run_cli("simulate", *args, "--duration", 0.05, "--no-figures", "--no-progress", "--out", out)
+    _assert_one_line(r.returncode, r.stdout, r.stderr, f"argument {flag}: ")
+    assert "not valid UTF-8" in r.stderr and "caf\\xe9" in r.stderr, r.stderr
+    _untouched(tmp_path, before)
