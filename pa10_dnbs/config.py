@@ -236,11 +236,22 @@ def validate(raw: Any, n_joints: int) -> dict:
     return checked
 
 
+def _config_file(path: Path) -> Path:
+    """``path`` resolved, a file: ConfigError naming it when it is missing, a folder, or a name the OS refuses (too
+    long, a loop of symbolic links)."""
+    try:
+        resolved = path.resolve()
+        if resolved.is_file():
+            return resolved
+        there = resolved.is_dir()
+    except (OSError, RuntimeError) as exc:   # ENAMETOOLONG; Path.resolve's "Symlink loop" (RuntimeError)
+        raise ConfigError(f"config file {path}: {getattr(exc, 'strerror', None) or exc}") from None
+    raise ConfigError(f"config file {path}: a folder, not a file" if there else f"config file not found: {resolved}")
+
+
 def _read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict:
     """The document at ``path``, merged over the file its ``extends`` key names (relative to it), recursively."""
-    path = path.resolve()
-    if not path.is_file():
-        raise ConfigError(f"config file not found: {path}")
+    path = _config_file(path)
     if path in seen:
         raise ConfigError(f"{path}: extends: circular ({' -> '.join(str(p) for p in seen + (path,))})")
     raw = read_config_yaml(path)  # one line for a file that is not text, not YAML, or gives a key twice
@@ -255,8 +266,10 @@ def _read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict:
     base = raw.pop("extends")
     if not isinstance(base, str) or not base:
         raise ConfigError(f"{path}: extends: expected the path of a config file, got {base!r}")
-    if not (path.parent / base).is_file():
-        raise ConfigError(f"{path}: extends: {base}: no such config file ({(path.parent / base).resolve()})")
+    try:
+        _config_file(path.parent / base)
+    except ConfigError as exc:
+        raise ConfigError(f"{path}: extends: {base}: {exc}") from None
     parent = _read_yaml(path.parent / base, seen + (path,))
     if not isinstance(parent, dict):
         raise ConfigError(f"{path}: extends: {base} is not a mapping")

@@ -114,7 +114,7 @@ def test_binary_config(tmp_path):
 def test_extends_missing_file(tmp_path):
     cfg = tmp_path / "child.yaml"
     cfg.write_text("extends: nosuch.yaml\n")
-    _one_line_error(_simulate_with(tmp_path, cfg), cfg, "extends: nosuch.yaml", "no such config file")
+    _one_line_error(_simulate_with(tmp_path, cfg), cfg, "extends: nosuch.yaml", "config file not found")
 
 
 def test_a_config_that_does_not_extend_the_default_names_its_file(tmp_path):
@@ -463,3 +463,22 @@ def test_init_from_the_output_of_a_run_of_several_controllers_finds_its_dnbs_che
     assert r.returncode == 0, r.stderr
     report = (tmp_path / "warm" / "report.md").read_text()
     assert "DNBS warm-started from the checkpoints in" in report and str(run) in report
+
+
+@pytest.mark.parametrize("kind, words", [("long", "File name too long"), ("loop", "Symlink loop"),
+                                         ("folder", "a folder, not a file")])
+def test_a_config_path_the_os_refuses_is_one_line(tmp_path, kind, words):
+    """A name too long for the OS (it was exit 1, the flag unnamed), a loop of symbolic links (a RuntimeError
+    traceback) or a folder: one line naming the file, exit 2, for --config and for a config's extends."""
+    if kind == "long":
+        bad = tmp_path / ("x" * 300 + ".yaml")
+    elif kind == "loop":
+        (tmp_path / "a").symlink_to(tmp_path / "b")
+        (tmp_path / "b").symlink_to(tmp_path / "a")
+        bad = tmp_path / "a"
+    else:
+        bad = tmp_path
+    _one_line_error(run_cli("arm", "--config", bad), "config file", words)
+    cfg = tmp_path / "extends.yaml"
+    cfg.write_text(f"extends: {bad}\n")
+    _one_line_error(run_cli("arm", "--config", cfg), f"{cfg}: extends: ", words)
