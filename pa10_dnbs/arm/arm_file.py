@@ -17,12 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config_error import ConfigError
 from ..config_yaml import read_yaml
 from ..kinematics.urdf_chain import UrdfChain
 from ..kinematics.urdf_tree import UrdfError
-from ..paths import share_path
 from .arm import Arm
+from .arm_path import ArmError, arm_file_path, existing_file, is_urdf, preset_names  # noqa: F401 (the API)
 from .chain_select import actuated_joints
 from .package_uri import is_package_uri, resolve_package_uri
 from .plant_urdf import plant_urdf
@@ -33,41 +32,6 @@ KEYS = {"name", "description", "urdf", "urdf_install", "tip_link", "joints", "ex
         "flange_link", "sources", "settings", *FACTS}
 
 
-class ArmError(ConfigError):
-    """An arm file or URDF is unusable; the message names the file and what is wrong."""
-
-
-def preset_names() -> list[str]:
-    """The arms shipped in ``urdf/`` (folders with an arm.yaml)."""
-    root = share_path("urdf")
-    return sorted(p.parent.name for p in root.glob("*/arm.yaml"))
-
-
-def arm_file_path(spec: str | Path) -> Path:
-    """The file ``spec`` names: a preset's ``urdf/<name>/arm.yaml``, or the path itself (resolved)."""
-    text = "" if spec is None else str(spec)
-    if not text.strip():
-        raise ArmError("arm: empty (a preset name or the path of an arm file or URDF)")
-    if is_package_uri(text):
-        try:
-            path = resolve_package_uri(text)
-        except ValueError as exc:  # PackageNotFound too
-            raise ArmError(f"arm: {exc}") from None
-        if not path.is_file():
-            raise ArmError(f"arm: {text}: file not found: {path}")
-        return path.resolve()
-    if "/" not in text and not text.endswith((".yaml", ".yml", ".urdf")):
-        path = share_path("urdf", text, "arm.yaml")
-        if not path.is_file():
-            raise ArmError(f"arm: no arm called {text!r} (presets: {', '.join(preset_names())}; or give the path "
-                           f"of an arm file or URDF)")
-        return path.resolve()
-    path = Path(text).expanduser().resolve()
-    if not path.is_file():
-        raise ArmError(f"arm: file not found: {path}")
-    return path
-
-
 def load_arm(spec: str | Path = DEFAULT_ARM) -> Arm:
     """The arm ``spec`` names, read and validated once per file (later calls return the same object)."""
     return _load(str(arm_file_path(spec)))
@@ -76,7 +40,7 @@ def load_arm(spec: str | Path = DEFAULT_ARM) -> Arm:
 @functools.lru_cache(maxsize=16)
 def _load(path_text: str) -> Arm:
     path = Path(path_text)
-    if path.suffix == ".urdf":
+    if is_urdf(path):   # a bare URDF: named *.urdf, or an XML document whose root is <robot>
         return _build(path, {"name": path.stem, "urdf": path.name,
                              "sources": {"urdf": str(path)}}, bare=True)
     raw = read_yaml(path, ArmError, "arm file")  # strict, as a config: a key given twice, 1e-3, one line per fault
@@ -92,9 +56,7 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
     for key in ("name", "urdf"):
         if not isinstance(raw.get(key), str) or not raw[key]:
             raise ArmError(f"{path}: {key}: expected a non-empty string")
-    urdf = path if bare else _urdf_path(path, raw)
-    if not urdf.is_file():
-        raise ArmError(f"{path}: urdf: file not found: {urdf}")
+    urdf = path if bare else existing_file(_urdf_path(path, raw), f"{path}: urdf")
     try:
         xml = urdf.read_text()
         chain = UrdfChain(xml)
@@ -103,10 +65,14 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
         raise ArmError(f"{urdf}: {exc}") from None
     except UnicodeDecodeError:
         raise ArmError(f"{urdf}: not a URDF: not a text file (not UTF-8)") from None
+    except OSError as exc:
+        raise ArmError(f"{urdf}: cannot read: {exc.strerror or exc}") from None
     except (ET.ParseError, ValueError, AttributeError, TypeError) as exc:
         raise ArmError(f"{urdf}: the URDF does not parse: {exc}") from None
     names = _names(path, raw, "joints")
     exclude = _names(path, raw, "exclude_joints") or ()
+    for key in ("tip_link", "flange_link"):
+        _check_link_name(path, key, raw.get(key))
     keep_gripper = raw.get("keep_gripper", False)
     if not isinstance(keep_gripper, bool):
         raise ArmError(f"{path}: keep_gripper: expected true or false")
@@ -117,6 +83,11 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
         raise ArmError(f"{path}: {exc}") from None
     joint_names = tuple(j.name for j in actuated)
     n = len(joint_names)
+    for name in joint_names:
+        why = _unfit_file_name(name)
+        if why:
+            raise ArmError(f"{urdf}: joint {name!r}: {why}: an actuated joint's name becomes a file name "
+                           f"(<joint>.npz checkpoints); rename it in the URDF")
     for j in actuated:
         _check_inertia(urdf, links.get(j.child), j.child, j.name)
     lower = np.array([j.lower for j in actuated], dtype=float)
@@ -174,7 +145,7 @@ def _urdf_path(path: Path, raw: dict) -> Path:
     if hint is not None and not (isinstance(hint, str) and hint.strip()):
         raise ArmError(f"{path}: urdf_install: expected a non-empty string (how to install the urdf's package)")
     if not is_package_uri(raw["urdf"]):
-        return (path.parent / raw["urdf"]).resolve()
+        return path.parent / raw["urdf"]   # resolved by existing_file (a loop or a name too long: one line)
     try:
         return resolve_package_uri(raw["urdf"], hint)
     except ValueError as exc:  # PackageNotFound too
@@ -187,7 +158,39 @@ def _names(path: Path, raw: dict, key: str) -> tuple[str, ...] | None:
         return None
     if not isinstance(value, list) or not all(isinstance(v, str) and v for v in value):
         raise ArmError(f"{path}: {key}: expected a list of joint names")
+    if key == "joints":   # each actuated once (a repeat in exclude_joints locks the joint all the same)
+        twice = [v for i, v in enumerate(value) if v in value[:i]]
+        if twice:
+            raise ArmError(f"{path}: {key}: {twice[0]!r} is given twice (each actuated joint once, in chain order)")
     return tuple(value)
+
+
+def _check_link_name(path: Path, key: str, value) -> None:
+    """``tip_link`` / ``flange_link``: absent (None) or a link's name, a string; a number (YAML reads an unquoted
+    ``2`` as one) is told to be quoted."""
+    if value is None or isinstance(value, str):
+        return
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        raise ArmError(f'{path}: {key}: expected a link name (a string), got the number {value!r}: quote it '
+                       f'({key}: "{value}") if the URDF has a link named so')
+    kind = {list: "a list", dict: "a mapping", bool: "a boolean"}.get(type(value), type(value).__name__)
+    raise ArmError(f"{path}: {key}: expected a link name (a string), got {kind}: {value!r}")
+
+
+MAX_FILE_NAME_BYTES = 200   # a joint's name in UTF-8: "<joint>.npz.tmp.npz" within the usual 255-byte limit
+
+
+def _unfit_file_name(name: str) -> str | None:
+    """Why the joint name ``name`` cannot be a file's name (``<name>.npz``), or None when it can."""
+    for char, called in (("/", "'/'"), ("\0", "a NUL character")):
+        if char in name:
+            return f"it holds {called}"
+    if name in (".", ".."):
+        return f"{name!r} names a folder"
+    size = len(name.encode("utf-8", "surrogatepass"))
+    if size > MAX_FILE_NAME_BYTES:
+        return f"{size} bytes long in UTF-8, more than {MAX_FILE_NAME_BYTES}"
+    return None
 
 
 def _vector(path: Path, key: str, value, n: int, strict: bool) -> np.ndarray:

@@ -86,6 +86,7 @@ def actuated_joints(chain: UrdfChain, exclude: tuple[str, ...] = (), tip_link: s
     if not chain.joints:
         raise ValueError("the URDF has no joints")
     on_chain = [j for j in chain_joints(chain, tip_link) if j.kind != "fixed"]
+    gripper: set[str] = set()
     known = {j.name for j in chain.joints}
     for name in tuple(exclude) + tuple(names or ()):
         if name not in known:
@@ -110,7 +111,31 @@ def actuated_joints(chain: UrdfChain, exclude: tuple[str, ...] = (), tip_link: s
             raise ValueError(f"joint {j.name!r} mimics joint {j.mimics!r} (<mimic>): it has no actuator of its own "
                              f"and cannot be controlled as one (list it in exclude_joints to lock it)")
     if not actuated:
-        raise ValueError(f"no revolute joint on the chain from {chain.root_link}")
+        raise ValueError(_none_left(chain.root_link, on_chain, exclude, gripper, names))
     chosen = {j.name for j in actuated}
     locked = [j for j in chain.movable if j.name not in chosen]
     return actuated, locked
+
+
+def _none_left(root: str, on_chain: list[UrdfJoint], exclude: tuple[str, ...], gripper: set[str],
+               names: tuple[str, ...] | None) -> str:
+    """Why no joint of the chain from ``root`` is left to actuate: ``joints`` empty, no movable joint, none
+    revolute, or every revolute one locked (as the gripper, by ``exclude_joints``), naming them and the remedy."""
+    if names is not None:
+        return "joints: empty (name the revolute joints to actuate, in chain order)"
+    revolute = [j for j in on_chain if j.kind in ACTUATABLE]
+    if not revolute:
+        other = ", ".join(f"{j.name} ({j.kind})" for j in on_chain)
+        why = f": its movable joints are {other} (only revolute or continuous joints can be actuated)" if other else ""
+        return f"no revolute joint on the chain from {root}{why}"
+    held = [j.name for j in revolute if j.name in gripper and j.name not in exclude]
+    excluded = [j.name for j in revolute if j.name in exclude]
+    if not held:
+        return f"exclude_joints locks every revolute joint on the chain from {root} ({', '.join(excluded)})"
+    by_exclude = f", {', '.join(excluded)} by exclude_joints" if excluded else ""
+    if all(j.kind in ACTUATABLE for j in on_chain if j.name in gripper):
+        how = "keep_gripper: true in an arm file keeps them actuated"
+    else:   # the gripper holds a prismatic joint too: keep_gripper would actuate it (refused); name the joints
+        how = f"name the ones to actuate in an arm file (joints: [{', '.join(held)}])"
+    return (f"every revolute joint on the chain from {root} is locked: {', '.join(held)} as the chain's gripper "
+            f"(its trailing joints that are prismatic or named *grip*, *finger*, *jaw* or *claw*){by_exclude}: {how}")

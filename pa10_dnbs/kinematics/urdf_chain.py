@@ -15,7 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .urdf_tree import JOINT_TYPES, MAX_OFFSET_M, UrdfError, check_link, check_name, number, tree_root, vector3
+from .urdf_tree import (JOINT_TYPES, MAX_AXIS, MAX_OFFSET_M, UrdfError, check_link, check_name, number, tree_root,
+                        vector3)
 
 
 @dataclass(frozen=True)
@@ -95,6 +96,9 @@ def _joint(el: ET.Element, i: int) -> UrdfJoint:
     xyz = np.array(vector3(origin, "xyz", "0 0 0", name, MAX_OFFSET_M))
     rpy = vector3(origin, "rpy", "0 0 0", name)
     axis = np.array(vector3(axis_el, "xyz", "1 0 0", name))
+    if np.max(np.abs(axis)) > MAX_AXIS:   # a direction; its squared length would overflow past ~1e154
+        raise UrdfError(f'joint {name!r}: <axis xyz="{axis_el.get("xyz")}">: each component must be within '
+                        f'+/-{MAX_AXIS:g} (a direction, its length divided out; see pa10_dnbs/kinematics/urdf_tree.py)')
     norm = np.linalg.norm(axis)
     if norm == 0.0:
         if kind != "fixed":

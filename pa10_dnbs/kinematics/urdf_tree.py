@@ -16,7 +16,10 @@ arm yet far from where float64 loses the precision a run needs:
   the mass bound stays 1e11 kg m^2, far inside float64;
 - ``MAX_MASS_KG``: a link's mass in [0, 1e5 kg] (the heaviest industrial arms weigh about 10 t in all);
 - ``MAX_INERTIA_KGM2``: each inertia entry within 1e7 kg m^2 (1e5 kg at 10 m);
-- rpy: finite (any angle is meaningful; it is reduced modulo 2 pi).
+- rpy: finite (any angle is meaningful; it is reduced modulo 2 pi);
+- ``MAX_AXIS``: each component of a joint's ``<axis xyz>`` within 1e6. An axis is a direction, written as a unit
+  vector or small numbers; its length is divided out, and past ~1e154 its square overflows float64 (an axis of
+  1e160 ended in a traceback from the inertia sweep).
 """
 from __future__ import annotations
 
@@ -26,6 +29,7 @@ JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "plan
 MAX_OFFSET_M = 1e3        # |x|, |y|, |z| of any <origin xyz> [m]
 MAX_MASS_KG = 1e5         # a link's <mass value> [kg]
 MAX_INERTIA_KGM2 = 1e7    # |each <inertia> entry| [kg m^2]
+MAX_AXIS = 1e6            # |each component of a joint's <axis xyz>| (a direction: unitless)
 INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 
 

@@ -1,0 +1,181 @@
+"""Arm intake at its edges: each a user's arm file or URDF that once ended in a traceback, exit 1 after the run,
+or a line naming the wrong cause (review rev_a, findings 2-5, 7, 8, 14, 15). Each is now ONE line naming the
+arm file or URDF and the key, joint or path, exit 2, before anything runs; the forms that mean an arm are read."""
+import os
+from pathlib import Path
+
+import pytest
+import yaml
+
+from cli_runner import run_cli
+from pa10_dnbs.arm import load_arm
+
+
+def _chain(names=("j1", "j2", "j3"), kind="revolute", axis="0 0 1", root="robot") -> str:
+    """A serial chain base -> l1..ln of 1 kg links, joints ``names`` of type ``kind`` (first axis ``axis``)."""
+    inertial = ('<inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/>'
+                '</inertial>')
+    parts = [f'<link name="base">{inertial}</link>']
+    parts += [f'<link name="l{i}">{inertial}</link>' for i in range(1, len(names) + 1)]
+    for i, name in enumerate(names, 1):
+        parent = "base" if i == 1 else f"l{i - 1}"
+        parts.append(f'<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="l{i}"/>'
+                     f'<origin xyz="0 0 0.3"/><axis xyz="{axis if i == 1 else "0 1 0"}"/>'
+                     f'<limit lower="-2" upper="2" effort="50" velocity="2"/></joint>')
+    return f'<?xml version="1.0"?>\n<{root} name="t">\n' + "\n".join(parts) + f"\n</{root}>\n"
+
+
+def _write(path: Path, text: str) -> Path:
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def _arm_file(tmp_path: Path, name: str = "arm.yaml", urdf: str = "chain.urdf", **fields) -> Path:
+    """An arm file in ``tmp_path`` for the URDF ``urdf`` beside it (chain.urdf: a 3-joint chain, written), with
+    ``fields``."""
+    if urdf == "chain.urdf":
+        _write(tmp_path / urdf, _chain())
+    doc = {"name": "t", "urdf": urdf, "sources": {"urdf": "test"}, **fields}
+    return _write(tmp_path / name, yaml.safe_dump(doc))
+
+
+def _refused(arm, command=("arm",)) -> str:
+    """The one line ``pa10-dnbs arm --arm ARM`` (or ``command``) refuses ``arm`` with (exit 2, nothing else on
+    stderr); a line about the value itself opens with the flag, ``--arm:``."""
+    r = run_cli(*command, "--arm", arm)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and lines[0].startswith("pa10-dnbs: error: "), (r.returncode,
+                                                                                                  r.stderr[-2000:])
+    return lines[0][len("pa10-dnbs: error: "):]
+
+
+@pytest.mark.parametrize("key", ["tip_link", "flange_link"])
+@pytest.mark.parametrize("value, said", [(["l3"], "got a list: ['l3']"), ({"l3": 1}, "got a mapping: {'l3': 1}")])
+def test_a_link_key_that_is_not_a_string_is_named(tmp_path, key, value, said):
+    """Was a TypeError traceback (a list or mapping is unhashable)."""
+    path = _arm_file(tmp_path, **{key: value})
+    assert _refused(path) == f"{path}: {key}: expected a link name (a string), {said}"
+
+
+@pytest.mark.parametrize("key", ["tip_link", "flange_link"])
+def test_an_unquoted_numeric_link_name_is_told_to_be_quoted(tmp_path, key):
+    """Was "no link 2 in the URDF" for a URDF with a link named "2" (YAML reads an unquoted 2 as a number)."""
+    _write(tmp_path / "numbered.urdf", _chain().replace('"l2"', '"2"'))
+    path = _arm_file(tmp_path, urdf="numbered.urdf", **{key: 2})
+    assert _refused(path) == (f'{path}: {key}: expected a link name (a string), got the number 2: quote it '
+                              f'({key}: "2") if the URDF has a link named so')
+    arm = load_arm(_arm_file(tmp_path, name="quoted.yaml", urdf="numbered.urdf", **{key: "2"}))
+    assert arm.joint_names == (("j1", "j2") if key == "tip_link" else ("j1", "j2", "j3"))
+    assert arm.flange_link == "2"   # given, or the tip (the last actuated joint's child)
+
+
+def test_a_joint_given_twice_in_joints_is_said_so(tmp_path):
+    """Was "joints: list them in chain order (j1)", the list shown holding the joint once."""
+    path = _arm_file(tmp_path, joints=["j1", "j1"])
+    assert _refused(path) == f"{path}: joints: 'j1' is given twice (each actuated joint once, in chain order)"
+
+
+@pytest.mark.parametrize("bad, why", [("arm/j1", "it holds '/'"), ("..", "'..' names a folder"),
+                                      (".", "'.' names a folder"),
+                                      ("j" * 201, "201 bytes long in UTF-8, more than 200"),
+                                      ("é" * 101, "202 bytes long in UTF-8, more than 200")],
+                         ids=["slash", "dotdot", "dot", "201_ascii", "101_two_byte"])
+def test_a_joint_name_that_cannot_be_a_file_name_is_refused_at_intake(tmp_path, bad, why):
+    """Was accepted: the run completed, then its checkpoint `<joint>.npz` failed (exit 1, a temporary file named)."""
+    urdf = _write(tmp_path / "named.urdf", _chain(names=(bad, "j2", "j3")))
+    line = _refused(urdf)
+    assert line == (f"{urdf}: joint {bad!r}: {why}: an actuated joint's name becomes a file name "
+                    f"(<joint>.npz checkpoints); rename it in the URDF"), line
+
+
+@pytest.mark.parametrize("command", ["simulate", "launch"])
+def test_simulate_and_launch_refuse_it_before_the_run(tmp_path, command):
+    """The review's command: ``simulate`` ran the whole run, then failed writing ``checkpoints/arm/j1.npz``."""
+    urdf = _write(tmp_path / "slash.urdf", _chain(names=("arm/j1", "arm/j2", "arm/j3")))
+    out = tmp_path / "out"
+    line = _refused(urdf, (command, "--duration", "0.1", "--out", out))
+    assert line.startswith(f"{urdf}: joint 'arm/j1': it holds '/': "), line
+    assert not out.exists() and [p.name for p in tmp_path.iterdir()] == ["slash.urdf"]
+
+
+def test_a_joint_name_of_200_bytes_is_accepted_of_201_refused(tmp_path):
+    arm = load_arm(_write(tmp_path / "name_200.urdf", _chain(names=("j" * 200, "j2", "j3"))))
+    assert arm.joint_names[0] == "j" * 200
+    assert "201 bytes long" in _refused(_write(tmp_path / "name_201.urdf", _chain(names=("j" * 201, "j2", "j3"))))
+
+
+def test_an_axis_whose_length_would_overflow_is_refused(tmp_path):
+    """Was an overflow warning, then numpy's LinAlgError traceback from the inertia sweep (exit 1). Up to 1e6 an
+    axis is divided by its length, as ever."""
+    urdf = _write(tmp_path / "axis.urdf", _chain(axis="1e160 0 0"))
+    line = _refused(urdf)
+    assert line.startswith(f'{urdf}: joint \'j1\': <axis xyz="1e160 0 0">: each component must be within '
+                           f'+/-1e+06'), line
+    arm = load_arm(_write(tmp_path / "axis_ok.urdf", _chain(axis="1e6 0 0")))
+    assert arm.chain.joint("j1").axis.tolist() == [1.0, 0.0, 0.0]
+
+
+def test_a_chain_locked_whole_as_its_gripper_says_so_and_how_to_keep_it(tmp_path):
+    """Was "no revolute joint on the chain from base" for three revolute joints named finger_*."""
+    names = ("finger_1", "finger_2", "finger_3")
+    urdf = _write(tmp_path / "fingers.urdf", _chain(names=names))
+    line = _refused(urdf)
+    assert line.startswith(f"{urdf}: every revolute joint on the chain from base is locked: finger_1, finger_2, "
+                           f"finger_3 as the chain's gripper") and line.endswith("keep_gripper: true in an arm file "
+                                                                                 "keeps them actuated"), line
+    arm = load_arm(_arm_file(tmp_path, urdf="fingers.urdf", keep_gripper=True))
+    assert arm.joint_names == names
+
+
+def test_a_chain_of_prismatic_joints_names_them(tmp_path):
+    """Was "no revolute joint on the chain from base", the joints and their kind unsaid."""
+    urdf = _write(tmp_path / "slides.urdf", _chain(names=("p1", "p2", "p3"), kind="prismatic"))
+    assert _refused(urdf) == (f"{urdf}: no revolute joint on the chain from base: its movable joints are "
+                              f"p1 (prismatic), p2 (prismatic), p3 (prismatic) (only revolute or continuous "
+                              f"joints can be actuated)")
+
+
+@pytest.mark.parametrize("file_name", ["robot.xml", "ROBOT.URDF", "robot"])
+def test_a_urdf_is_read_whatever_its_name_ends_in(tmp_path, file_name):
+    """Was read as YAML: "expected a mapping of arm facts"."""
+    arm = load_arm(_write(tmp_path / file_name, _chain()))
+    assert arm.joint_names == ("j1", "j2", "j3")
+
+
+def test_an_xml_document_that_is_not_a_urdf_is_named_so(tmp_path):
+    path = _write(tmp_path / "model.sdf", _chain(root="sdf"))
+    assert _refused(path) == (f"{path}: not an arm file: an XML document whose root is <sdf> (a URDF's root is "
+                              f"<robot>)")
+
+
+def test_an_arm_folder_is_read_through_its_arm_yaml(tmp_path):
+    """docs/arms.md: an arm is a folder; given by its path it was "arm: file not found"."""
+    folder = tmp_path / "myarm"
+    folder.mkdir()
+    path = _arm_file(folder, joints=["j1", "j2"])
+    arm = load_arm(str(folder))
+    assert arm.file == path.resolve() and arm.joint_names == ("j1", "j2")
+
+
+def test_a_folder_without_an_arm_yaml_is_said_so(tmp_path):
+    assert _refused(tmp_path) == (f"--arm: {tmp_path.resolve()} is a folder without an arm.yaml (give an arm folder, "
+                                  f"an arm file or a URDF)")
+
+
+def test_a_path_too_long_for_the_os_is_one_line(tmp_path):
+    """Was exit 1: "[Errno 36] File name too long" without the flag or key (Path.is_file raised)."""
+    long_name = "x" * 300 + ".urdf"
+    line = _refused(tmp_path / long_name)
+    assert line.startswith(f"--arm: {tmp_path.resolve()}/xxx") and line.endswith(": File name too long"), line
+    path = _arm_file(tmp_path, urdf=long_name)
+    line = _refused(path)
+    assert line.startswith(f"{path}: urdf: {tmp_path.resolve()}/xxx") and line.endswith(": File name too long"), line
+
+
+def test_a_loop_of_symbolic_links_is_one_line(tmp_path):
+    """Was a RuntimeError traceback ("Symlink loop from ...") from Path.resolve()."""
+    os.symlink(tmp_path / "loop_b", tmp_path / "loop_a")
+    os.symlink(tmp_path / "loop_a", tmp_path / "loop_b")
+    assert _refused(tmp_path / "loop_a") == f"--arm: {tmp_path / 'loop_a'}: a loop of symbolic links"
+    path = _arm_file(tmp_path, urdf="loop_a")
+    assert _refused(path) == f"{path}: urdf: {tmp_path / 'loop_a'}: a loop of symbolic links"
