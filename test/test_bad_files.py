@@ -482,3 +482,10 @@ def test_a_config_path_the_os_refuses_is_one_line(tmp_path, kind, words):
     cfg = tmp_path / "extends.yaml"
     cfg.write_text(f"extends: {bad}\n")
     _one_line_error(run_cli("arm", "--config", cfg), f"{cfg}: extends: ", words)
+
+
+def test_init_from_a_name_too_long_for_the_os_is_one_line(tmp_path):
+    """ENAMETOOLONG from the checkpoint folder's look-up was exit 1, the flag unnamed."""
+    _one_line_error(run_cli("simulate", "--controller", "dnbs", *TINY, "--init-from", tmp_path / ("x" * 300),
+                            "--out", tmp_path / "out"), "--init-from", "File name too long")
+    assert not (tmp_path / "out").exists()

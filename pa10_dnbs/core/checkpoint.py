@@ -109,8 +109,12 @@ def load_joint_checkpoints(path: Path, joint_names, degrees: tuple[int, int] | N
     ``degrees``: the (alpha, torque) ``max_degree`` the states must fit (:func:`check_controller_state`).
     ValueError naming the file when one is missing, unreadable or does not fit.
     """
-    d = checkpoint_dir(path)
-    if not d.is_dir():
+    try:
+        d = checkpoint_dir(path)
+        there = d.is_dir()
+    except OSError as exc:   # a name too long for the OS
+        raise ValueError(f"{path}: {exc.strerror or exc}") from None
+    if not there:
         raise ValueError(f"{path}: no such checkpoint directory")
     states = []
     for name in joint_names:
