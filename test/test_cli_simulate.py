@@ -100,3 +100,19 @@ def test_existing_output_needs_force(tmp_path):
     r = run_cli("simulate", "--controller", "pid", "--duration", "0.2", "--out", out, "--force", "--no-progress")
     assert r.returncode == 0, r.stderr
     assert not (out / "keep.txt").exists() and (out / "metrics.json").exists()
+
+
+def test_a_configs_faults_are_said_not_injected_in_process(tmp_path):
+    """The faults section acts on the node graph's messages (launch); an in-process run has none and says so on
+    stderr and in its report (it was silent: a clean report for a config that asked for faults)."""
+    cfg = tmp_path / "faults.yaml"
+    cfg.write_text(f"extends: {default_config_path()}\nfaults:\n  state:\n    drop_fraction: 0.5\n")
+    out = tmp_path / "run"
+    r = run_cli("simulate", "--config", cfg, "--controller", "pid", "--duration", "0.05", "--no-figures",
+                "--no-progress", "--out", out)
+    assert r.returncode == 0, r.stderr
+    assert "faults section is injected by `launch` alone" in r.stderr
+    assert "this in-process run has no faults" in (out / "report.md").read_text()
+    r = run_cli("simulate", "--controller", "pid", "--duration", "0.05", "--no-figures", "--no-progress",
+                "--out", tmp_path / "plain")
+    assert "faults" not in r.stderr and "faults" not in (tmp_path / "plain" / "report.md").read_text()

@@ -19,6 +19,7 @@ from ..run_settings import build_settings
 from ..run_size import check_run_size, say_note
 from ..run_steps import run_steps
 from ..sim.closed_loop import simulate
+from ..supervisor.fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
 from ..trajectory_file import load_trajectory_file
 
 CHOICES = {"dnbs": ("dnbs",), "pid": ("pid",), "ctc": ("ctc",), "both": ("dnbs", "pid"), "all": ("dnbs", "pid", "ctc")}
@@ -43,6 +44,8 @@ def run_simulate(options: SimulateOptions) -> int:
     traj = load_trajectory_file(Path(o.trajectory), the_arm) if o.trajectory is not None else None  # its quintics: the run's
     check_run_size(duration_s, n_steps, len(the_arm.joint_names), kept_runs=len(kinds),
                    total_runs=len(kinds), say=say_note)
+    if faults_active(settings.faults):
+        say_note(IN_PROCESS_FAULTS_NOTE)
     init_states = None
     if o.init_from is not None:
         if "dnbs" not in kinds:
@@ -86,6 +89,8 @@ def run_simulate(options: SimulateOptions) -> int:
              "source: in-process simulation (no ROS)"]
     if o.engine != "pybullet":
         notes.append(f"engine: {o.engine} (docs/engines.md); the gains are the same as on the PyBullet plant")
+    if faults_active(settings.faults):
+        notes.append(IN_PROCESS_FAULTS_NOTE)
     if traj is not None:
         notes.append(f"reference: the trajectory of `{o.trajectory}` from t = 0, not eq. 27 (docs/trajectories.md)")
     if init_states is not None:

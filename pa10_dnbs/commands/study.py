@@ -17,6 +17,7 @@ from ..report.progress import ProgressBar
 from ..run_settings import build_settings
 from ..run_steps import run_steps
 from ..run_size import check_run_size, say_note
+from ..supervisor.fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
 from ..sim.closed_loop import CONTROLLERS
 from ..study.feasibility import infeasible_scenarios
 from ..study.partial_summary import write_partial_study
@@ -38,6 +39,8 @@ def run_study_command(options: StudyOptions) -> int:
     at_once = 1 if o.scheduler is not None else min(n_runs, o.jobs or os.cpu_count() or 1)
     check_run_size(o.duration_s, n_steps, settings.n_joints, at_once=at_once,
                    total_runs=n_runs, say=say_note)
+    if faults_active(settings.faults):
+        say_note(IN_PROCESS_FAULTS_NOTE)
     check_output_dir(o.out, o.force, "--out", inputs={"--config": config_path, "--arm": settings.arm.file,
                                                       "arm URDF": settings.arm.urdf})
     check_scenario_references(settings, scen)   # a reference past the Nyquist rate: one line, nothing runs

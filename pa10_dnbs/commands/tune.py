@@ -23,6 +23,7 @@ from ..interrupt import EXIT_INTERRUPTED, check, deferred, immediate, on_second_
 from ..output_lock import lock_output
 from ..report.outputs import check_creatable, check_output_dir, check_tune_dir, tune_files
 from ..run_size import check_run_size, say_note
+from ..supervisor.fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
 from ..study.executor import Executor
 from ..study.scenarios import SCENARIOS, check_scenario_references
 from .name_list import name_list
@@ -77,6 +78,8 @@ def _checked_tune(o: TuneOptions, state: dict) -> int:
     at_once = 1 if o.scheduler is not None else min(runs_per_trial, o.jobs or os.cpu_count() or 1)
     check_run_size(o.duration_s, n_steps, len(the_arm.joint_names), at_once=at_once,
                    total_runs=runs_per_trial * o.trials, say=say_note)
+    if faults_active(base.faults):
+        say_note(IN_PROCESS_FAULTS_NOTE)
     spec = TuneSpec(the_arm.name, o.controller, param_list, train, list(range(o.seeds)), o.duration_s,
                     str(config_path.resolve()), o.seed, start_values(o.controller, base))
     command = _command(o.controller, o.trials, out, o.arm, config_path, o.storage, o.seed, o.scenarios, o.seeds, o.held_out_seeds,

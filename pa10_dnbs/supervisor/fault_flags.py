@@ -154,6 +154,11 @@ def faults_active(faults: FaultSettings) -> bool:
     return links or any(t >= 0 for t in faults.kill_controller_at_s)
 
 
+#: what an in-process command says when its config injects faults: only the node graph's wire carries them
+IN_PROCESS_FAULTS_NOTE = ("the config's faults section is injected by `launch` alone (on the messages between the "
+                          "nodes); this in-process run has no faults")
+
+
 def plain(obj):
     """Tuples as lists, recursively (for yaml.safe_dump)."""
     if isinstance(obj, dict):
