@@ -37,7 +37,7 @@ REQUIREMENTS = ROOT / "requirements-collection.txt"
 def _args(argv):
     ap = OneLineParser(description=__doc__.splitlines()[0])
     ap.add_argument("--arms", default=",".join(ARMS), help=f"comma-separated, of: {', '.join(ARMS)}")
-    ap.add_argument("--modes", default=",".join(MODES), help="bare, arm_file or both")
+    ap.add_argument("--modes", default=",".join(MODES), help="comma-separated, of: bare, arm_file (default: both)")
     ap.add_argument("--duration", type=float, default=20.0, help="s per run (the window is [10, 20) s at 20 s)")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
     ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "collection" / "arm_collection.json")
