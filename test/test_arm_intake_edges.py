@@ -179,3 +179,10 @@ def test_a_loop_of_symbolic_links_is_one_line(tmp_path):
     assert _refused(tmp_path / "loop_a") == f"--arm: {tmp_path / 'loop_a'}: a loop of symbolic links"
     path = _arm_file(tmp_path, urdf="loop_a")
     assert _refused(path) == f"{path}: urdf: {tmp_path / 'loop_a'}: a loop of symbolic links"
+
+
+def test_a_pipe_is_not_taken_for_a_missing_file(tmp_path):
+    """Was "file not found" for a named pipe that exists (as for bash's <(...) process substitution)."""
+    os.mkfifo(tmp_path / "fifo")
+    assert _refused(tmp_path / "fifo") == (f"--arm: {tmp_path / 'fifo'}: not a regular file (a pipe or a device): "
+                                           f"give the path of a file")

@@ -7,6 +7,7 @@ an arm file (YAML) or a URDF. A URDF is known by its XML root ``<robot>``, whate
 """
 from __future__ import annotations
 
+import errno
 import os
 import stat
 import xml.etree.ElementTree as ET
@@ -39,26 +40,30 @@ def shown(path) -> str:
 
 
 def existing(path, who: str) -> tuple[Path, bool]:
-    """(``path`` resolved, whether it is a folder), when it exists; else ArmError ``"<who>: ..."``: file not
-    found, or the OS's reason (a name too long, a loop of symbolic links, no permission, a NUL byte)."""
+    """(``path`` resolved, whether it is a folder), when it is a file or a folder; else ArmError ``"<who>: ..."``:
+    file not found, the OS's reason (a name too long, a loop of symbolic links, no permission, a NUL byte), or
+    not a regular file (a pipe, a device: nothing to read twice or hand to the simulator)."""
     path = Path(path)
     try:
-        resolved = path.resolve()
-    except RuntimeError:   # Python < 3.13: resolve() raises this on a loop of symbolic links
-        raise ArmError(f"{who}: {shown(path)}: a loop of symbolic links") from None
-    except ValueError:
-        raise ArmError(f"{who}: {shown(path)!r}: a path cannot hold a NUL byte") from None
-    except OSError as exc:
-        raise ArmError(f"{who}: {shown(path)}: {exc.strerror or exc}") from None
-    try:
-        mode = os.stat(resolved).st_mode
+        mode = os.stat(path).st_mode   # the kernel follows the links, /dev/fd/N too
     except (FileNotFoundError, NotADirectoryError):
-        raise ArmError(f"{who}: file not found: {shown(resolved)}") from None
+        raise ArmError(f"{who}: file not found: {shown(_absolute(path))}") from None
     except ValueError:
         raise ArmError(f"{who}: {shown(path)!r}: a path cannot hold a NUL byte") from None
     except OSError as exc:   # ENAMETOOLONG, ELOOP, EACCES
-        raise ArmError(f"{who}: {shown(resolved)}: {exc.strerror or exc}") from None
-    return resolved, stat.S_ISDIR(mode)
+        why = "a loop of symbolic links" if exc.errno == errno.ELOOP else (exc.strerror or str(exc))
+        raise ArmError(f"{who}: {shown(_absolute(path))}: {why}") from None
+    if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+        raise ArmError(f"{who}: {shown(path)}: not a regular file (a pipe or a device): give the path of a file")
+    return _absolute(path), stat.S_ISDIR(mode)
+
+
+def _absolute(path: Path) -> Path:
+    """``path`` resolved (its links followed) where it can be, else made absolute as it is."""
+    try:
+        return path.resolve()
+    except (RuntimeError, OSError):   # a loop of symbolic links (RuntimeError before Python 3.13)
+        return Path(os.path.abspath(path))
 
 
 def existing_file(path, who: str) -> Path:
