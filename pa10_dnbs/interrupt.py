@@ -2,9 +2,10 @@
 
 A terminal's Ctrl-C sends SIGINT to every process of the foreground group: the command and its pool workers.
 
-- Pool workers ignore SIGINT (:func:`ignore_sigint`, their pool's initializer; :func:`sigint_blocked` closes the
-  window between fork and initializer). A worker interrupted inside multiprocessing's queues can leave a half
-  message in a pipe the pool reads forever (the rare hang the old pool had); the parent stops them itself.
+- Pool workers ignore SIGINT (:func:`pool_worker_start`, their pool's initializer; :func:`sigint_blocked` closes
+  the window between fork and initializer). A worker interrupted inside multiprocessing's queues can leave a half
+  message in a pipe the pool reads forever (the rare hang the old pool had); the parent stops them itself. They
+  also die with the command, however it ends (a plain ``kill``, SIGKILL), so none is left behind.
 - The command: the first SIGINT raises KeyboardInterrupt (the command stops its work, keeps what is complete,
   says where, exits 130); from then on a second SIGINT ends at once (:func:`two_stage_sigint`): every child is
   killed and reaped, one line (:func:`on_second_sigint` sets it), exit 130, no clean-up that could wait.
@@ -27,15 +28,33 @@ import time
 
 EXIT_INTERRUPTED = 130   # 128 + SIGINT, as a shell reports a command ended by Ctrl-C
 POLL_S = 0.1            # how often a waiting executor looks at a deferred Ctrl-C
+PR_SET_PDEATHSIG = 1    # prctl(2): the signal a process gets when its parent dies (linux/prctl.h)
 
 _second_line = "pa10-dnbs: interrupted again: stopped at once"
 _state = {"deferred": 0, "requested": False, "raised": False, "cleanup": None}
 
 
 def ignore_sigint() -> None:
-    """A pool worker's initializer: Ctrl-C is for the parent, which stops the workers itself."""
+    """Ctrl-C is for the parent, which stops the workers itself."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+def pool_worker_start(parent_pid: int) -> None:
+    """A pool worker's initializer: it ignores Ctrl-C (:func:`ignore_sigint`) and dies with its parent (Linux's
+    PR_SET_PDEATHSIG: SIGKILL once the parent is gone), so a command ended by a plain ``kill`` (SIGTERM, no
+    handler) or SIGKILL leaves no worker behind; ``parent_pid``: the parent's, to catch a parent that died
+    before the request."""
+    ignore_sigint()
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+    except (OSError, AttributeError):  # pragma: no cover - not Linux
+        return
+    if os.getppid() != parent_pid:
+        os._exit(0)
 
 
 @contextlib.contextmanager

@@ -222,6 +222,32 @@ def test_study_ctrl_c_at_start_up_and_before_a_run_ends_stops_the_workers_and_wr
     assert sorted(p.name for p in tmp_path.iterdir()) == []   # no output, no partial folder
 
 
+def test_a_study_ended_by_a_plain_kill_leaves_no_worker_behind(tmp_path):
+    """SIGTERM (``kill``, ``timeout``, a scheduler's cancel) ends the command by the signal's default action, with
+    no handler to stop its pool: the workers were left running, orphaned. They now die with their parent."""
+    c = Command("study", "--scenarios", "nominal", "--controllers", "pid", "--seeds", 40, "--duration", 30,
+                "--jobs", 2, "--no-progress", "--out", tmp_path / "s")
+    try:
+        wait_until(lambda: len(child_pids(c.proc.pid)) == 2, "two pool workers", proc=c)
+        workers = child_pids(c.proc.pid)
+        c.proc.send_signal(signal.SIGTERM)   # the command alone, as `kill PID` does
+        c.proc.communicate(timeout=BOUND_S)
+        wait_until(lambda: not any(_alive(w) for w in workers),
+                   "the workers gone", timeout_s=5.0)
+        assert c.proc.returncode == -signal.SIGTERM and not (tmp_path / "s").exists()
+    finally:
+        c.kill()
+
+
+def _alive(pid: int) -> bool:
+    """Whether ``pid`` runs (a zombie has ended)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
 def test_study_ctrl_c_mid_run_keeps_the_completed_runs_marked_partial_and_a_rerun_is_refused(tmp_path):
     out = tmp_path / "s"
     args = ("study", "--scenarios", "nominal", "--controllers", "pid", "--seeds", 40, "--duration", 5, "--jobs", 2,

@@ -23,7 +23,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Callable, Hashable
 
 from ..config_error import ConfigError
-from ..interrupt import POLL_S, check, ignore_sigint, immediate, sigint_blocked
+from ..interrupt import POLL_S, check, immediate, pool_worker_start, sigint_blocked
 
 CONNECT_TIMEOUT_S = 10.0   # to reach the scheduler and to see its first worker
 STOP_GRACE_S = 2.0         # interrupted: SIGTERM to the workers, SIGKILL after this
@@ -46,7 +46,8 @@ class Executor:
             self._client = connect(self.scheduler)
             self.jobs = max(1, len(self._client.scheduler_info(n_workers=-1)["workers"]))
         elif self.jobs > 1:
-            self._pool = ProcessPoolExecutor(max_workers=self.jobs, initializer=ignore_sigint)
+            self._pool = ProcessPoolExecutor(max_workers=self.jobs, initializer=pool_worker_start,
+                                             initargs=(os.getpid(),))
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:
