@@ -7,6 +7,7 @@ naming the dotted key (e.g. ``dnbs.torque_net.eta``).
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -258,9 +259,11 @@ def _read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict:
     if not isinstance(raw, dict):
         return raw
     arm = raw.get("arm")
-    is_path = isinstance(arm, str) and ("/" in arm or arm.endswith((".yaml", ".yml", ".urdf")))
+    is_path = isinstance(arm, str) and ("/" in arm or arm.lower().endswith((".yaml", ".yml", ".urdf", ".xml")))
     if is_path and not arm.startswith("package://"):
-        raw["arm"] = str((path.parent / arm).resolve())  # a path is relative to the file that names it
+        # a path is relative to the file that names it (made absolute, not resolved: the arm's loader resolves it
+        # and names a loop of symbolic links in one line)
+        raw["arm"] = os.path.abspath(path.parent / arm)
     if "extends" not in raw:
         return raw
     base = raw.pop("extends")

@@ -1,12 +1,14 @@
-import dataclasses
 """Config validation: every bad value is rejected with the key named."""
 import copy
+import dataclasses
 import math
+from pathlib import Path
 
 import pytest
 import yaml
+from cli_runner import run_cli
 
-from pa10_dnbs.config import ConfigError, default_config_path
+from pa10_dnbs.config import ConfigError, default_config_path, load_config
 from pa10_dnbs.run_settings import build_settings
 
 
@@ -125,3 +127,19 @@ def test_shipped_presets_are_valid():
     paper = build_settings(share_path("config", "paper.yaml"))
     on = [f.name for f in dataclasses.fields(paper.dnbs.remedies) if getattr(paper.dnbs.remedies, f.name).enabled]
     assert on == ["anti_windup"]  # the paper's law as the project first ran it
+
+
+def test_a_configs_arm_path_is_relative_to_it_and_a_symlink_loop_is_one_line(tmp_path):
+    """``arm: robot.xml`` (a URDF by its XML root) is taken relative to the config; ``arm:`` naming a loop of
+    symbolic links was a RuntimeError traceback from resolving it."""
+    repo = Path(__file__).resolve().parent.parent
+    (tmp_path / "robot.xml").write_text((repo / "urdf" / "pa10" / "pa10_7ce.urdf").read_text())
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(f"extends: {default_config_path()}\narm: robot.xml\n")
+    assert load_config(cfg)["arm"] == str(tmp_path / "robot.xml")
+    (tmp_path / "a").symlink_to(tmp_path / "b")
+    (tmp_path / "b").symlink_to(tmp_path / "a")
+    cfg.write_text(f"extends: {default_config_path()}\narm: ./a\n")
+    r = run_cli("arm", "--config", cfg)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.strip() == f"pa10-dnbs: error: arm: {tmp_path / 'a'}: a loop of symbolic links", r.stderr
