@@ -203,3 +203,15 @@ def test_the_arm_command_prints_its_report_once_on_stdout():
     r = run_cli("arm", "--arm", "iiwa")
     assert r.returncode == 0 and r.stderr == "", r.stderr
     assert r.stdout.count("J light-heavy [kg m^2]") == 1 and "sources:" in r.stdout and "runs with:" in r.stdout
+
+
+def test_the_rules_table_keeps_its_columns_under_long_joint_names(tmp_path):
+    """The names column is as wide as the longest name (a UR's shoulder_lift_joint pushed its row 12 columns
+    right of the headings)."""
+    urdf = three_link_urdf().replace('name="j2"', 'name="a_rather_long_joint_name"')
+    r = run_cli("arm", "--arm", write_arm(tmp_path, urdf))
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    head = next(i for i, line in enumerate(lines) if "J light-heavy" in line)
+    column = lines[head].index("limits [rad]")
+    assert [line.index("[") for line in lines[head + 1:head + 4]] == [column] * 3, lines[head:head + 4]

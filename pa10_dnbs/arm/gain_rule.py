@@ -133,10 +133,11 @@ def report_rule(arm: Arm, sweep: InertiaSweep, fragment: dict, dt_s: float, stre
     k_u = np.array(rt["torque_gain_nms_per_rad"])
     print(f"arm {arm.name}: {arm.n_joints} joints from {arm.file}; gains by the rule of docs/arms.md "
           f"(figure {coupled_figure(sweep, k_u, dt_s):.2f} < 2)", file=stream)
-    print("  joint   limits [rad]       torque [N m]  rotor [kg m^2]  J light-heavy [kg m^2]   k_u     k_a",
+    w = max([7, *map(len, arm.joint_names)])   # the name column, as wide as the longest name
+    print(f"  {'joint':<{w}} limits [rad]       torque [N m]  rotor [kg m^2]  J light-heavy [kg m^2]   k_u     k_a",
           file=stream)
     for j, name in enumerate(arm.joint_names):
-        print(f"  {name:<7} [{arm.lower_rad[j]:+.2f}, {arm.upper_rad[j]:+.2f}]  {arm.torque_limit_nm[j]:>9.1f}  "
+        print(f"  {name:<{w}} [{arm.lower_rad[j]:+.2f}, {arm.upper_rad[j]:+.2f}]  {arm.torque_limit_nm[j]:>9.1f}  "
               f"{arm.rotor_inertia_kgm2[j]:>13.4g}  {sweep.light_kgm2[j]:>9.4g} - {sweep.heavy_kgm2[j]:<9.4g}  "
               f"{k_u[j]:>7.4g} {rt['alpha_gain_per_s'][j]:>6.3g}", file=stream)
     for line in rule_warnings(arm, sweep, k_u, dt_s):
