@@ -68,6 +68,7 @@ VALUE_CASES = [
     (["launch", "--effort-timeout", "inf"], "--effort-timeout"),
     (["launch", "--effort-timeout", "-2"], "--effort-timeout"),
     (["launch", "--clock-hz", "-5"], "--clock-hz"),
+    (["launch", "--clock-hz", "3000"], "--clock-hz: must be in (0, 1000] Hz"),   # 0 is refused too: not "[0,"
     (["launch", "--domain-id", "500"], "--domain-id"),
     (["launch", "--rt-priority", "100"], "--rt-priority"),
     (["launch", "--bag-compression", "none"], "--bag-compression"),  # without --record: no effect

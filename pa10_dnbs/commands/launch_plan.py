@@ -81,7 +81,7 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
         domain_id = robot_domain()
     dt = settings.simulation.dt_s
     try:
-        check_clock_hz(o.clock_hz, dt)
+        check_clock_hz(o.clock_hz, dt, off_allowed=False)
     except ValueError as exc:
         raise ConfigError(f"--clock-hz: {exc}") from None
     n_steps = run_steps(duration_s, dt, "simulation.duration_s" if o.duration_s is None else "--duration")

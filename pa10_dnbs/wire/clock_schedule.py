@@ -11,10 +11,14 @@ from .steps import NS_PER_S, StepClock
 DEFAULT_CLOCK_HZ = 100.0  # simulated-time Hz, the default of `ros2 bag play --clock`
 
 
-def check_clock_hz(clock_hz: float, dt_s: float) -> None:
-    """ValueError unless 0 <= ``clock_hz`` [Hz] <= 1 / ``dt_s`` (at most one /clock per step; 0: off)."""
-    if not (clock_hz == clock_hz and 0 <= clock_hz <= 1.0 / dt_s + 1e-9):
-        raise ValueError(f"must be in [0, {1.0 / dt_s:g}] Hz of simulated time (0: no /clock), got {clock_hz}")
+def check_clock_hz(clock_hz: float, dt_s: float, off_allowed: bool = True) -> None:
+    """ValueError unless 0 <= ``clock_hz`` [Hz] <= 1 / ``dt_s`` (at most one /clock per step; 0: off, where
+    ``off_allowed``: a graph whose nodes run on /clock needs it)."""
+    low_ok = clock_hz >= 0 if off_allowed else clock_hz > 0
+    if not (clock_hz == clock_hz and low_ok and clock_hz <= 1.0 / dt_s + 1e-9):
+        raise ValueError(f"must be in [0, {1.0 / dt_s:g}] Hz of simulated time (0: no /clock), got {clock_hz}"
+                         if off_allowed else f"must be in (0, {1.0 / dt_s:g}] Hz of simulated time (the graph's "
+                         f"nodes run on /clock), got {clock_hz}")
 
 
 class ClockSchedule:
