@@ -501,7 +501,7 @@ stuck = [sys.executable, "-c", "import signal, time; [signal.signal(s, signal.SI
          "signal.SIGTERM, signal.SIGUSR1)]; print('READY', flush=True); time.sleep(120)"]
 procs = [ManagedProcess(f"node{i}", stuck, {}, Path(sys.argv[1]) / f"node{i}.log") for i in range(3)]
 stop = StopRequest()
-stop.hard_stop = lambda: _hard_stop(procs, None, types.SimpleNamespace(record_bag=None), None)
+stop.hard_stop = lambda: _hard_stop(procs, None, types.SimpleNamespace(record_bag=sys.argv[2]), None)
 catch_signals(stop)
 while not all(p.saw("READY") for p in procs):
     time.sleep(0.02)
@@ -516,7 +516,7 @@ print("GRACEFUL", flush=True)
 def test_launch_second_ctrl_c_kills_nodes_that_ignore_the_first_at_once(tmp_path):
     """Nodes that ignore SIGINT, SIGUSR1 and SIGTERM (a stuck teardown): the first Ctrl-C would wait 5 + 3 s for them
     (supervisor/processes.py); the second kills them at once: the launcher's own stop logic, real processes."""
-    c = Command(STUCK_NODES, tmp_path, script="-c")
+    c = Command(STUCK_NODES, tmp_path, tmp_path / "bag", script="-c")   # a bag the recorder never began
     try:
         pids = []
         for line in c.proc.stdout:
@@ -533,7 +533,8 @@ def test_launch_second_ctrl_c_kills_nodes_that_ignore_the_first_at_once(tmp_path
     assert rc == 130 and seconds < 1.5, (rc, seconds, err)
     # these nodes made no shared-memory files; other runs' dead ones may go (shm_cleanup.py), so any count
     assert re.fullmatch(r"pa10-dnbs launch: interrupted again: killed the 3 of its 3 processes still running at "
-                        r"once, removed \d+ shared-memory files from /dev/shm", one_line(err)), err
+                        r"once, removed \d+ shared-memory files from /dev/shm; no bag was written \(\S+/bag\)",
+                        one_line(err)), err
     assert not [p for p in pids if os.path.exists(f"/proc/{p}")], pids
 
 

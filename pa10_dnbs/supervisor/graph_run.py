@@ -126,8 +126,10 @@ def _hard_stop(procs: list[ManagedProcess], lease, opt: GraphOptions, on_hard_st
             extra = on_hard_stop() or ""
         except Exception:  # noqa: BLE001 - the process ends now whatever the clean-up met
             pass
-    bag = (f"; the bag {opt.record_bag} was cut short (its recorder was killed): it may not be readable"
-           if opt.record_bag is not None else "")
+    bag = ""
+    if opt.record_bag is not None:   # the recorder creates the folder once it has subscribed
+        bag = (f"; the bag {opt.record_bag} was cut short (its recorder was killed): it may not be readable"
+               if os.path.exists(opt.record_bag) else f"; no bag was written ({opt.record_bag})")
     line = (f"\npa10-dnbs launch: interrupted again: killed the {killed} of its {len(procs)} processes still "
             f"running at once, removed {len(removed)} shared-memory files from /dev/shm{extra}{bag}\n")
     try:
