@@ -51,7 +51,14 @@ def _sweep_stale(directory: Path) -> None:
 
 def lock_output(path: Path, what: str = "output directory") -> None:
     """Hold the lock of ``path`` for this process (again: no-op); raises OutputInUseError if another run holds it."""
-    key = str(Path(path).resolve())
+    lock_key(str(Path(path).resolve()), f"{what} {path} is in use by another run (pid {{pid}}); wait for it to end or "
+                                        "choose another path")
+
+
+def lock_key(key: str, in_use: str) -> None:
+    """Hold the lock named ``key`` (a resolved path, or any text naming one shared thing, e.g. an Optuna study in a
+    storage) for this process (again: no-op); OutputInUseError with ``in_use`` (``{pid}``: the holder's) if another
+    run holds it."""
     if key in _held:
         return
     file = _lock_file(key)
@@ -63,8 +70,7 @@ def lock_output(path: Path, what: str = "output directory") -> None:
         except BlockingIOError:
             holder = (os.read(fd, 64).decode(errors="replace").split() or ["?"])[0]
             os.close(fd)
-            raise OutputInUseError(f"{what} {path} is in use by another run (pid {holder}); wait for it to end or "
-                                   "choose another path") from None
+            raise OutputInUseError(in_use.format(pid=holder)) from None
         try:
             same = os.fstat(fd).st_ino == os.stat(file).st_ino
         except FileNotFoundError:
@@ -79,7 +85,11 @@ def lock_output(path: Path, what: str = "output directory") -> None:
 
 def release_output(path: Path) -> None:
     """Drop the lock of ``path`` if this process holds it (its lock file is removed)."""
-    key = str(Path(path).resolve())
+    release_key(str(Path(path).resolve()))
+
+
+def release_key(key: str) -> None:
+    """Drop the lock named ``key`` if this process holds it (its lock file is removed)."""
     fd, pid = _held.pop(key, (None, None))
     if fd is None:
         return
@@ -93,7 +103,7 @@ def release_output(path: Path) -> None:
 
 
 def held() -> set[str]:
-    """The resolved paths whose locks this process holds."""
+    """The keys (resolved paths) whose locks this process holds."""
     return set(_held)
 
 
@@ -101,7 +111,7 @@ def release_all(keep: set[str] = frozenset()) -> None:
     """Drop every lock this process holds but those of ``keep`` (end of a command run inside another)."""
     for key in list(_held):
         if key not in keep:
-            release_output(Path(key))
+            release_key(key)
 
 
 atexit.register(release_all)

@@ -263,9 +263,9 @@ def _cli_process(*args, cwd=None) -> subprocess.Popen:
                             stderr=subprocess.PIPE, text=True, env=env, cwd=cwd)
 
 
-def _wait_for_lock(out: Path, proc: subprocess.Popen, timeout_s: float = 120.0) -> None:
-    """Until ``proc`` holds the lock of ``out`` (its lock file names it)."""
-    lock = _lock_file(str(out.resolve()))
+def _wait_for_lock(out: Path | str, proc: subprocess.Popen, timeout_s: float = 120.0) -> None:
+    """Until ``proc`` holds the lock of ``out`` (a path, or a lock's key: its lock file names it)."""
+    lock = _lock_file(out if isinstance(out, str) else str(out.resolve()))
     t0 = time.monotonic()
     while not (lock.exists() and lock.read_text().split()[:1] == [str(proc.pid)]):
         assert proc.poll() is None, proc.communicate()
@@ -325,6 +325,31 @@ def test_a_second_tune_into_one_out_at_once_is_refused(tmp_path):
             first.communicate(timeout=60)
     assert not _leftovers(str(tmp_path))
     assert not _lock_file(str(out.resolve())).exists()
+
+
+def test_a_second_tune_of_one_study_in_a_shared_storage_at_once_is_refused(tmp_path):
+    """Two tunes of one study in one --storage (each into its own --out) marked each other's running trials
+    failed, and one ended in Optuna's UpdateFinishedTrialError traceback."""
+    from pa10_dnbs.tune.tuner import study_lock_key
+
+    url = f"sqlite:///{tmp_path / 'shared.db'}"
+    args = ("tune", "--controller", "pid", "--trials", "1", "--scenarios", "nominal", "--seeds", "1",
+            "--held-out-seeds", "0", "--jobs", "1", "--storage", url)
+    first = _cli_process(*args, "--duration", "20", "--out", tmp_path / "a")
+    try:
+        _wait_for_lock(study_lock_key(url, "pa10-pid"), first)
+        r = run_cli(*args, "--duration", "20", "--out", tmp_path / "b")
+        _assert_one_line(r.returncode, r.stdout, r.stderr, f"--storage: study pa10-pid in {url} is being tuned by "
+                                                            f"another run (pid {first.pid})")
+        assert not (tmp_path / "b").exists()
+    finally:
+        first.send_signal(2)
+        try:
+            first.communicate(timeout=60)
+        except subprocess.TimeoutExpired:
+            first.kill()
+            first.communicate(timeout=60)
+    assert not _leftovers(str(tmp_path))
 
 
 def test_an_existing_output_is_refused_without_force_and_replaced_with_it(tmp_path):

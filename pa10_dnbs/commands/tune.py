@@ -20,7 +20,7 @@ from ..config import ConfigError, default_config_path
 from .options import TuneOptions
 from ..json_text import json_text
 from ..interrupt import EXIT_INTERRUPTED, check, deferred, immediate, on_second_sigint, say
-from ..output_lock import lock_output
+from ..output_lock import lock_key, lock_output
 from ..report.outputs import check_creatable, check_output_dir, check_tune_dir, tune_files
 from ..run_size import check_run_size, say_note
 from ..supervisor.fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
@@ -32,7 +32,8 @@ from ..tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 from ..tune.space import select, start_values
 from ..run_settings import build_settings
 from ..run_steps import run_steps
-from ..tune.tuner import TrialProgress, TuneSpec, completed, held_out, open_storage, open_study, optimize, refusal
+from ..tune.tuner import (TrialProgress, TuneSpec, completed, held_out, open_storage, open_study, optimize, refusal,
+                          study_lock_key)
 
 HELD_OUT_SEED0 = 100   # held-out seeds are 100, 101, ...: never a training seed (0 .. --seeds - 1)
 
@@ -89,6 +90,10 @@ def _checked_tune(o: TuneOptions, state: dict) -> int:
                      resume=tune_files(out, o.storage))
     check_tune_dir(out, spec.study_name, spec.identity(), refusal)  # only this tune's own files: it resumes
     lock_output(out)  # a second tune into DIR at once is refused (the same command later resumes)
+    if o.storage is not None:   # a shared storage: one tune of a study at a time
+        lock_key(study_lock_key(o.storage, spec.study_name),
+                 f"--storage: study {spec.study_name} in {o.storage} is being tuned by another run (pid {{pid}}); "
+                 "wait for it to end (the same command then resumes it)")
     where_kept = o.storage if o.storage is not None else str(out / "tune.db")
     on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; the completed trials stay in {where_kept}; "
                      "run the same command to resume")

@@ -63,6 +63,13 @@ def quiet_optuna() -> None:
     logging.getLogger("alembic").setLevel(logging.WARNING)
 
 
+def study_lock_key(url: str, study_name: str) -> str:
+    """The name of the lock a tune holds on its study in the storage at ``url`` (output_lock.lock_key): two tunes
+    of one study at once would each mark the other's running trial failed. As given: two spellings of one
+    SQLite file, or one server reached from two machines, are not caught."""
+    return f"optuna study {study_name} in {url}"
+
+
 def open_storage(url: str):
     """An Optuna RDB storage at ``url`` (sqlite:///file.db, postgresql://..., ...); ConfigError if it does not
     open."""
