@@ -147,6 +147,23 @@ def test_a_complete_run_bag_analyses(tmp_path):
     assert m["wall_time_s"] is None and m["real_time_factor"] is None   # a bag holds no wall time: null, not NaN
 
 
+def test_analyse_with_another_arms_config_is_refused_and_an_exit_1_says_why(tmp_path):
+    """--config of another arm with as many joints reported the bag against that arm's limits and ended with
+    exit 1 and no word; an exit 1 (torques beyond the config's limits) now says why."""
+    bag = _write_run_bag(tmp_path / "b", ns="/pa10")
+    default = Path(__file__).resolve().parent.parent / "config" / "default.yaml"
+    iiwa = tmp_path / "iiwa.yaml"
+    iiwa.write_text(f"extends: {default}\narm: iiwa\n")
+    r = run_cli("analyse", bag, "--out", tmp_path / "out", "--config", iiwa)
+    _assert_clear_error(r, f"--config {iiwa}: its arm iiwa (joints a1, ", "is not the bag's (joints s1, ")
+    assert not (tmp_path / "out").exists()
+    weak = tmp_path / "weak.yaml"   # the bag's torques are 2 N m
+    weak.write_text(f"extends: {default}\nplant:\n  torque_limit_nm: 1.0\n")
+    r = run_cli("analyse", bag, "--out", tmp_path / "out", "--config", weak, "--no-figures")
+    assert r.returncode == 1 and r.stderr.strip() == ("analyse: exit 1: the recorded run holds torques beyond the "
+                                                      f"limits ({tmp_path / 'out'}/report.md)"), r.stderr
+
+
 def _not_json(name):
     raise AssertionError(f"{name} in metrics.json: strict readers refuse it")
 

@@ -2,11 +2,12 @@
 from __future__ import annotations
 
 import math
+import sys
 from pathlib import Path
 
 from ..bag.analysis import bag_arm, bag_joint_names, robot_chain, run_info, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
-from ..config import default_config_path
+from ..config import ConfigError, default_config_path
 from .options import AnalyseOptions
 from ..number_text import interval
 from ..output_lock import lock_output
@@ -18,9 +19,20 @@ from ..run_settings import build_settings
 MIN_STEPS = 2   # a run of fewer steps has no sample in its metrics window (the second half of the run)
 
 
+def _given_config(config_path: Path, joints: tuple[str, ...]) -> tuple[dict, str]:
+    """The run's config from ``--config``: ConfigError naming it when its arm's joints are not the bag's
+    ``joints`` (another arm's config would report the bag against that arm's torque limits)."""
+    settings = build_settings(config_path)
+    if tuple(settings.arm.joint_names) != tuple(joints):
+        raise ConfigError(f"--config {config_path}: its arm {settings.arm.name} (joints "
+                          f"{', '.join(settings.arm.joint_names)}) is not the bag's (joints {', '.join(joints)}): pass "
+                          "the run's config, or leave --config out for the one stored in the bag")
+    return settings.to_config(), str(Path(config_path).resolve())
+
+
 def _run_config(info: dict, config_path: Path | None, bag: Bag) -> tuple[dict, str]:
     if config_path is not None:
-        return build_settings(config_path).to_config(), str(Path(config_path).resolve())
+        return _given_config(config_path, bag_joint_names(bag))
     cfg = info.get("config")
     if cfg is None:
         path = default_config_path()
@@ -114,4 +126,9 @@ def run_analyse(options: AnalyseOptions) -> int:
           f"{interval(metrics['window_s'])} s "
           f"({rec.n} steps from {bag.path})")
     print(f"wrote {o.out}/report.md")
-    return 0 if metrics["all_finite"] and metrics["torques_within_limits"] else 1
+    if metrics["all_finite"] and metrics["torques_within_limits"]:
+        return 0
+    why = [what for ok, what in ((metrics["all_finite"], "non-finite values"),
+                                 (metrics["torques_within_limits"], "torques beyond the limits")) if not ok]
+    print(f"analyse: exit 1: the recorded run holds {' and '.join(why)} ({o.out}/report.md)", file=sys.stderr)
+    return 1
