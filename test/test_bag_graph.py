@@ -193,6 +193,19 @@ def test_faithful_replay(bag, tmp_path, domain):
         assert got[t] == recorded[t], t
 
 
+def test_replay_stopped_by_ctrl_c_says_so_and_exits_130(bag, domain):
+    """Playback cut short by a Ctrl-C exited 0 with the same PLAYED line as a whole bag; now one line says how far
+    it got, and the exit code is 130 as for every command (with --loop a Ctrl-C is how it ends: 0)."""
+    player = Proc([sys.executable, "-m", "pa10_dnbs.cli", "replay", bag, "--rate", 0.05], domain_id=domain)
+    try:
+        player.wait_for("PLAYING", 60)
+        time.sleep(0.5)
+        assert _stop(player) == 130, player.output
+    finally:
+        player.kill()
+    assert "pa10-dnbs replay: interrupted: played " in player.output and " of the bag's " in player.output
+
+
 def test_redrive_reproduces_the_recorded_states_bit_for_bit(bag, tmp_path, domain):
     """Only the recorded efforts, replayed into a fresh lockstep plant (no controllers): same states, same bytes."""
     new_bag = tmp_path / "redriven"

@@ -76,6 +76,7 @@ class PlayerNode(Node):
         self.unheard: dict[str, int] = {}  # topic -> messages published while it had no matched subscriber
         self._heard_at: dict[str, float] = {}  # topic -> when a subscriber was last seen [s, perf_counter]
         self.exit_code = 0
+        self.interrupted = False   # a Ctrl-C (or SIGTERM) before the bag was played through
         # topics read for the live view only (not published, or not played: /tf has no Python message package)
         shown = set(live.topics()) if live else set()
         self._live_only = [t for t in bag.topics if self.out_name[t] in shown and t not in self.pubs]
@@ -159,21 +160,37 @@ class PlayerNode(Node):
 
     def loop(self, executor, stop) -> None:
         if self.opt.wait_for_subscribers_s > 0 and not self._wait_for_subscribers(stop):
+            self._stopped(stop)
             return
         if self.live is not None and not self._wait_for_live_client(stop):
+            self._stopped(stop)
             return
         print(f"PLAYING {len(self.pubs)} topics at rate {self.opt.rate:g}", flush=True)
-        while self._play_once(stop) and self.opt.loop:
-            pass
+        while True:
+            if not self._play_once(stop):
+                self._stopped(stop)
+                break
+            if not self.opt.loop:
+                break
         # let reliable subscribers take the last messages before the writers go away
         deadline = time.monotonic() + 2.0
         while not stop.done() and time.monotonic() < deadline and any(
                 not p.wait_for_all_acked(Duration(seconds=0.1)) for p in self.pubs.values()):
             pass
 
+    def _stopped(self, stop) -> None:
+        """Playback ended by a signal: with ``--loop`` that is how it ends (exit 0); else the bag was not played
+        through: exit 130, and close() says so."""
+        if stop.done() and not self.opt.loop:
+            self.interrupted, self.exit_code = True, 130
+
     def close(self) -> None:
         print(f"PLAYED {self.published} messages" + (f"; skipped {', '.join(self.skipped)}" if self.skipped else ""),
               flush=True)
+        if self.interrupted:
+            total = sum(self.bag.topics[t].count for t in self.pubs)
+            print(f"pa10-dnbs replay: interrupted: played {self.published} of the bag's {total} messages on the "
+                  "played topics", file=sys.stderr, flush=True)
         if self.unheard:
             print(unheard_warning(self.unheard, self.published), file=sys.stderr, flush=True)
 
