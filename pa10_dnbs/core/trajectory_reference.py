@@ -190,7 +190,7 @@ class TrajectoryReference:
         lo, hi = self.lower_rad[j], self.upper_rad[j]
         raise TrajectoryError(f"the interpolation of joint {self.joint_names[j]!r} reaches {value:.6g} rad "
                               f"at t = {step * dt:.3f} s, beyond its limits [{lo:.6g}, {hi:.6g}] rad "
-                              "(give velocities, or points further inside)")
+                              "(points further inside, or velocities that keep it inside)")
 
     def _evaluate(self, k, derivative: int) -> np.ndarray:
         base = (self.base.position, self.base.velocity, self.base.acceleration)[derivative]
