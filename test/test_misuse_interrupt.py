@@ -281,9 +281,13 @@ def test_study_ctrl_c_mid_run_keeps_the_completed_runs_marked_partial_and_a_reru
     assert (out / "study.partial.json").read_text() == json.dumps(data, indent=2) + "\n"   # untouched
 
 
-def test_study_ctrl_c_while_it_writes_its_outputs_leaves_neither_them_nor_a_partial_folder(tmp_path):
-    c = Command("study", "--scenarios", "nominal", "--controllers", "pid", "--duration", 0.5, "--jobs", 1,
-                "--no-progress", "--out", tmp_path / "s")
+@pytest.mark.parametrize("command", ["study", "simulate"])
+def test_a_ctrl_c_while_the_outputs_are_written_finishes_them_and_says_so(tmp_path, command):
+    """Every run is done: a Ctrl-C while the outputs are written (figures, tables) let them be finished, then
+    says so and exits 130 (it threw every completed run away, where a Ctrl-C a moment earlier kept them)."""
+    args = {"study": ("study", "--scenarios", "nominal", "--controllers", "pid", "--duration", 0.5, "--jobs", 1),
+            "simulate": ("simulate", "--controller", "all", "--duration", 0.3)}[command]
+    c = Command(*args, "--no-progress", "--out", tmp_path / "s")
     try:
         wait_until(lambda: any(tmp_path.glob(".s.partial-*")), "its outputs being written", proc=c)
         c.ctrl_c()
@@ -291,9 +295,11 @@ def test_study_ctrl_c_while_it_writes_its_outputs_leaves_neither_them_nor_a_part
     finally:
         c.kill()
     assert rc == 130 and seconds < BOUND_S, (rc, seconds)
-    assert one_line(err) == ("pa10-dnbs: interrupted before it wrote anything (outputs are written whole, at the "
-                             "end): run the same command again"), err
-    assert list(tmp_path.iterdir()) == []
+    main = "study.md" if command == "study" else "report.md"
+    assert one_line(err) == (f"pa10-dnbs: interrupted as it finished: {tmp_path / 's'} is written whole "
+                             f"({tmp_path / 's'}/{main})"), err
+    assert [p.name for p in tmp_path.iterdir()] == ["s"] and list((tmp_path / "s").glob("*.png"))
+    assert not (tmp_path / "s" / "interrupted.json").exists()
 
 
 def test_simulate_all_ctrl_c_in_its_first_run_writes_nothing_and_says_so(tmp_path):
