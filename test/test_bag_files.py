@@ -149,13 +149,22 @@ def test_a_complete_run_bag_analyses(tmp_path):
 
 def test_analyse_with_another_arms_config_is_refused_and_an_exit_1_says_why(tmp_path):
     """--config of another arm with as many joints reported the bag against that arm's limits and ended with
-    exit 1 and no word; an exit 1 (torques beyond the config's limits) now says why."""
+    exit 1 and no word, and one of another step misread the run's steps (metrics 34x off, exit 0); an exit 1
+    (torques beyond the config's limits) now says why."""
     bag = _write_run_bag(tmp_path / "b", ns="/pa10")
     default = Path(__file__).resolve().parent.parent / "config" / "default.yaml"
     iiwa = tmp_path / "iiwa.yaml"
     iiwa.write_text(f"extends: {default}\narm: iiwa\n")
     r = run_cli("analyse", bag, "--out", tmp_path / "out", "--config", iiwa)
     _assert_clear_error(r, f"--config {iiwa}: its arm iiwa (joints a1, ", "is not the bag's (joints s1, ")
+    assert not (tmp_path / "out").exists()
+    from pa10_dnbs.run_settings import build_settings
+    stored = build_settings(default).to_config()   # a bag whose stored config gives its step, 1 ms
+    stepped = _write_run_bag(tmp_path / "b1ms", ns="/pa10", custom_data={"pa10_dnbs.config": json.dumps(stored)})
+    coarse = tmp_path / "coarse.yaml"
+    coarse.write_text(f"extends: {default}\nsimulation:\n  dt_s: 0.002\n")
+    r = run_cli("analyse", stepped, "--out", tmp_path / "out", "--config", coarse)
+    _assert_clear_error(r, f"--config {coarse}: its simulation.dt_s 0.002 s is not the bag's step 0.001 s")
     assert not (tmp_path / "out").exists()
     weak = tmp_path / "weak.yaml"   # the bag's torques are 2 N m
     weak.write_text(f"extends: {default}\nplant:\n  torque_limit_nm: 1.0\n")

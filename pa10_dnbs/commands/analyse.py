@@ -19,20 +19,33 @@ from ..run_settings import build_settings
 MIN_STEPS = 2   # a run of fewer steps has no sample in its metrics window (the second half of the run)
 
 
-def _given_config(config_path: Path, joints: tuple[str, ...]) -> tuple[dict, str]:
+def _given_config(config_path: Path, joints: tuple[str, ...], bag_dt_s: float | None) -> tuple[dict, str]:
     """The run's config from ``--config``: ConfigError naming it when its arm's joints are not the bag's
-    ``joints`` (another arm's config would report the bag against that arm's torque limits)."""
+    ``joints`` (another arm's config would report the bag against that arm's torque limits) or its step is not
+    the bag's ``bag_dt_s`` [s] (its stored config's; None: unknown), which would misread the run's steps."""
     settings = build_settings(config_path)
     if tuple(settings.arm.joint_names) != tuple(joints):
         raise ConfigError(f"--config {config_path}: its arm {settings.arm.name} (joints "
                           f"{', '.join(settings.arm.joint_names)}) is not the bag's (joints {', '.join(joints)}): pass "
                           "the run's config, or leave --config out for the one stored in the bag")
+    if bag_dt_s is not None and settings.simulation.dt_s != bag_dt_s:
+        raise ConfigError(f"--config {config_path}: its simulation.dt_s {settings.simulation.dt_s:g} s is not the "
+                          f"bag's step {bag_dt_s:g} s: pass the run's config, or leave --config out for the one "
+                          "stored in the bag")
     return settings.to_config(), str(Path(config_path).resolve())
+
+
+def _stored_dt_s(info: dict) -> float | None:
+    """The step [s] of the config stored in the bag, or None."""
+    try:
+        return float(info["config"]["simulation"]["dt_s"])
+    except (KeyError, TypeError, ValueError):
+        return None
 
 
 def _run_config(info: dict, config_path: Path | None, bag: Bag) -> tuple[dict, str]:
     if config_path is not None:
-        return _given_config(config_path, bag_joint_names(bag))
+        return _given_config(config_path, bag_joint_names(bag), _stored_dt_s(info))
     cfg = info.get("config")
     if cfg is None:
         path = default_config_path()
