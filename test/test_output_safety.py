@@ -265,3 +265,16 @@ def test_out_paths_atomic_output_dir_cannot_replace_are_refused_up_front(tmp_pat
     assert sorted(p.name for p in tmp_path.iterdir()) == ["dang", "link", "real"]
     assert sorted(p.name for p in real.iterdir()) == [".pa10-dnbs-output", "X", "lnk", "metrics.json", "report.md",
                                                      "timeseries.npz"]
+
+
+def test_force_onto_a_tunes_folder_says_it_is_one(tmp_path):
+    """A tune writes no output mark (its folder is its storage, resumed, never replaced); --force of another
+    command said its files were "not a pa10-dnbs output"."""
+    out = tmp_path / "t"
+    r = run_cli("tune", "--controller", "pid", "--trials", 1, "--scenarios", "nominal", "--seeds", 1,
+                "--held-out-seeds", 0, "--duration", 0.05, "--jobs", 1, "--no-progress", "--out", out)
+    assert r.returncode == 0, r.stderr
+    before = _tree(out)
+    _refused(run_cli("simulate", "--controller", "pid", *TINY, "--out", out, "--force"),
+             "--out", f"{out} is a tune's folder", "--force never replaces one")
+    assert _tree(out) == before

@@ -101,6 +101,9 @@ def check_output_dir(out: Path, force: bool, flag: str = "--out", inputs: dict |
         raise OutputExistsError(f"output directory exists: {out} (use --force to replace it)" if flag == "--out" else
                                 f"{flag}: {out} exists; pass --force to replace it")
     if any(out.iterdir()) and not is_previous_output(out):
+        if "tune.db" in {p.name for p in out.iterdir()}:   # a tune's folder (its storage: trials, never replaced)
+            raise OutputExistsError(f"{flag}: {out} is a tune's folder (its storage tune.db holds the trials): "
+                                    "--force never replaces one; remove it yourself or choose another folder")
         raise OutputExistsError(f"{flag}: {out} holds files that are not a pa10-dnbs output: --force replaces only "
                                 "an empty folder or a previous output; remove it yourself or choose another folder")
 
