@@ -4,12 +4,19 @@ arm from its URDF, pa10_dnbs.arm)."""
 __version__ = "0.1.0"
 
 
+#: processes that are a command to the user (``python -m`` these): the CLI, and the robot node ``pa10-dnbs robot``
+#: runs in the terminal's process group, so that the terminal's Ctrl-C reaches it while rclpy loads
+COMMAND_MODULES = ("pa10_dnbs.cli", "pa10_dnbs.ros.mujoco_robot_node")
+
+
 def _quiet_start_of_the_command() -> None:
-    """When this process is the ``pa10-dnbs`` command: a Ctrl-C while its modules load ends it with one line and
-    exit 130, not an import traceback (pa10_dnbs/interrupt.py). Any other importer keeps its own SIGINT."""
+    """When this process is the ``pa10-dnbs`` command (or its robot node): a Ctrl-C while its modules load ends it
+    with one line and exit 130, not an import traceback (pa10_dnbs/interrupt.py; the node's own handler takes
+    over once it runs). Any other importer keeps its own SIGINT."""
     import sys
 
-    command = getattr(sys, "orig_argv", [])[1:3] == ["-m", "pa10_dnbs.cli"]   # python -m pa10_dnbs.cli
+    argv = getattr(sys, "orig_argv", [])[1:3]
+    command = argv[:1] == ["-m"] and argv[1:] and argv[1] in COMMAND_MODULES      # python -m pa10_dnbs.cli
     if command or (sys.argv[:1] and sys.argv[0].endswith("pa10-dnbs")):       # the console script
         from .interrupt import quiet_start
 

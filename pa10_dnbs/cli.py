@@ -33,6 +33,10 @@ SETTING_FLAGS = {"arm": "--arm",
                  "robot_command_topic": "--robot-command-topic", "robot_timeout": "--robot-timeout"}
 
 
+#: the commands that write no output folder (their Ctrl-C line says nothing about outputs)
+NO_OUTPUTS = frozenset({"robot", "replay", "arm"})
+
+
 def _progress(args: argparse.Namespace) -> bool:
     return not args.no_progress and sys.stderr.isatty()
 
@@ -430,8 +434,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"pa10-dnbs: error: {exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
-        print(interrupt.written_line() or "pa10-dnbs: interrupted before it wrote anything (outputs are written "
-              "whole, at the end): run the same command again", file=sys.stderr)
+        writes = getattr(args, "func_name", None) not in NO_OUTPUTS
+        print(interrupt.written_line() or ("pa10-dnbs: interrupted before it wrote anything (outputs are written "
+              "whole, at the end): run the same command again" if writes else
+              "pa10-dnbs: interrupted while starting, before any work: nothing changed"), file=sys.stderr)
         return 130
     finally:
         if argv is None:   # this process is the command (not a caller's in-process run): Ctrl-C while it exits

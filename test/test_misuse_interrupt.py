@@ -435,6 +435,49 @@ def test_a_ctrl_c_after_the_outputs_are_written_says_so_not_that_nothing_was_wri
         assert ("runs/x is written whole" in line) == written and ("before it wrote anything" in line) != written, line
 
 
+def test_a_ctrl_c_while_a_command_without_outputs_starts_says_nothing_of_outputs(monkeypatch, capsys):
+    """robot, replay and arm write no output folder: their start-up Ctrl-C line is not about outputs."""
+    import argparse
+
+    from pa10_dnbs import cli
+
+    def command(args):
+        raise KeyboardInterrupt
+
+    parser = argparse.ArgumentParser()
+    parser.set_defaults(func=command, func_name="robot")
+    monkeypatch.setattr(cli, "build_parser", lambda: parser)
+    assert cli.main([]) == 130
+    assert one_line(capsys.readouterr().err) == "pa10-dnbs: interrupted while starting, before any work: nothing changed"
+
+
+def test_the_robot_node_stopped_while_rclpy_loads_says_one_line(tmp_path):
+    """pa10-dnbs robot runs its node as a process in the terminal's group: a Ctrl-C in its first ~0.4 s, while
+    rclpy loads, printed the node's KeyboardInterrupt traceback and exit 1 or 254."""
+    proc = subprocess.Popen([sys.executable, "-m", "pa10_dnbs.ros.mujoco_robot_node"], cwd=REPO,
+                            env=dict(os.environ, PYTHONPATH=str(REPO)), stderr=subprocess.PIPE, text=True)
+    try:
+        wait_until(lambda: _maps(proc.pid, "librcl"), "rclpy loading")   # inside the node's imports
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=BOUND_S)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert "Traceback" not in err, err
+    assert proc.returncode == 130 and one_line(err) == ("pa10-dnbs: interrupted while starting, before any work: "
+                                                        "nothing changed"), (proc.returncode, err)
+
+
+def _maps(pid: int, name: str) -> bool:
+    """Whether process ``pid`` has mapped a library whose path holds ``name``."""
+    try:
+        with open(f"/proc/{pid}/maps") as f:
+            return name in f.read()
+    except OSError:
+        return False
+
+
 def _sigint_disposition(_):
     return signal.getsignal(signal.SIGINT) == signal.SIG_IGN
 
