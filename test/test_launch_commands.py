@@ -52,3 +52,31 @@ def test_a_failed_runs_logs_are_kept_where_its_message_points(tmp_path):
     (tmp / "logs").mkdir()
     stopped = GraphFailure("interrupted (SIGINT)", interrupted=True)
     assert _keep_logs(stopped, tmp, tmp_path / "other") is stopped and not (tmp_path / "other.failed").exists()
+
+
+def test_a_failed_runs_logs_never_replace_a_users_folder_or_file(tmp_path):
+    """<out>.failed was removed unchecked (a user's folder of that name lost); a file there turned the failure
+    into [Errno 17]. Only an earlier failure's kept logs (its mark) are replaced; else a fresh folder."""
+    from pa10_dnbs.commands.launch import _keep_logs
+    from pa10_dnbs.supervisor.graph_options import GraphFailure
+
+    def fail(name):
+        tmp = tmp_path / f".{name}.partial-x"
+        (tmp / "logs").mkdir(parents=True)
+        (tmp / "logs" / "plant.log").write_text("graph incomplete\n")
+        return _keep_logs(GraphFailure(f"plant exited early with code 1 ({tmp}/logs/plant.log)"), tmp,
+                          tmp_path / name)
+
+    (tmp_path / "thesis.failed").mkdir()
+    (tmp_path / "thesis.failed" / "precious.txt").write_text("my data\n")
+    (tmp_path / "notes.failed").write_text("a file\n")
+    for name in ("thesis", "notes"):
+        exc = fail(name)
+        fresh = [p for p in tmp_path.glob(f"{name}.failed-*") if p.is_dir()]
+        assert len(fresh) == 1 and (fresh[0] / "logs" / "plant.log").is_file(), list(tmp_path.iterdir())
+        assert str(exc).startswith("plant exited early") and f"kept in {fresh[0] / 'logs'}" in str(exc)
+    assert (tmp_path / "thesis.failed" / "precious.txt").read_text() == "my data\n"
+    assert (tmp_path / "notes.failed").read_text() == "a file\n"
+    fail("run")
+    fail("run")   # a second failure replaces the first's kept logs (its mark), no fresh folder
+    assert (tmp_path / "run.failed" / "logs" / "plant.log").is_file() and not list(tmp_path.glob("run.failed-*"))

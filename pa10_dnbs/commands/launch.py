@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import dataclasses
 import shutil
+import tempfile
 import sys
 from pathlib import Path
 
@@ -106,15 +107,28 @@ def _hard_stop_cleanup(tmp: Path, out: Path) -> str:
     return f"; nothing written to {out}"
 
 
+#: the file that marks ``<out>.failed`` as a failed launch's kept logs (only such a folder is ever replaced)
+FAILED_MARK = ".pa10-dnbs-failed-launch"
+
+
 def _keep_logs(exc: GraphFailure, tmp: Path, out: Path) -> GraphFailure:
     """A failed run's output folder (``tmp``) is removed, so its ``logs/`` move to ``<out>.failed/logs`` (replacing
-    an earlier failure's) and the message names them there; an interrupted run (Ctrl-C) keeps nothing."""
+    an earlier failure's, known by its FAILED_MARK; anything else there is left alone and the logs go to a fresh
+    ``<out>.failed-XXXX``) and the message names them there; an interrupted run (Ctrl-C) keeps nothing."""
     logs = tmp / "logs"
     if exc.interrupted or not logs.is_dir():
         return exc
-    kept = out.parent / f"{out.name}.failed"
-    shutil.rmtree(kept, ignore_errors=True)
-    kept.mkdir(parents=True)
-    shutil.move(str(logs), str(kept / "logs"))
+    try:
+        kept = out.parent / f"{out.name}.failed"
+        if (kept / FAILED_MARK).is_file():
+            shutil.rmtree(kept)
+        if kept.exists() or kept.is_symlink():   # not ours: a user's file or folder
+            kept = Path(tempfile.mkdtemp(prefix=f"{out.name}.failed-", dir=out.parent))
+        else:
+            kept.mkdir(parents=True)
+        (kept / FAILED_MARK).write_text(f"the logs of a failed pa10-dnbs launch into {out}\n")
+        shutil.move(str(logs), str(kept / "logs"))
+    except OSError as why:   # the failure's own line comes first, whatever happens to its logs
+        return GraphFailure(f"{exc}\n(its nodes' logs could not be kept: {why})")
     message = str(exc).replace(str(logs), str(kept / "logs"))
     return GraphFailure(f"{message}\nthe nodes' logs and command lines are kept in {kept / 'logs'}")
