@@ -9,6 +9,8 @@ A terminal's Ctrl-C sends SIGINT to every process of the foreground group: the c
 - The command: the first SIGINT raises KeyboardInterrupt (the command stops its work, keeps what is complete,
   says where, exits 130); from then on a second SIGINT ends at once (:func:`two_stage_sigint`): every child is
   killed and reaped, one line (:func:`on_second_sigint` sets it), exit 130, no clean-up that could wait.
+  SIGTERM (``kill``, ``timeout``, a batch scheduler's cancel) is taken as a Ctrl-C (STOP_SIGNALS): no half-written
+  output folder is left behind by it.
 - Code that talks to a database (the tune's Optuna storage) runs :func:`deferred`: there the first SIGINT is
   only noted, and :func:`check` raises KeyboardInterrupt at the next safe point (the executor checks every
   ``POLL_S``), never inside a SQL statement (an interrupted cursor prints SQLAlchemy's traceback and can leave
@@ -29,6 +31,8 @@ import time
 EXIT_INTERRUPTED = 130   # 128 + SIGINT, as a shell reports a command ended by Ctrl-C
 POLL_S = 0.1            # how often a waiting executor looks at a deferred Ctrl-C
 PR_SET_PDEATHSIG = 1    # prctl(2): the signal a process gets when its parent dies (linux/prctl.h)
+#: what stops a command: Ctrl-C, and SIGTERM (``kill``, ``timeout``, a batch scheduler's cancel), taken alike
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 _second_line = "pa10-dnbs: interrupted again: stopped at once"
 _state = {"deferred": 0, "requested": False, "raised": False, "cleanup": None}
@@ -46,6 +50,8 @@ def pool_worker_start(parent_pid: int) -> None:
     handler) or SIGKILL leaves no worker behind; ``parent_pid``: the parent's, to catch a parent that died
     before the request."""
     ignore_sigint()
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)   # the parent stops a worker with SIGTERM: not its handler's
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})   # held back while it was forked
     try:
         import ctypes
 
@@ -59,10 +65,10 @@ def pool_worker_start(parent_pid: int) -> None:
 
 @contextlib.contextmanager
 def sigint_blocked():
-    """SIGINT held back in this thread while workers are forked (they inherit the mask, then ignore it); a
-    SIGINT that came meanwhile is delivered on exit."""
+    """SIGINT and SIGTERM held back in this thread while workers are forked (they inherit the mask, then set
+    their own dispositions); one that came meanwhile is delivered on exit."""
     try:
-        old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, set(STOP_SIGNALS))
     except (AttributeError, OSError, ValueError):  # pragma: no cover - not POSIX
         yield
         return
@@ -115,6 +121,12 @@ def kill_children(wait_s: float = 2.0) -> None:
         time.sleep(0.01)
 
 
+def _on_stop(handler) -> None:
+    """``handler`` for every stop signal (main thread only: ValueError elsewhere)."""
+    for sig in STOP_SIGNALS:
+        signal.signal(sig, handler)
+
+
 def _second(signum, frame) -> None:
     kill_children()
     if _state.get("cleanup") is not None:
@@ -126,7 +138,7 @@ def _second(signum, frame) -> None:
 
 
 def _first(signum, frame) -> None:
-    signal.signal(signal.SIGINT, _second)
+    _on_stop(_second)
     _state["requested"] = True
     if not _state["deferred"]:
         _state["raised"] = True
@@ -168,7 +180,7 @@ def two_stage_sigint():
     Outside the main thread: nothing changes."""
     global _second_line
     try:
-        previous = signal.signal(signal.SIGINT, _first)
+        previous = {sig: signal.signal(sig, _first) for sig in STOP_SIGNALS}
     except ValueError:   # not the main thread
         yield
         return
@@ -177,7 +189,8 @@ def two_stage_sigint():
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
         _state.update(deferred=0, requested=False, raised=False, cleanup=None)
 
 
@@ -236,7 +249,7 @@ def outputs_written(line: str) -> None:
     where), not with a line that says nothing was written. Outside the main thread: only the line is kept."""
     _state["written"] = line
     with contextlib.suppress(ValueError):
-        signal.signal(signal.SIGINT, _after_output)
+        _on_stop(_after_output)
 
 
 def written_line() -> str | None:

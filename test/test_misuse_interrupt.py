@@ -222,21 +222,27 @@ def test_study_ctrl_c_at_start_up_and_before_a_run_ends_stops_the_workers_and_wr
     assert sorted(p.name for p in tmp_path.iterdir()) == []   # no output, no partial folder
 
 
-def test_a_study_ended_by_a_plain_kill_leaves_no_worker_behind(tmp_path):
-    """SIGTERM (``kill``, ``timeout``, a scheduler's cancel) ends the command by the signal's default action, with
-    no handler to stop its pool: the workers were left running, orphaned. They now die with their parent."""
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL], ids=["SIGTERM", "SIGKILL"])
+def test_a_study_ended_by_a_kill_leaves_no_worker_and_no_partial_folder(tmp_path, sig):
+    """SIGTERM (``kill``, ``timeout``, a scheduler's cancel) ended the command by the signal's default action:
+    its pool workers were left running, orphaned, and a half-written folder could stay. It is now taken as a
+    Ctrl-C; and under SIGKILL, which nothing can catch, the workers die with their parent."""
     c = Command("study", "--scenarios", "nominal", "--controllers", "pid", "--seeds", 40, "--duration", 30,
                 "--jobs", 2, "--no-progress", "--out", tmp_path / "s")
     try:
         wait_until(lambda: len(child_pids(c.proc.pid)) == 2, "two pool workers", proc=c)
         workers = child_pids(c.proc.pid)
-        c.proc.send_signal(signal.SIGTERM)   # the command alone, as `kill PID` does
-        c.proc.communicate(timeout=BOUND_S)
-        wait_until(lambda: not any(_alive(w) for w in workers),
-                   "the workers gone", timeout_s=5.0)
-        assert c.proc.returncode == -signal.SIGTERM and not (tmp_path / "s").exists()
+        c.proc.send_signal(sig)   # the command alone, as `kill PID` does
+        _, err = c.proc.communicate(timeout=BOUND_S)
+        wait_until(lambda: not any(_alive(w) for w in workers), "the workers gone", timeout_s=5.0)
     finally:
         c.kill()
+    if sig == signal.SIGKILL:
+        assert c.proc.returncode == -signal.SIGKILL and not (tmp_path / "s").exists()
+    else:
+        assert c.proc.returncode == 130 and re.fullmatch(r"pa10-dnbs: interrupted after \d+ of 40 runs; .*",
+                                                          one_line(err)), err
+    assert not [p for p in tmp_path.iterdir() if ".partial-" in p.name], list(tmp_path.iterdir())
 
 
 def _alive(pid: int) -> bool:
@@ -281,16 +287,19 @@ def test_study_ctrl_c_mid_run_keeps_the_completed_runs_marked_partial_and_a_reru
     assert (out / "study.partial.json").read_text() == json.dumps(data, indent=2) + "\n"   # untouched
 
 
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["Ctrl-C", "SIGTERM"])
 @pytest.mark.parametrize("command", ["study", "simulate"])
-def test_a_ctrl_c_while_the_outputs_are_written_finishes_them_and_says_so(tmp_path, command):
+def test_a_ctrl_c_while_the_outputs_are_written_finishes_them_and_says_so(tmp_path, command, sig):
     """Every run is done: a Ctrl-C while the outputs are written (figures, tables) let them be finished, then
-    says so and exits 130 (it threw every completed run away, where a Ctrl-C a moment earlier kept them)."""
+    says so and exits 130 (it threw every completed run away, where a Ctrl-C a moment earlier kept them). A
+    SIGTERM the same (its default action left the hidden .partial folder behind for good)."""
     args = {"study": ("study", "--scenarios", "nominal", "--controllers", "pid", "--duration", 0.5, "--jobs", 1),
             "simulate": ("simulate", "--controller", "all", "--duration", 0.3)}[command]
     c = Command(*args, "--no-progress", "--out", tmp_path / "s")
     try:
         wait_until(lambda: any(tmp_path.glob(".s.partial-*")), "its outputs being written", proc=c)
-        c.ctrl_c()
+        c.t_sigint = time.monotonic()
+        os.killpg(c.proc.pid, sig)
         rc, seconds, err = c.end()
     finally:
         c.kill()
