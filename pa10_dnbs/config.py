@@ -18,12 +18,14 @@ from .config_yaml import read_config_yaml
 
 @dataclass(frozen=True)
 class Num:
-    """A real number; ``low`` is the bound, ``strict`` makes it exclusive; ``integer`` requires an int."""
+    """A real number; ``low`` is the bound, ``strict`` makes it exclusive; ``integer`` requires an int; ``high``
+    the upper bound, exclusive where ``high_strict``."""
 
     low: float | None = None
     strict: bool = True
     integer: bool = False
     high: float | None = None
+    high_strict: bool = False
 
 
 @dataclass(frozen=True)
@@ -54,6 +56,8 @@ POS = Num(0.0)
 NONNEG = Num(0.0, strict=False)
 ANY = Num()
 FRACTION = Num(0.0, strict=False, high=1.0)
+#: a fraction of messages dropped: below 1 (all dropped, a lockstep step would wait for a message that never comes)
+DROP_FRACTION = Num(0.0, strict=False, high=1.0, high_strict=True)
 
 
 def _net_schema(output_key: str, error_key: str, n_inputs: int) -> dict:
@@ -82,7 +86,7 @@ LINK_DELAY_MAX_MS = 1000.0
 def _link_faults() -> dict:
     """Faults injected on one direction of each joint's link (plant -> controller states, or efforts back)."""
     return {
-        "drop_fraction": Joints(FRACTION),
+        "drop_fraction": Joints(DROP_FRACTION),
         "delay_ms": Joints(Num(0.0, strict=False, high=LINK_DELAY_MAX_MS)),
         "jitter_ms": Joints(Num(0.0, strict=False, high=LINK_DELAY_MAX_MS)),
         "corrupt_fraction": Joints(FRACTION),
@@ -170,8 +174,8 @@ def _number(key: str, value: Any, spec: Num) -> float | int:
     if spec.low is not None and (value <= spec.low if spec.strict else value < spec.low):
         rel = ">" if spec.strict else ">="
         raise ConfigError(f"{key}: must be {rel} {spec.low:g}, got {value!r}")
-    if spec.high is not None and value > spec.high:
-        raise ConfigError(f"{key}: must be <= {spec.high:g}, got {value!r}")
+    if spec.high is not None and (value >= spec.high if spec.high_strict else value > spec.high):
+        raise ConfigError(f"{key}: must be {'<' if spec.high_strict else '<='} {spec.high:g}, got {value!r}")
     return int(value) if spec.integer else float(value)
 
 

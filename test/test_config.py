@@ -55,6 +55,7 @@ def test_every_dnbs_kernel_setting_loads_and_auto_is_the_default(tmp_path, raw, 
     (("simulation", "window_s"), [5.0, 2.0], r"simulation\.window_s: t1 must be greater"),
     (("simulation", "duration_s"), 5.0, r"simulation\.window_s: ends at 20 s, after simulation\.duration_s"),
     (("simulation", "initial_velocity_rad_s"), True, r"simulation\.initial_velocity_rad_s: expected a number"),
+    (("faults", "state", "drop_fraction"), 1.0, r"faults\.state\.drop_fraction: must be < 1"),  # nothing arrives
 ])
 def test_bad_values_name_the_key(tmp_path, raw, path, value, match):
     d = copy.deepcopy(raw)

@@ -76,6 +76,7 @@ VALUE_CASES = [
     (["launch", "--live-host", "0.0.0.0"], "--live-host"),
     (["launch", "--live", "0", "--live-hz", "inf"], "--live-hz"),
     (["launch", "--drop-states", "2"], "--drop-states"),
+    (["launch", "--drop-efforts", "1"], "--drop-efforts: expected a fraction in [0, 1)"),   # a step waits forever
     (["launch", "--delay-efforts", "inf"], "--delay-efforts"),
     (["launch", "--kill", "s1@nan"], "--kill"),
     (["study", "--duration", "1e7"], "--duration"),

@@ -61,13 +61,17 @@ def add_fault_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--fault-seed", type=int, default=None, metavar="N", help="seed of the injected faults")
 
 
-def _fraction(flag: str, text: str) -> float:
+def _fraction(flag: str, text: str, below_one: bool = False) -> float:
+    """``text`` as a fraction in [0, 1] (``below_one``: [0, 1), a drop: with every message dropped a lockstep
+    step would wait for one that never comes)."""
+    span = "[0, 1)" if below_one else "[0, 1]"
     try:
         v = float(text)
     except ValueError:
-        raise ConfigError(f"{flag}: expected a fraction in [0, 1], got {text!r}") from None
-    if not 0.0 <= v <= 1.0:
-        raise ConfigError(f"{flag}: expected a fraction in [0, 1], got {text!r}")
+        raise ConfigError(f"{flag}: expected a fraction in {span}, got {text!r}") from None
+    if not (0.0 <= v < 1.0 if below_one else 0.0 <= v <= 1.0):
+        raise ConfigError(f"{flag}: expected a fraction in {span}, got {text!r}"
+                          + (" (1 drops every message: nothing would ever arrive)" if below_one and v == 1.0 else ""))
     return v
 
 
@@ -97,7 +101,7 @@ def apply_fault_flags(settings: Settings, args: FaultFlags) -> Settings:
             continue
         flag = "--" + dest.replace("_", "-")
         if key == "drop_fraction":
-            value = _fraction(flag, str(value))
+            value = _fraction(flag, str(value), below_one=True)
         elif not 0.0 <= value <= LINK_DELAY_MAX_MS:
             raise ConfigError(f"{flag}: expected milliseconds in [0, {LINK_DELAY_MAX_MS:g}] (a later message is a lost "
                               f"one: --drop-*), got {value!r}")
