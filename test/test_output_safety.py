@@ -278,3 +278,24 @@ def test_force_onto_a_tunes_folder_says_it_is_one(tmp_path):
     _refused(run_cli("simulate", "--controller", "pid", *TINY, "--out", out, "--force"),
              "--out", f"{out} is a tune's folder", "--force never replaces one")
     assert _tree(out) == before
+
+
+@pytest.mark.parametrize("kind", ["other tables", "not sqlite"])
+def test_a_tune_never_writes_into_a_tune_db_that_is_not_its_storage(tmp_path, kind):
+    """A DIR/tune.db of the user's (an SQLite database of its own, or another file) was taken as the storage:
+    Optuna's 13 tables were written into it, or the refusal named --storage, which was never given."""
+    import sqlite3
+
+    out = tmp_path / "t"
+    out.mkdir()
+    db = out / "tune.db"
+    if kind == "other tables":
+        with sqlite3.connect(db) as con:
+            con.execute("CREATE TABLE mine (a)")
+    else:
+        db.write_text("my notes\n")
+    before = db.read_bytes()
+    r = run_cli("tune", "--controller", "pid", "--trials", 1, "--scenarios", "nominal", "--seeds", 1,
+                "--held-out-seeds", 0, "--duration", 0.05, "--jobs", 1, "--no-progress", "--out", out)
+    _refused(r, f"--out: {db} is not a tune's storage")
+    assert db.read_bytes() == before and sorted(p.name for p in out.iterdir()) == ["tune.db"]

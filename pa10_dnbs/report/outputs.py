@@ -196,10 +196,27 @@ def check_tune_dir(out: Path, study_name: str, identity: dict, refusal) -> None:
                                 f"--out: {out} holds the tune {done.get('study')!r}, not {study_name!r}: "
                                 "give another --out for this tune")
     if (out / "tune.db").is_file():
+        why = _not_optuna(out / "tune.db")
+        if why:   # a file of the user's, which the tune would write its tables into
+            raise OutputExistsError(f"--out: {out}/tune.db is not a tune's storage ({why}): a tune keeps its trials "
+                                    "in DIR/tune.db; move the file or give another --out")
         others = [n for n in _sqlite_study_names(out / "tune.db") if n != study_name]
         if others:
             raise OutputExistsError(f"--out: {out}/tune.db holds the tune {others[0]!r}, not {study_name!r}: "
                                     "give another --out for this tune")
+
+
+def _not_optuna(db: Path) -> str | None:
+    """Why the file ``db`` is no Optuna SQLite storage (not SQLite; tables of its own), or None: an Optuna storage,
+    or an empty file or database (a storage not yet made, which the tune makes)."""
+    try:
+        with contextlib.closing(sqlite3.connect(f"{Path(db).resolve().as_uri()}?mode=ro", uri=True)) as con:
+            tables = {row[0] for row in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+    except sqlite3.Error as exc:
+        return f"not an SQLite database: {exc}"
+    if tables and not {"studies", "trials", "alembic_version"} <= tables:
+        return f"an SQLite database with other tables: {', '.join(sorted(tables)[:3])}"
+    return None
 
 
 def _sqlite_study_names(db: Path) -> list[str]:
