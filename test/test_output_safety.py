@@ -299,3 +299,19 @@ def test_a_tune_never_writes_into_a_tune_db_that_is_not_its_storage(tmp_path, ki
                 "--held-out-seeds", 0, "--duration", 0.05, "--jobs", 1, "--no-progress", "--out", out)
     _refused(r, f"--out: {db} is not a tune's storage")
     assert db.read_bytes() == before and sorted(p.name for p in out.iterdir()) == ["tune.db"]
+
+
+def test_an_output_given_up_removes_the_folders_above_it_that_it_made(tmp_path):
+    """"Nothing written" left the missing folders above --out that the output's staging had made."""
+    from pa10_dnbs.report.outputs import atomic_output_dir
+
+    (tmp_path / "kept").mkdir()
+    for out in (tmp_path / "deep" / "a" / "b", tmp_path / "kept" / "new" / "b"):
+        with pytest.raises(KeyboardInterrupt):
+            with atomic_output_dir(out, force=False) as tmp:
+                (tmp / "half.txt").write_text("written before the Ctrl-C\n")
+                raise KeyboardInterrupt
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kept"] and not list((tmp_path / "kept").iterdir())
+    with atomic_output_dir(tmp_path / "deep" / "a" / "b", force=False) as tmp:
+        (tmp / "whole.txt").write_text("done\n")
+    assert (tmp_path / "deep" / "a" / "b" / "whole.txt").is_file()

@@ -244,13 +244,16 @@ def check_creatable(path: Path, flag: str) -> None:
 
 @contextmanager
 def atomic_output_dir(out: Path, force: bool):
-    """Yield a temporary directory; on success it replaces ``out``, on error it is removed."""
+    """Yield a temporary directory; on success it replaces ``out``, on error it is removed (with the folders above
+    ``out`` it made: an interrupted or failed command leaves nothing)."""
     out = Path(out)
     check_output_dir(out, force)
+    made = [p for p in (out.parent, *out.parent.parents) if not p.exists()][::-1]   # outermost first
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     except BaseException:
+        _remove_empty(made)
         release_output(out)
         raise
     try:
@@ -268,11 +271,21 @@ def atomic_output_dir(out: Path, force: bool):
             raise
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
+        _remove_empty(made)
         release_output(out)
         raise
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
     release_output(out)
+
+
+def _remove_empty(folders: list[Path]) -> None:
+    """Remove ``folders`` (outermost first) innermost first, each only while it is empty."""
+    for folder in reversed(folders):
+        try:
+            folder.rmdir()
+        except OSError:   # not empty (something else was written there meanwhile), or gone
+            return
 
 
 def write_run(directory: Path, run: RunData, metrics: dict, chain: UrdfChain | None = None,
