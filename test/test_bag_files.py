@@ -397,3 +397,140 @@ def test_the_player_counts_what_it_publishes_to_nobody():
     assert line.startswith("WARNING replay: 4 of 6 messages went out with no subscriber matched on "
                            "/pa10/s1/effort, /pa10/s2/effort: nothing received them")
     assert "--wait-for-subscribers" in line
+
+
+def _edit_metadata(bag, edit):
+    """Apply ``edit`` to the bag's rosbag2_bagfile_information and write metadata.yaml back."""
+    meta_path = bag / "metadata.yaml"
+    meta = yaml.safe_load(meta_path.read_text())
+    edit(meta["rosbag2_bagfile_information"])
+    meta_path.write_text(yaml.safe_dump(meta))
+    return bag
+
+
+def _topic_entry(info, topic):
+    return next(e for e in info["topics_with_message_count"] if e["topic_metadata"]["name"] == topic)
+
+
+def _drop_topic(info, topic):
+    """Leave ``topic`` out (the total lessened by its count: only the per-topic check can see it)."""
+    entry = _topic_entry(info, topic)
+    info["topics_with_message_count"].remove(entry)
+    info["message_count"] -= entry["message_count"]
+
+
+METADATA_DISAGREEMENTS = {
+    "type": (lambda i: _topic_entry(i, "/pa10/joint_states")["topic_metadata"].__setitem__("type", "std_msgs/msg/String"),
+             "topic /pa10/joint_states has type std_msgs/msg/String but the MCAP file holds it as "
+             "sensor_msgs/msg/JointState"),
+    "left out": (lambda i: _drop_topic(i, "/pa10/s1/reference"),
+                 "leaves out topic /pa10/s1/reference, of which the MCAP file holds 1 messages"),
+    "added": (lambda i: i["topics_with_message_count"].append(
+        {"topic_metadata": {"name": "/extra", "type": "std_msgs/msg/String", "serialization_format": "cdr"},
+         "message_count": 0}), "lists topic /extra (std_msgs/msg/String, 0 messages), which the MCAP file"),
+    "count": (lambda i: _topic_entry(i, "/pa10/joint_states").__setitem__("message_count", 5),
+              "topic /pa10/joint_states counts 5 messages but the MCAP summary holds 51"),
+    "negative duration": (lambda i: i.__setitem__("duration", {"nanoseconds": -1}),
+                          "duration.nanoseconds: expected a whole number >= 0, got -1"),
+    "absurd duration": (lambda i: i.__setitem__("duration", {"nanoseconds": 10 ** 18}),
+                        "duration 1000000000000000000 ns ends the bag at 1000000000000000000 ns but its last "
+                        "message in the MCAP file is at 50000000 ns"),
+    "start": (lambda i: i.__setitem__("starting_time", {"nanoseconds_since_epoch": 7}),
+              "starting_time is 7 ns but the first message in the MCAP file is at 0 ns"),
+    "malformed count": (lambda i: i["topics_with_message_count"][0].__setitem__("message_count", "many"),
+                        "topics_with_message_count[0].message_count (/pa10/joint_states): expected a whole number"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(METADATA_DISAGREEMENTS))
+def test_metadata_that_disagrees_with_the_mcap_is_refused(tmp_path, case):
+    """rosbags reads a bag's topics, types, counts and times from metadata.yaml: a type that is not its channel's
+    played 0 messages of the topic (exit 0), a topic left out was 'no such topic', wrong counts and durations were
+    taken as they stood. Each is now one line naming metadata.yaml and the topic or field, exit 2, for analyse
+    and replay alike (replay opens the bag before it joins ROS)."""
+    from pa10_dnbs.bag.bag_reader import BagError
+
+    edit, words = METADATA_DISAGREEMENTS[case]
+    bag = _edit_metadata(_write_run_bag(tmp_path / "b", n=50, ns="/pa10"), edit)
+    with pytest.raises(BagError) as err:
+        Bag(bag)
+    assert f"{bag}/metadata.yaml: " in str(err.value) and words in str(err.value), str(err.value)
+    r = _analyse(bag, tmp_path)
+    _assert_clear_error(r, f"{bag}/metadata.yaml: ", words)
+    assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "out").exists()
+
+
+def test_replay_of_a_bag_whose_metadata_names_another_type_is_refused_before_ros(tmp_path):
+    """The reviewer's case: replay played 0 of the topic's messages and exited 0."""
+    edit, words = METADATA_DISAGREEMENTS["type"]
+    bag = _edit_metadata(_write_run_bag(tmp_path / "b", n=50, ns="/pa10"), edit)
+    r = subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "replay", str(bag), "--rate", "10", "--topics",
+                        "/pa10/joint_states"], cwd=REPO, capture_output=True, text=True, timeout=120,
+                       env={**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"})
+    _assert_clear_error(r, f"{bag}/metadata.yaml: ", words)
+    assert r.stdout == "" and len(r.stderr.strip().splitlines()) == 1, r.stdout + r.stderr
+
+
+def test_metadata_within_rosbag2s_own_slack_is_accepted(tmp_path):
+    """rosbag2 writes the duration as a running maximum, short of the span when receive stamps came out of order:
+    an end a little before the last message is how rosbag2 writes it, not a disagreement."""
+    bag = _edit_metadata(_write_run_bag(tmp_path / "b", n=50, ns="/pa10"),
+                         lambda i: i.__setitem__("duration", {"nanoseconds": i["duration"]["nanoseconds"] - 1_000_000}))
+    with Bag(bag) as b:
+        assert b.message_count == 51 + 7
+
+
+def test_the_unheard_warning_names_the_topics_as_published():
+    """replay --namespace /arm3 of a bag recorded in /arm2: the warning named /arm2/joint_states, where nothing
+    was published; it names /arm3/joint_states, where a subscriber must be started."""
+    import contextlib
+    import io
+    from types import SimpleNamespace
+
+    from pa10_dnbs.ros.player_node import PlayerNode
+
+    player = SimpleNamespace(published=301, skipped=[], interrupted=False, unheard={"/arm2/joint_states": 301},
+                             out_name={"/arm2/joint_states": "/arm3/joint_states", "/clock": "/clock"})
+    err = io.StringIO()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        PlayerNode.close(player)
+    assert err.getvalue().startswith("WARNING replay: 301 of 301 messages went out with no subscriber matched on "
+                                     "/arm3/joint_states: nothing received them"), err.getvalue()
+    assert "/arm2" not in err.getvalue()
+
+
+def test_replay_of_only_unplayable_topics_is_refused_before_ros(tmp_path):
+    """--topics /tf (tf2_msgs has no Python package here) played nothing and exited 0: now one line naming
+    --topics and why, exit 2, before ROS; a mix of playable and unplayable topics is played as before (the player
+    skips and names the others)."""
+    from rosbags.typesys import Stores, get_typestore
+
+    from pa10_dnbs.commands.replay import unplayable_topics
+    from pa10_dnbs.ros.msg_types import message_class
+
+    try:
+        message_class("tf2_msgs/msg/TFMessage")
+        pytest.skip("tf2_msgs is installed here: /tf is playable")
+    except LookupError:
+        pass
+    store = get_typestore(Stores.ROS2_JAZZY)
+    tf = bytes(store.serialize_cdr(store.types["tf2_msgs/msg/TFMessage"](transforms=[]), "tf2_msgs/msg/TFMessage"))
+    w = BagWriter(tmp_path / "b")
+    w.add_topic("/tf", "tf2_msgs/msg/TFMessage", [QOS])
+    w.add_topic("/tf_static", "tf2_msgs/msg/TFMessage", [QOS])
+    w.add_topic("/joint_states", "sensor_msgs/msg/JointState", [QOS])
+    for k in range(3):
+        w.write("/tf", k * 1_000_000, tf)
+        w.write("/joint_states", k * 1_000_000, joint_state_cdr.encode(0, k * 1_000_000, ["s1"], [0.0], [0.0], [0.0]))
+    w.write("/tf_static", 0, tf)
+    w.close()
+    bag = tmp_path / "b"
+    with Bag(bag) as b:
+        assert set(unplayable_topics(b, ["/tf", "/joint_states", "/tf"])) == {"/tf"}
+        assert unplayable_topics(b, ["/joint_states"]) == {}
+    r = subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "replay", str(bag), "--topics", "/tf", "/tf_static"],
+                       cwd=REPO, capture_output=True, text=True, timeout=120,
+                       env={**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"})
+    _assert_clear_error(r, "--topics: nothing to play: /tf (tf2_msgs/msg/TFMessage: no Python message package "
+                           "installed for it); /tf_static (")
+    assert r.stdout == "" and len(r.stderr.strip().splitlines()) == 1, r.stdout + r.stderr

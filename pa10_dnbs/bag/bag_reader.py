@@ -4,8 +4,9 @@ Checks, in order: the path exists; it is a bag directory (``metadata.yaml``)
 or an ``.mcap`` file inside one; metadata.yaml parses; each storage file ends
 with the MCAP footer magic (a recording cut off before it closed does not);
 every CRC in it matches (summary, each chunk, data section: mcap_check.py; a
-damaged chunk is named with the topics it held); the MCAP summary's message
-count equals metadata.yaml's; rosbags opens it.
+damaged chunk is named with the topics it held); metadata.yaml agrees with the
+MCAP summaries (total and per-topic message counts, topics and their types,
+start and duration: metadata_check.py); rosbags opens it.
 Reading messages later converts decoding failures into BagError as well.
 """
 from __future__ import annotations
@@ -18,6 +19,7 @@ import yaml
 
 from ..config_yaml import yaml_error_line
 from ..refused import Refused
+from .metadata_check import check_metadata, read_summary
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 
@@ -47,11 +49,7 @@ class Bag:
         for f in files:
             _check_mcap_file(f)
         self.crc_reports = [_check_crcs(f) for f in files]
-        expected = _message_count(self.path, info)
-        in_files = sum(_summary_message_count(f) for f in files)
-        if expected != in_files:
-            raise BagError(f"{self.path}: metadata.yaml counts {expected} messages but the MCAP "
-                           f"summary holds {in_files}; the bag is inconsistent")
+        check_metadata(self.path, info, [read_summary(f, BagError) for f in files], BagError)
         self.custom_data: dict[str, str] = _custom_data(self.path, info)
         try:
             self._reader = Reader(self.path)
@@ -141,14 +139,6 @@ def _storage_files(bag: Path, info: dict) -> list[Path]:
     return [bag / n for n in names]
 
 
-def _message_count(bag: Path, info: dict) -> int:
-    """``message_count``: a whole number >= 0 (-1 when absent: then it never matches the files')."""
-    count = info.get("message_count", -1)
-    if isinstance(count, bool) or not isinstance(count, int) or count < -1:
-        raise BagError(f"{bag}/metadata.yaml: message_count: expected a whole number, got {count!r}")
-    return count
-
-
 def _custom_data(bag: Path, info: dict) -> dict[str, str]:
     """``custom_data``: a mapping of names to texts (absent: empty; a value YAML read as a number: its text; none: "")."""
     data = info.get("custom_data") or {}
@@ -179,16 +169,3 @@ def _check_crcs(f: Path):
         return check_mcap_crcs(f)
     except McapCrcError as exc:
         raise BagError(f"{f}: {exc}") from None
-
-
-def _summary_message_count(f: Path) -> int:
-    from mcap.reader import make_reader
-
-    try:
-        with f.open("rb") as fh:
-            summary = make_reader(fh).get_summary()
-    except Exception as exc:
-        raise BagError(f"{f}: corrupt MCAP summary: {type(exc).__name__}: {exc}") from None
-    if summary is None or summary.statistics is None:
-        raise BagError(f"{f}: MCAP file has no summary statistics (not closed properly)")
-    return summary.statistics.message_count

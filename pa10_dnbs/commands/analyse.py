@@ -10,7 +10,7 @@ from ..bag.bag_reader import Bag, BagError
 from ..config import ConfigError, default_config_path
 from .options import AnalyseOptions
 from ..number_text import interval
-from ..output_lock import lock_output
+from ..output_lock import lock_input
 from ..report.metrics_file import DEFAULT_METRICS, metrics_dict, window_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..report.progress import ProgressBar
@@ -76,7 +76,7 @@ def run_analyse(options: AnalyseOptions) -> int:
     """
     o = options
     check_output_dir(o.out, o.force, "--out", inputs={"BAG": o.bag_path, "--config": o.config_path})
-    lock_output(o.bag_path, "bag")  # a bag another run is still recording (or replacing) is refused, not misread
+    lock_input(o.bag_path, "bag")  # a bag another run is still recording (or replacing) is refused, not misread
     with Bag(o.bag_path) as bag:
         info = run_info(bag)
         cfg, cfg_note = _run_config(info, o.config_path, bag)

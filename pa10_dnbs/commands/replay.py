@@ -8,6 +8,7 @@ from pathlib import Path
 from ..bag.analysis import bag_joint_names, run_info
 from ..bag.bag_reader import Bag, BagError
 from ..config import ConfigError, default_config_path
+from ..output_lock import lock_input, release_output
 from .options import ReplayOptions
 from ..live.options import check_live_options
 from ..live.schemas import live_channels
@@ -37,12 +38,18 @@ def run_replay(options: ReplayOptions) -> int:
     from ..ros.player_node import PlayerNode, PlayOptions
     from ..ros.runtime import exit_process, run_node  # the player leaves as a node does: no rclpy teardown
 
+    lock_input(o.bag_path, "bag")  # a bag another run still records (or replaces) is refused; readers share it
     with Bag(o.bag_path) as bag:
         if o.topics:
             unknown = [t for t in o.topics if t not in bag.topics]
             if unknown:
                 raise BagError(f"{bag.path}: no such topic in the bag: {', '.join(unknown)} "
                                f"(it has {', '.join(sorted(bag.topics))})")
+            unplayable = unplayable_topics(bag, o.topics)
+            if len(unplayable) == len(set(o.topics)):
+                why = "; ".join(f"{t} ({why})" for t, why in unplayable.items())
+                raise ConfigError(f"--topics: nothing to play: {why}; the player publishes only the topics whose "
+                                  "Python message package is installed")
         duration_s = (bag.end_ns - bag.start_ns) / 1e9
         if o.start_offset_s > duration_s:
             raise ConfigError(f"--start-offset: {o.start_offset_s} s is past the bag's end ({duration_s:.3f} s)")
@@ -50,7 +57,9 @@ def run_replay(options: ReplayOptions) -> int:
                           clock_hz=o.clock_hz, wait_for_subscribers_s=o.wait_for_subscribers_s, queue_depth=o.queue_depth,
                           namespace=namespace)
         if o.live_port is None:
-            exit_process(run_node(functools.partial(PlayerNode, bag, opt), args=[]))
+            code = run_node(functools.partial(PlayerNode, bag, opt), args=[])
+            release_output(o.bag_path)
+            exit_process(code)
         cfg = _live_config(bag, o.config_path)
         arm = find_arm(bag.topics) or ArmTopics()
         joints = bag_joint_names(bag, arm)
@@ -66,7 +75,22 @@ def run_replay(options: ReplayOptions) -> int:
             code = run_node(functools.partial(PlayerNode, bag, opt, live=view), args=[])
         finally:
             server.stop()
+        release_output(o.bag_path)
         exit_process(code)
+
+
+def unplayable_topics(bag: Bag, topics) -> dict[str, str]:
+    """The topics of ``topics`` the player cannot publish, with why: their message type has no Python package
+    here (tf2_msgs: ``/tf``, ``/tf_static``); PlayerNode skips them the same way (ros/msg_types.py)."""
+    from ..ros.msg_types import message_class
+
+    out = {}
+    for t in dict.fromkeys(topics):
+        try:
+            message_class(bag.topics[t].msgtype)
+        except LookupError as exc:
+            out[t] = str(exc)
+    return out
 
 
 def _live_config(bag: Bag, config_path: Path | None) -> dict:

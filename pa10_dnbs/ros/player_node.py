@@ -73,7 +73,7 @@ class PlayerNode(Node):
                                                  from_bag_qos(bag.qos_profiles(t), opt.queue_depth))
         self._clock_pub = self.create_publisher(Clock, CLOCK, QoSProfile(depth=10)) if opt.clock_hz > 0 else None
         self.published = 0
-        self.unheard: dict[str, int] = {}  # topic -> messages published while it had no matched subscriber
+        self.unheard: dict[str, int] = {}  # bag topic -> messages published while it had no matched subscriber
         self._heard_at: dict[str, float] = {}  # topic -> when a subscriber was last seen [s, perf_counter]
         self.exit_code = 0
         self.interrupted = False   # a Ctrl-C (or SIGTERM) before the bag was played through
@@ -191,12 +191,14 @@ class PlayerNode(Node):
             total = sum(self.bag.topics[t].count for t in self.pubs)
             print(f"pa10-dnbs replay: interrupted: played {self.published} of the bag's {total} messages on the "
                   "played topics", file=sys.stderr, flush=True)
-        if self.unheard:
-            print(unheard_warning(self.unheard, self.published), file=sys.stderr, flush=True)
+        if self.unheard:  # named as published (--namespace moves the arm's topics), not as recorded
+            published_as = {self.out_name[t]: n for t, n in self.unheard.items()}
+            print(unheard_warning(published_as, self.published), file=sys.stderr, flush=True)
 
 
 def unheard_warning(unheard: dict[str, int], published: int) -> str:
-    """The player's line when messages went out with nobody subscribed: nothing received them."""
+    """The player's line when messages went out with nobody subscribed: nothing received them (``unheard``:
+    published topic name -> such messages)."""
     n = sum(unheard.values())
     return (f"WARNING replay: {n} of {published} messages went out with no subscriber matched on "
             f"{', '.join(sorted(unheard))}: nothing received them; start the subscribers first and use "
