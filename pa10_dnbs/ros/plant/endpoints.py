@@ -21,13 +21,13 @@ import struct
 import time
 
 import numpy as np
-from rclpy.duration import Duration
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 
 from ...faults.faulty_link import faulty_link
 from ...loop.endpoint_match import Need
+from ..acked import wait_acked
 from ...wire import joint_state_cdr
 from ...wire.clock_schedule import ClockSchedule
 from ...settings import Settings
@@ -169,21 +169,20 @@ class PlantEndpoints:
                              "min_joint_states_subscribers", recorders)))
         return out
 
-    def flush(self, timeout_s: float = 2.0) -> bool:
-        """Wait (at most ``timeout_s`` in all) until every subscriber acknowledged what the reliable publishers
-        sent, so the observer gets the last states before the plant's writers go away; True when all did."""
-        end = time.monotonic() + timeout_s
-        ok = True
-        for pub in [self._js_pub] + ([self._clock_pub] if self._clock_pub else []) + self._state_pubs:
-            left = max(0.0, end - time.monotonic())
-            ok = pub.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9))) and ok
-        return ok
+    def flush(self, timeout_s: float = 2.0, stop=None) -> bool:
+        """Wait (at most ``timeout_s`` in all, until ``stop`` is done) until every subscriber acknowledged what the
+        reliable publishers sent, so the observer gets the last states before the plant's writers go away; True
+        when all did."""
+        return wait_acked([self._js_pub] + ([self._clock_pub] if self._clock_pub else []) + self._state_pubs,
+                          timeout_s, stop)
 
-    def close(self) -> None:
+    def close(self, stop=None) -> None:
+        """Close the links and wait (2 s at most; not once ``stop`` is done: a stopped graph's subscribers are
+        gone) for the last messages' acknowledgements."""
         for link in self.state_links:
             if link is not None:
                 link.close()
-        self.flush()
+        self.flush(stop=stop)
         self._wait_set.destroy()
 
 

@@ -155,6 +155,7 @@ class PlantNode(Node):
         self.resent_steps: list[list[int]] = [[] for _ in range(n)]  # lockstep: the steps re-sent, per joint
         self.schedule = None  # realtime: the TickSchedule
         self.finished = False
+        self._stop = None   # the stop Future, once loop() runs
         self._observed = None  # (k, q, qd, applied) of a state whose joint_states and /clock are still to go out
         self.exit_code = 0  # a signal before the end is a clean stop; "completed" in the stats says if it ran out
         self.wall_start = self.wall_end = math.nan
@@ -268,6 +269,7 @@ class PlantNode(Node):
         return False
 
     def loop(self, executor, stop: Future) -> None:
+        self._stop = stop   # close() waits for no acknowledgement once the graph is being stopped
         if not self.wait_for_graph(executor, stop):
             return
         print("RUNNING plant", flush=True)
@@ -276,7 +278,7 @@ class PlantNode(Node):
             run_lockstep(self, executor, stop)
         else:
             run_realtime(self, executor, stop)
-        if self.finished and not stop.done() and not self.endpoints.flush(FINAL_FLUSH_S):
+        if self.finished and not stop.done() and not self.endpoints.flush(FINAL_FLUSH_S, stop) and not stop.done():
             # the observer lags on a loaded machine: give it the run's last states before the writers go
             self.get_logger().warning(f"not every subscriber acknowledged the last states within {FINAL_FLUSH_S:g} s")
 
@@ -285,7 +287,7 @@ class PlantNode(Node):
         return plant_stats(self)
 
     def close(self) -> None:
-        self.endpoints.close()
+        self.endpoints.close(self._stop)
         path = self.p["stats_file"]
         if path:
             write_json(path, self.stats())

@@ -16,13 +16,13 @@ import struct
 import time
 
 import numpy as np
-from rclpy.duration import Duration
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
 from ...loop.endpoint_match import Need
+from ..acked import wait_acked
 from ...wire import joint_state_cdr
 from ...wire.clock_schedule import ClockSchedule
 from ...wire.robot_interface import JointMatcher, RobotCommand
@@ -143,14 +143,11 @@ class StandardPlantEndpoints:
                             f"the graph's nodes (clock_subscribers:={clock_subscribers})"))
         return out
 
-    def flush(self, timeout_s: float = 2.0) -> bool:
-        end = time.monotonic() + timeout_s
-        ok = True
-        for pub in [self._state_pub] + ([self._clock_pub] if self._clock_pub else []):
-            left = max(0.0, end - time.monotonic())
-            ok = pub.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9))) and ok
-        return ok
+    def flush(self, timeout_s: float = 2.0, stop=None) -> bool:
+        """As :meth:`PlantEndpoints.flush`: the standard interface's state and clock publishers."""
+        return wait_acked([self._state_pub] + ([self._clock_pub] if self._clock_pub else []), timeout_s, stop)
 
-    def close(self) -> None:
-        self.flush()
+    def close(self, stop=None) -> None:
+        """As :meth:`PlantEndpoints.close`."""
+        self.flush(stop=stop)
         self._wait_set.destroy()
