@@ -53,16 +53,21 @@ def test_readers_share_a_path_and_a_writer_is_refused_while_one_holds_it(tmp_pat
     release_output(path)
 
 
-def _refused_writer(path: Path) -> None:
-    """A writer in another process tries ``path``: raises the OutputInUseError it got."""
-    code = ("import sys; from pathlib import Path; from pa10_dnbs.output_lock import OutputInUseError, lock_output\n"
-            f"try:\n    lock_output(Path({str(path)!r}), 'bag')\nexcept OutputInUseError as e:\n"
+def _try_in_another_process(call: str, path: Path) -> None:
+    """``call`` (lock_output or lock_input) of ``path`` in another process: raises the OutputInUseError it got."""
+    code = (f"import sys; from pathlib import Path; from pa10_dnbs.output_lock import OutputInUseError, {call}\n"
+            f"try:\n    {call}(Path({str(path)!r}), 'bag')\nexcept OutputInUseError as e:\n"
             "    print(e); sys.exit(3)\n")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
                        env={**os.environ, "PYTHONPATH": str(REPO)})
     if r.returncode == 3:
         raise OutputInUseError(r.stdout.strip())
     assert r.returncode == 0, r.stderr
+
+
+def _refused_writer(path: Path) -> None:
+    """A writer in another process tries ``path``."""
+    _try_in_another_process("lock_output", path)
 
 
 def test_a_reader_is_refused_while_a_writer_holds_the_path(tmp_path):
@@ -98,13 +103,8 @@ def test_a_shared_lock_is_made_exclusive_only_when_no_other_reader_holds_it(tmp_
 
 
 def _refused_reader(path: Path) -> None:
-    code = ("import sys; from pathlib import Path; from pa10_dnbs.output_lock import OutputInUseError, lock_input\n"
-            f"try:\n    lock_input(Path({str(path)!r}))\nexcept OutputInUseError as e:\n    print(e); sys.exit(3)\n")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60,
-                       env={**os.environ, "PYTHONPATH": str(REPO)})
-    if r.returncode == 3:
-        raise OutputInUseError(r.stdout.strip())
-    assert r.returncode == 0, r.stderr
+    """A reader in another process tries ``path``."""
+    _try_in_another_process("lock_input", path)
 
 
 def test_analyse_of_a_bag_another_run_reads_runs(tmp_path):

@@ -308,6 +308,16 @@ def test_a_second_simulate_into_a_running_ones_out_is_refused_and_the_first_is_i
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temporary, no lock left beside it
 
 
+def _ctrl_c(proc: subprocess.Popen) -> None:
+    """Stop ``proc`` as a Ctrl-C does, and wait for it (SIGKILL after 60 s)."""
+    proc.send_signal(2)
+    try:
+        proc.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate(timeout=60)
+
+
 def test_a_second_tune_into_one_out_at_once_is_refused(tmp_path):
     out = tmp_path / "t"
     first = _cli_process("tune", "--controller", "pid", "--trials", "1", "--scenarios", "nominal", "--seeds", "1",
@@ -318,12 +328,7 @@ def test_a_second_tune_into_one_out_at_once_is_refused(tmp_path):
                     "--held-out-seeds", "0", "--duration", "0.2", "--jobs", "1", "--out", out)
         _assert_one_line(r.returncode, r.stdout, r.stderr, "in use by another run")
     finally:
-        first.send_signal(2)  # Ctrl-C: the tune stops, keeps its storage and drops its lock (and its lock file)
-        try:
-            first.communicate(timeout=60)
-        except subprocess.TimeoutExpired:
-            first.kill()
-            first.communicate(timeout=60)
+        _ctrl_c(first)  # the tune stops, keeps its storage and drops its lock (and its lock file)
     assert not _leftovers(str(tmp_path))
     assert not _lock_file(str(out.resolve())).exists()
 
@@ -344,12 +349,7 @@ def test_a_second_tune_of_one_study_in_a_shared_storage_at_once_is_refused(tmp_p
                                                             f"another run (pid {first.pid})")
         assert not (tmp_path / "b").exists()
     finally:
-        first.send_signal(2)
-        try:
-            first.communicate(timeout=60)
-        except subprocess.TimeoutExpired:
-            first.kill()
-            first.communicate(timeout=60)
+        _ctrl_c(first)
     assert not _leftovers(str(tmp_path))
 
 
