@@ -18,7 +18,7 @@ def test_a_change_is_checked_again_and_names_the_key(cfg):
         replace_in(cfg, "plant.payload_kg", -1.0)
     with pytest.raises(ConfigError, match=r"^pid\.kp: expected 7 values \(one per joint of the arm\), got 2$"):
         replace_in(cfg, "pid.kp", (1.0, 2.0))
-    with pytest.raises(ConfigError, match=r"^faults\.effort\.drop_fraction\[2\]: must be <= 1, got 2\.0$"):
+    with pytest.raises(ConfigError, match=r"^faults\.effort\.drop_fraction\[2\]: must be < 1, got 2\.0$"):
         replace_in(cfg, "faults.effort.drop_fraction", (0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0))
     with pytest.raises(ConfigError, match=r"^dnbs\.remedies\.projection\.weight_bound: must be > 0"):
         replace_in(cfg, "dnbs.remedies.projection.weight_bound", 0.0)
