@@ -287,14 +287,14 @@ def test_study_ctrl_c_mid_run_keeps_the_completed_runs_marked_partial_and_a_reru
     assert (out / "study.partial.json").read_text() == json.dumps(data, indent=2) + "\n"   # untouched
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["Ctrl-C", "SIGTERM"])
-@pytest.mark.parametrize("command", ["study", "simulate"])
+@pytest.mark.parametrize("command, sig", [("study", signal.SIGINT), ("simulate", signal.SIGTERM)],
+                         ids=["study Ctrl-C", "simulate SIGTERM"])   # one path in both (the commands' and signals')
 def test_a_ctrl_c_while_the_outputs_are_written_finishes_them_and_says_so(tmp_path, command, sig):
     """Every run is done: a Ctrl-C while the outputs are written (figures, tables) let them be finished, then
     says so and exits 130 (it threw every completed run away, where a Ctrl-C a moment earlier kept them). A
     SIGTERM the same (its default action left the hidden .partial folder behind for good)."""
     args = {"study": ("study", "--scenarios", "nominal", "--controllers", "pid", "--duration", 0.5, "--jobs", 1),
-            "simulate": ("simulate", "--controller", "all", "--duration", 0.3)}[command]
+            "simulate": ("simulate", "--controller", "both", "--duration", 0.3)}[command]
     c = Command(*args, "--no-progress", "--out", tmp_path / "s")
     try:
         wait_until(lambda: any(tmp_path.glob(".s.partial-*")), "its outputs being written", proc=c)
