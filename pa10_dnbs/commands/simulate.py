@@ -9,11 +9,11 @@ from .options import SimulateOptions
 from ..config import ConfigError, default_config_path
 from ..core.joint_trajectory import TrajectoryError
 from ..core.checkpoint import load_joint_checkpoints, network_degrees, save_checkpoint
-from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, deferred, on_second_sigint, outputs_written, say
+from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, on_second_sigint, outputs_written, say
 from ..number_text import interval
 from ..report.markdown import report_markdown
 from ..report.metrics_file import metrics_dict, metrics_settings
-from ..report.outputs import atomic_output_dir, check_output_dir, write_report, write_run
+from ..report.outputs import atomic_output_dir, check_output_dir, finished_output_dir, write_report, write_run
 from ..report.partial import partial_banner, write_partial_mark
 from ..run_settings import build_settings
 from ..run_size import check_run_size, say_note
@@ -101,17 +101,13 @@ def run_simulate(options: SimulateOptions) -> int:
     if tuple(measured["window_s"]) != tuple(settings.simulation.window_s):
         notes.append(f"run shorter than the configured window {interval(settings.simulation.window_s)} s: "
                      f"metrics over the second half instead")
-    with deferred():   # every run is done: a Ctrl-C now lets the outputs be finished (seconds), then says so
-        with atomic_output_dir(o.out, o.force) as tmp:
-            on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; nothing written to {o.out}",
-                             cleanup=lambda: shutil.rmtree(tmp, ignore_errors=True))
-            write_report(tmp, runs, metrics, title=f"{the_arm.description}: closed-loop run", notes=notes,
-                         chain=the_arm.chain, figures=o.figures)
-            for run in runs:
-                if run.controller == "dnbs":
-                    _save_checkpoints(tmp / "checkpoints" if len(runs) == 1 else tmp / "dnbs" / "checkpoints",
-                                      run.extra["controllers"], n_steps - 1, the_arm.joint_names)
-        outputs_written(f"pa10-dnbs: interrupted as it finished: {o.out} is written whole ({o.out}/report.md)")
+    with finished_output_dir(o.out, o.force, "report.md") as tmp:   # a Ctrl-C now: finished first, then said
+        write_report(tmp, runs, metrics, title=f"{the_arm.description}: closed-loop run", notes=notes,
+                     chain=the_arm.chain, figures=o.figures)
+        for run in runs:
+            if run.controller == "dnbs":
+                _save_checkpoints(tmp / "checkpoints" if len(runs) == 1 else tmp / "dnbs" / "checkpoints",
+                                  run.extra["controllers"], n_steps - 1, the_arm.joint_names)
     print(f"wrote {o.out}/report.md")
     ok = all(m["all_finite"] and m["torques_within_limits"] for m in metrics)
     return 0 if ok else 1

@@ -11,8 +11,8 @@ from ..accel.choice import resolve_kernel
 from .options import StudyOptions
 from ..config import ConfigError, default_config_path
 from ..json_text import json_text
-from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, deferred, on_second_sigint, outputs_written, say
-from ..report.outputs import atomic_output_dir, check_output_dir
+from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, on_second_sigint, outputs_written, say
+from ..report.outputs import atomic_output_dir, check_output_dir, finished_output_dir
 from ..report.progress import ProgressBar
 from ..run_settings import build_settings
 from ..run_steps import run_steps
@@ -75,16 +75,11 @@ def run_study_command(options: StudyOptions) -> int:
         bar.close()
         return _keep_partial(o.out, o.force, done, list(product(scen, ctrl, range(o.seeds))), command, head)
     bar.close()
-    with deferred():   # every run is done: a Ctrl-C now lets the outputs be finished (seconds), then says so
-        with atomic_output_dir(o.out, o.force) as tmp:
-            on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; nothing written to {o.out}",
-                             cleanup=lambda: shutil.rmtree(tmp, ignore_errors=True))
-            (tmp / "study.json").write_text(json_text({**head, "rows": rows}))
-            (tmp / "study.md").write_text(study_markdown(rows, command, o.duration_s,
-                                                         {k: v.description for k, v in SCENARIOS.items()},
-                                                         infeasible))
-            study_figure(rows, tmp / "study.png")
-        outputs_written(f"pa10-dnbs: interrupted as it finished: {o.out} is written whole ({o.out}/study.md)")
+    with finished_output_dir(o.out, o.force, "study.md") as tmp:   # a Ctrl-C now: finished first, then said
+        (tmp / "study.json").write_text(json_text({**head, "rows": rows}))
+        (tmp / "study.md").write_text(study_markdown(rows, command, o.duration_s,
+                                                     {k: v.description for k, v in SCENARIOS.items()}, infeasible))
+        study_figure(rows, tmp / "study.png")
     diverged = sum(r["diverged"] for r in rows)
     print(f"{n} runs, {diverged} diverged"
           + (f"; {len(infeasible)} scenario(s) infeasible on this arm, not run" if infeasible else "")

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import yaml
 
+from ..interrupt import deferred, on_second_sigint, outputs_written
 from ..json_text import json_text
 from ..kinematics.urdf_chain import UrdfChain
 from ..output_lock import lock_output, release_output
@@ -277,6 +278,20 @@ def atomic_output_dir(out: Path, force: bool):
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
     release_output(out)
+
+
+@contextmanager
+def finished_output_dir(out: Path, force: bool, main_file: str):
+    """:func:`atomic_output_dir` for the outputs of a command whose runs are all done: a Ctrl-C (or SIGTERM)
+    meanwhile lets them be finished (seconds), then ends the command with the line that says so; a second one
+    removes the half-written folder and ends at once (pa10_dnbs/interrupt.py). ``main_file``: the file the line
+    names (report.md, study.md)."""
+    with deferred():
+        with atomic_output_dir(out, force) as tmp:
+            on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; nothing written to {out}",
+                             cleanup=lambda: shutil.rmtree(tmp, ignore_errors=True))
+            yield tmp
+        outputs_written(f"pa10-dnbs: interrupted as it finished: {out} is written whole ({out}/{main_file})")
 
 
 def _remove_empty(folders: list[Path]) -> None:
