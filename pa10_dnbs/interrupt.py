@@ -38,20 +38,14 @@ _second_line = "pa10-dnbs: interrupted again: stopped at once"
 _state = {"deferred": 0, "requested": False, "raised": False, "cleanup": None}
 
 
-def ignore_sigint() -> None:
-    """Ctrl-C is for the parent, which stops the workers itself."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
-
-
 def pool_worker_start(parent_pid: int) -> None:
-    """A pool worker's initializer: it ignores Ctrl-C (:func:`ignore_sigint`) and dies with its parent (Linux's
-    PR_SET_PDEATHSIG: SIGKILL once the parent is gone), so a command ended by a plain ``kill`` (SIGTERM, no
-    handler) or SIGKILL leaves no worker behind; ``parent_pid``: the parent's, to catch a parent that died
-    before the request."""
-    ignore_sigint()
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)   # the parent stops a worker with SIGTERM: not its handler's
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})   # held back while it was forked
+    """A pool worker's initializer: it ignores Ctrl-C (the parent stops the workers itself), ends on SIGTERM (how
+    the parent stops one; not the handler it inherited) and dies with its parent (Linux's PR_SET_PDEATHSIG: SIGKILL
+    once the parent is gone), so a command ended by any signal leaves no worker behind; ``parent_pid``: the
+    parent's, to catch a parent that died before the request."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, set(STOP_SIGNALS))   # held back while it was forked
     try:
         import ctypes
 

@@ -10,7 +10,7 @@ def _settle(v) -> str:
 
 def _settled_after(v) -> str:
     """'after 0.190 s', or 'never' (a run that did not settle)."""
-    return "never" if v is None else f"after {v:.3f} s"
+    return "never" if v is None else f"after {_settle(v)} s"
 
 
 def metrics_table(metrics: list[dict]) -> str:

@@ -207,11 +207,16 @@ def check_tune_dir(out: Path, study_name: str, identity: dict, refusal) -> None:
                                     "give another --out for this tune")
 
 
+def _read_only(db: Path):
+    """The SQLite database ``db`` opened read only (a context manager that closes it)."""
+    return contextlib.closing(sqlite3.connect(f"{Path(db).resolve().as_uri()}?mode=ro", uri=True))
+
+
 def _not_optuna(db: Path) -> str | None:
     """Why the file ``db`` is no Optuna SQLite storage (not SQLite; tables of its own), or None: an Optuna storage,
     or an empty file or database (a storage not yet made, which the tune makes)."""
     try:
-        with contextlib.closing(sqlite3.connect(f"{Path(db).resolve().as_uri()}?mode=ro", uri=True)) as con:
+        with _read_only(db) as con:
             tables = {row[0] for row in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
     except sqlite3.Error as exc:
         return f"not an SQLite database: {exc}"
@@ -223,7 +228,7 @@ def _not_optuna(db: Path) -> str | None:
 def _sqlite_study_names(db: Path) -> list[str]:
     """The Optuna study names in the SQLite storage ``db`` (read only; none if it is not one)."""
     try:
-        with contextlib.closing(sqlite3.connect(f"{Path(db).resolve().as_uri()}?mode=ro", uri=True)) as con:
+        with _read_only(db) as con:
             return [row[0] for row in con.execute("SELECT study_name FROM studies")]
     except sqlite3.Error:
         return []
