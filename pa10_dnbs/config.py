@@ -14,6 +14,7 @@ from typing import Any
 
 from .config_error import ConfigError  # re-exported: the CLI and the nodes catch it from here
 from .config_yaml import read_config_yaml
+from .file_path import PathProblem, file_or_folder
 
 
 @dataclass(frozen=True)
@@ -242,16 +243,15 @@ def validate(raw: Any, n_joints: int) -> dict:
 
 
 def _config_file(path: Path) -> Path:
-    """``path`` resolved, a file: ConfigError naming it when it is missing, a folder, or a name the OS refuses (too
-    long, a loop of symbolic links)."""
+    """``path`` resolved, a regular file: ConfigError naming it otherwise (missing, a folder, a pipe or a device, a
+    name the OS refuses: file_path.file_or_folder)."""
     try:
-        resolved = path.resolve()
-        if resolved.is_file():
-            return resolved
-        there = resolved.is_dir()
-    except (OSError, RuntimeError) as exc:   # ENAMETOOLONG; Path.resolve's "Symlink loop" (RuntimeError)
-        raise ConfigError(f"config file {path}: {getattr(exc, 'strerror', None) or exc}") from None
-    raise ConfigError(f"config file {path}: a folder, not a file" if there else f"config file not found: {resolved}")
+        resolved, is_dir = file_or_folder(path)
+    except PathProblem as exc:
+        raise ConfigError(f"config file not found: {exc.path}" if exc.missing else f"config file {exc}") from None
+    if is_dir:
+        raise ConfigError(f"config file {path}: a folder, not a file")
+    return resolved
 
 
 def _read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict:

@@ -6,6 +6,7 @@ a ``--scheduler`` that is no Dask scheduler's address (run as a process: no nois
 """
 import glob
 import math
+import os
 import socket
 import subprocess
 import sys
@@ -465,12 +466,17 @@ def test_init_from_the_output_of_a_run_of_several_controllers_finds_its_dnbs_che
     assert "DNBS warm-started from the checkpoints in" in report and str(run) in report
 
 
-@pytest.mark.parametrize("kind, words", [("long", "File name too long"), ("loop", "Symlink loop"),
-                                         ("folder", "a folder, not a file")])
+@pytest.mark.parametrize("kind, words", [("long", "File name too long"), ("loop", "a loop of symbolic links"),
+                                         ("folder", "a folder, not a file"),
+                                         ("fifo", "not a regular file (a pipe or a device)")])
 def test_a_config_path_the_os_refuses_is_one_line(tmp_path, kind, words):
     """A name too long for the OS (it was exit 1, the flag unnamed), a loop of symbolic links (a RuntimeError
-    traceback) or a folder: one line naming the file, exit 2, for --config and for a config's extends."""
-    if kind == "long":
+    traceback), a folder, or a pipe (bash's ``--config <(...)``: was "config file not found: /proc/N/fd/pipe:[M]"):
+    one line naming the file, exit 2, for --config and for a config's extends; said as --arm says it."""
+    if kind == "fifo":
+        bad = tmp_path / "fifo"
+        os.mkfifo(bad)
+    elif kind == "long":
         bad = tmp_path / ("x" * 300 + ".yaml")
     elif kind == "loop":
         (tmp_path / "a").symlink_to(tmp_path / "b")

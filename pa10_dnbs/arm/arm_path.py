@@ -7,18 +7,15 @@ an arm file (YAML) or a URDF. A URDF is known by its XML root ``<robot>``, whate
 """
 from __future__ import annotations
 
-import errno
-import os
-import stat
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from ..config_error import ConfigError
+from ..file_path import PathProblem, file_or_folder, shown
 from ..paths import share_path
 from .package_uri import is_package_uri, resolve_package_uri
 
 ARM_YAML = "arm.yaml"      # the arm file of an arm folder
-SHOWN_PATH_CHARS = 200     # a longer path is shown shortened in a message (its head and tail, and its length)
 
 
 class ArmError(ConfigError):
@@ -31,39 +28,13 @@ def preset_names() -> list[str]:
     return sorted(p.parent.name for p in root.glob(f"*/{ARM_YAML}"))
 
 
-def shown(path) -> str:
-    """``path`` for a message: as it is, or its head and tail and its length when longer than SHOWN_PATH_CHARS."""
-    text = str(path)
-    if len(text) <= SHOWN_PATH_CHARS:
-        return text
-    return f"{text[:120]}...{text[-60:]} ({len(text)} characters)"
-
-
 def existing(path, who: str) -> tuple[Path, bool]:
-    """(``path`` resolved, whether it is a folder), when it is a file or a folder; else ArmError ``"<who>: ..."``:
-    file not found, the OS's reason (a name too long, a loop of symbolic links, no permission, a NUL byte), or
-    not a regular file (a pipe, a device: nothing to read twice or hand to the simulator)."""
-    path = Path(path)
+    """(``path`` resolved, whether it is a folder), when it is a file or a folder; else ArmError ``"<who>: ..."``
+    (file_path.file_or_folder: not found, the OS's reason, not a regular file)."""
     try:
-        mode = os.stat(path).st_mode   # the kernel follows the links, /dev/fd/N too
-    except (FileNotFoundError, NotADirectoryError):
-        raise ArmError(f"{who}: file not found: {shown(_absolute(path))}") from None
-    except ValueError:
-        raise ArmError(f"{who}: {shown(path)!r}: a path cannot hold a NUL byte") from None
-    except OSError as exc:   # ENAMETOOLONG, ELOOP, EACCES
-        why = "a loop of symbolic links" if exc.errno == errno.ELOOP else (exc.strerror or str(exc))
-        raise ArmError(f"{who}: {shown(_absolute(path))}: {why}") from None
-    if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
-        raise ArmError(f"{who}: {shown(path)}: not a regular file (a pipe or a device): give the path of a file")
-    return _absolute(path), stat.S_ISDIR(mode)
-
-
-def _absolute(path: Path) -> Path:
-    """``path`` resolved (its links followed) where it can be, else made absolute as it is."""
-    try:
-        return path.resolve()
-    except (RuntimeError, OSError):   # a loop of symbolic links (RuntimeError before Python 3.13)
-        return Path(os.path.abspath(path))
+        return file_or_folder(path)
+    except PathProblem as exc:
+        raise ArmError(f"{who}: {exc}") from None
 
 
 def existing_file(path, who: str) -> Path:
