@@ -19,6 +19,7 @@ import hashlib
 import os
 import tempfile
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 from .refused import Refused
@@ -169,6 +170,29 @@ def release_all(keep: set[str] = frozenset()) -> None:
     for key in list(_held):
         if key not in keep:
             release_key(key)
+
+
+@contextmanager
+def waiting_for(key: str, in_use: str, wait_s: float, between=None):
+    """Hold the lock named ``key`` (not held by this process yet) while the block runs, waiting up to ``wait_s`` [s]
+    for another run to drop it: for a step of a few seconds two runs must not take at once (creating one
+    storage's tables). OutputInUseError with ``in_use`` (``{pid}``: the holder's) past the wait; ``between``:
+    called between two tries (e.g. interrupt.check, so that a Ctrl-C ends the wait)."""
+    give_up = time.monotonic() + wait_s
+    while True:
+        try:
+            lock_key(key, in_use)
+            break
+        except OutputInUseError:
+            if time.monotonic() >= give_up:
+                raise
+            if between is not None:
+                between()
+            time.sleep(0.02)
+    try:
+        yield
+    finally:
+        release_key(key)
 
 
 atexit.register(release_all)

@@ -507,3 +507,31 @@ def test_a_file_name_that_is_not_utf8_is_refused_before_the_run(tmp_path, flag):
     _assert_one_line(r.returncode, r.stdout, r.stderr, f"argument {flag}: ")
     assert "not valid UTF-8" in r.stderr and "caf\\xe9" in r.stderr, r.stderr
     _untouched(tmp_path, before)
+
+
+OPEN_STORAGES = """
+import sys, time
+from pa10_dnbs.tune.tuner import open_storage
+folder, start = sys.argv[1], float(sys.argv[2])
+for i in range(8):   # eight new storages, both processes opening each at the same instant
+    while time.time() < start + 0.5 * i:
+        pass
+    try:
+        open_storage(f"sqlite:///{folder}/s{i}.db")
+        print("ok")
+    except Exception as exc:
+        print("refused:", str(exc).splitlines()[0])
+"""
+
+
+def test_two_tunes_opening_one_new_storage_at_once_both_open_it(tmp_path):
+    """Two tunes (two studies) given one new --storage created its tables twice at once: one was refused with
+    "storage: cannot open ...: (sqlite3.OperationalError) table studies already exists" or a UNIQUE constraint of
+    alembic_version (4 of 10 tries). One opens it at a time now; each of 8 storages opens in both processes."""
+    start = time.time() + 5.0   # both past their imports
+    procs = [subprocess.Popen([sys.executable, "-c", OPEN_STORAGES, str(tmp_path), repr(start)], text=True,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE) for _ in range(2)]
+    outs = [p.communicate(timeout=120) for p in procs]
+    for out, err in outs:
+        assert out.split("\n")[:-1] == ["ok"] * 8, out + err
+    assert not [f for f in _lock_file("x").parent.glob("*.lock") if str(tmp_path) in f.read_text()]  # none left

@@ -16,6 +16,8 @@ import warnings
 from dataclasses import dataclass, field
 
 from ..config_error import ConfigError
+from ..interrupt import check
+from ..output_lock import OutputInUseError, waiting_for
 from ..settings import Settings
 from ..study.executor import Executor
 from .objective import objective, tune_run
@@ -70,14 +72,22 @@ def study_lock_key(url: str, study_name: str) -> str:
     return f"optuna study {study_name} in {url}"
 
 
+STORAGE_OPEN_WAIT_S = 60.0   # how long a tune waits for another to finish opening the same storage [s]
+
+
 def open_storage(url: str):
     """An Optuna RDB storage at ``url`` (sqlite:///file.db, postgresql://..., ...); ConfigError if it does not
-    open."""
+    open. Two tunes opening one new storage at once would both create its tables (sqlite: "table studies already
+    exists", 4 of 10 tries): one opens it at a time, the other waits (a lock named by the URL as given)."""
     import optuna
 
     quiet_optuna()
     try:
-        return optuna.storages.RDBStorage(url)
+        with waiting_for(f"optuna storage {url}", f"--storage: {url} is being opened by another run (pid {{pid}}) "
+                         f"for over {STORAGE_OPEN_WAIT_S:g} s", STORAGE_OPEN_WAIT_S, between=check):
+            return optuna.storages.RDBStorage(url)
+    except OutputInUseError:
+        raise
     except Exception as exc:  # sqlalchemy's errors for bad URLs, missing drivers, unreachable servers
         text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise ConfigError(f"storage: cannot open {url}: {text}", setting="storage") from None
