@@ -40,11 +40,17 @@ def _every_remedy(cfg):
     return cfg
 
 
+def _same_bits(a, b) -> bool:
+    """Equal values, NaN where NaN, and the same sign bits (array_equal takes -0.0 for +0.0; a checkpoint does not)."""
+    a, b = np.asarray(a), np.asarray(b)
+    return np.array_equal(a, b, equal_nan=True) and np.array_equal(np.signbit(a), np.signbit(b))
+
+
 def _same_state(a, b) -> bool:
-    return (all(np.array_equal(getattr(a.ekf, f), getattr(b.ekf, f)) for f in ("w", "P", "last_hph"))
-            and np.array_equal(a.alpha, b.alpha) and np.array_equal(a.torque_unsaturated, b.torque_unsaturated)
+    return (all(_same_bits(getattr(a.ekf, f), getattr(b.ekf, f)) for f in ("w", "P", "last_hph"))
+            and _same_bits(a.alpha, b.alpha) and _same_bits(a.torque_unsaturated, b.torque_unsaturated)
             and a.steps == b.steps
-            and all(np.array_equal(a.ekf_resets[k], b.ekf_resets[k]) for k in ("alpha", "torque")))
+            and all(_same_bits(a.ekf_resets[k], b.ekf_resets[k]) for k in ("alpha", "torque")))
 
 
 def test_a_closed_loop_on_the_kernel_is_the_numpy_loop_bit_for_bit(cfg):
@@ -56,7 +62,7 @@ def test_a_closed_loop_on_the_kernel_is_the_numpy_loop_bit_for_bit(cfg):
         assert np.array_equal(getattr(a, field), getattr(b, field)), field
 
 
-@pytest.mark.parametrize("variant", ["default", "every_remedy", "printed_sign", "slope_bound"])
+@pytest.mark.parametrize("variant", ["default", "every_remedy", "printed_sign", "slope_bound", "zero_bound"])
 def test_every_branch_of_the_step_gives_the_same_bits(cfg, variant):
     """Saturation and anti-windup, the learning ramp, the covariance bound, untrusted rows (``active``),
     an EKF reset, and per variant the dead zone, e-modification, projection, eta < 1, another width, or
@@ -68,6 +74,9 @@ def test_every_branch_of_the_step_gives_the_same_bits(cfg, variant):
     if variant == "slope_bound":  # per-weight bounds (2n, W), tight enough to act
         cfg = replace_in(cfg, "dnbs.remedies.slope_bound.enabled", True)
         cfg = replace_in(cfg, "dnbs.remedies.slope_bound.fraction", (0.02,) * 7)
+    if variant == "zero_bound":  # the robust term off: k_a = k_u = 0, every slope bound 0, a clip at +/-0 (a tie)
+        cfg = replace_in(cfg, "dnbs.remedies.slope_bound.enabled", True)
+        cfg = replace_in(cfg, "dnbs.remedies.robust_term.enabled", False)
     cfg = replace_in(cfg, "dnbs.remedies.learning_ramp.ramp_s", 0.3)  # the ramp ends inside the run
     numpy_cfg, c_cfg = _kernels(cfg)
     ref = build_reference(cfg)
@@ -88,15 +97,19 @@ def test_every_branch_of_the_step_gives_the_same_bits(cfg, variant):
                 g.controllers.ekf.P[9, 2, 2] = np.nan
         with np.errstate(invalid="ignore", over="ignore"):
             u, v = ref_bank.step(x1[step], x2[step], ref.sample(step)), c_bank.step(x1[step], x2[step], ref.sample(step))
-        assert np.array_equal(u, v, equal_nan=True), step
+        assert _same_bits(u, v), step
         assert _same_state(ref_bank.controllers, c_bank.controllers), step
         saturated += bool((np.abs(c_bank.controllers.torque_unsaturated) >= limit).any())
     assert c_bank.controllers.ekf_resets["torque"][2] >= 1
     assert ref_bank.bad_states["speed"][1] == c_bank.bad_states["speed"][1] == 30
     assert saturated > 0  # the anti-windup branch was taken
-    if variant == "slope_bound":  # the projection acted: some weight sits on its bound
+    if variant in ("slope_bound", "zero_bound"):  # the projection acted: some weight sits on its bound
         bank = c_bank.controllers
         assert np.any(np.abs(bank.ekf.w) == bank._bounds)
+    if variant == "zero_bound":  # weights held at a bound of 0 are +0.0, in numpy's bank and the kernel's
+        for bank in (ref_bank.controllers, c_bank.controllers):
+            zero = bank._bounds == 0.0
+            assert zero.any() and not np.signbit(bank.ekf.w[zero]).any()
 
 
 def test_a_single_joint_bank_answer_then_learn_and_checkpoints(cfg):

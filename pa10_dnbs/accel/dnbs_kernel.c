@@ -48,9 +48,10 @@ static double psum(const double *a, long n) {
 /* np.add.reduce(row) of a contiguous row: the identity +0.0, then the pairwise sum */
 INLINE double reduce_row(const double *a, long n) { return 0.0 + (n <= 128 ? psum_block(a, n) : psum(a, n)); }
 
-/* np.maximum / np.minimum of two doubles (NaN in either propagates) */
-INLINE double np_max(double a, double b) { return (a >= b || isnan(a)) ? a : b; }
-INLINE double np_min(double a, double b) { return (a <= b || isnan(a)) ? a : b; }
+/* np.maximum / np.minimum of two doubles: NaN in either propagates, and on a tie the second operand, as numpy
+   gives it (np.maximum(-0.0, 0.0) is +0.0: a weight clipped to a bound of 0 is +0.0 in both) */
+INLINE double np_max(double a, double b) { return (a > b || isnan(a)) ? a : b; }
+INLINE double np_min(double a, double b) { return (a < b || isnan(a)) ? a : b; }
 
 /* What the Python side fills in (pa10_dnbs/accel/compiled_dnbs.py, class _Config: same fields, same order). */
 typedef struct {
