@@ -73,7 +73,7 @@ def _run(args) -> dict:
     if callable(edit):
         base = edit(base)
     cfg, dist = scenario_settings(base, scenario, base.simulation.seed)
-    cfg = replace_in(cfg, "simulation.window_s", window)
+    cfg = replace_in(replace_in(cfg, "simulation.duration_s", duration), "simulation.window_s", window)
     run = simulate(cfg, "dnbs", duration, disturbances=dist)
     m = metrics_dict(run, metrics_settings(cfg, duration))
     return {"variant": variant, "scenario": scenario, **{k: m[k] for k in (
