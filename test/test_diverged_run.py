@@ -1,4 +1,5 @@
-"""A run that goes non-finite is a result: metrics say where, the report and its figures are written, exit 1."""
+"""A run that diverges (|e| > 1 rad, or non-finite) is a result: metrics say where and why, the report and its
+figures are written, exit 1; the study and the tuner count the same runs."""
 import json
 from pathlib import Path
 
@@ -6,23 +7,35 @@ import numpy as np
 
 from cli_runner import run_cli
 from pa10_dnbs.config import default_config_path
-from pa10_dnbs.core.metrics import divergence
+from pa10_dnbs.core.metrics import DIVERGED_RAD, divergence, first_non_finite
 
 CONTINUOUS = Path(__file__).parent / "fixtures" / "urdf_intake" / "continuous_joint.urdf"
 
 
-def test_divergence_names_the_first_non_finite_step_and_the_joint_running_away():
+def test_first_non_finite_names_the_step_and_the_joint_running_away():
     q = np.zeros((6, 3))
     qd = np.zeros((6, 3))
     tau = np.zeros((6, 3))
-    assert divergence(q, qd, tau) is None
+    assert first_non_finite(q, qd, tau) is None
     qd[3] = [1.0, -50.0, 2.0]
     q[4, 0] = np.inf
-    assert divergence(q, qd, tau) == {"step": 4, "joint": 1}
+    assert first_non_finite(q, qd, tau) == {"step": 4, "joint": 1}
     tau[2, 2] = np.nan
-    assert divergence(q, qd, tau) == {"step": 2, "joint": 0}
+    assert first_non_finite(q, qd, tau) == {"step": 2, "joint": 0}
     q[0, 2] = np.nan
-    assert divergence(q, None, tau) == {"step": 0, "joint": 2}
+    assert first_non_finite(q, None, tau) == {"step": 0, "joint": 2}
+
+
+def test_divergence_is_an_error_beyond_1_rad_or_a_non_finite_sample_whichever_comes_first():
+    e, q, qd, tau = (np.zeros((8, 3)) for _ in range(4))
+    e[:, 1] = np.linspace(0.0, 0.9, 8)
+    assert divergence(e, q, qd, tau) is None            # 0.9 rad: not diverged
+    e[5, 2] = -DIVERGED_RAD * 1.01
+    assert divergence(e, q, qd, tau) == {"step": 5, "joint": 2, "non_finite": False}
+    qd[5, 0], qd[6, 0] = 3.0, np.inf
+    assert divergence(e, q, qd, tau)["step"] == 5       # the error came first
+    tau[4, 1] = np.nan
+    assert divergence(e, q, qd, tau) == {"step": 4, "joint": 0, "non_finite": True}
 
 
 def test_absurd_gains_diverge_into_a_report_not_a_traceback(tmp_path):
@@ -40,6 +53,7 @@ def test_absurd_gains_diverge_into_a_report_not_a_traceback(tmp_path):
     d = m["diverged"]
     assert d is not None and 0 < d["step"] < 100 and d["joint"] in ("j1", "j2", "j3")
     assert d["time_s"] == d["step"] * m["dt_s"] and not m["all_finite"]
+    assert m["non_finite_from_step"] >= d["step"]   # past 1 rad a step before it overflows, or at that step
     assert m["worst_rms_error_rad"] is None   # undefined, written null: the file is strict JSON
     assert _strict_json(out / "summary.json")["pid"]["worst_rms_error_rad"] is None
     assert "DIVERGED" in r.stdout and f"step {d['step']}" in r.stdout
@@ -49,6 +63,27 @@ def test_absurd_gains_diverge_into_a_report_not_a_traceback(tmp_path):
     for name in ("arm.png", "tracking.png", "errors.png", "startup.png", "torques.png"):
         assert (out / "pid" / name).stat().st_size > 0, name
     assert (out / "errors_compare.png").is_file()
+
+
+def test_a_run_that_swings_past_1_rad_is_diverged_where_the_study_says_so(tmp_path):
+    """A run 1.3 rad off (a PID with zero gains: the PA10 falls under gravity), every value finite: metrics.json
+    said "diverged": null and simulate exited 0, while the study counted the same run diverged (|e| > 1 rad).
+    Now one definition: metrics.json says where and why, the summary line and the report say DIVERGED, exit 1,
+    the figures are whole (nothing non-finite to cut); the study counts it."""
+    cfg = tmp_path / "zero_gains.yaml"
+    cfg.write_text(f"extends: {default_config_path()}\npid:\n  kp: 0.0\n  ki: 0.0\n  kd: 0.0\n")
+    out = tmp_path / "out"
+    r = run_cli("simulate", "--config", cfg, "--controller", "pid", "--duration", "1", "--out", out)
+    assert r.returncode == 1, r.stderr
+    m = _strict_json(out / "metrics.json")
+    d = m["diverged"]
+    assert d["why"] == "|e| > 1 rad" and d["joint"] == "s2" and 0 < d["step"] < 1000, d
+    assert m["all_finite"] and m["non_finite_from_step"] is None and m["worst_max_abs_error_run_rad"] > DIVERGED_RAD
+    assert f"DIVERGED: |e| > 1 rad from step {d['step']}" in r.stdout
+    assert f"**diverged**: |e| > 1 rad from step {d['step']}" in (out / "report.md").read_text()
+    r = run_cli("study", "--config", cfg, "--scenarios", "nominal", "--controllers", "pid", "--seeds", "1",
+                "--duration", "1", "--jobs", "1", "--no-progress", "--out", tmp_path / "study")
+    assert "1 runs, 1 diverged" in r.stdout, r.stdout + r.stderr
 
 
 def _strict_json(path):

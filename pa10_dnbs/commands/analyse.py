@@ -11,7 +11,7 @@ from ..config import ConfigError, default_config_path
 from .options import AnalyseOptions
 from ..number_text import interval
 from ..output_lock import lock_input
-from ..report.metrics_file import DEFAULT_METRICS, metrics_dict, window_settings
+from ..report.metrics_file import DEFAULT_METRICS, diverged_text, metrics_dict, run_ok, window_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..report.progress import ProgressBar
 from ..run_settings import build_settings
@@ -139,9 +139,11 @@ def run_analyse(options: AnalyseOptions) -> int:
           f"{interval(metrics['window_s'])} s "
           f"({rec.n} steps from {bag.path})")
     print(f"wrote {o.out}/report.md")
-    if metrics["all_finite"] and metrics["torques_within_limits"]:
+    if run_ok(metrics):
         return 0
     why = [what for ok, what in ((metrics["all_finite"], "non-finite values"),
-                                 (metrics["torques_within_limits"], "torques beyond the limits")) if not ok]
+                                 (metrics["torques_within_limits"], "torques beyond the limits"),
+                                 (not metrics.get("diverged"), f"a diverged run ({diverged_text(metrics)})"))
+           if not ok]
     print(f"analyse: exit 1: the recorded run holds {' and '.join(why)} ({o.out}/report.md)", file=sys.stderr)
     return 1

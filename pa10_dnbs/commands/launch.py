@@ -11,7 +11,7 @@ import yaml
 
 from ..interrupt import outputs_written
 from ..number_text import interval
-from ..report.metrics_file import metrics_dict
+from ..report.metrics_file import diverged_text, metrics_dict, run_ok
 from ..report.outputs import atomic_output_dir, write_report
 from ..supervisor.fault_flags import plain
 from ..supervisor.fault_report import fault_report
@@ -98,7 +98,9 @@ def run_launch(options: LaunchOptions) -> int:
         print(f"recorded {record} ({size / 1e6:.1f} MB, {size / 1e6 / (n_steps * dt):.2f} MB per simulated second, "
               f"compression {o.bag_compression})")
     print(f"wrote {out}/report.md")
-    return 0 if m["all_finite"] and m["torques_within_limits"] else 1
+    if m.get("diverged"):
+        print(f"DIVERGED: {diverged_text(m)}")
+    return 0 if run_ok(m) else 1
 
 
 def _hard_stop_cleanup(tmp: Path, out: Path) -> str:

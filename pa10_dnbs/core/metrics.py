@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+DIVERGED_RAD = 1.0   # a tracking error |e| above this [rad], or a non-finite sample: the run diverged
+
 
 def window_slice(n_steps: int, dt_s: float, window_s: tuple[float, float]) -> slice:
     """Index range of the samples inside [t0, t1)."""
@@ -82,7 +84,7 @@ def run_metrics(error_rad: np.ndarray, torque_nm: np.ndarray, torque_limit_nm, d
     return out
 
 
-def divergence(position_rad: np.ndarray, velocity_rad_s: np.ndarray | None, torque_nm: np.ndarray) -> dict | None:
+def first_non_finite(position_rad: np.ndarray, velocity_rad_s: np.ndarray | None, torque_nm: np.ndarray) -> dict | None:
     """Where a run went non-finite, or None when every sample is finite.
 
     Inputs of shape (n_steps, n_joints) (``velocity_rad_s`` may be None). Returns ``{"step": k, "joint": j}``:
@@ -102,3 +104,21 @@ def divergence(position_rad: np.ndarray, velocity_rad_s: np.ndarray | None, torq
         return {"step": 0, "joint": int(np.flatnonzero(bad[0])[0])}
     before = np.abs(np.asarray(velocity_rad_s if velocity_rad_s is not None else position_rad, dtype=float)[k - 1])
     return {"step": k, "joint": int(np.argmax(before))}
+
+
+def divergence(error_rad: np.ndarray, position_rad: np.ndarray, velocity_rad_s: np.ndarray | None,
+               torque_nm: np.ndarray) -> dict | None:
+    """Where a run diverged, or None: the first step with |error| > DIVERGED_RAD on some joint, or with a
+    non-finite sample (:func:`first_non_finite`), whichever comes first. Inputs (n_steps, n_joints).
+
+    Returns ``{"step": k, "joint": j, "non_finite": bool}``: j the first joint beyond DIVERGED_RAD at k, or for a
+    non-finite step the joint running away (:func:`first_non_finite`). One definition for every figure that says
+    diverged: metrics.json, the exit codes, the study, the tuner's objective and the arm collection."""
+    gone = first_non_finite(position_rad, velocity_rad_s, torque_nm)
+    with np.errstate(invalid="ignore"):
+        beyond = np.abs(np.asarray(error_rad, dtype=float)) > DIVERGED_RAD   # NaN: False (non-finite, above)
+    rows = np.flatnonzero(beyond.any(axis=1))
+    if rows.size and (gone is None or rows[0] < gone["step"]):
+        k = int(rows[0])
+        return {"step": k, "joint": int(np.flatnonzero(beyond[k])[0]), "non_finite": False}
+    return None if gone is None else dict(gone, non_finite=True)

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import math
 
+from .metrics_file import diverged_text
+
 
 def _settle(v) -> str:
     return "never" if v is None else f"{v:.3f}"
@@ -59,12 +61,13 @@ def _wall_time(wall_s, rtf) -> str:
 
 
 def _diverged(m: dict) -> str:
-    """'; DIVERGED at step k ...' for a run that went non-finite (its figures end there), else ''."""
-    d = m.get("diverged")
-    if not d:
+    """'; **diverged**: ... from step k ...' for a run that diverged (one that went non-finite: its figures end
+    there), else ''."""
+    if not m.get("diverged"):
         return ""
-    return (f"; **diverged**: non-finite from step {d['step']} (t = {d['time_s']:.3f} s), joint {d['joint']} running "
-            f"away (the figures end there; its undefined figures are inf)")
+    return (f"; **diverged**: {diverged_text(m)}"
+            + (" running away (the figures end there; its undefined figures are inf)"
+               if m.get("non_finite_from_step") is not None else ""))
 
 
 def report_markdown(metrics: list[dict], figures: list[tuple[str, str]], title: str, notes: list[str]) -> str:

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.metrics import divergence, joint_metrics, run_metrics
+from ..core.metrics import DIVERGED_RAD, divergence, first_non_finite, joint_metrics, run_metrics
 from ..run_data import RunData
 
 # metrics settings of configs written before the ``metrics`` section existed (bags of earlier runs)
@@ -39,8 +39,10 @@ def metrics_dict(run: RunData, settings: dict, **extra) -> dict:
     """Per-joint figures over the window and over the whole run, plus run-level facts; ``extra`` keys are
     added as they are. ``settings``: :func:`metrics_settings`.
 
-    ``diverged`` is None, or where the run went non-finite: ``{"step", "time_s", "joint"}``
-    (:func:`pa10_dnbs.core.metrics.divergence`); a figure of a diverged joint that the non-finite samples
+    ``diverged`` is None, or where the run diverged: ``{"step", "time_s", "joint", "why"}``, the first step with
+    |e| > DIVERGED_RAD (why ``"|e| > 1 rad"``) or a non-finite sample (why ``"non-finite"``), whichever comes first
+    (:func:`pa10_dnbs.core.metrics.divergence`, the study's and the tuner's definition too). A run that went
+    non-finite (``non_finite_from_step``, its figures end there): a figure of a joint that the non-finite samples
     leave undefined (NaN) is Infinity here, and so is that joint's max |e| over the run, so that the worst
     joint is the diverged one; metrics.json writes every non-finite figure null (``json_text.py``)."""
     duration = run.n_steps * run.dt_s
@@ -51,11 +53,14 @@ def metrics_dict(run: RunData, settings: dict, **extra) -> dict:
     for name, j, w in zip(run.joint_names, joints, whole):
         j["name"] = name
         j.update(w)
-    diverged = divergence(run.position_rad, run.velocity_rad_s, run.torque_nm)
-    if diverged is not None:
+    gone = first_non_finite(run.position_rad, run.velocity_rad_s, run.torque_nm)
+    if gone is not None:
         _unbounded(joints, run)
+    diverged = divergence(run.error_rad, run.position_rad, run.velocity_rad_s, run.torque_nm)
+    if diverged is not None:
         diverged = {"step": diverged["step"], "time_s": diverged["step"] * run.dt_s,
-                    "joint": run.joint_names[diverged["joint"]]}
+                    "joint": run.joint_names[diverged["joint"]],
+                    "why": "non-finite" if diverged["non_finite"] else f"|e| > {DIVERGED_RAD:g} rad"}
     finite = bool(np.all(np.isfinite(run.position_rad)) and np.all(np.isfinite(run.torque_nm)))
     within = bool(np.all(np.abs(run.torque_nm) <= run.torque_limit_nm * (1 + 1e-12)))
     out = {
@@ -74,6 +79,7 @@ def metrics_dict(run: RunData, settings: dict, **extra) -> dict:
         "worst_saturated_fraction_after_s": max(j["saturated_fraction_after_s"] for j in joints),
         "all_finite": finite,
         "diverged": diverged,
+        "non_finite_from_step": None if gone is None else gone["step"],
         "torques_within_limits": within,
         "joints": [{k: j[k] for k in ("name", "rms_error_rad", "max_abs_error_rad", "max_abs_torque_nm",
                                       "torque_limit_nm", "saturated_fraction", "settling_time_s",
@@ -82,6 +88,20 @@ def metrics_dict(run: RunData, settings: dict, **extra) -> dict:
     }
     out.update(extra)
     return out
+
+
+def run_ok(m: dict) -> bool:
+    """A run that neither diverged nor left the torque limits (every value finite): exit code 0, else 1."""
+    return bool(m["all_finite"] and m["torques_within_limits"] and not m.get("diverged"))
+
+
+def diverged_text(m: dict) -> str:
+    """'diverged: non-finite from step k (t = ... s), joint J' or 'diverged: |e| > 1 rad from step k ...', for the
+    summary lines and the report ('' when the run did not diverge)."""
+    d = m.get("diverged")
+    if not d:
+        return ""
+    return f"{d.get('why', 'non-finite')} from step {d['step']} (t = {d['time_s']:.3f} s), joint {d['joint']}"
 
 
 def _unbounded(joints: list[dict], run: RunData) -> None:

@@ -339,9 +339,9 @@ def write_run(directory: Path, run: RunData, metrics: dict, chain: UrdfChain | N
 
 
 def _shown(run: RunData, metrics: dict) -> RunData:
-    """What a run's figures draw: the run itself, or a diverged run up to the step where it went non-finite."""
-    diverged = metrics.get("diverged")
-    return until_step(run, diverged["step"]) if diverged else run
+    """What a run's figures draw: the run itself, or a run that went non-finite up to that step."""
+    step = metrics.get("non_finite_from_step")
+    return until_step(run, step) if step is not None else run
 
 
 def write_report(directory: Path, runs: list[RunData], metrics: list[dict], title: str,

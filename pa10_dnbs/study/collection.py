@@ -19,7 +19,6 @@ import numpy as np
 
 #: example-robot-data's version the benchmark is pinned to (requirements-collection.txt).
 COLLECTION_VERSION = "6.0.0"
-DIVERGED_RAD = 1.0   # |e| above this (or a non-finite value): diverged (as the study counts it)
 CONTROLLERS = ("dnbs", "pid", "ctc")
 
 #: key -> (URDF under example-robot-data's robots/, what it is). Every serial arm of 6.0.0.
@@ -62,7 +61,6 @@ def _controller_figures(run, settings, duration_s: float) -> dict:
 
     m = metrics_dict(run, metrics_settings(settings, duration_s))
     err, tau = run.error_rad, run.torque_nm
-    finite = bool(np.all(np.isfinite(err)) and np.all(np.isfinite(tau)))
     max_abs = float(np.nanmax(np.abs(err))) if np.any(np.isfinite(err)) else math.inf
     start = int(math.ceil(settings.metrics.startup_s / run.dt_s))
     lim = np.asarray(run.torque_limit_nm, float)
@@ -75,7 +73,7 @@ def _controller_figures(run, settings, duration_s: float) -> dict:
     return {"rms_rad": num(m["worst_rms_error_rad"]), "settled_s": num(m["worst_settling_time_s"]),
             "torque_variation": num(m["worst_torque_variation"]), "steps_at_limit_after_startup": at_limit,
             "max_abs_error_rad": max_abs if math.isfinite(max_abs) else None,
-            "diverged": (not finite) or max_abs > DIVERGED_RAD,
+            "diverged": m["diverged"] is not None,
             "worst_rms_joint": max(m["joints"], key=lambda j: j["rms_error_rad"]
                                    if math.isfinite(j["rms_error_rad"]) else math.inf)["name"]}
 

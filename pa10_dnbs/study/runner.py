@@ -6,14 +6,11 @@ import math
 import os
 from itertools import product
 
-import numpy as np
-
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..sim.closed_loop import simulate
 from .executor import Executor
 from .scenarios import scenario_settings
 
-DIVERGED_RAD = 1.0  # a run with |e| above this (or a non-finite value) counts as diverged
 
 
 def _finite_or_none(x):
@@ -25,9 +22,7 @@ def run_one(settings, scenario: str, controller: str, seed: int, duration_s: flo
     changed, dist = scenario_settings(settings, scenario, seed)
     run = simulate(changed, controller, duration_s, disturbances=dist)
     m = metrics_dict(run, metrics_settings(changed, run.n_steps * run.dt_s))
-    err = run.error_rad
-    diverged = not (np.all(np.isfinite(err)) and np.all(np.isfinite(run.torque_nm))) or bool(
-        np.nanmax(np.abs(err)) > DIVERGED_RAD)
+    diverged = m["diverged"] is not None   # |e| > 1 rad or a non-finite value (core/metrics.divergence)
     return {"scenario": scenario, "controller": controller, "seed": seed,
             "worst_rms_error_rad": _finite_or_none(m["worst_rms_error_rad"]),
             "worst_settling_time_s": _finite_or_none(m["worst_settling_time_s"]),

@@ -19,7 +19,6 @@ import numpy as np
 
 from ..report.metrics_file import metrics_dict, metrics_settings
 from ..sim.closed_loop import simulate
-from ..study.runner import DIVERGED_RAD
 from ..study.scenarios import SCENARIOS, scenario_settings
 
 RMS_FLOOR_RAD = 1e-9
@@ -59,9 +58,7 @@ def tune_run(settings, scenario: str, controller: str, seed: int, duration_s: fl
     with np.errstate(all="ignore"):
         run = simulate(changed, controller, duration_s, disturbances=dist)
         m = metrics_dict(run, metrics_settings(changed, run.n_steps * run.dt_s))
-        err = run.error_rad
-        diverged = not (np.all(np.isfinite(err)) and np.all(np.isfinite(run.torque_nm))) or bool(
-            np.nanmax(np.abs(err)) > DIVERGED_RAD)
+        diverged = m["diverged"] is not None   # |e| > 1 rad or a non-finite value (core/metrics.divergence)
 
     def finite(x):
         return float(x) if x is not None and math.isfinite(x) else None
