@@ -67,6 +67,8 @@ def _with_rules(arm: Arm, checked: dict, absent: tuple[str, ...], report: bool) 
             reference.update({k: v for k, v in values["reference"].items() if f"reference.{k}" in absent})
         if any(key in absent for key in GAIN_KEYS):
             values = dict(values, **derived_gains(plant, ReferenceSettings.of(reference), run, report=report))
+            if not checked["dnbs"]["remedies"]["robust_term"]["enabled"]:   # its bounds would all be 0
+                values["dnbs"]["remedies"]["slope_bound"]["enabled"] = False
     return _placed(checked, values, absent)
 
 

@@ -193,6 +193,13 @@ class RemediesSettings(_Section):
     learning_ramp: LearningRampSettings
     covariance_bound: CovarianceBoundSettings
 
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.slope_bound.enabled and not self.robust_term.enabled:
+            raise ConfigError("dnbs.remedies.slope_bound.enabled: true needs dnbs.remedies.robust_term.enabled: the "
+                              "bounds are fractions of the robust term's gains, 0 when it is off, so every network "
+                              "weight would be held at 0 (set slope_bound.enabled: false)")
+
 
 @dataclass(frozen=True)
 class DnbsSettings(_Section):

@@ -74,9 +74,9 @@ def test_every_branch_of_the_step_gives_the_same_bits(cfg, variant):
     if variant == "slope_bound":  # per-weight bounds (2n, W), tight enough to act
         cfg = replace_in(cfg, "dnbs.remedies.slope_bound.enabled", True)
         cfg = replace_in(cfg, "dnbs.remedies.slope_bound.fraction", (0.02,) * 7)
-    if variant == "zero_bound":  # the robust term off: k_a = k_u = 0, every slope bound 0, a clip at +/-0 (a tie)
+    if variant == "zero_bound":  # a slope fraction of 0 (the rule's least): every slope bound 0, a clip at +/-0
         cfg = replace_in(cfg, "dnbs.remedies.slope_bound.enabled", True)
-        cfg = replace_in(cfg, "dnbs.remedies.robust_term.enabled", False)
+        cfg = replace_in(cfg, "dnbs.remedies.slope_bound.fraction", (0.0,) * 7)
     cfg = replace_in(cfg, "dnbs.remedies.learning_ramp.ramp_s", 0.3)  # the ramp ends inside the run
     numpy_cfg, c_cfg = _kernels(cfg)
     ref = build_reference(cfg)

@@ -5,6 +5,7 @@ without the slope bound its networks' weights run away and the error passes 1 ra
 with it every weight stays in its box and the error stays below half of that. The rule: presets-like ranges
 are left as before, wider ranges get a slower cascade and a warning naming the discrete-time limit.
 """
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -12,8 +13,10 @@ import pytest
 
 from pa10_dnbs.arm.gain_rule import (E1_BASE, RATIO_SAFE, SEPARATION, InertiaSweep, discrete_limit_rad_s,
                                      gain_rule, rotor_inertia_for_ratio, rule_warnings)
+from pa10_dnbs.config import ConfigError, default_config_path
 from pa10_dnbs.core.dnbs_controller import DNBSControllers, DNBSParams, NetworkParams, Remedies
 from pa10_dnbs.core.reference import Reference
+from pa10_dnbs.run_settings import build_settings
 
 T = 1e-3
 
@@ -109,3 +112,27 @@ def test_a_wide_range_gets_a_slower_cascade_and_a_warning_with_its_discrete_time
     # that rotor inertia does bring the range to 10x
     j_r = float(rotor_inertia_for_ratio(light[0], heavy[0]))
     assert (heavy[0] + j_r) / (light[0] + j_r) == pytest.approx(10.0)
+
+
+XARM7 = Path(__file__).parent / "fixtures" / "urdf_intake" / "xarm7_no_meshes.urdf"   # the rule turns the bound on
+
+
+def _config(tmp_path, remedies: str) -> Path:
+    path = tmp_path / "remedies.yaml"
+    path.write_text(f"extends: {default_config_path()}\ndnbs:\n  remedies:\n{remedies}")
+    return path
+
+
+def test_the_robust_term_off_leaves_the_rules_slope_bound_off(tmp_path):
+    """Its bounds are fractions of the robust term's gains, 0 with it off: the bare xArm7 with the robust term off
+    (the paper's law) had every weight held at 0 (alpha_w all 0, a constant torque, 6.4 rad off, exit 0)."""
+    assert build_settings(default_config_path(), XARM7, report=False).dnbs.remedies.slope_bound.enabled
+    off = build_settings(_config(tmp_path, "    robust_term: {enabled: false}\n"), XARM7, report=False)
+    assert not off.dnbs.remedies.robust_term.enabled and not off.dnbs.remedies.slope_bound.enabled
+
+
+def test_the_slope_bound_without_the_robust_term_is_refused_in_one_line(tmp_path):
+    cfg = _config(tmp_path, "    robust_term: {enabled: false}\n    slope_bound: {enabled: true}\n")
+    with pytest.raises(ConfigError, match=r"^dnbs\.remedies\.slope_bound\.enabled: true needs "
+                                          r"dnbs\.remedies\.robust_term\.enabled: .* held at 0"):
+        build_settings(cfg, XARM7, report=False)
