@@ -96,6 +96,23 @@ def test_nonfinite_checkpoint(tmp_path, checkpoints, key, value):
         _one_line_error(r, "--init-from", ck / "s2.npz", "not all finite")
 
 
+@pytest.mark.parametrize("key,change", [("torque_P", "negative"), ("alpha_P", "asymmetric")])
+def test_a_covariance_that_is_not_symmetric_positive_definite_is_refused(tmp_path, checkpoints, key, change):
+    """Finite, so it was accepted, and the guard reset that network at the first step: the warm start silently
+    thrown away (the graph's metrics counted an EKF reset, the in-process run said nothing)."""
+    ck = _copy(checkpoints, tmp_path / "ck")
+    state = dict(np.load(ck / "s2.npz"))
+    P = state[key].copy()
+    if change == "negative":
+        P = -np.eye(len(P))
+    else:
+        P[0, 1] += 5.0
+    state[key] = P
+    np.savez(ck / "s2.npz", **state)
+    for r in _warm_start(tmp_path, ck):
+        _one_line_error(r, "--init-from", ck / "s2.npz", "covariance is not symmetric positive definite")
+
+
 def _simulate_with(tmp_path, cfg):
     out = tmp_path / "out"
     r = run_cli("simulate", "--controller", "pid", *TINY, "--config", cfg, "--out", out)

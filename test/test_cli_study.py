@@ -7,7 +7,7 @@ from cli_runner import run_cli
 from pa10_dnbs.study.scenarios import SCENARIOS, scenario_settings
 
 ROW_KEYS = {"scenario", "controller", "seed", "worst_rms_error_rad", "worst_settling_time_s",
-            "worst_max_abs_error_run_rad", "worst_torque_variation", "diverged"}
+            "worst_max_abs_error_run_rad", "worst_torque_variation", "diverged", "guard_events"}
 
 
 def _cli(*args):

@@ -91,3 +91,23 @@ def _strict_json(path):
     def refuse(name):
         raise AssertionError(f"{path}: {name} is not JSON")
     return json.loads(path.read_text(), parse_constant=refuse)
+
+
+def test_what_the_guards_did_in_process_is_in_the_metrics_the_report_and_the_summary(tmp_path):
+    """The state guard refusing states (answered by the held torque, not trained on) left no trace in an
+    in-process run's metrics.json or report.md (the graph's nodes count it). A speed limit of 0.05 rad/s: the
+    reference's own speed passes it within the first 0.3 s on some joints."""
+    cfg = tmp_path / "slow_guard.yaml"
+    cfg.write_text(f"extends: {default_config_path()}\nguards:\n  max_speed_rad_s: 0.05\n")
+    out = tmp_path / "out"
+    r = run_cli("simulate", "--config", cfg, "--controller", "dnbs", "--duration", "0.3", "--no-figures", "--out", out)
+    counts = _strict_json(out / "metrics.json")["guard_counters"]
+    assert counts and all(c.get("bad_states_speed", 0) > 0 for c in counts.values()), counts
+    first = next(iter(counts))
+    assert f"guards acted: {first}: bad_states_speed {counts[first]['bad_states_speed']}" in r.stdout
+    assert "**guards acted**" in (out / "report.md").read_text()
+    clean = tmp_path / "clean"
+    assert run_cli("simulate", "--controller", "dnbs", "--duration", "0.3", "--no-figures", "--out",
+                   clean).returncode == 0
+    assert _strict_json(clean / "metrics.json")["guard_counters"] == {}
+    assert "guards acted" not in (clean / "report.md").read_text()

@@ -12,7 +12,7 @@ from ..core.checkpoint import load_joint_checkpoints, network_degrees, save_chec
 from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, on_second_sigint, outputs_written, say
 from ..number_text import interval
 from ..report.markdown import report_markdown
-from ..report.metrics_file import diverged_text, metrics_dict, metrics_settings, run_ok
+from ..report.metrics_file import diverged_text, guard_text, metrics_dict, metrics_settings, run_ok
 from ..report.outputs import atomic_output_dir, check_output_dir, finished_output_dir, write_report, write_run
 from ..report.partial import partial_banner, write_partial_mark
 from ..run_settings import build_settings
@@ -128,7 +128,8 @@ def _summary_line(m: dict) -> str:
             + (f"after {settle:.3f} s" if settle is not None else "never")
             + f"; max |e| {m['worst_max_abs_error_run_rad']:.4f} rad; torque variation "
             f"{m['worst_torque_variation']:.2f}; {m['real_time_factor']:.1f}x real time"
-            + (f"; DIVERGED: {diverged_text(m)}" if m.get("diverged") else ""))
+            + (f"; DIVERGED: {diverged_text(m)}" if m.get("diverged") else "")
+            + (f"; guards acted: {guard_text(m)}" if m.get("guard_counters") else ""))
 
 
 def _keep_partial(out: Path, force: bool, runs, metrics: list[dict], kinds: tuple[str, ...], the_arm, n_steps: int,

@@ -81,7 +81,10 @@ def run_study_command(options: StudyOptions) -> int:
                                                      {k: v.description for k, v in SCENARIOS.items()}, infeasible))
         study_figure(rows, tmp / "study.png")
     diverged = sum(r["diverged"] for r in rows)
+    guarded = sum(r.get("guard_events", 0) > 0 for r in rows)
     print(f"{n} runs, {diverged} diverged"
+          + (f"; {guarded} with guard events (states refused, torques replaced or EKF resets: study.json's "
+             "guard_events)" if guarded else "")
           + (f"; {len(infeasible)} scenario(s) infeasible on this arm, not run" if infeasible else "")
           + f"; wrote {o.out}/study.md")
     return 0

@@ -101,6 +101,22 @@ def check_controller_state(f: Path, state: dict, joint: int, degrees: tuple[int,
                 raise ValueError(f"{f}: its {name} network's {what} are not numbers ({value.dtype})")
             if not np.isfinite(value).all():
                 raise ValueError(f"{f}: its {name} network's {what} are not all finite (NaN or inf)")
+        if not _symmetric_positive_definite(np.asarray(state[f"{name}_P"], dtype=float)):
+            raise ValueError(f"{f}: its {name} network's covariance is not symmetric positive definite (the EKF "
+                             "keeps it so; the guard would reset it at the first step, dropping the warm start)")
+
+
+def _symmetric_positive_definite(P: np.ndarray) -> bool:
+    """P (L, L) symmetric (to 1e-12 of its largest entry) with a Cholesky factor (every eigenvalue > 0)."""
+    if P.size == 0:
+        return True
+    if np.abs(P - P.T).max() > 1e-12 * np.abs(P).max():
+        return False
+    try:
+        np.linalg.cholesky(P)
+    except np.linalg.LinAlgError:
+        return False
+    return True
 
 
 def load_joint_checkpoints(path: Path, joint_names, degrees: tuple[int, int] | None = None) -> list[dict]:

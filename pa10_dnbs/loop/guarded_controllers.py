@@ -80,3 +80,11 @@ class GuardedControllers:
         self.last_torque = u
         return u
 
+
+    def counters(self, row: int = 0) -> dict[str, int]:
+        """Row ``row``'s guard events (``bad_states_<reason>``, ``nonfinite_torques``) and its controller's
+        (DNBS: ``ekf_resets_alpha``, ``ekf_resets_torque``): the names a joint controller node reports."""
+        c = {f"bad_states_{r}": int(v[row]) for r, v in self.bad_states.items()}
+        c["nonfinite_torques"] = int(self.nonfinite_torques[row])
+        c.update(self.controllers.counters(row))
+        return c

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 
-from .metrics_file import diverged_text
+from .metrics_file import diverged_text, guard_text
 
 
 def _settle(v) -> str:
@@ -70,6 +70,13 @@ def _diverged(m: dict) -> str:
                if m.get("non_finite_from_step") is not None else ""))
 
 
+def _guards(m: dict) -> str:
+    """'; **guards acted**: ...' for a run whose state guard refused states (answered by the held or zero torque,
+    not trained on), replaced non-finite torques or reset an EKF; else ''."""
+    text = guard_text(m)
+    return f"; **guards acted** (docs/faults.md): {text}" if text else ""
+
+
 def report_markdown(metrics: list[dict], figures: list[tuple[str, str]], title: str, notes: list[str]) -> str:
     """Whole report; ``figures`` is a list of (caption, relative path)."""
     m0 = metrics[0]
@@ -82,7 +89,7 @@ def report_markdown(metrics: list[dict], figures: list[tuple[str, str]], title: 
         lines.append(f"- **{m['controller'].upper()}**: worst-joint RMS {m['worst_rms_error_rad']:.3e} rad; settled "
                      f"(|e| < {m['settle_band_rad']:g} rad) {_settled_after(m['worst_settling_time_s'])}; "
                      f"all values finite: {m['all_finite']}; torques within the limits: {m['torques_within_limits']}; "
-                     + _wall_time(m['wall_time_s'], rtf) + _diverged(m))
+                     + _wall_time(m['wall_time_s'], rtf) + _diverged(m) + _guards(m))
     lines += [""] + [f"- {n}" for n in notes]
     lines += ["", f"## Tracking over [{m0['window_s'][0]:g}, {m0['window_s'][1]:g}) s", "", metrics_table(metrics)]
     lines += ["", "## Start-up: the whole run", "", startup_table(metrics), "", "## Figures", ""]

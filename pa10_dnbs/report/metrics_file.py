@@ -80,6 +80,7 @@ def metrics_dict(run: RunData, settings: dict, **extra) -> dict:
         "all_finite": finite,
         "diverged": diverged,
         "non_finite_from_step": None if gone is None else gone["step"],
+        **guard_counters(run),
         "torques_within_limits": within,
         "joints": [{k: j[k] for k in ("name", "rms_error_rad", "max_abs_error_rad", "max_abs_torque_nm",
                                       "torque_limit_nm", "saturated_fraction", "settling_time_s",
@@ -88,6 +89,22 @@ def metrics_dict(run: RunData, settings: dict, **extra) -> dict:
     }
     out.update(extra)
     return out
+
+
+def guard_counters(run: RunData) -> dict:
+    """``{"guard_counters": {joint: {counter: count}}}``, the joints and counters that are not 0, for a run that
+    holds its guards' counts (an in-process run: GuardedControllers.counters); {} for one that does not (a run
+    rebuilt from a bag: the graph's nodes report theirs in the launcher's faults section)."""
+    if "guard_counters" not in run.extra:
+        return {}
+    return {"guard_counters": {name: {k: v for k, v in c.items() if v}
+                               for name, c in zip(run.joint_names, run.extra["guard_counters"]) if any(c.values())}}
+
+
+def guard_text(m: dict) -> str:
+    """'s1: bad_states_speed 10090, ...; e1: ...' of a run's non-zero guard counters ('' when none)."""
+    return "; ".join(f"{joint}: " + ", ".join(f"{k} {v}" for k, v in c.items())
+                     for joint, c in (m.get("guard_counters") or {}).items())
 
 
 def run_ok(m: dict) -> bool:

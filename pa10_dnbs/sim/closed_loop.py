@@ -101,7 +101,8 @@ def simulate(settings: Settings, controller: str, duration_s: float, progress: b
                        torque_limit_nm=np.array(settings.plant.torque_limit_nm),
                        position_rad=pos, velocity_rad_s=vel, reference_rad=ref, torque_nm=tau,
                        wall_time_s=wall, extra={"limit_hits": plant.limit_hits.tolist(),
-                                                "controllers": guarded.controllers})
+                                                "controllers": guarded.controllers,
+                                                "guard_counters": [guarded.counters(row) for row in range(nj)]})
     finally:
         close_plant()
 

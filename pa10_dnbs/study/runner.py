@@ -28,7 +28,9 @@ def run_one(settings, scenario: str, controller: str, seed: int, duration_s: flo
             "worst_settling_time_s": _finite_or_none(m["worst_settling_time_s"]),
             "worst_max_abs_error_run_rad": _finite_or_none(m["worst_max_abs_error_run_rad"]),
             "worst_torque_variation": _finite_or_none(m["worst_torque_variation"]),
-            "diverged": diverged}
+            "diverged": diverged,
+            # states the guards refused, non-finite torques replaced, EKF resets: all joints (report/metrics_file)
+            "guard_events": sum(sum(c.values()) for c in m.get("guard_counters", {}).values())}
 
 
 def run_study(settings, scenarios, controllers, seeds: int, duration_s: float, workers: int | None = None,
