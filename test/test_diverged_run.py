@@ -111,3 +111,24 @@ def test_what_the_guards_did_in_process_is_in_the_metrics_the_report_and_the_sum
                    clean).returncode == 0
     assert _strict_json(clean / "metrics.json")["guard_counters"] == {}
     assert "guards acted" not in (clean / "report.md").read_text()
+
+
+def test_torques_within_the_limits_is_what_the_controllers_asked_not_what_the_plant_clipped(monkeypatch):
+    """The figure checked the applied torque, which the plant clips: it could not be false in-process. A PID
+    that asks twice its limits (the paper's claim broken) is now reported outside them, and a sound one within."""
+    from pa10_dnbs.core.pid_controller import PIDControllers
+    from pa10_dnbs.report.metrics_file import metrics_dict, metrics_settings
+    from pa10_dnbs.run_settings import build_settings
+    from pa10_dnbs.sim.closed_loop import simulate
+
+    settings = build_settings(default_config_path(), report=False)
+
+    def within(run):
+        return metrics_dict(run, metrics_settings(settings, 0.05))["torques_within_limits"]
+
+    assert within(simulate(settings, "pid", 0.05))
+    limit = np.asarray(settings.plant.torque_limit_nm)
+    monkeypatch.setattr(PIDControllers, "answer", lambda self, x1, x2, ref, active=None: 2.0 * limit)
+    run = simulate(settings, "pid", 0.05)
+    assert np.all(np.abs(run.torque_nm) <= limit)   # the plant clipped them
+    assert run.extra["torques_asked_beyond_limits"] == [50] * 7 and not within(run)

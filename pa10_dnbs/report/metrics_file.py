@@ -62,7 +62,9 @@ def metrics_dict(run: RunData, settings: dict, **extra) -> dict:
                     "joint": run.joint_names[diverged["joint"]],
                     "why": "non-finite" if diverged["non_finite"] else f"|e| > {DIVERGED_RAD:g} rad"}
     finite = bool(np.all(np.isfinite(run.position_rad)) and np.all(np.isfinite(run.torque_nm)))
-    within = bool(np.all(np.abs(run.torque_nm) <= run.torque_limit_nm * (1 + 1e-12)))
+    # the applied torque (which the plant clips), and in-process what the controllers asked (the paper's claim)
+    within = bool(np.all(np.abs(run.torque_nm) <= run.torque_limit_nm * (1 + 1e-12))
+                  and not any(run.extra.get("torques_asked_beyond_limits", ())))
     out = {
         "controller": run.controller,
         "duration_s": duration,

@@ -77,6 +77,8 @@ def simulate(settings: Settings, controller: str, duration_s: float, progress: b
         dist = disturbances or Disturbances()
         noise = _sensor_noise(dist, n, nj)
         delayed = [np.zeros(nj)] * dist.torque_delay_steps
+        limit = np.asarray(s.plant.torque_limit_nm, dtype=float) * (1 + 1e-12)
+        asked_beyond = np.zeros(nj, dtype=np.int64)   # steps a controller asked more than its joint's limit
         bar = ProgressBar(n, dt, f"simulate {controller}") if progress else None
         t0 = time.perf_counter()
         for k in range(n):
@@ -86,6 +88,7 @@ def simulate(settings: Settings, controller: str, duration_s: float, progress: b
             if noise is not None:
                 q, qd = q + noise[0][k], qd + noise[1][k]
             u = guarded.step(q, qd, ReferenceSample(ref[k], ref_vel[k], ref_ahead[k], ref_acc[k]))
+            asked_beyond += np.abs(u) > limit
             if delayed:
                 delayed.append(u)
                 u = delayed.pop(0)
@@ -102,7 +105,8 @@ def simulate(settings: Settings, controller: str, duration_s: float, progress: b
                        position_rad=pos, velocity_rad_s=vel, reference_rad=ref, torque_nm=tau,
                        wall_time_s=wall, extra={"limit_hits": plant.limit_hits.tolist(),
                                                 "controllers": guarded.controllers,
-                                                "guard_counters": [guarded.counters(row) for row in range(nj)]})
+                                                "guard_counters": [guarded.counters(row) for row in range(nj)],
+                                                "torques_asked_beyond_limits": asked_beyond.tolist()})
     finally:
         close_plant()
 
