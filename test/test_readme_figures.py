@@ -105,3 +105,19 @@ def test_the_suite_figures_come_from_the_junit_report(tmp_path):
                    'skipped="3" tests="40" time="61.25"></testsuite></testsuites>')
     assert record_tests.junit_figures(xml) == {"tests": 40, "passed": 34, "failed": 2, "errors": 1, "skipped": 3,
                                                "pytest_s": 61.2}
+
+
+def test_the_recorded_main_jobs_error_is_the_in_process_runs_bit_for_bit():
+    """The lockstep graph equals the in-process run bit for bit, so the main job's recorded RMS (the README's
+    main-job row) must be the in-process run's: a record made on a tree that gave other bits (main_job.json held
+    ...883e-05 where both give ...797e-05) or before a change of the numbers is caught here."""
+    from pa10_dnbs.config import default_config_path
+    from pa10_dnbs.report.metrics_file import metrics_dict, metrics_settings
+    from pa10_dnbs.run_settings import build_settings
+    from pa10_dnbs.sim.closed_loop import simulate
+
+    record = json.loads((ROOT / "benchmarks" / "main_job.json").read_text())["figures"]
+    settings = build_settings(default_config_path(), report=False)
+    run = simulate(settings, "dnbs", record["duration_s"])
+    m = metrics_dict(run, metrics_settings(settings, record["duration_s"]))
+    assert m["worst_rms_error_rad"] == record["worst_rms_error_rad"], (m["worst_rms_error_rad"], record)
