@@ -115,8 +115,8 @@ def run_ok(m: dict) -> bool:
 
 
 def diverged_text(m: dict) -> str:
-    """'diverged: non-finite from step k (t = ... s), joint J' or 'diverged: |e| > 1 rad from step k ...', for the
-    summary lines and the report ('' when the run did not diverge)."""
+    """'non-finite from step k (t = ... s), joint J' or '|e| > 1 rad from step k ...': where and why a run
+    diverged, for the summary lines and the report ('' when it did not)."""
     d = m.get("diverged")
     if not d:
         return ""
