@@ -16,7 +16,7 @@ Prints a Markdown table (docs/controller.md holds the one of the last run). Figu
 from __future__ import annotations
 
 import argparse
-import copy
+import os
 import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -25,6 +25,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from pa10_dnbs.cli_values import OneLineParser, number_in, whole_in  # noqa: E402
 from pa10_dnbs.config import default_config_path  # noqa: E402
+from pa10_dnbs.interrupt import (EXIT_INTERRUPTED, kill_children, pool_worker_start, say, sigint_blocked,  # noqa: E402
+                                 two_stage_sigint)
 from pa10_dnbs.paths import share_path  # noqa: E402
 from pa10_dnbs.report.metrics_file import metrics_dict, metrics_settings  # noqa: E402
 from pa10_dnbs.sim.closed_loop import simulate  # noqa: E402
@@ -110,8 +112,18 @@ def main(argv: list[str] | None = None) -> int:
     jobs = [(i, sc, d, w) for i in rows for sc, d, w in (
         ("nominal", 20.0, (10.0, 20.0)), ("payload_5kg", 20.0, (10.0, 20.0)),
         ("encoder_noise", a.long_s, (a.long_s - 20.0, a.long_s)))]
-    with ProcessPoolExecutor(max_workers=a.workers) as pool:
-        res = {(r["variant"], r["scenario"]): r for r in pool.map(_run, jobs)}
+    try:
+        with two_stage_sigint():
+            with sigint_blocked():   # the workers ignore Ctrl-C: this process stops them
+                pool = ProcessPoolExecutor(max_workers=a.workers, initializer=pool_worker_start,
+                                           initargs=(os.getpid(),))
+                futures = [pool.submit(_run, job) for job in jobs]
+            res = {(r["variant"], r["scenario"]): r for r in (f.result() for f in futures)}
+            pool.shutdown()
+    except KeyboardInterrupt:
+        kill_children()
+        say(f"ablation: interrupted: nothing printed (the table needs all {len(jobs)} runs)")
+        return EXIT_INTERRUPTED
     print(f"| variant | nominal: settled [s] | max abs [rad] | torque variation | at limit after 0.2 s | RMS [rad] | "
           f"payload 5 kg: settled [s] | torque variation | RMS [rad] | noise, {a.long_s:g} s: RMS last 20 s [rad] |")
     print("|---" * 10 + "|")
