@@ -224,3 +224,21 @@ def test_progress_draws_trials_best_and_elapsed_on_a_terminal_only(tmp_path):
     bar(1, 2, 6)
     assert quiet.getvalue() == ""
     assert shown.getvalue() == "\r\x1b[Ktune pid: 1/10 trials  runs 2/6  best -3.500 (trial 0)  elapsed 0:01:15"
+
+
+def test_importances_are_drawn_from_two_different_points_on(tmp_path):
+    """With one completed trial optuna still draws importance.png, each parameter at 1/k (0.33 for three): a
+    figure that reads as a result and measures nothing; docs/tuning.md says "from 2 trials on"."""
+    from pa10_dnbs.tune.report import tune_figures
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    study = optuna.create_study()
+    study.enqueue_trial({"a": 1.0, "b": 2.0})
+    study.optimize(lambda t: t.suggest_float("a", 0, 3) + t.suggest_float("b", 0, 3), n_trials=1)
+    assert tune_figures(study, tmp_path) == ["history.png"] and not (tmp_path / "importance.png").exists()
+    study.enqueue_trial({"a": 1.0, "b": 2.0})   # the same point again: still nothing to compare
+    study.optimize(lambda t: t.suggest_float("a", 0, 3) + t.suggest_float("b", 0, 3), n_trials=1)
+    assert tune_figures(study, tmp_path) == ["history.png"]
+    study.enqueue_trial({"a": 2.0, "b": 0.5})
+    study.optimize(lambda t: t.suggest_float("a", 0, 3) + t.suggest_float("b", 0, 3), n_trials=1)
+    assert tune_figures(study, tmp_path) == ["history.png", "importance.png"]

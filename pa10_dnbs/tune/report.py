@@ -125,8 +125,13 @@ def tune_figures(study, directory: Path) -> list[str]:
         import matplotlib.pyplot as plt
         from optuna.visualization.matplotlib import plot_optimization_history, plot_param_importances
 
+    from optuna.trial import TrialState
+
+    points = {tuple(sorted(t.params.items())) for t in study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))}
     out = []
     for name, plot in (("history.png", plot_optimization_history), ("importance.png", plot_param_importances)):
+        if name == "importance.png" and len(points) < 2:   # optuna draws 1/k each from one point: no importance
+            continue
         check()   # a Ctrl-C noted meanwhile (the plots read the storage: never interrupted inside)
         try:
             with warnings.catch_warnings():   # optuna's "too few trials" for importances: not the user's concern
