@@ -199,7 +199,8 @@ def test_equal_budget_writes_one_table_of_every_controller(tmp_path):
 
     many = arms_table([tmp_path / "eq", tmp_path / "eq"]).splitlines()
     assert many[0] == "| scenario | pa10 PID / CTC | pa10 PID / CTC |"
-    assert len(many) == 2 + 8 + 1 and all(line.count("|") == 4 for line in many)
+    assert len(many) == 2 + 8 + 2 and all(line.count("|") == 4 for line in many)
+    assert many[-1] == "| budget per controller | 2 trials x 1 run of 0.5 s | 2 trials x 1 run of 0.5 s |"
     tuned = json.loads((tmp_path / "eq" / "pid" / "tune.json").read_text())["held_out"]["tuned"]
     assert many[2].startswith(f"| nominal | {tuned[0]['worst_rms_error_rad']:.1e} / ".replace("e-0", "e-"))
     table = subprocess.run([sys.executable, str(path.parent / "equal_budget_table.py"), str(tmp_path / "eq"),
@@ -242,3 +243,13 @@ def test_importances_are_drawn_from_two_different_points_on(tmp_path):
     study.enqueue_trial({"a": 2.0, "b": 0.5})
     study.optimize(lambda t: t.suggest_float("a", 0, 3) + t.suggest_float("b", 0, 3), n_trials=1)
     assert tune_figures(study, tmp_path) == ["history.png", "importance.png"]
+
+
+def test_the_arms_table_refuses_an_unfinished_comparison(tmp_path):
+    """An interrupted comparison (one tune done, no comparison.md) was printed beside finished ones, no note."""
+    from pa10_dnbs.tune.comparison import arms_table
+
+    (tmp_path / "eq" / "pid").mkdir(parents=True)
+    (tmp_path / "eq" / "pid" / "tune.json").write_text(json.dumps({"arm": "pa10", "trials": 2, "held_out": {}}))
+    with pytest.raises(ValueError, match=r"eq: an unfinished comparison \(no comparison.md\)"):
+        arms_table([tmp_path / "eq"])

@@ -68,10 +68,14 @@ def load_comparison(directory: Path) -> dict[str, dict]:
 
 def arms_table(dirs: list[Path]) -> str:
     """Per scenario and arm, each tuned controller's held-out worst RMS [rad] (``DIR/<controller>/tune.json`` of
-    every comparison DIR); the last row: each controller's objective over all its held-out runs."""
+    every comparison DIR); then each controller's objective over all its held-out runs, and the budget each
+    comparison gave (arms may differ). ValueError for a DIR without a tune or not finished (no comparison.md)."""
     arms = []
     for d in dirs:
         results = load_comparison(d)
+        if not (Path(d) / "comparison.md").is_file():
+            raise ValueError(f"{d}: an unfinished comparison (no comparison.md): the same scripts/equal_budget.py "
+                             "command finishes it")
         arms.append((next(iter(results.values()))["arm"], results))
     scenarios = list(dict.fromkeys(r["scenario"] for _, res in arms for t in res.values()
                                    for r in t["held_out"]["tuned"]))
@@ -84,4 +88,13 @@ def arms_table(dirs: list[Path]) -> str:
     lines.append("| objective, all held-out runs (shipped -> tuned) | " + " | ".join(" / ".join(
         f"{objective(t['held_out']['start']):.1f} -> {objective(t['held_out']['tuned']):.1f}" for t in res.values())
         for _, res in arms) + " |")
+    lines.append("| budget per controller | " + " | ".join(" / ".join(dict.fromkeys(_budget(t) for t in res.values()))
+                                                       for _, res in arms) + " |")
     return "\n".join(lines) + "\n"
+
+
+def _budget(tune: dict) -> str:
+    """'60 trials x 8 runs of 20 s' of one tune.json: its completed trials, training runs per trial, duration."""
+    o = tune["options"]
+    runs = len(o["scenarios"].split(",") if isinstance(o["scenarios"], str) else o["scenarios"]) * len(o["seeds"])
+    return f"{tune['trials']} trials x {runs} run{'s' * (runs != 1)} of {o['duration_s']:g} s"
