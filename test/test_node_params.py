@@ -26,6 +26,9 @@ CASES = [  # (node module, bad parameter, word the error line must hold): each n
     # a joint controller's setting: its joint's one value (a strict bound; a list where one double is its value)
     ("joint_controller_node", ("joint:=s1", "dnbs.alpha_net.error_scale_rad:=0.0"), "dnbs.alpha_net.error_scale_rad"),
     ("joint_controller_node", ("joint:=s1", "controller:=pid", "pid.kp:=[1.0,2.0]"), "pid.kp"),
+    # a value rcl cannot parse as YAML: refused by rclpy.init itself (was an RCLError traceback, exit 1)
+    ("joint_bus_node", "robot_command:=forward:", "parameter override rule: '-p robot_command:=forward:'"),
+    ("plant.node", "duration_s:=[1,", "'-p duration_s:=[1,'"),
 ]
 
 

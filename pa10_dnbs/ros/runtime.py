@@ -57,6 +57,29 @@ TEARDOWN_LIMIT_S = 5.0  # a close() (or the freeing of a half-built node) that t
 TEARDOWN_DUMP_LEAD_S = 0.5  # the stacks of a hung close() are written this long before it is cut short
 
 
+def _init_rcl(args) -> str | None:
+    """rclpy.init with ``args``; None, or why rcl refused its ``--ros-args`` (one line: a ``-p`` value that is not
+    YAML, an unknown argument). rcl's own log line about it is kept off stderr: the caller says it once."""
+    from rclpy._rclpy_pybind11 import RCLError, UnknownROSArgsError
+
+    saved, quiet = os.dup(2), os.open(os.devnull, os.O_WRONLY)
+    os.dup2(quiet, 2)
+    try:
+        rclpy.init(args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+    except UnknownROSArgsError as exc:
+        return f"unknown ROS arguments {exc}"
+    except RCLError as exc:
+        why = str(exc).removeprefix("failed to initialize rcl: ").split(". Error:")[0].split(", at /")[0]
+        if "parameter override" in why:
+            why += " (not a YAML value: quote it, e.g. -p 'name:=\"text:\"')"
+        return why
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(quiet)
+    return None
+
+
 class SignalStop(Future):
     """The stop request of ``run_node``: done once a signal handler has called ``request`` (lock-free: a plain
     attribute) or ``set_result`` was called. Spin loops see it within ``SLICE_S``."""
@@ -112,7 +135,10 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
     ``exit_code`` (int), ``loop(executor, stop)`` (its own spin loop, which
     must return once ``stop`` is done) and ``close()`` (write files, report).
     """
-    rclpy.init(args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
+    refused = _init_rcl(args)
+    if refused is not None:   # its --ros-args: the user's input (graph.md, "Parameters"): one line, exit 2
+        print(f"FAILED {refused}", file=sys.stderr, flush=True)
+        return 2
     stop = SignalStop()
     _STOP.append(stop)
     on_signal = stop_on_signal(stop)
