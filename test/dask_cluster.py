@@ -101,9 +101,10 @@ def remove_orphan_semaphores(before: set[str]) -> list[str]:
 
 
 @contextmanager
-def local_cluster(directory: Path, n_workers: int = 2):
+def local_cluster(directory: Path, n_workers: int = 2, worker_args: tuple = (), wait_for_workers: bool = True):
     """Yield a :class:`Cluster` of a scheduler and ``n_workers`` workers on 127.0.0.1 (random ports, no
-    dashboards); every process is stopped and reaped at the end, and the semaphores its killed processes
+    dashboards; ``worker_args``: more options of `dask worker`; ``wait_for_workers`` False: not waited for, e.g.
+    workers that die); every process is stopped and reaped at the end, and the semaphores its killed processes
     left in /dev/shm are removed."""
     directory.mkdir(parents=True, exist_ok=True)
     semaphores_before = _semaphores()
@@ -120,14 +121,15 @@ def local_cluster(directory: Path, n_workers: int = 2):
         _wait(lambda: sched_file.exists() and sched_file.stat().st_size > 0, "scheduler start")
         address = json.loads(sched_file.read_text())["address"]
         workers = [subprocess.Popen([DASK, "worker", address, "--nworkers", "1", "--nthreads", "1",
-                                     "--no-dashboard", "--name", f"w{i}", "--local-directory", str(directory)],
+                                     "--no-dashboard", "--name", f"w{i}", "--local-directory", str(directory),
+                                     *worker_args],
                                     stdout=log, stderr=log, env=env, start_new_session=True)
                    for i in range(n_workers)]
         procs += workers
         from distributed import Client
 
         with Client(address, timeout=START_TIMEOUT_S) as client:
-            client.wait_for_workers(n_workers, timeout=START_TIMEOUT_S)
+            client.wait_for_workers(n_workers if wait_for_workers else 0, timeout=START_TIMEOUT_S)
         yield Cluster(address, sched, workers)
     finally:
         for p in reversed(procs):

@@ -9,6 +9,10 @@ results are keyed, so a run that comes back twice is counted once and ``on_done`
   import the same pa10_dnbs (docs/tuning.md, "A cluster").
 - otherwise ``jobs`` local processes (default: one per core); ``jobs == 1`` runs in this process.
 
+The cluster lost while runs are out (its scheduler gone, or no worker for ``WORKERLESS_S``, or a run's workers
+killed again and again): :class:`ClusterLost`, one line naming ``--scheduler`` (exit 2); the runs completed so far
+went to ``on_done``, so the command keeps them as for a Ctrl-C.
+
 Interrupted (Ctrl-C, an error) while runs are out: the local workers (which ignore SIGINT, pa10_dnbs/interrupt.py)
 are terminated and reaped within ``STOP_GRACE_S`` (then killed); a cluster's futures are cancelled, so the
 scheduler drops every run not started (a run already on a worker thread ends with that run, its result dropped).
@@ -28,6 +32,16 @@ from ..interrupt import POLL_S, check, immediate, pool_worker_start, sigint_bloc
 CONNECT_TIMEOUT_S = 10.0   # to reach the scheduler and to see its first worker
 STOP_GRACE_S = 2.0         # interrupted: SIGTERM to the workers, SIGKILL after this
 CLOSE_TIMEOUT_S = 5.0      # interrupted: the cluster connection closes within this
+WORKERLESS_S = CONNECT_TIMEOUT_S   # runs out and the scheduler without a worker this long: the cluster is lost
+WATCH_S = 1.0              # how often a waiting executor asks the scheduler for its number of workers
+
+
+class ClusterLost(ConfigError):
+    """The Dask cluster cannot finish the runs (its scheduler gone, no worker left): one line naming
+    ``--scheduler`` and exit 2, as an unreachable scheduler; what completed before was given to ``on_done``."""
+
+    def __init__(self, message: str):
+        super().__init__(f"scheduler: {message}", setting="scheduler")
 
 
 class Executor:
@@ -110,15 +124,19 @@ class Executor:
                 for i, (key, args) in enumerate(tasks.items()):
                     futures[self._client.submit(fn, *args, pure=False, key=f"{fn.__name__}-{token}-{i}")] = key
                 done = dask_completed(list(futures), loop=self._client.loop)
+                watch = _Watch(self._client, self.scheduler)
                 while not done.is_empty():   # polled: a Ctrl-C noted meanwhile (interrupt.deferred) is raised here
                     batch = done.next_batch(block=False)
                     for fut in batch:
-                        finished(futures[fut], fut.result())
+                        finished(futures[fut], watch.result(fut))
                     check()
                     if not batch:
+                        watch.check()   # the scheduler gone, or no worker for WORKERLESS_S: ClusterLost
                         time.sleep(POLL_S / 2)
-            except BaseException:
-                self._client.cancel(list(futures), force=True)   # the scheduler drops them: nothing left queued
+            except BaseException as exc:
+                if self._client.status == "running" and not isinstance(exc, ClusterLost) or \
+                        isinstance(exc, ClusterLost) and exc.scheduler_alive:
+                    self._client.cancel(list(futures), force=True)   # the scheduler drops them: nothing left queued
                 raise
         elif self._pool is not None:
             futures, order = {}, {}
@@ -143,6 +161,55 @@ class Executor:
                     value = fn(*args)
                 finished(key, value)
         return results
+
+
+class _Watch:
+    """What a waiting executor checks on its cluster: the client still connected to the scheduler (a future it
+    did not cancel itself comes back cancelled when the connection is lost), and a worker there at least once
+    every ``WORKERLESS_S`` (asked every ``WATCH_S``)."""
+
+    def __init__(self, client, address: str):
+        self.client, self.address = client, address
+        self.last_worker = self.last_asked = time.monotonic()
+
+    def lost(self, why: str, scheduler_alive: bool = False) -> ClusterLost:
+        exc = ClusterLost(why)
+        exc.scheduler_alive = scheduler_alive
+        return exc
+
+    def result(self, fut):
+        """``fut.result()``; ClusterLost for a run the cluster could not finish (not an error of the run)."""
+        from distributed import CancelledError
+        from distributed.scheduler import KilledWorker
+
+        try:
+            return fut.result()
+        except CancelledError:
+            raise self.lost(f"lost the connection to the scheduler {self.address} (its process ended, or its "
+                            "host or the network went down)") from None
+        except KilledWorker:
+            raise self.lost(f"the workers of {self.address} died on one run again and again (out of memory? "
+                            "a worker that cannot import this pa10_dnbs?): see the workers' logs",
+                            scheduler_alive=True) from None
+
+    def check(self) -> None:
+        now = time.monotonic()
+        if self.client.status != "running":
+            raise self.lost(f"lost the connection to the scheduler {self.address} (its process ended, or its "
+                            "host or the network went down)")
+        if now - self.last_asked < WATCH_S:
+            return
+        self.last_asked = now
+        try:
+            n = self.client.scheduler_info(n_workers=0).get("n_workers", 1)
+        except Exception:   # noqa: BLE001 - asked again at the next poll; a lost connection shows in the status
+            return
+        if n:
+            self.last_worker = now
+        elif now - self.last_worker >= WORKERLESS_S:
+            raise self.lost(f"{self.address} has had no worker for {WORKERLESS_S:g} s while runs were waiting "
+                            "(its workers ended, or their host went down)",
+                            scheduler_alive=True)
 
 
 # The address forms a Dask client reaches: [scheme://]host:port, host a name, an IPv4 or a bracketed IPv6 address
@@ -229,4 +296,32 @@ def connect(address: str):
         client.close()
         raise ConfigError(f"scheduler: {address} has no worker (waited {CONNECT_TIMEOUT_S:g} s)",
                           setting="scheduler") from None
+    try:
+        _check_workers(client, address)
+    except BaseException:
+        client.close()
+        raise
     return client
+
+
+def _check_workers(client, address: str) -> None:
+    """ConfigError unless every worker of ``client`` imports this pa10_dnbs, at this version (its tasks are the
+    project's functions: a worker that cannot unpickle them dies on each, and the runs would wait for ever).
+    ``eval`` of a string: a builtin, so the check itself unpickles on any worker."""
+    from .. import __version__
+
+    try:
+        found = client.run(eval, "__import__('pa10_dnbs').__version__", on_error="return")
+    except Exception as exc:   # noqa: BLE001 - the scheduler went away meanwhile: said in one line
+        raise ConfigError(f"scheduler: cannot check the workers of {address}: "
+                          f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}", setting="scheduler") \
+            from None
+    for worker, got in sorted(found.items()):
+        if isinstance(got, BaseException):
+            raise ConfigError(f"scheduler: worker {worker} of {address} cannot import pa10_dnbs "
+                              f"({type(got).__name__}: {str(got).splitlines()[0] if str(got) else ''}): every "
+                              "worker needs the same pa10_dnbs (docs/tuning.md, \"A cluster\")", setting="scheduler")
+        if got != __version__:
+            raise ConfigError(f"scheduler: worker {worker} of {address} has pa10_dnbs {got}, this is {__version__}: "
+                              "every worker needs the same pa10_dnbs (docs/tuning.md, \"A cluster\")",
+                              setting="scheduler")

@@ -1,0 +1,188 @@
+"""``--scheduler`` when the cluster goes away mid-run (a real Dask scheduler and workers on 127.0.0.1, started
+here): the scheduler killed, or every worker killed, or workers that cannot import pa10_dnbs. Never a traceback
+nor a wait for ever: one line naming --scheduler, exit 2, and the completed work kept as for a Ctrl-C (the
+study's rows in study.partial.*, the tune's trials in its storage); no process of the cluster left behind."""
+import json
+import os
+import re
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+
+import pytest
+
+from cli_runner import run_cli
+from dask_cluster import local_cluster
+
+import pa10_dnbs.study.executor as executor
+
+pytestmark = pytest.mark.slow
+
+STUDY = ("study", "--scenarios", "nominal,payload_2kg", "--controllers", "pid", "--seeds", 4, "--duration", 30,
+         "--no-progress")
+TUNE = ("tune", "--controller", "pid", "--trials", 8, "--scenarios", "nominal", "--seeds", 1, "--duration", 30,
+        "--held-out-seeds", 0, "--no-progress")
+WAIT_S = 90.0   # a bound on any wait here (the runs take seconds)
+
+
+def _wait(predicate, what, proc=None):
+    t0 = time.monotonic()
+    while not predicate():
+        assert proc is None or proc.poll() is None, f"the command ended before {what}: {proc.communicate()}"
+        assert time.monotonic() - t0 < WAIT_S, f"no {what} within {WAIT_S} s"
+        time.sleep(0.1)
+
+
+def _finished_runs(client, prefix):
+    """How many of the command's runs (keys ``prefix-...``, study/executor.py) the cluster holds finished."""
+    return client.run_on_scheduler(lambda dask_scheduler: sum(
+        str(k).startswith(prefix) and ts.state == "memory" for k, ts in dask_scheduler.tasks.items()))
+
+
+def _complete_trials(db):
+    if not db.exists():
+        return 0
+    with sqlite3.connect(f"{db.resolve().as_uri()}?mode=ro", uri=True) as con:
+        try:
+            return con.execute("SELECT count(*) FROM trials WHERE state = 'COMPLETE'").fetchone()[0]
+        except sqlite3.OperationalError:   # the tables not made yet
+            return 0
+
+
+def _command(*args):
+    return subprocess.Popen([sys.executable, "-m", "pa10_dnbs.cli", *map(str, args)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+
+
+def _end(proc):
+    try:
+        out, err = proc.communicate(timeout=WAIT_S)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    return proc.returncode, out, err
+
+
+def _kill_scheduler_once(cluster, proc, done):
+    """SIGKILL the scheduler once ``done(client)`` (the command mid-run, work completed)."""
+    from distributed import Client
+
+    try:
+        with Client(cluster.address, timeout=30) as client:
+            _wait(lambda: done(client), "completed work", proc)
+        time.sleep(0.5)   # the command has fetched the result (the executor polls every 0.05 s)
+        os.killpg(cluster.scheduler.pid, signal.SIGKILL)
+        return _end(proc)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+
+
+def test_study_whose_scheduler_dies_keeps_its_completed_rows(tmp_path):
+    with local_cluster(tmp_path / "cluster") as cluster:
+        proc = _command(*STUDY, "--scheduler", cluster.address, "--out", tmp_path / "s")
+        rc, out, err = _kill_scheduler_once(cluster, proc, lambda c: _finished_runs(c, "run_one-") >= 1)
+        pids = cluster.pids
+    assert not pids(), "processes of the cluster left behind"
+    m = re.fullmatch(r"pa10-dnbs: error: --scheduler: lost the connection to the scheduler tcp://127\.0\.0\.1:\d+ "
+                     r"\(.*\); stopped after (\d) of 8 runs; kept their rows in \S+/s/study\.partial\.md .*\n", err)
+    assert rc == 2 and m, (rc, err)
+    rows = json.loads((tmp_path / "s" / "study.partial.json").read_text())["rows"]
+    assert 1 <= len(rows) == int(m.group(1)) < 8
+
+
+def test_tune_whose_scheduler_dies_says_how_many_trials_it_keeps(tmp_path):
+    db = tmp_path / "t" / "tune.db"
+    with local_cluster(tmp_path / "cluster") as cluster:
+        proc = _command(*TUNE, "--scheduler", cluster.address, "--out", tmp_path / "t")
+        rc, out, err = _kill_scheduler_once(cluster, proc, lambda c: _complete_trials(db) >= 1)
+        pids = cluster.pids
+    assert not pids(), "processes of the cluster left behind"
+    m = re.fullmatch(r"pa10-dnbs: error: --scheduler: lost the connection to the scheduler tcp://127\.0\.0\.1:\d+ "
+                     r"\(.*\); kept (\d) completed trials? \(of --trials 8\) in \S+/t/tune\.db; run the same "
+                     r"command to resume\n", err)
+    assert rc == 2 and m, (rc, err)
+    assert 1 <= int(m.group(1)) == _complete_trials(db) < 8
+
+
+def _kill_workers_once(cluster, done):
+    """A thread's job: SIGKILL every worker (nanny and all) once ``done(client)``."""
+    from distributed import Client
+
+    with Client(cluster.address, timeout=30) as client:
+        _wait(lambda: done(client), "completed work")
+    for w in cluster.workers:
+        os.killpg(w.pid, signal.SIGKILL)
+        w.wait()
+
+
+@pytest.mark.parametrize("what", ["study", "tune"])
+def test_a_run_whose_workers_all_die_ends_with_one_line(tmp_path, monkeypatch, what):
+    """No worker for WORKERLESS_S (10 s; 2 s here) while runs wait: one line, exit 2, the completed work kept."""
+    import _thread
+    import threading
+
+    monkeypatch.setattr(executor, "WORKERLESS_S", 2.0, raising=False)
+    db = tmp_path / "t" / "tune.db"
+    with local_cluster(tmp_path / "cluster") as cluster:
+        done = (lambda c: _finished_runs(c, "run_one-") >= 1) if what == "study" else \
+            (lambda c: _complete_trials(db) >= 1)
+        killer = threading.Thread(target=_kill_workers_once, args=(cluster, done), daemon=True)
+        killer.start()
+        watchdog = threading.Timer(40.0, _thread.interrupt_main)   # a run that would wait for ever: Ctrl-C
+        watchdog.start()
+        t0 = time.monotonic()
+        try:
+            r = run_cli(*(STUDY if what == "study" else TUNE), "--scheduler", cluster.address, "--out",
+                        tmp_path / ("s" if what == "study" else "t"))
+        finally:
+            watchdog.cancel()
+        seconds = time.monotonic() - t0
+        killer.join(5)
+        pids = cluster.pids
+    assert not pids(), "processes of the cluster left behind"
+    assert r.returncode == 2 and seconds < 40, (r.returncode, seconds, r.stderr)
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and re.match(r"pa10-dnbs: error: --scheduler: tcp://127\.0\.0\.1:\d+ has had no worker "
+                                        r"for 2 s while runs were waiting", lines[0]), r.stderr
+    if what == "study":
+        rows = json.loads((tmp_path / "s" / "study.partial.json").read_text())["rows"]
+        assert f"stopped after {len(rows)} of 8 runs; kept their rows" in lines[0] and rows
+    else:
+        n = _complete_trials(db)
+        assert f"kept {n} completed trial" in lines[0] and "run the same command to resume" in lines[0] and n >= 1
+
+
+BLOCK_PA10 = """
+import sys
+
+
+class NoPa10:
+    def find_spec(self, name, path=None, target=None):
+        if name == "pa10_dnbs" or name.startswith("pa10_dnbs."):
+            raise ModuleNotFoundError(f"No module named {name!r}")
+
+
+sys.meta_path.insert(0, NoPa10())
+"""
+
+
+def test_workers_that_cannot_import_the_project_are_refused_at_connect(tmp_path):
+    preload = tmp_path / "block_pa10.py"
+    preload.write_text(BLOCK_PA10)
+    with local_cluster(tmp_path / "cluster", worker_args=("--preload", str(preload))) as cluster:
+        t0 = time.monotonic()
+        rc, out, err = _end(_command("study", "--scenarios", "nominal", "--controllers", "pid", "--seeds", 2,
+                                     "--duration", 0.3, "--no-progress", "--scheduler", cluster.address,
+                                     "--out", tmp_path / "s"))
+        seconds = time.monotonic() - t0
+        pids = cluster.pids
+    assert not pids(), "processes of the cluster left behind"
+    assert rc == 2 and seconds < 30 and re.fullmatch(
+        r"pa10-dnbs: error: --scheduler: worker tcp://127\.0\.0\.1:\d+ of tcp://127\.0\.0\.1:\d+ cannot import "
+        r"pa10_dnbs \(ModuleNotFoundError: .*\): every worker needs the same pa10_dnbs .*\n", err), (rc, err)
+    assert not (tmp_path / "s").exists()
