@@ -32,8 +32,8 @@ from ..tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 from ..tune.space import select, start_values
 from ..run_settings import build_settings
 from ..run_steps import run_steps
-from ..tune.tuner import (TrialProgress, TuneSpec, completed, held_out, open_storage, open_study, optimize, refusal,
-                          study_lock_key)
+from ..tune.tuner import (TrialProgress, TuneSpec, arm_digest, check_persistent, completed, held_out, open_storage, open_study,
+                          optimize, refusal, settings_digest, study_lock_key)
 
 HELD_OUT_SEED0 = 100   # held-out seeds are 100, 101, ...: never a training seed (0 .. --seeds - 1)
 
@@ -69,6 +69,8 @@ def _checked_tune(o: TuneOptions, state: dict) -> int:
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out: {out} exists and is not a directory")
     check_creatable(out, "--out")
+    if o.storage is not None:
+        check_persistent(o.storage)   # an in-memory database keeps nothing: refused before any run
     config_path = Path(o.config_path) if o.config_path else default_config_path()
     base = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
     the_arm = base.arm
@@ -81,13 +83,17 @@ def _checked_tune(o: TuneOptions, state: dict) -> int:
                 from None
     n_steps = run_steps(o.duration_s, base.simulation.dt_s)
     runs_per_trial = len(train) * o.seeds
-    at_once = 1 if o.scheduler is not None else min(runs_per_trial, o.jobs or os.cpu_count() or 1)
-    check_run_size(o.duration_s, n_steps, len(the_arm.joint_names), at_once=at_once,
-                   total_runs=runs_per_trial * o.trials, say=say_note)
+    jobs = o.jobs or os.cpu_count() or 1
+    batch = max(1, jobs // runs_per_trial)   # trials asked at once with `jobs` workers (tune/tuner.py optimize)
+    n_held = 2 * len(SCENARIOS) * o.held_out_seeds   # the start and the best settings on every scenario
+    pool = min(jobs, max(runs_per_trial * min(batch, o.trials), n_held))   # the runs that ever step at once
+    check_run_size(o.duration_s, n_steps, len(the_arm.joint_names), at_once=1 if o.scheduler is not None else pool,
+                   total_runs=runs_per_trial * o.trials + n_held, say=say_note)
     if faults_active(base.faults):
         say_note(IN_PROCESS_FAULTS_NOTE)
     spec = TuneSpec(the_arm.name, o.controller, param_list, train, list(range(o.seeds)), o.duration_s,
-                    str(config_path.resolve()), o.seed, start_values(o.controller, base))
+                    str(config_path.resolve()), o.seed, start_values(o.controller, base),
+                    arm_digest(the_arm), settings_digest(base))
     command = _command(o.controller, o.trials, out, o.arm, config_path, o.storage, o.seed, o.scenarios, o.seeds, o.held_out_seeds,
                        o.duration_s, o.params)
     check_output_dir(out, False, "--out", inputs={"--config": config_path, "--arm": the_arm.file,
@@ -106,7 +112,7 @@ def _checked_tune(o: TuneOptions, state: dict) -> int:
     with deferred():   # a Ctrl-C stops the tune between two storage operations, never inside one
         with immediate():   # seconds of imports on a busy machine: a Ctrl-C stops them at once
             import optuna  # noqa: F401
-        return _tune(state, spec, base, o.trials, out, o.storage, o.jobs, o.scheduler, train, o.seeds, o.held_out_seeds,
+        return _tune(state, spec, base, o.trials, out, o.storage, (pool, batch), o.scheduler, train, o.seeds, o.held_out_seeds,
                      o.controller, the_arm, config_path, command, o.progress)
 
 
@@ -145,21 +151,24 @@ def _lost_line(exc: ClusterLost, state: dict, trials: int) -> str:
             "written: run the same command to finish them")
 
 
-def _tune(state, spec, base, trials, out, storage, jobs, scheduler, train, seeds, held_out_seeds, controller,
+def _tune(state, spec, base, trials, out, storage, pool_batch, scheduler, train, seeds, held_out_seeds, controller,
           the_arm, config_path, command, progress) -> int:
     """The search, the held-out runs and the reports; ``state`` says how far it got (for an interruption)."""
-    with Executor(jobs, scheduler) as ex:   # an unreachable scheduler stops here, before any storage is touched
+    pool, batch = pool_batch   # local: the processes (no more than ever run at once) and the trials asked at once
+    with Executor(pool if scheduler is None else None, scheduler) as ex:   # an unreachable scheduler stops here,
+        # before any storage is touched
         storage_obj = open_storage(storage) if storage is not None else None
         if storage is None:
             out.mkdir(parents=True, exist_ok=True)
             storage = f"sqlite:///{(out / 'tune.db').resolve()}"
             storage_obj = open_storage(storage)
-        batch = max(1, ex.jobs // (len(train) * seeds))
+        if scheduler is not None:
+            batch = max(1, ex.jobs // (len(train) * seeds))   # the cluster's workers
         study = open_study(storage_obj, spec, batch)
         state["study"], state["phase"] = study, "trials"
         t0 = time.monotonic()
         bar = state["bar"] = TrialProgress(study, trials, f"tune {controller} on {the_arm.name}", progress)
-        optimize(study, spec, base, trials, ex, bar)
+        optimize(study, spec, base, trials, ex, bar, batch=batch)
         bar.close()
         state["bar"], state["phase"] = None, "reports"
         trials_done = completed(study)

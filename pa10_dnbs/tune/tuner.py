@@ -39,6 +39,8 @@ class TuneSpec:
     config_file: str
     seed: int = 0
     start: dict = field(default_factory=dict)  # the start point of the full space (space.start_values)
+    arm_digest: str = ""        # sha256 of the arm file's and its URDF's content (:func:`arm_digest`)
+    settings_digest: str = ""   # sha256 of the merged settings the trials start from (:func:`settings_digest`)
 
     @property
     def fixed(self) -> dict:
@@ -54,7 +56,31 @@ class TuneSpec:
         """The options a resumed study must share with the one in the storage."""
         return {"arm": self.arm_name, "controller": self.controller, "params": [p.name for p in self.params],
                 "scenarios": self.scenarios, "seeds": self.seeds, "duration_s": self.duration_s,
-                "config_file": self.config_file, "seed": self.seed}
+                "config_file": self.config_file, "seed": self.seed, "arm_digest": self.arm_digest,
+                "settings_digest": self.settings_digest}
+
+
+def arm_digest(arm) -> str:
+    """sha256 (hex) of what an arm is: its arm file's content and its URDF's (one file for a bare URDF); two arm
+    files of one name, or an arm file edited in place, differ."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for path in dict.fromkeys([arm.file, arm.urdf]):   # in order, once each
+        h.update(path.read_bytes())
+        h.update(b"\0")
+    return h.hexdigest()
+
+
+def settings_digest(settings: Settings) -> str:
+    """sha256 (hex) of the merged settings (config files, arm file, rules: everything a trial's run is set by but
+    the searched point), the arm file's path left out (the arm is :func:`arm_digest`): a config edited in place
+    differs."""
+    import hashlib
+    import json
+
+    mapping = {k: v for k, v in settings.to_config().items() if k != "arm"}
+    return hashlib.sha256(json.dumps(mapping, sort_keys=True, default=repr).encode()).hexdigest()
 
 
 def quiet_optuna() -> None:
@@ -73,6 +99,24 @@ def study_lock_key(url: str, study_name: str) -> str:
 
 
 STORAGE_OPEN_WAIT_S = 60.0   # how long a tune waits for another to finish opening the same storage [s]
+
+
+def check_persistent(url: str) -> None:
+    """ConfigError naming --storage for an in-memory SQLite URL (``sqlite://``, ``sqlite:///:memory:``, a
+    ``file::memory:`` or ``mode=memory`` URI with ``uri=true``): its trials end with the process, so nothing could be kept or resumed. Other URLs are
+    opened (and said wrong) by :func:`open_storage`."""
+    from sqlalchemy.engine import make_url
+
+    try:
+        u = make_url(url)
+    except Exception:   # noqa: BLE001 - not a URL: open_storage says so
+        return
+    db, uri = u.database or "", str(u.query.get("uri", "")).lower() == "true"   # uri=true: a file: URI (pysqlite)
+    if u.get_backend_name() == "sqlite" and (db in ("", ":memory:") or uri and (
+            db.startswith("file::memory:") or str(u.query.get("mode", "")) == "memory")):
+        raise ConfigError(f"storage: {url} is an in-memory database: its trials would end with this run, nothing "
+                          "kept or resumed; give a file (sqlite:///PATH.db), a database server, or leave --storage "
+                          "out (DIR/tune.db)", setting="storage")
 
 
 def open_storage(url: str):
@@ -118,17 +162,22 @@ def open_study(storage, spec: TuneSpec, batch: int):
 
 
 IDENTITY_FLAGS = {"arm": "--arm", "controller": "--controller", "params": "--params", "scenarios": "--scenarios",
-                  "seeds": "--seeds", "duration_s": "--duration", "config_file": "--config", "seed": "--seed"}
+                  "seeds": "--seeds", "duration_s": "--duration", "config_file": "--config", "seed": "--seed",
+                  "arm_digest": "--arm", "settings_digest": "--config"}
+DIGESTS = {"arm_digest": "the arm file's and URDF's content", "settings_digest": "the merged settings"}
 
 
 def refusal(study_name: str, stored: dict, given: dict) -> str:
     """Why a stored study cannot go on with these options, and what to do: one line naming each flag that
     differs, as stored and as given."""
     def shown(key, v):
+        if key in DIGESTS:
+            return f"sha256 {v[:12]}" if isinstance(v, str) and v else "not recorded (an older pa10-dnbs's study)"
         if key == "seeds" and isinstance(v, list):
             return str(len(v))          # --seeds N means seeds 0..N-1
         return ",".join(map(str, v)) if isinstance(v, list) else f"{v:g}" if isinstance(v, float) else str(v)
-    diff = [f"{IDENTITY_FLAGS.get(k, k)} {shown(k, given.get(k))} (stored: {shown(k, stored.get(k))})"
+    diff = [f"{IDENTITY_FLAGS.get(k, k)}: {DIGESTS[k]}, {shown(k, given.get(k))} (stored: {shown(k, stored.get(k))})"
+            if k in DIGESTS else f"{IDENTITY_FLAGS.get(k, k)} {shown(k, given.get(k))} (stored: {shown(k, stored.get(k))})"
             for k in given if stored.get(k) != given[k]]
     return (f"--out/--storage: study {study_name!r} there was run with other options, so its trials do not "
             f"score the same objective: {'; '.join(diff)}; rerun with the stored options to resume it, or give "
@@ -146,14 +195,15 @@ def trial_settings(base: Settings, spec: TuneSpec, values: dict) -> Settings:
     return apply(base, settings_fragment(spec.controller, base, dict(spec.fixed, **values)))
 
 
-def optimize(study, spec: TuneSpec, base: Settings, n_trials: int, executor: Executor, progress=None) -> None:
-    """Run trials until the study holds ``n_trials`` completed ones. ``progress(done, best, runs_done, runs)``
-    after every run. Interrupted (Ctrl-C, an error): the trials of the batch are marked failed, the completed
+def optimize(study, spec: TuneSpec, base: Settings, n_trials: int, executor: Executor, progress=None,
+             batch: int | None = None) -> None:
+    """Run trials until the study holds ``n_trials`` completed ones, ``batch`` at a time (default: as many as
+    the executor's workers run at once). ``progress(done, best, runs_done, runs)`` after every run. Interrupted (Ctrl-C, an error): the trials of the batch are marked failed, the completed
     ones stay in the storage, and the exception goes on."""
     from optuna.trial import TrialState
 
     runs_per_trial = len(spec.scenarios) * len(spec.seeds)
-    batch = max(1, executor.jobs // runs_per_trial)
+    batch = batch or max(1, executor.jobs // runs_per_trial)
     while (done := len(completed(study))) < n_trials:
         asked = [study.ask() for _ in range(min(batch, n_trials - done))]
         tasks = {}
