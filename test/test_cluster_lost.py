@@ -186,3 +186,30 @@ def test_workers_that_cannot_import_the_project_are_refused_at_connect(tmp_path)
         r"pa10-dnbs: error: --scheduler: worker tcp://127\.0\.0\.1:\d+ of tcp://127\.0\.0\.1:\d+ cannot import "
         r"pa10_dnbs \(ModuleNotFoundError: .*\): every worker needs the same pa10_dnbs .*\n", err), (rc, err)
     assert not (tmp_path / "s").exists()
+
+
+def test_a_run_whose_workers_keep_dying_is_named_in_one_line(tmp_path, monkeypatch):
+    """Dask gives a run up (KilledWorker) once `allowed-failures` workers died running it (0 here: the first
+    death; 3 by default): one line naming the run and --scheduler, exit 2, the completed rows kept."""
+    from distributed import Client
+
+    monkeypatch.setenv("DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES", "0")   # the scheduler's, at its start
+    with local_cluster(tmp_path / "cluster", n_workers=1) as cluster:
+        proc = _command(*STUDY, "--scheduler", cluster.address, "--out", tmp_path / "s")
+        try:
+            with Client(cluster.address, timeout=30) as client:
+                _wait(lambda: client.run_on_scheduler(lambda dask_scheduler: any(
+                    str(k).startswith("run_one-") and ts.state == "processing"
+                    for k, ts in dask_scheduler.tasks.items())), "a run on the worker", proc)
+                time.sleep(0.3)
+                os.kill(next(iter(client.run(os.getpid).values())), signal.SIGKILL)   # its nanny starts another
+            rc, out, err = _end(proc)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.communicate()
+        pids = cluster.pids
+    assert not pids(), "processes of the cluster left behind"
+    assert rc == 2 and re.fullmatch(
+        r"pa10-dnbs: error: --scheduler: tcp://127\.0\.0\.1:\d+ gave up the run \((nominal|payload_2kg), pid, \d\): "
+        r"each worker that ran it died .*; stopped after \d of 8 runs; .*\n", err), (rc, err)

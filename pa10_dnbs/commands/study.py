@@ -20,7 +20,7 @@ from ..run_size import check_run_size, say_note
 from ..supervisor.fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
 from ..sim.closed_loop import CONTROLLERS
 from ..study.feasibility import infeasible_scenarios
-from ..study.executor import ClusterLost
+from ..study.executor import RunsLost
 from ..study.partial_summary import write_partial_study
 from ..study.runner import run_study
 from ..study.scenarios import SCENARIOS, check_scenario_references
@@ -75,7 +75,7 @@ def run_study_command(options: StudyOptions) -> int:
     except KeyboardInterrupt:   # the workers are stopped (study/executor.py); the completed runs are kept
         bar.close()
         return _keep_partial(o.out, o.force, done, list(product(scen, ctrl, range(o.seeds))), command, head)
-    except ClusterLost as exc:   # the cluster cannot go on: the completed runs are kept as for a Ctrl-C
+    except RunsLost as exc:   # a worker or the cluster lost: the completed runs are kept as for a Ctrl-C
         bar.close()
         return _keep_partial(o.out, o.force, done, list(product(scen, ctrl, range(o.seeds))), command, head,
                              lost=exc)
@@ -93,14 +93,14 @@ def run_study_command(options: StudyOptions) -> int:
 
 
 def _keep_partial(out: Path, force: bool, done: list[dict], all_runs: list, command: str, head: dict,
-                  lost: ClusterLost | None = None) -> int:
-    """After a Ctrl-C (or with ``lost``, the Dask cluster lost mid-study): the completed runs' rows into ``out``,
-    marked partial (study/partial_summary.py); one line saying what is where; exit 130 (lost: its line naming
-    --scheduler, exit 2, as an unreachable scheduler). Nothing completed: nothing written. A second Ctrl-C
+                  lost: RunsLost | None = None) -> int:
+    """After a Ctrl-C (or with ``lost``, a local worker process or the Dask cluster lost mid-study): the completed
+    runs' rows into ``out``, marked partial (study/partial_summary.py); one line saying what is where; exit 130
+    (lost: its line naming --jobs or --scheduler, exit 2, as an unreachable scheduler). Nothing completed: nothing written. A second Ctrl-C
     meanwhile removes the half-written folder and ends at once."""
     n = len(all_runs)
     kept = len({(r["scenario"], r["controller"], r["seed"]) for r in done})
-    opening = f"pa10-dnbs: error: {lost.named('--scheduler')}; stopped " if lost is not None else "pa10-dnbs: interrupted "
+    opening = f"pa10-dnbs: error: {lost.line()}; stopped " if lost is not None else "pa10-dnbs: interrupted "
     code = 2 if lost is not None else EXIT_INTERRUPTED
     if not kept:
         say(f"{opening}after 0 of {n} runs; nothing written to {out}: run the same command again")

@@ -24,7 +24,7 @@ from ..output_lock import lock_key, lock_output
 from ..report.outputs import check_creatable, check_output_dir, check_tune_dir, tune_files
 from ..run_size import check_run_size, say_note
 from ..supervisor.fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
-from ..study.executor import ClusterLost, Executor
+from ..study.executor import Executor, RunsLost
 from ..study.scenarios import SCENARIOS, check_scenario_references
 from .name_list import name_list
 from ..tune.report import held_out_table, held_out_verdict, tune_figures, tune_markdown, tuned_yaml
@@ -54,7 +54,7 @@ def run_tune(options: TuneOptions) -> int:
             state["bar"].close()
         say(_interrupted_line(state, options.trials))
         return EXIT_INTERRUPTED
-    except ClusterLost as exc:   # the Dask cluster cannot go on: what the storage keeps, as for a Ctrl-C; exit 2
+    except RunsLost as exc:   # a worker or the cluster lost: what the storage keeps, as for a Ctrl-C; exit 2
         if state["bar"] is not None:
             state["bar"].close()
         say(_lost_line(exc, state, options.trials))
@@ -137,10 +137,10 @@ def _interrupted_line(state: dict, trials: int) -> str:
             "reports were all written: run the same command to finish them")
 
 
-def _lost_line(exc: ClusterLost, state: dict, trials: int) -> str:
-    """The cluster lost mid-tune: one line naming --scheduler, how many trials the storage keeps, where, and
-    that the same command resumes."""
-    opening = f"pa10-dnbs: error: {exc.named('--scheduler')}"
+def _lost_line(exc: RunsLost, state: dict, trials: int) -> str:
+    """A local worker process or the cluster lost mid-tune: one line naming --jobs or --scheduler, how many
+    trials the storage keeps, where, and that the same command resumes."""
+    opening = f"pa10-dnbs: error: {exc.line()}"
     if state["study"] is None:
         return f"{opening}; before this run's first trial: run the same command again"
     n, where_kept = len(completed(state["study"])), state["where_kept"]

@@ -10,8 +10,9 @@ results are keyed, so a run that comes back twice is counted once and ``on_done`
 - otherwise ``jobs`` local processes (default: one per core); ``jobs == 1`` runs in this process.
 
 The cluster lost while runs are out (its scheduler gone, or no worker for ``WORKERLESS_S``, or a run's workers
-killed again and again): :class:`ClusterLost`, one line naming ``--scheduler`` (exit 2); the runs completed so far
-went to ``on_done``, so the command keeps them as for a Ctrl-C.
+killed again and again): :class:`ClusterLost`, one line naming ``--scheduler`` (exit 2); a local worker process
+killed (the OOM killer): :class:`PoolBroken`, naming ``--jobs``. The runs completed so far went to ``on_done``, so
+the command keeps them as for a Ctrl-C.
 
 Interrupted (Ctrl-C, an error) while runs are out: the local workers (which ignore SIGINT, pa10_dnbs/interrupt.py)
 are terminated and reaped within ``STOP_GRACE_S`` (then killed); a cluster's futures are cancelled, so the
@@ -24,6 +25,7 @@ import re
 import time
 import uuid
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from typing import Callable, Hashable
 
 from ..config_error import ConfigError
@@ -36,12 +38,30 @@ WORKERLESS_S = CONNECT_TIMEOUT_S   # runs out and the scheduler without a worker
 WATCH_S = 1.0              # how often a waiting executor asks the scheduler for its number of workers
 
 
-class ClusterLost(ConfigError):
-    """The Dask cluster cannot finish the runs (its scheduler gone, no worker left): one line naming
-    ``--scheduler`` and exit 2, as an unreachable scheduler; what completed before was given to ``on_done``."""
+class RunsLost(ConfigError):
+    """The runs cannot be finished where they run: one line naming the option that chose the place (``flag``)
+    and exit 2; what completed before was given to ``on_done``, and the command keeps it as for a Ctrl-C."""
 
-    def __init__(self, message: str):
-        super().__init__(f"scheduler: {message}", setting="scheduler")
+    setting_name, flag = "jobs", "--jobs"
+
+    def __init__(self, message: str, scheduler_alive: bool = False):
+        super().__init__(f"{self.setting_name}: {message}", setting=self.setting_name)
+        self.scheduler_alive = scheduler_alive
+
+    def line(self) -> str:
+        """The message, opening with the flag."""
+        return self.named(self.flag)
+
+
+class ClusterLost(RunsLost):
+    """The Dask cluster cannot finish the runs (its scheduler gone, no worker left, a run whose workers died
+    again and again): named ``--scheduler``, as an unreachable scheduler."""
+
+    setting_name, flag = "scheduler", "--scheduler"
+
+
+class PoolBroken(RunsLost):
+    """A local worker process died (SIGKILL: the OOM killer, a ``kill -9``): the pool cannot go on."""
 
 
 class Executor:
@@ -128,7 +148,7 @@ class Executor:
                 while not done.is_empty():   # polled: a Ctrl-C noted meanwhile (interrupt.deferred) is raised here
                     batch = done.next_batch(block=False)
                     for fut in batch:
-                        finished(futures[fut], watch.result(fut))
+                        finished(futures[fut], watch.result(fut, futures[fut]))
                     check()
                     if not batch:
                         watch.check()   # the scheduler gone, or no worker for WORKERLESS_S: ClusterLost
@@ -141,19 +161,31 @@ class Executor:
         elif self._pool is not None:
             futures, order = {}, {}
             try:
+                procs = dict(self._pool._processes or {})
                 with sigint_blocked():   # the workers forked by the first submit must not see a Ctrl-C
                     for key, args in tasks.items():
-                        fut = self._pool.submit(fn, *args)
+                        try:
+                            fut = self._pool.submit(fn, *args)
+                        except BrokenProcessPool:   # a worker died between two calls of run (one idle)
+                            raise _pool_broken(self._pool, list(procs.values())) from None
                         futures[fut], order[fut] = key, len(order)
                 pending = set(futures)
                 while pending:   # polled: a Ctrl-C noted meanwhile (interrupt.deferred) is raised here
+                    procs.update(self._pool._processes or {})   # forked as needed: their exit codes, if one dies
                     done, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
+                    broken = False
                     for fut in sorted(done, key=lambda f: order[f]):
-                        finished(futures[fut], fut.result())
+                        if isinstance(fut.exception(), BrokenProcessPool):
+                            broken = True   # the runs that did complete first (on_done)
+                        else:
+                            finished(futures[fut], fut.result())
+                    if broken:
+                        raise _pool_broken(self._pool, list(procs.values()))
                     check()
-            except BaseException:
-                for fut in futures:
-                    fut.cancel()
+            except BaseException as exc:
+                if not isinstance(exc, PoolBroken):   # broken: its manager thread has failed every future
+                    for fut in futures:
+                        fut.cancel()
                 raise
         else:
             for key, args in tasks.items():
@@ -161,6 +193,26 @@ class Executor:
                     value = fn(*args)
                 finished(key, value)
         return results
+
+
+def _pool_broken(pool, procs) -> PoolBroken:
+    """The line of ``pool`` whose worker died: how (its signal), and the likely why. Its manager thread (which
+    fails every future and ends the other workers) is let finish first, and every worker reaped, so that the
+    exit codes are known (and no future is cancelled under it: an InvalidStateError in that thread)."""
+    import signal
+
+    manager = getattr(pool, "_executor_manager_thread", None)
+    if manager is not None:
+        manager.join(STOP_GRACE_S)
+    for p in procs:
+        p.join(STOP_GRACE_S)
+    codes = sorted({p.exitcode for p in procs if p.exitcode not in (None, 0)})
+    if len(codes) > 1 and -signal.SIGTERM in codes:   # the others, ended by the pool itself (terminate_broken)
+        codes.remove(-signal.SIGTERM)
+    how = ", ".join(f"killed by {signal.Signals(-c).name}" if c < 0 and -c in signal.valid_signals()
+                    else f"exit code {c}" for c in codes) or "ended"
+    oom = " (out of memory? fewer --jobs need less)" if -signal.SIGKILL in codes else ""
+    return PoolBroken(f"a local worker process died ({how}){oom}, so its run cannot finish")
 
 
 class _Watch:
@@ -173,11 +225,9 @@ class _Watch:
         self.last_worker = self.last_asked = time.monotonic()
 
     def lost(self, why: str, scheduler_alive: bool = False) -> ClusterLost:
-        exc = ClusterLost(why)
-        exc.scheduler_alive = scheduler_alive
-        return exc
+        return ClusterLost(why, scheduler_alive)
 
-    def result(self, fut):
+    def result(self, fut, key=None):
         """``fut.result()``; ClusterLost for a run the cluster could not finish (not an error of the run)."""
         from distributed import CancelledError
         from distributed.scheduler import KilledWorker
@@ -187,10 +237,10 @@ class _Watch:
         except CancelledError:
             raise self.lost(f"lost the connection to the scheduler {self.address} (its process ended, or its "
                             "host or the network went down)") from None
-        except KilledWorker:
-            raise self.lost(f"the workers of {self.address} died on one run again and again (out of memory? "
-                            "a worker that cannot import this pa10_dnbs?): see the workers' logs",
-                            scheduler_alive=True) from None
+        except KilledWorker:   # Dask gives a run up once `allowed-failures` workers died running it
+            run = f"the run ({', '.join(map(str, key))})" if isinstance(key, tuple) else "a run"
+            raise self.lost(f"{self.address} gave up {run}: each worker that ran it died (Dask's allowed-failures "
+                            "retries spent; out of memory?): see the workers' logs", scheduler_alive=True) from None
 
     def check(self) -> None:
         now = time.monotonic()
