@@ -128,8 +128,9 @@ def local_cluster(directory: Path, n_workers: int = 2, worker_args: tuple = (), 
         procs += workers
         from distributed import Client
 
-        with Client(address, timeout=START_TIMEOUT_S) as client:
-            client.wait_for_workers(n_workers if wait_for_workers else 0, timeout=START_TIMEOUT_S)
+        if wait_for_workers and n_workers:
+            with Client(address, timeout=START_TIMEOUT_S) as client:
+                client.wait_for_workers(n_workers, timeout=START_TIMEOUT_S)
         yield Cluster(address, sched, workers)
     finally:
         for p in reversed(procs):

@@ -213,3 +213,25 @@ def test_a_run_whose_workers_keep_dying_is_named_in_one_line(tmp_path, monkeypat
     assert rc == 2 and re.fullmatch(
         r"pa10-dnbs: error: --scheduler: tcp://127\.0\.0\.1:\d+ gave up the run \((nominal|payload_2kg), pid, \d\): "
         r"each worker that ran it died .*; stopped after \d of 8 runs; .*\n", err), (rc, err)
+
+
+def test_a_ctrl_c_while_a_tune_waits_for_a_worker_stops_it_at_once(tmp_path):
+    """A scheduler without a worker: the tune waits up to 10 s for one; a Ctrl-C meanwhile ends it within about a
+    second, exit 130, the line of an interruption before any trial (it was held until the wait's end, exit 2)."""
+    from test_misuse_interrupt import Command, one_line
+
+    with local_cluster(tmp_path / "cluster", n_workers=0) as cluster:
+        c = Command("tune", "--controller", "pid", "--trials", 2, "--scenarios", "nominal", "--duration", 0.2,
+                    "--held-out-seeds", 0, "--no-progress", "--scheduler", cluster.address, "--out", tmp_path / "t")
+        try:
+            time.sleep(3.0)   # started (imports: ~2 s), waiting for a worker
+            c.ctrl_c()
+            rc, seconds, err = c.end()
+        finally:
+            c.kill()
+        pids = cluster.pids
+    assert not pids(), "processes of the cluster left behind"
+    assert rc == 130 and seconds < 3.0, (rc, seconds, err)
+    assert re.fullmatch(r"pa10-dnbs: interrupted (before the first trial; no trial kept: run the same command to "
+                        r"start|while checking its input, before any trial: .*)", one_line(err)), err
+    assert not (tmp_path / "t").exists()

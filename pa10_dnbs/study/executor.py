@@ -77,7 +77,8 @@ class Executor:
 
     def __enter__(self) -> "Executor":
         if self.scheduler is not None:
-            self._client = connect(self.scheduler)
+            with immediate():   # seconds of waits (probe, handshake, a worker): a Ctrl-C stops them at once,
+                self._client = connect(self.scheduler)   # also inside a tune's deferred() (interrupt.py)
             self.jobs = max(1, len(self._client.scheduler_info(n_workers=-1)["workers"]))
         elif self.jobs > 1:
             self._pool = ProcessPoolExecutor(max_workers=self.jobs, initializer=pool_worker_start,
@@ -341,15 +342,14 @@ def connect(address: str):
         raise ConfigError(f"scheduler: cannot connect to {address}: "
                           f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}", setting="scheduler") from None
     try:
-        client.wait_for_workers(1, timeout=CONNECT_TIMEOUT_S)
-    except (OSError, TimeoutError):
-        client.close()
-        raise ConfigError(f"scheduler: {address} has no worker (waited {CONNECT_TIMEOUT_S:g} s)",
-                          setting="scheduler") from None
-    try:
+        try:
+            client.wait_for_workers(1, timeout=CONNECT_TIMEOUT_S)
+        except (OSError, TimeoutError):
+            raise ConfigError(f"scheduler: {address} has no worker (waited {CONNECT_TIMEOUT_S:g} s)",
+                              setting="scheduler") from None
         _check_workers(client, address)
-    except BaseException:
-        client.close()
+    except BaseException:   # a Ctrl-C too: the client closed, not left to close itself (noisily) at exit
+        client.close(timeout=CLOSE_TIMEOUT_S)
         raise
     return client
 
