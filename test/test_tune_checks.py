@@ -122,3 +122,15 @@ def test_an_in_memory_storage_is_refused(tmp_path, url):
         f"pa10-dnbs: error: --storage: {url} is an in-memory database: its trials would end with this run, nothing "
         "kept or resumed; give a file (sqlite:///PATH.db), a database server, or leave --storage out (DIR/tune.db)\n")
     assert not (tmp_path / "t").exists()
+
+
+def test_no_importance_figure_from_a_single_point(tmp_path):
+    """--trials 1 (the start point only): history.png, but no importance.png (optuna draws equal shares of a
+    single point) and no link to it; from 2 trials at different points on, both."""
+    r = run_cli("tune", *SHORT, "--trials", 1, "--out", tmp_path / "t")
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "t" / "history.png").exists() and not (tmp_path / "t" / "importance.png").exists()
+    assert "importance.png" not in (tmp_path / "t" / "tune.md").read_text()
+    r = run_cli("tune", *SHORT, "--trials", 2, "--out", tmp_path / "t")
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "t" / "importance.png").exists() and "importance.png" in (tmp_path / "t" / "tune.md").read_text()

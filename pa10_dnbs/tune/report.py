@@ -125,9 +125,14 @@ def tune_figures(study, directory: Path) -> list[str]:
         import matplotlib.pyplot as plt
         from optuna.visualization.matplotlib import plot_optimization_history, plot_param_importances
 
+    from optuna.trial import TrialState
+
+    points = {tuple(sorted(t.params.items())) for t in study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))}
     out = []
     for name, plot in (("history.png", plot_optimization_history), ("importance.png", plot_param_importances)):
         check()   # a Ctrl-C noted meanwhile (the plots read the storage: never interrupted inside)
+        if name == "importance.png" and len(points) < 2:   # optuna draws equal shares from one point: no measure
+            continue
         try:
             with warnings.catch_warnings():   # optuna's "too few trials" for importances: not the user's concern
                 warnings.simplefilter("ignore", UserWarning)
