@@ -235,3 +235,21 @@ def test_a_ctrl_c_while_a_tune_waits_for_a_worker_stops_it_at_once(tmp_path):
     assert re.fullmatch(r"pa10-dnbs: interrupted (before the first trial; no trial kept: run the same command to "
                         r"start|while checking its input, before any trial: .*)", one_line(err)), err
     assert not (tmp_path / "t").exists()
+
+
+def test_a_worker_without_a_compiler_runs_a_dnbs_study_with_kernel_auto(tmp_path, monkeypatch):
+    """`dnbs.kernel: auto` on a cluster: each worker resolves it (c where it builds, else numpy: the same bits);
+    it was resolved here (c) and imposed on a worker that cannot build it: the study refused, exit 2."""
+    monkeypatch.setenv("CC", "no-such-cc")   # the workers' environment: no compiler, an empty kernel cache
+    monkeypatch.setenv("PA10_DNBS_CACHE", str(tmp_path / "worker_cache"))
+    with local_cluster(tmp_path / "cluster", n_workers=1) as cluster:
+        monkeypatch.delenv("CC")
+        monkeypatch.delenv("PA10_DNBS_CACHE")
+        rc, out, err = _end(_command("study", "--scenarios", "nominal", "--controllers", "dnbs", "--seeds", 1,
+                                     "--duration", 0.2, "--no-progress", "--scheduler", cluster.address,
+                                     "--out", tmp_path / "s"))
+        pids = cluster.pids
+    assert not pids(), "processes of the cluster left behind"
+    assert rc == 0 and err == "", (rc, err)
+    assert not list((tmp_path / "worker_cache").glob("*.so"))   # the worker ran numpy's step
+    assert json.loads((tmp_path / "s" / "study.json").read_text())["rows"][0]["controller"] == "dnbs"

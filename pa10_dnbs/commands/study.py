@@ -52,8 +52,9 @@ def run_study_command(options: StudyOptions) -> int:
         raise ConfigError(f"--scenarios: every scenario chosen is infeasible on arm {settings.arm.file} (lines above): "
                           "nothing to run")
     asked, scen = scen, [s for s in scen if s not in infeasible]
-    if "dnbs" in ctrl:
-        settings = resolve_kernel(settings, say=print)  # once here, not in each worker
+    if "dnbs" in ctrl and o.scheduler is None:   # on a cluster each worker resolves `auto` (the same bits): a
+        settings = resolve_kernel(settings, say=print)  # worker without a compiler takes numpy; here: once, not in
+        # each local worker
     n = len(scen) * len(ctrl) * o.seeds
     dt = settings.simulation.dt_s
     steps_per_run = n_steps
