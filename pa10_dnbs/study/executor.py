@@ -160,9 +160,8 @@ class Executor:
                     self._client.cancel(list(futures), force=True)   # the scheduler drops them: nothing left queued
                 raise
         elif self._pool is not None:
-            futures, order = {}, {}
+            futures, order, procs = {}, {}, dict(self._pool._processes or {})
             try:
-                procs = dict(self._pool._processes or {})
                 with sigint_blocked():   # the workers forked by the first submit must not see a Ctrl-C
                     for key, args in tasks.items():
                         try:
@@ -184,7 +183,14 @@ class Executor:
                         raise _pool_broken(self._pool, list(procs.values()))
                     check()
             except BaseException as exc:
-                if not isinstance(exc, PoolBroken):   # broken: its manager thread has failed every future
+                procs.update(self._pool._processes or {})
+                if isinstance(exc, PoolBroken) or any(p.exitcode is not None for p in procs.values()):
+                    # broken (a worker gone: the group's SIGTERM of `timeout`): its manager thread fails every
+                    # future; none is cancelled under it (an InvalidStateError traceback in that thread)
+                    manager = getattr(self._pool, "_executor_manager_thread", None)
+                    if manager is not None:
+                        manager.join(STOP_GRACE_S)
+                else:
                     for fut in futures:
                         fut.cancel()
                 raise
