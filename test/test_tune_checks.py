@@ -134,3 +134,51 @@ def test_no_importance_figure_from_a_single_point(tmp_path):
     r = run_cli("tune", *SHORT, "--trials", 2, "--out", tmp_path / "t")
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "t" / "importance.png").exists() and "importance.png" in (tmp_path / "t" / "tune.md").read_text()
+
+
+def test_one_study_is_tuned_once_however_its_sqlite_file_is_named(tmp_path):
+    """A tune into --out A (its storage A/tune.db, no --storage) and one naming that file as its --storage,
+    spelled otherwise (``//`` in the path): the second is refused while the first runs (both ran, and one ended
+    in Optuna's UpdateFinishedTrialError traceback)."""
+    from test_misuse_inputs import _cli_process, _ctrl_c, _leftovers, _wait_for_lock
+
+    from pa10_dnbs.tune.tuner import study_lock_key
+
+    args = ("tune", "--controller", "pid", "--trials", 2, "--scenarios", "nominal", "--seeds", 1,
+            "--held-out-seeds", 0, "--jobs", 1, "--duration", 20)
+    first = _cli_process(*args, "--out", tmp_path / "a")
+    try:
+        _wait_for_lock(study_lock_key(f"sqlite:///{tmp_path / 'a' / 'tune.db'}", "pa10-pid"), first)
+        url = f"sqlite:///{tmp_path}//a/tune.db"
+        r = run_cli(*args, "--storage", url, "--out", tmp_path / "b")
+        assert r.returncode == 2 and r.stderr == (f"pa10-dnbs: error: --storage: study pa10-pid in {url} is being "
+                                                  f"tuned by another run (pid {first.pid}); wait for it to end (the "
+                                                  "same command then resumes it)\n"), r.stderr
+        assert not (tmp_path / "b").exists()
+    finally:
+        _ctrl_c(first)
+    assert not _leftovers(str(tmp_path))
+
+
+def test_an_out_holding_another_storages_tune_is_refused(tmp_path):
+    """DIR holds a finished tune (its trials in DIR/tune.db): a tune of the same study in another --storage into
+    DIR would replace its reports with that storage's study's (and disagree with DIR/tune.db); refused, nothing
+    replaced. The same without tune.json (an interrupted tune), and the other way round."""
+    out = tmp_path / "t"
+    assert run_cli("tune", *SHORT, "--trials", 2, "--out", out).returncode == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    other = f"sqlite:///{tmp_path / 'other.db'}"
+    r = run_cli("tune", *SHORT, "--trials", 1, "--storage", other, "--out", out)
+    assert r.returncode == 2 and r.stderr == (
+        f"pa10-dnbs: error: --out: {out} holds the reports of the tune in sqlite:///{(out / 'tune.db').resolve()}, "
+        f"not in {other}: give another --out for this tune (or rerun without --storage to resume that one)\n")
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before and not (tmp_path / "other.db").exists()
+    (out / "tune.json").unlink()
+    r = run_cli("tune", *SHORT, "--trials", 1, "--storage", other, "--out", out)
+    assert r.returncode == 2 and r.stderr.startswith(f"pa10-dnbs: error: --out: {out}/tune.db holds the trials of a "
+                                                     f"tune without --storage, not of {other}"), r.stderr
+    out2 = tmp_path / "t2"
+    assert run_cli("tune", *SHORT, "--trials", 1, "--storage", other, "--out", out2).returncode == 0
+    r = run_cli("tune", *SHORT, "--trials", 1, "--out", out2)
+    assert r.returncode == 2 and f"(or rerun with --storage {other} to resume that one)" in r.stderr, r.stderr
+    assert not (out2 / "tune.db").exists()

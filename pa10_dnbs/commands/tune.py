@@ -21,7 +21,7 @@ from .options import TuneOptions
 from ..json_text import json_text
 from ..interrupt import EXIT_INTERRUPTED, check, deferred, immediate, on_second_sigint, say
 from ..output_lock import lock_key, lock_output
-from ..report.outputs import check_creatable, check_output_dir, check_tune_dir, tune_files
+from ..report.outputs import OutputExistsError, check_creatable, check_output_dir, check_tune_dir, tune_files
 from ..run_size import check_run_size, say_note
 from ..supervisor.fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
 from ..study.executor import Executor, RunsLost
@@ -32,8 +32,8 @@ from ..tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 from ..tune.space import select, start_values
 from ..run_settings import build_settings
 from ..run_steps import run_steps
-from ..tune.tuner import (TrialProgress, TuneSpec, arm_digest, check_persistent, completed, held_out, open_storage, open_study,
-                          optimize, refusal, settings_digest, study_lock_key)
+from ..tune.tuner import (TrialProgress, TuneSpec, arm_digest, check_persistent, completed, held_out, open_storage,
+                          open_study, optimize, refusal, settings_digest, storage_key, study_lock_key)
 
 HELD_OUT_SEED0 = 100   # held-out seeds are 100, 101, ...: never a training seed (0 .. --seeds - 1)
 
@@ -100,11 +100,12 @@ def _checked_tune(o: TuneOptions, state: dict) -> int:
                                                    "arm URDF": the_arm.urdf},
                      resume=tune_files(out, o.storage))
     check_tune_dir(out, spec.study_name, spec.identity(), refusal)  # only this tune's own files: it resumes
+    _check_same_storage(out, o.storage)   # DIR's reports and tune.db are of this storage's study
     lock_output(out)  # a second tune into DIR at once is refused (the same command later resumes)
-    if o.storage is not None:   # a shared storage: one tune of a study at a time
-        lock_key(study_lock_key(o.storage, spec.study_name),
-                 f"--storage: study {spec.study_name} in {o.storage} is being tuned by another run (pid {{pid}}); "
-                 "wait for it to end (the same command then resumes it)")
+    url = o.storage if o.storage is not None else _default_storage(out)   # one tune of a study at a time, in
+    lock_key(study_lock_key(url, spec.study_name),    # whichever storage, however its URL is spelled
+             f"{'--storage' if o.storage is not None else '--out'}: study {spec.study_name} in {url} is being tuned "
+             "by another run (pid {pid}); wait for it to end (the same command then resumes it)")
     where_kept = o.storage if o.storage is not None else str(out / "tune.db")
     on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; the completed trials stay in {where_kept}; "
                      "run the same command to resume")
@@ -114,6 +115,33 @@ def _checked_tune(o: TuneOptions, state: dict) -> int:
             import optuna  # noqa: F401
         return _tune(state, spec, base, o.trials, out, o.storage, (pool, batch), o.scheduler, train, o.seeds, o.held_out_seeds,
                      o.controller, the_arm, config_path, command, o.progress)
+
+
+def _default_storage(out: Path) -> str:
+    """The storage of a tune without --storage: DIR/tune.db."""
+    return f"sqlite:///{(out / 'tune.db').resolve()}"
+
+
+def _check_same_storage(out: Path, storage: str | None) -> None:
+    """OutputExistsError (one line naming --out) if ``out`` holds another storage's tune: a tune.json written from
+    another storage, or its own tune.db while the trials go to a --storage elsewhere (the reports would be
+    replaced by another storage's study, and disagree with DIR/tune.db)."""
+    import json
+
+    url = storage if storage is not None else _default_storage(out)
+    try:
+        done = json.loads((out / "tune.json").read_text())
+    except (OSError, ValueError):
+        done = None
+    stored = done.get("storage") if isinstance(done, dict) else None
+    own = storage_key(_default_storage(out))
+    if isinstance(stored, str) and storage_key(stored) != storage_key(url):
+        that = "without --storage" if storage_key(stored) == own else f"with --storage {stored}"
+        raise OutputExistsError(f"--out: {out} holds the reports of the tune in {stored}, not in {url}: give another "
+                                f"--out for this tune (or rerun {that} to resume that one)")
+    if storage is not None and (out / "tune.db").is_file() and storage_key(url) != own:
+        raise OutputExistsError(f"--out: {out}/tune.db holds the trials of a tune without --storage, not of "
+                                f"{storage}: give another --out for this tune (or leave --storage out to resume that one)")
 
 
 def _interrupted_line(state: dict, trials: int) -> str:
@@ -160,7 +188,7 @@ def _tune(state, spec, base, trials, out, storage, pool_batch, scheduler, train,
         storage_obj = open_storage(storage) if storage is not None else None
         if storage is None:
             out.mkdir(parents=True, exist_ok=True)
-            storage = f"sqlite:///{(out / 'tune.db').resolve()}"
+            storage = _default_storage(out)
             storage_obj = open_storage(storage)
         if scheduler is not None:
             batch = max(1, ex.jobs // (len(train) * seeds))   # the cluster's workers

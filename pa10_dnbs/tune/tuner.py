@@ -91,11 +91,28 @@ def quiet_optuna() -> None:
     logging.getLogger("alembic").setLevel(logging.WARNING)
 
 
+def storage_key(url: str) -> str:
+    """What names the storage at ``url``: an SQLite file as ``sqlite:///`` and its resolved path (a relative
+    path, ``//`` in it, or a tune's default ``DIR/tune.db`` name the same file alike); any other URL as given."""
+    from sqlalchemy.engine import make_url
+
+    try:
+        u = make_url(url)
+    except Exception:   # noqa: BLE001 - not a URL: open_storage says so
+        return url
+    db = u.database or ""
+    if u.get_backend_name() != "sqlite" or db in ("", ":memory:") or db.startswith("file:"):
+        return url
+    from pathlib import Path
+
+    return f"sqlite:///{Path(db).expanduser().resolve()}"
+
+
 def study_lock_key(url: str, study_name: str) -> str:
     """The name of the lock a tune holds on its study in the storage at ``url`` (output_lock.lock_key): two tunes
-    of one study at once would each mark the other's running trial failed. As given: two spellings of one
-    SQLite file, or one server reached from two machines, are not caught."""
-    return f"optuna study {study_name} in {url}"
+    of one study at once would each mark the other's running trial failed. An SQLite file by its resolved path
+    (:func:`storage_key`); a server by its URL as given (one server reached by two names is not caught)."""
+    return f"optuna study {study_name} in {storage_key(url)}"
 
 
 STORAGE_OPEN_WAIT_S = 60.0   # how long a tune waits for another to finish opening the same storage [s]
@@ -127,7 +144,7 @@ def open_storage(url: str):
 
     quiet_optuna()
     try:
-        with waiting_for(f"optuna storage {url}", f"--storage: {url} is being opened by another run (pid {{pid}}) "
+        with waiting_for(f"optuna storage {storage_key(url)}", f"--storage: {url} is being opened by another run (pid {{pid}}) "
                          f"for over {STORAGE_OPEN_WAIT_S:g} s", STORAGE_OPEN_WAIT_S, between=check):
             return optuna.storages.RDBStorage(url)
     except OutputInUseError:
