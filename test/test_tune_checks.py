@@ -182,3 +182,24 @@ def test_an_out_holding_another_storages_tune_is_refused(tmp_path):
     r = run_cli("tune", *SHORT, "--trials", 1, "--out", out2)
     assert r.returncode == 2 and f"(or rerun with --storage {other} to resume that one)" in r.stderr, r.stderr
     assert not (out2 / "tune.db").exists()
+
+
+@pytest.mark.parametrize("left", ["finished", "interrupted"])
+def test_equal_budget_checks_every_controllers_tune_before_the_first(tmp_path, left):
+    """DIR/ctc holds a tune of other options (finished, or interrupted: only its tune.db): refused before the PID
+    tune runs, in one line naming DIR/ctc and the script's flags (it came after the PID tune, naming
+    --out/--storage)."""
+    from test_misuse_inputs import _script
+
+    eq = tmp_path / "eq"
+    assert run_cli("tune", "--controller", "ctc", "--trials", 1, "--scenarios", "nominal", "--seeds", 1,
+                   "--duration", 0.3, "--held-out-seeds", 0, "--no-progress", "--out", eq / "ctc").returncode == 0
+    if left == "interrupted":
+        (eq / "ctc" / "tune.json").unlink()
+    rc, out, err = _script("equal_budget", "--trials", 2, "--scenarios", "nominal", "--seeds", 1, "--duration", 0.2,
+                           "--held-out-seeds", 1, "--no-progress", "--controllers", "pid,ctc", "--out", eq)
+    assert rc == 2 and err == (
+        f"equal_budget: error: {eq}/ctc: study 'pa10-ctc' there was run with other options, so its trials do not "
+        "score the same objective: --duration 0.2 (stored: 0.3); rerun with the stored options to resume it, or "
+        "give another --out (a new comparison)\n"), err
+    assert not (eq / "pid").exists() and out == ""

@@ -33,7 +33,8 @@ from ..tune.space import select, start_values
 from ..run_settings import build_settings
 from ..run_steps import run_steps
 from ..tune.tuner import (TrialProgress, TuneSpec, arm_digest, check_persistent, completed, held_out, open_storage,
-                          open_study, optimize, refusal, settings_digest, storage_key, study_lock_key)
+                          open_study, optimize, refusal, settings_digest, storage_key, stored_identity,
+                          study_lock_key)
 
 HELD_OUT_SEED0 = 100   # held-out seeds are 100, 101, ...: never a training seed (0 .. --seeds - 1)
 
@@ -61,8 +62,42 @@ def run_tune(options: TuneOptions) -> int:
         return 2
 
 
+def check_tune(o: TuneOptions) -> None:
+    """Every check a tune of ``o`` makes before it writes anything, and the study an interrupted tune left in
+    DIR/tune.db against these options; ConfigError or Refused (one line) if one fails; no note said. For a caller
+    that runs several tunes and checks them all first (scripts/equal_budget.py)."""
+    c = _checks(o, say=None)
+    spec = c["spec"]
+    if o.storage is None:
+        stored = stored_identity(c["out"] / "tune.db", spec.study_name)
+        if stored is not None and stored != spec.identity():
+            raise ConfigError(refusal(spec.study_name, stored, spec.identity()))
+
+
 def _checked_tune(o: TuneOptions, state: dict) -> int:
     """Check every input of ``o`` (nothing written), then tune; ``state`` says how far it got."""
+    c = _checks(o, say=say_note)
+    out, spec = c["out"], c["spec"]
+    lock_output(out)  # a second tune into DIR at once is refused (the same command later resumes)
+    url = o.storage if o.storage is not None else _default_storage(out)   # one tune of a study at a time, in
+    lock_key(study_lock_key(url, spec.study_name),    # whichever storage, however its URL is spelled
+             f"{'--storage' if o.storage is not None else '--out'}: study {spec.study_name} in {url} is being tuned "
+             "by another run (pid {pid}); wait for it to end (the same command then resumes it)")
+    where_kept = o.storage if o.storage is not None else str(out / "tune.db")
+    on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; the completed trials stay in {where_kept}; "
+                     "run the same command to resume")
+    state.update(phase="start", where_kept=where_kept, had_storage=o.storage is not None or (out / "tune.db").exists())
+    with deferred():   # a Ctrl-C stops the tune between two storage operations, never inside one
+        with immediate():   # seconds of imports on a busy machine: a Ctrl-C stops them at once
+            import optuna  # noqa: F401
+        return _tune(state, spec, c["base"], o.trials, out, o.storage, (c["pool"], c["batch"]), o.scheduler,
+                     c["train"], o.seeds, o.held_out_seeds, o.controller, c["base"].arm, c["config_path"],
+                     c["command"], o.progress)
+
+
+def _checks(o: TuneOptions, say) -> dict:
+    """Check every input of ``o`` (nothing written; ``say``: the notes of a long run or of faults); what the tune
+    needs of them."""
     param_list = select(o.controller, None if o.params is None else [n.strip() for n in o.params.split(",") if n.strip()])
     train = name_list("--scenarios", o.scenarios, list(SCENARIOS))
     out = Path(o.out)
@@ -88,9 +123,9 @@ def _checked_tune(o: TuneOptions, state: dict) -> int:
     n_held = 2 * len(SCENARIOS) * o.held_out_seeds   # the start and the best settings on every scenario
     pool = min(jobs, max(runs_per_trial * min(batch, o.trials), n_held))   # the runs that ever step at once
     check_run_size(o.duration_s, n_steps, len(the_arm.joint_names), at_once=1 if o.scheduler is not None else pool,
-                   total_runs=runs_per_trial * o.trials + n_held, say=say_note)
-    if faults_active(base.faults):
-        say_note(IN_PROCESS_FAULTS_NOTE)
+                   total_runs=runs_per_trial * o.trials + n_held, say=say)
+    if faults_active(base.faults) and say is not None:
+        say(IN_PROCESS_FAULTS_NOTE)
     spec = TuneSpec(the_arm.name, o.controller, param_list, train, list(range(o.seeds)), o.duration_s,
                     str(config_path.resolve()), o.seed, start_values(o.controller, base),
                     arm_digest(the_arm), settings_digest(base))
@@ -101,20 +136,8 @@ def _checked_tune(o: TuneOptions, state: dict) -> int:
                      resume=tune_files(out, o.storage))
     check_tune_dir(out, spec.study_name, spec.identity(), refusal)  # only this tune's own files: it resumes
     _check_same_storage(out, o.storage)   # DIR's reports and tune.db are of this storage's study
-    lock_output(out)  # a second tune into DIR at once is refused (the same command later resumes)
-    url = o.storage if o.storage is not None else _default_storage(out)   # one tune of a study at a time, in
-    lock_key(study_lock_key(url, spec.study_name),    # whichever storage, however its URL is spelled
-             f"{'--storage' if o.storage is not None else '--out'}: study {spec.study_name} in {url} is being tuned "
-             "by another run (pid {pid}); wait for it to end (the same command then resumes it)")
-    where_kept = o.storage if o.storage is not None else str(out / "tune.db")
-    on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; the completed trials stay in {where_kept}; "
-                     "run the same command to resume")
-    state.update(phase="start", where_kept=where_kept, had_storage=o.storage is not None or (out / "tune.db").exists())
-    with deferred():   # a Ctrl-C stops the tune between two storage operations, never inside one
-        with immediate():   # seconds of imports on a busy machine: a Ctrl-C stops them at once
-            import optuna  # noqa: F401
-        return _tune(state, spec, base, o.trials, out, o.storage, (pool, batch), o.scheduler, train, o.seeds, o.held_out_seeds,
-                     o.controller, the_arm, config_path, command, o.progress)
+    return {"out": out, "spec": spec, "base": base, "pool": pool, "batch": batch, "train": train,
+            "config_path": config_path, "command": command}
 
 
 def _default_storage(out: Path) -> str:

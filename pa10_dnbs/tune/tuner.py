@@ -178,6 +178,28 @@ def open_study(storage, spec: TuneSpec, batch: int):
     return study
 
 
+def stored_identity(db, study_name: str) -> dict | None:
+    """The options stored with study ``study_name`` in the SQLite file ``db`` (read only, no Optuna), or None (no
+    file, no such study, not an Optuna storage)."""
+    import json
+    import sqlite3
+    from pathlib import Path
+
+    db = Path(db)
+    if not db.is_file():
+        return None
+    try:
+        con = sqlite3.connect(f"{db.resolve().as_uri()}?mode=ro", uri=True)
+        try:
+            row = con.execute("SELECT a.value_json FROM study_user_attributes a JOIN studies s ON a.study_id = "
+                              "s.study_id WHERE s.study_name = ? AND a.key = ?", (study_name, STUDY_ATTR)).fetchone()
+        finally:
+            con.close()
+        return json.loads(row[0]) if row else None
+    except (sqlite3.Error, ValueError):
+        return None
+
+
 IDENTITY_FLAGS = {"arm": "--arm", "controller": "--controller", "params": "--params", "scenarios": "--scenarios",
                   "seeds": "--seeds", "duration_s": "--duration", "config_file": "--config", "seed": "--seed",
                   "arm_digest": "--arm", "settings_digest": "--config"}
