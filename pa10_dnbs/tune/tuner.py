@@ -5,8 +5,9 @@ so cluster workers need no database (docs/tuning.md).
 Determinism: the sampler is TPE seeded with ``seed`` (plus the number of trials already in the storage, so a
 resumed tune does not redraw the points it already tried). Trials are asked in batches of
 ``max(1, workers // runs per trial)`` and told in trial order, so the same command with the same number of
-workers gives the same trials; with at most one trial per batch (the default: 4 scenarios x 2 seeds = 8 runs,
-fewer than 16 workers) the trials do not depend on the number of workers either.
+workers gives the same trials; with at most one trial per batch (the default: 8 scenarios x 1 seed = 8 runs,
+fewer than 16 workers) the trials do not depend on the number of workers either. ``--jobs`` sets the batch; the
+local pool has no more processes than the runs that step at once (commands/tune.py).
 """
 from __future__ import annotations
 
