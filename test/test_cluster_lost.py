@@ -253,3 +253,27 @@ def test_a_worker_without_a_compiler_runs_a_dnbs_study_with_kernel_auto(tmp_path
     assert rc == 0 and err == "", (rc, err)
     assert not list((tmp_path / "worker_cache").glob("*.so"))   # the worker ran numpy's step
     assert json.loads((tmp_path / "s" / "study.json").read_text())["rows"][0]["controller"] == "dnbs"
+
+
+def test_a_tls_cluster_configured_in_dasks_config_is_reached(tmp_path):
+    """A scheduler and worker speaking TLS, the client's certificates in Dask's config (environment variables):
+    the address probe uses that security as the Client does (it was refused, 'TLS expects a ssl_context')."""
+    cert, key = tmp_path / "cert.pem", tmp_path / "key.pem"
+    subprocess.run(["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-keyout", key, "-out", cert,
+                    "-days", "2", "-subj", "/CN=127.0.0.1", "-addext", "subjectAltName=IP:127.0.0.1"],
+                   check=True, capture_output=True, timeout=60)
+    tls = ("--tls-ca-file", str(cert), "--tls-cert", str(cert), "--tls-key", str(key))
+    env = dict(os.environ, DASK_DISTRIBUTED__COMM__TLS__CA_FILE=str(cert),
+               DASK_DISTRIBUTED__COMM__TLS__CLIENT__CERT=str(cert), DASK_DISTRIBUTED__COMM__TLS__CLIENT__KEY=str(key),
+               DASK_DISTRIBUTED__COMM__REQUIRE_ENCRYPTION="True")
+    with local_cluster(tmp_path / "cluster", n_workers=1, scheduler_args=("--protocol", "tls", *tls),
+                       worker_args=tls, wait_for_workers=False) as cluster:
+        assert cluster.address.startswith("tls://")
+        args = ["study", "--scenarios", "nominal", "--controllers", "pid", "--seeds", 1, "--duration", 0.2,
+                "--no-progress", "--scheduler", cluster.address, "--out", tmp_path / "s"]
+        proc = subprocess.Popen([sys.executable, "-m", "pa10_dnbs.cli", *map(str, args)], stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, text=True, env=env)
+        rc, out, err = _end(proc)
+        pids = cluster.pids
+    assert not pids(), "processes of the cluster left behind"
+    assert rc == 0 and err == "" and "1 runs, 0 diverged" in out, (rc, out, err)

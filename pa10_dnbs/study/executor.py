@@ -287,8 +287,10 @@ def check_address(address: str) -> str:
 async def _identity(address: str) -> dict:
     """The identity a Dask server at ``address`` gives (its ``type``: 'Scheduler' for a scheduler)."""
     from distributed.comm import connect as comm_connect
+    from distributed.security import Security
 
-    comm = await comm_connect(address, timeout=CONNECT_TIMEOUT_S)
+    # Dask's configured security (TLS certificates: distributed.comm.tls.*), as the Client then uses
+    comm = await comm_connect(address, timeout=CONNECT_TIMEOUT_S, **Security().get_connection_args("client"))
     try:
         await comm.write({"op": "identity", "reply": True})
         return await comm.read()
@@ -303,6 +305,12 @@ def _probe(address: str) -> None:
     import socket
 
     m = _ADDRESS.match(address)
+    if (m.group("scheme") or "tcp") == "ucx":
+        import importlib.util
+
+        if importlib.util.find_spec("ucp") is None:
+            raise ConfigError(f"scheduler: cannot connect to {address}: ucx:// needs the ucx-py package (ucp), not "
+                              "installed here", setting="scheduler")
     if (m.group("scheme") or "tcp") != "ucx":   # a TCP port first: a refusal is said at once, not after retries
         try:
             socket.create_connection((m.group("host").strip("[]"), int(m.group("port"))), CONNECT_TIMEOUT_S).close()
@@ -319,6 +327,10 @@ def _probe(address: str) -> None:
     except Exception as exc:   # refused, reset, not Dask's protocol: said in one line
         text = str(exc).splitlines()[0] if str(exc) else ""
         why = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+        if "ssl_context" in text:   # tls:// or wss:// with no certificates configured
+            why = ("it speaks TLS, and no client certificates are configured: set Dask's distributed.comm.tls "
+                   "ca-file, client.cert and client.key (a Dask config file, or DASK_DISTRIBUTED__COMM__TLS__CA_FILE, "
+                   "..._CLIENT__CERT, ..._CLIENT__KEY)")
     else:
         kind = reply.get("type") if isinstance(reply, dict) else None
         if kind == "Scheduler":
