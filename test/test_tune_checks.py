@@ -203,3 +203,24 @@ def test_equal_budget_checks_every_controllers_tune_before_the_first(tmp_path, l
         "score the same objective: --duration 0.2 (stored: 0.3); rerun with the stored options to resume it, or "
         "give another --out (a new comparison)\n"), err
     assert not (eq / "pid").exists() and out == ""
+
+
+def test_equal_budget_table_refuses_unfinished_and_unequal_comparisons(tmp_path):
+    """An interrupted comparison (no comparison.md) and comparisons of other budgets put side by side without a
+    word: now one line each, exit 2."""
+    from test_misuse_inputs import _script
+
+    common = ("--controllers", "pid", "--scenarios", "nominal", "--seeds", 1, "--held-out-seeds", 1,
+              "--no-progress", "--jobs", 1)
+    assert _script("equal_budget", *common, "--trials", 1, "--duration", 0.2, "--out", tmp_path / "a")[0] == 0
+    assert _script("equal_budget", *common, "--trials", 2, "--duration", 0.2, "--out", tmp_path / "b")[0] == 0
+    rc, out, err = _script("equal_budget_table", tmp_path / "a", tmp_path / "a")
+    assert rc == 0 and out.startswith("| scenario | pa10 PID | pa10 PID |"), err
+    rc, out, err = _script("equal_budget_table", tmp_path / "a", tmp_path / "b")
+    assert rc == 2 and out == "" and err == (
+        f"equal_budget_table: error: not equal budgets: {tmp_path}/a/pid: 1 trials of 1 scenarios x 1 seeds x 0.2 s, "
+        f"1 held-out seeds, seed 0; {tmp_path}/b/pid: 2 trials of 1 scenarios x 1 seeds x 0.2 s, 1 held-out seeds, "
+        "seed 0\n"), err
+    (tmp_path / "a" / "comparison.md").unlink()
+    rc, out, err = _script("equal_budget_table", tmp_path / "a")
+    assert rc == 2 and err.startswith(f"equal_budget_table: error: {tmp_path}/a is an unfinished comparison"), err

@@ -56,23 +56,38 @@ def _short(v) -> str:
 
 
 def load_comparison(directory: Path) -> dict[str, dict]:
-    """{controller: its tune.json} of one comparison DIR, DNBS, PID and CTC first; ValueError when there is none."""
+    """{controller: its tune.json} of one finished comparison DIR (its comparison.md written), DNBS, PID and CTC
+    first; ValueError when there is none, or it is unfinished (an interrupted equal_budget.py)."""
     directory = Path(directory)
     results = {c.name: json.loads((c / "tune.json").read_text())
                for c in (sorted(directory.iterdir()) if directory.is_dir() else []) if (c / "tune.json").is_file()}
     if not results:
         raise ValueError(f"no DIR/<controller>/tune.json under {directory}")
+    if not (directory / "comparison.md").is_file():
+        raise ValueError(f"{directory} is an unfinished comparison (no comparison.md: its equal_budget.py was "
+                         "interrupted): run that command again to finish it")
     first = [c for c in ("dnbs", "pid", "ctc") if c in results]
     return {c: results[c] for c in first + [c for c in results if c not in first]}
+
+
+def budget(tune: dict) -> str:
+    """A tune's budget in words (tune.json): trials, training runs, held-out seeds, the sampler's seed."""
+    o = tune["options"]
+    return (f"{tune['trials']} trials of {len(o['scenarios'])} scenarios x {len(o['seeds'])} seeds x "
+            f"{o['duration_s']:g} s, {len(tune['held_out_seeds'])} held-out seeds, seed {o['seed']}")
 
 
 def arms_table(dirs: list[Path]) -> str:
     """Per scenario and arm, each tuned controller's held-out worst RMS [rad] (``DIR/<controller>/tune.json`` of
     every comparison DIR); the last row: each controller's objective over all its held-out runs."""
-    arms = []
+    arms, budgets = [], {}
     for d in dirs:
         results = load_comparison(d)
         arms.append((next(iter(results.values()))["arm"], results))
+        for c, t in results.items():
+            budgets.setdefault(budget(t), f"{d}/{c}")
+    if len(budgets) > 1:   # the table says 'equal budget': so must its columns be
+        raise ValueError("not equal budgets: " + "; ".join(f"{where}: {text}" for text, where in budgets.items()))
     scenarios = list(dict.fromkeys(r["scenario"] for _, res in arms for t in res.values()
                                    for r in t["held_out"]["tuned"]))
     lines = ["| scenario | " + " | ".join(f"{arm} {' / '.join(c.upper() for c in res)}" for arm, res in arms) + " |",
