@@ -105,8 +105,8 @@ def local_cluster(directory: Path, n_workers: int = 2, worker_args: tuple = (), 
                   scheduler_args: tuple = ()):
     """Yield a :class:`Cluster` of a scheduler and ``n_workers`` workers on 127.0.0.1 (random ports, no
     dashboards; ``worker_args``, ``scheduler_args``: more options of `dask worker`, `dask scheduler`;
-    ``wait_for_workers`` False: not waited for, e.g. workers that die); every process is stopped and reaped at the end, and the semaphores its killed processes
-    left in /dev/shm are removed."""
+    ``wait_for_workers`` False: not waited for, e.g. workers that die); every process is stopped and reaped at
+    the end, and the semaphores its killed processes left in /dev/shm are removed."""
     directory.mkdir(parents=True, exist_ok=True)
     semaphores_before = _semaphores()
     sched_file = directory / "scheduler.json"

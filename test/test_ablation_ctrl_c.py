@@ -17,7 +17,8 @@ REPO = Path(__file__).resolve().parent.parent
 
 def test_ablation_ctrl_c_says_one_line_and_stops_its_workers(tmp_path):
     proc = subprocess.Popen([sys.executable, str(REPO / "scripts" / "ablation.py"), "--only", "0,1", "--long-s",
-                             "20", "--workers", "2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+                             "20", "--workers", "2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
     try:
         t0 = time.monotonic()
         while len(child_pids(proc.pid)) < 2:

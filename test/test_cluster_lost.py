@@ -16,7 +16,7 @@ import pytest
 from cli_runner import run_cli
 from dask_cluster import local_cluster
 
-import pa10_dnbs.study.executor as executor
+import pa10_dnbs.study.cluster as cluster_module
 
 pytestmark = pytest.mark.slow
 
@@ -126,7 +126,7 @@ def test_a_run_whose_workers_all_die_ends_with_one_line(tmp_path, monkeypatch, w
     import _thread
     import threading
 
-    monkeypatch.setattr(executor, "WORKERLESS_S", 2.0, raising=False)
+    monkeypatch.setattr(cluster_module, "WORKERLESS_S", 2.0, raising=False)
     db = tmp_path / "t" / "tune.db"
     with local_cluster(tmp_path / "cluster") as cluster:
         done = (lambda c: _finished_runs(c, "run_one-") >= 1) if what == "study" else \

@@ -86,7 +86,7 @@ def test_held_out_verdict_warns_when_the_tuned_settings_lose_to_the_start():
     (("--controller", "pid", "--scheduler", "tcp://127.0.0.1:9"), "--scheduler: cannot connect"),
 ])
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, monkeypatch, args, says):
-    monkeypatch.setattr("pa10_dnbs.study.executor.CONNECT_TIMEOUT_S", 1.0)
+    monkeypatch.setattr("pa10_dnbs.study.cluster.CONNECT_TIMEOUT_S", 1.0)
     r = _tune(*args, "--out", tmp_path / "t", *SHORT)
     assert r.returncode == 2, r.stderr
     assert says in r.stderr and len(r.stderr.strip().splitlines()) == 1
@@ -94,7 +94,7 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, monkeypatc
 
 
 def test_an_unreachable_scheduler_leaves_a_given_storage_untouched(tmp_path, monkeypatch):
-    monkeypatch.setattr("pa10_dnbs.study.executor.CONNECT_TIMEOUT_S", 1.0)
+    monkeypatch.setattr("pa10_dnbs.study.cluster.CONNECT_TIMEOUT_S", 1.0)
     r = _tune("--controller", "dnbs", "--storage", f"sqlite:///{tmp_path / 's.db'}", "--scheduler",
               "tcp://127.0.0.1:9", "--out", tmp_path / "t", *SHORT)
     assert r.returncode == 2 and "--scheduler" in r.stderr

@@ -20,7 +20,7 @@ from ..run_size import check_run_size, say_note
 from ..supervisor.fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
 from ..sim.closed_loop import CONTROLLERS
 from ..study.feasibility import infeasible_scenarios
-from ..study.executor import RunsLost
+from ..study.lost_runs import RunsLost
 from ..study.partial_summary import write_partial_study
 from ..study.runner import run_study
 from ..study.scenarios import SCENARIOS, check_scenario_references
@@ -97,8 +97,8 @@ def _keep_partial(out: Path, force: bool, done: list[dict], all_runs: list, comm
                   lost: RunsLost | None = None) -> int:
     """After a Ctrl-C (or with ``lost``, a local worker process or the Dask cluster lost mid-study): the completed
     runs' rows into ``out``, marked partial (study/partial_summary.py); one line saying what is where; exit 130
-    (lost: its line naming --jobs or --scheduler, exit 2, as an unreachable scheduler). Nothing completed: nothing written. A second Ctrl-C
-    meanwhile removes the half-written folder and ends at once."""
+    (lost: its line naming --jobs or --scheduler, exit 2, as an unreachable scheduler). Nothing completed:
+    nothing written. A second Ctrl-C meanwhile removes the half-written folder and ends at once."""
     n = len(all_runs)
     kept = len({(r["scenario"], r["controller"], r["seed"]) for r in done})
     opening = f"pa10-dnbs: error: {lost.line()}; stopped " if lost is not None else "pa10-dnbs: interrupted "

@@ -24,7 +24,8 @@ from ..output_lock import lock_key, lock_output
 from ..report.outputs import OutputExistsError, check_creatable, check_output_dir, check_tune_dir, tune_files
 from ..run_size import check_run_size, say_note
 from ..supervisor.fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
-from ..study.executor import Executor, RunsLost
+from ..study.executor import Executor
+from ..study.lost_runs import RunsLost
 from ..study.scenarios import SCENARIOS, check_scenario_references
 from .name_list import name_list
 from ..tune.report import held_out_table, held_out_verdict, tune_figures, tune_markdown, tuned_yaml
@@ -164,7 +165,8 @@ def _check_same_storage(out: Path, storage: str | None) -> None:
                                 f"--out for this tune (or rerun {that} to resume that one)")
     if storage is not None and (out / "tune.db").is_file() and storage_key(url) != own:
         raise OutputExistsError(f"--out: {out}/tune.db holds the trials of a tune without --storage, not of "
-                                f"{storage}: give another --out for this tune (or leave --storage out to resume that one)")
+                                f"{storage}: give another --out for this tune (or leave --storage out to resume "
+                                "that one)")
 
 
 def _interrupted_line(state: dict, trials: int) -> str:

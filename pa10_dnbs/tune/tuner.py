@@ -121,8 +121,8 @@ STORAGE_OPEN_WAIT_S = 60.0   # how long a tune waits for another to finish openi
 
 def check_persistent(url: str) -> None:
     """ConfigError naming --storage for an in-memory SQLite URL (``sqlite://``, ``sqlite:///:memory:``, a
-    ``file::memory:`` or ``mode=memory`` URI with ``uri=true``): its trials end with the process, so nothing could be kept or resumed. Other URLs are
-    opened (and said wrong) by :func:`open_storage`."""
+    ``file::memory:`` or ``mode=memory`` URI with ``uri=true``): its trials end with the process, so nothing
+    could be kept or resumed. Other URLs are opened (and said wrong) by :func:`open_storage`."""
     from sqlalchemy.engine import make_url
 
     try:
@@ -145,7 +145,8 @@ def open_storage(url: str):
 
     quiet_optuna()
     try:
-        with waiting_for(f"optuna storage {storage_key(url)}", f"--storage: {url} is being opened by another run (pid {{pid}}) "
+        with waiting_for(f"optuna storage {storage_key(url)}",
+                         f"--storage: {url} is being opened by another run (pid {{pid}}) "
                          f"for over {STORAGE_OPEN_WAIT_S:g} s", STORAGE_OPEN_WAIT_S, between=check):
             return optuna.storages.RDBStorage(url)
     except OutputInUseError:
@@ -216,9 +217,10 @@ def refusal(study_name: str, stored: dict, given: dict) -> str:
         if key == "seeds" and isinstance(v, list):
             return str(len(v))          # --seeds N means seeds 0..N-1
         return ",".join(map(str, v)) if isinstance(v, list) else f"{v:g}" if isinstance(v, float) else str(v)
-    diff = [f"{IDENTITY_FLAGS.get(k, k)}: {DIGESTS[k]}, {shown(k, given.get(k))} (stored: {shown(k, stored.get(k))})"
-            if k in DIGESTS else f"{IDENTITY_FLAGS.get(k, k)} {shown(k, given.get(k))} (stored: {shown(k, stored.get(k))})"
-            for k in given if stored.get(k) != given[k]]
+    def differs(k):
+        what = f"{IDENTITY_FLAGS.get(k, k)}: {DIGESTS[k]}," if k in DIGESTS else IDENTITY_FLAGS.get(k, k)
+        return f"{what} {shown(k, given.get(k))} (stored: {shown(k, stored.get(k))})"
+    diff = [differs(k) for k in given if stored.get(k) != given[k]]
     return (f"--out/--storage: study {study_name!r} there was run with other options, so its trials do not "
             f"score the same objective: {'; '.join(diff)}; rerun with the stored options to resume it, or give "
             "another --out (or --storage) to start a new study")
@@ -238,8 +240,9 @@ def trial_settings(base: Settings, spec: TuneSpec, values: dict) -> Settings:
 def optimize(study, spec: TuneSpec, base: Settings, n_trials: int, executor: Executor, progress=None,
              batch: int | None = None) -> None:
     """Run trials until the study holds ``n_trials`` completed ones, ``batch`` at a time (default: as many as
-    the executor's workers run at once). ``progress(done, best, runs_done, runs)`` after every run. Interrupted (Ctrl-C, an error): the trials of the batch are marked failed, the completed
-    ones stay in the storage, and the exception goes on."""
+    the executor's workers run at once). ``progress(done, best, runs_done, runs)`` after every run.
+    Interrupted (Ctrl-C, an error): the trials of the batch are marked failed, the completed ones stay in the
+    storage, and the exception goes on."""
     from optuna.trial import TrialState
 
     runs_per_trial = len(spec.scenarios) * len(spec.seeds)
