@@ -8,7 +8,8 @@ A terminal's Ctrl-C sends SIGINT to every process of the foreground group: the c
   also die with the command, however it ends (a plain ``kill``, SIGKILL), so none is left behind.
 - The command: the first SIGINT raises KeyboardInterrupt (the command stops its work, keeps what is complete,
   says where, exits 130); from then on a second SIGINT ends at once (:func:`two_stage_sigint`): every child is
-  killed and reaped, one line (:func:`on_second_sigint` sets it), exit 130, no clean-up that could wait.
+  killed and reaped, one line (:func:`on_second_sigint` sets it), exit 130, no clean-up that could wait. A SIGTERM
+  again within ``SAME_STOP_S`` is the same stop (``timeout`` signals the command, then its group).
   SIGTERM (``kill``, ``timeout``, a batch scheduler's cancel) is taken as a Ctrl-C (STOP_SIGNALS): no half-written
   output folder is left behind by it.
 - Code that talks to a database (the tune's Optuna storage) runs :func:`deferred`: there the first SIGINT is
@@ -33,6 +34,11 @@ POLL_S = 0.1            # how often a waiting executor looks at a deferred Ctrl-
 PR_SET_PDEATHSIG = 1    # prctl(2): the signal a process gets when its parent dies (linux/prctl.h)
 #: what stops a command: Ctrl-C, and SIGTERM (``kill``, ``timeout``, a batch scheduler's cancel), taken alike
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+#: a second SIGTERM this soon [s] after the first is the same stop, not a second Ctrl-C: GNU timeout sends its
+#: signal to the command and then to the command's whole group (microseconds apart). A second SIGINT is a second
+#: Ctrl-C however soon (a terminal sends each press to the group once).
+SAME_STOP_S = 0.2
+SAME_STOP_SIGNALS = (signal.SIGTERM,)
 
 _second_line = "pa10-dnbs: interrupted again: stopped at once"
 _state = {"deferred": 0, "requested": False, "raised": False, "cleanup": None}
@@ -121,7 +127,15 @@ def _on_stop(handler) -> None:
         signal.signal(sig, handler)
 
 
+def _same_stop(signum) -> bool:
+    """The first SIGTERM again within ``SAME_STOP_S`` (timeout: to the command, then to its group)."""
+    first = _state.get("first")
+    return first is not None and first[0] == signum in SAME_STOP_SIGNALS and time.monotonic() - first[1] < SAME_STOP_S
+
+
 def _second(signum, frame) -> None:
+    if _same_stop(signum):
+        return   # the same stop sent twice: the first goes on
     kill_children()
     if _state.get("cleanup") is not None:
         with contextlib.suppress(Exception):
@@ -133,6 +147,7 @@ def _second(signum, frame) -> None:
 
 def _first(signum, frame) -> None:
     _on_stop(_second)
+    _state["first"] = (signum, time.monotonic())
     _state["requested"] = True
     if not _state["deferred"]:
         _state["raised"] = True
@@ -179,7 +194,7 @@ def two_stage_sigint():
         yield
         return
     _second_line = "pa10-dnbs: interrupted again: stopped at once"
-    _state.update(deferred=0, requested=False, raised=False, cleanup=None, written=None)
+    _state.update(deferred=0, requested=False, raised=False, cleanup=None, written=None, first=None)
     try:
         yield
     finally:
@@ -217,7 +232,8 @@ def _hold_sigint_to_the_end() -> None:
     lines said."""
     if _state.get("ended"):
         with contextlib.suppress(ValueError):
-            signal.signal(signal.SIGINT, signal.SIG_IGN)
+            for sig in STOP_SIGNALS:   # SIGTERM as SIGINT
+                signal.signal(sig, signal.SIG_IGN)
 
 
 atexit.register(_hold_sigint_to_the_end)
@@ -229,6 +245,8 @@ AFTER_LINE = ("pa10-dnbs: interrupted while exiting, after the command had finis
 
 def _after_output(signum, frame) -> None:
     """A Ctrl-C once the command's outputs are in place: the line that says so (``outputs_written``), 130."""
+    if _same_stop(signum):
+        return   # the stop that made these outputs, sent twice: its line is said
     for stream in (sys.stdout, sys.stderr):
         with contextlib.suppress(Exception):
             stream.flush()
@@ -257,7 +275,8 @@ def quiet_end() -> None:
     the exit functions it is ignored (:func:`_hold_sigint_to_the_end`) and the command's exit code stands."""
     _state["ended"] = True
     with contextlib.suppress(ValueError):
-        signal.signal(signal.SIGINT, _after_output)
+        for sig in STOP_SIGNALS:   # SIGTERM too, taken as a Ctrl-C (its default action: death by the signal)
+            signal.signal(sig, _after_output)
 
 
 def say(line: str) -> None:

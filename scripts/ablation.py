@@ -18,18 +18,16 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from pa10_dnbs.cli_values import OneLineParser, number_in, whole_in  # noqa: E402
 from pa10_dnbs.config import default_config_path  # noqa: E402
-from pa10_dnbs.interrupt import (EXIT_INTERRUPTED, kill_children, pool_worker_start, say, sigint_blocked,  # noqa: E402
-                                 two_stage_sigint)
 from pa10_dnbs.paths import share_path  # noqa: E402
 from pa10_dnbs.report.metrics_file import metrics_dict, metrics_settings  # noqa: E402
 from pa10_dnbs.sim.closed_loop import simulate  # noqa: E402
+from pa10_dnbs.study.executor import Executor  # noqa: E402
 from pa10_dnbs.study.scenarios import scenario_settings  # noqa: E402
 from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.settings import replace_in  # noqa: E402
@@ -112,18 +110,8 @@ def main(argv: list[str] | None = None) -> int:
     jobs = [(i, sc, d, w) for i in rows for sc, d, w in (
         ("nominal", 20.0, (10.0, 20.0)), ("payload_5kg", 20.0, (10.0, 20.0)),
         ("encoder_noise", a.long_s, (a.long_s - 20.0, a.long_s)))]
-    try:
-        with two_stage_sigint():
-            with sigint_blocked():   # the workers ignore Ctrl-C: this process stops them
-                pool = ProcessPoolExecutor(max_workers=a.workers, initializer=pool_worker_start,
-                                           initargs=(os.getpid(),))
-                futures = [pool.submit(_run, job) for job in jobs]
-            res = {(r["variant"], r["scenario"]): r for r in (f.result() for f in futures)}
-            pool.shutdown()
-    except KeyboardInterrupt:
-        kill_children()
-        say(f"ablation: interrupted: nothing printed (the table needs all {len(jobs)} runs)")
-        return EXIT_INTERRUPTED
+    with Executor(min(a.workers or os.cpu_count() or 1, len(jobs))) as ex:   # Ctrl-C: its workers stopped
+        res = {(r["variant"], r["scenario"]): r for r in ex.run(_run, dict(enumerate((j,) for j in jobs))).values()}
     print(f"| variant | nominal: settled [s] | max abs [rad] | torque variation | at limit after 0.2 s | RMS [rad] | "
           f"payload 5 kg: settled [s] | torque variation | RMS [rad] | noise, {a.long_s:g} s: RMS last 20 s [rad] |")
     print("|---" * 10 + "|")
@@ -137,5 +125,19 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
+def interruptible_main(argv: list[str] | None = None) -> int:
+    """``main`` with Ctrl-C done right (docs/tuning.md, "Interrupting"): the workers stopped, one line, exit 130
+    (a second Ctrl-C ends at once: pa10_dnbs/interrupt.py)."""
+    from pa10_dnbs.interrupt import EXIT_INTERRUPTED, say, two_stage_sigint
+
+    try:
+        with two_stage_sigint():
+            return main(argv)
+    except KeyboardInterrupt:
+        say("ablation: interrupted; nothing printed (the table comes whole, once every run is done): run the same "
+            "command again")
+        return EXIT_INTERRUPTED
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(interruptible_main())

@@ -78,6 +78,30 @@ def tune_arguments(args: argparse.Namespace) -> list[str]:
     return words + (["--no-progress"] if args.no_progress else [])
 
 
+def check_one_tune(controller: str, args: argparse.Namespace) -> str | None:
+    """What ``pa10-dnbs tune`` would refuse for ``controller`` before it writes anything (its options, its
+    DIR/<controller>: another command's output, another tune, a study of other options), in one line naming
+    DIR/<controller> and this script's flags; None if it would start."""
+    from pa10_dnbs.cli import SETTING_FLAGS, build_parser as cli_parser, command_options
+    from pa10_dnbs.commands.tune import check_tune
+    from pa10_dnbs.config_error import ConfigError
+    from pa10_dnbs.refused import Refused
+
+    where = args.out / controller
+    try:
+        check_tune(command_options(cli_parser().parse_args(
+            ["tune", "--controller", controller, "--out", str(where), *tune_arguments(args)])))
+    except ConfigError as exc:
+        text = exc.named(SETTING_FLAGS.get(exc.setting))
+    except Refused as exc:
+        text = str(exc)
+    else:
+        return None
+    return (text.replace("--out/--storage: study", f"{where}: study")
+            .replace("give another --out (or --storage) to start a new study",
+                     "give another --out (a new comparison)"))
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
@@ -88,6 +112,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return 2
     try:
+        for c in args.controllers:   # every tune checked before the first starts (a refusal after a tune: lost time)
+            line = check_one_tune(c, args)
+            if line is not None:
+                print(f"{PROG}: error: {line}", file=sys.stderr)
+                return 2
         results = {}
         for c in args.controllers:
             rc = cli_main(["tune", "--controller", c, "--out", str(args.out / c), *tune_arguments(args)])

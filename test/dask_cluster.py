@@ -101,10 +101,12 @@ def remove_orphan_semaphores(before: set[str]) -> list[str]:
 
 
 @contextmanager
-def local_cluster(directory: Path, n_workers: int = 2):
+def local_cluster(directory: Path, n_workers: int = 2, worker_args: tuple = (), wait_for_workers: bool = True,
+                  scheduler_args: tuple = ()):
     """Yield a :class:`Cluster` of a scheduler and ``n_workers`` workers on 127.0.0.1 (random ports, no
-    dashboards); every process is stopped and reaped at the end, and the semaphores its killed processes
-    left in /dev/shm are removed."""
+    dashboards; ``worker_args``, ``scheduler_args``: more options of `dask worker`, `dask scheduler`;
+    ``wait_for_workers`` False: not waited for, e.g. workers that die); every process is stopped and reaped at
+    the end, and the semaphores its killed processes left in /dev/shm are removed."""
     directory.mkdir(parents=True, exist_ok=True)
     semaphores_before = _semaphores()
     sched_file = directory / "scheduler.json"
@@ -114,20 +116,22 @@ def local_cluster(directory: Path, n_workers: int = 2):
     procs: list[subprocess.Popen] = []
     try:
         sched = subprocess.Popen([DASK, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-                                  "--scheduler-file", str(sched_file)], stdout=log, stderr=log, env=env,
-                                 start_new_session=True)
+                                  "--scheduler-file", str(sched_file), *scheduler_args], stdout=log, stderr=log,
+                                 env=env, start_new_session=True)
         procs.append(sched)
         _wait(lambda: sched_file.exists() and sched_file.stat().st_size > 0, "scheduler start")
         address = json.loads(sched_file.read_text())["address"]
         workers = [subprocess.Popen([DASK, "worker", address, "--nworkers", "1", "--nthreads", "1",
-                                     "--no-dashboard", "--name", f"w{i}", "--local-directory", str(directory)],
+                                     "--no-dashboard", "--name", f"w{i}", "--local-directory", str(directory),
+                                     *worker_args],
                                     stdout=log, stderr=log, env=env, start_new_session=True)
                    for i in range(n_workers)]
         procs += workers
         from distributed import Client
 
-        with Client(address, timeout=START_TIMEOUT_S) as client:
-            client.wait_for_workers(n_workers, timeout=START_TIMEOUT_S)
+        if wait_for_workers and n_workers:
+            with Client(address, timeout=START_TIMEOUT_S) as client:
+                client.wait_for_workers(n_workers, timeout=START_TIMEOUT_S)
         yield Cluster(address, sched, workers)
     finally:
         for p in reversed(procs):

@@ -649,16 +649,3 @@ def test_launch_ctrl_c_once_or_twice_stops_every_node_and_writes_nothing(tmp_pat
     assert_no_leftovers(nodes, shm_before)
     assert list(tmp_path.iterdir()) == []   # neither the output nor its half-written folder
 
-
-def test_ablation_ctrl_c_mid_run_exits_130_in_one_line_and_leaves_no_worker():
-    """scripts/ablation.py printed a KeyboardInterrupt traceback from every process and died by the signal."""
-    c = Command("--only", "0,3", "--long-s", 20, "--workers", 2, script="scripts/ablation.py")
-    try:
-        wait_until(lambda: len(child_pids(c.proc.pid)) >= 2, "its two workers", proc=c)
-        time.sleep(1.0)   # inside the runs
-        c.ctrl_c()
-        rc, seconds, err = c.end()
-    finally:
-        c.kill()
-    assert rc == 130 and seconds < BOUND_S, (rc, seconds, err)
-    assert one_line(err) == "ablation: interrupted: nothing printed (the table needs all 6 runs)", err

@@ -20,6 +20,7 @@ from ..run_size import check_run_size, say_note
 from ..supervisor.fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
 from ..sim.closed_loop import CONTROLLERS
 from ..study.feasibility import infeasible_scenarios
+from ..study.lost_runs import RunsLost
 from ..study.partial_summary import write_partial_study
 from ..study.runner import run_study
 from ..study.scenarios import SCENARIOS, check_scenario_references
@@ -51,8 +52,9 @@ def run_study_command(options: StudyOptions) -> int:
         raise ConfigError(f"--scenarios: every scenario chosen is infeasible on arm {settings.arm.file} (lines above): "
                           "nothing to run")
     asked, scen = scen, [s for s in scen if s not in infeasible]
-    if "dnbs" in ctrl:
-        settings = resolve_kernel(settings, say=print)  # once here, not in each worker
+    if "dnbs" in ctrl and o.scheduler is None:   # on a cluster each worker resolves `auto` (the same bits): a
+        settings = resolve_kernel(settings, say=print)  # worker without a compiler takes numpy; here: once, not in
+        # each local worker
     n = len(scen) * len(ctrl) * o.seeds
     dt = settings.simulation.dt_s
     steps_per_run = n_steps
@@ -74,6 +76,10 @@ def run_study_command(options: StudyOptions) -> int:
     except KeyboardInterrupt:   # the workers are stopped (study/executor.py); the completed runs are kept
         bar.close()
         return _keep_partial(o.out, o.force, done, list(product(scen, ctrl, range(o.seeds))), command, head)
+    except RunsLost as exc:   # a worker or the cluster lost: the completed runs are kept as for a Ctrl-C
+        bar.close()
+        return _keep_partial(o.out, o.force, done, list(product(scen, ctrl, range(o.seeds))), command, head,
+                             lost=exc)
     bar.close()
     with finished_output_dir(o.out, o.force, "study.md") as tmp:   # a Ctrl-C now: finished first, then said
         (tmp / "study.json").write_text(json_text({**head, "rows": rows}))
@@ -90,22 +96,26 @@ def run_study_command(options: StudyOptions) -> int:
     return 0
 
 
-def _keep_partial(out: Path, force: bool, done: list[dict], all_runs: list, command: str, head: dict) -> int:
-    """After a Ctrl-C: the completed runs' rows into ``out``, marked partial (study/partial_summary.py); one line
-    saying what is where; exit 130. Nothing completed: nothing written. A second Ctrl-C meanwhile removes the
-    half-written folder and ends at once."""
+def _keep_partial(out: Path, force: bool, done: list[dict], all_runs: list, command: str, head: dict,
+                  lost: RunsLost | None = None) -> int:
+    """After a Ctrl-C (or with ``lost``, a local worker process or the Dask cluster lost mid-study): the completed
+    runs' rows into ``out``, marked partial (study/partial_summary.py); one line saying what is where; exit 130
+    (lost: its line naming --jobs or --scheduler, exit 2, as an unreachable scheduler). Nothing completed:
+    nothing written. A second Ctrl-C meanwhile removes the half-written folder and ends at once."""
     n = len(all_runs)
     kept = len({(r["scenario"], r["controller"], r["seed"]) for r in done})
+    opening = f"pa10-dnbs: error: {lost.line()}; stopped " if lost is not None else "pa10-dnbs: interrupted "
+    code = 2 if lost is not None else EXIT_INTERRUPTED
     if not kept:
-        say(f"pa10-dnbs: interrupted after 0 of {n} runs; nothing written to {out}: run the same command again")
-        return EXIT_INTERRUPTED
+        say(f"{opening}after 0 of {n} runs; nothing written to {out}: run the same command again")
+        return code
     with atomic_output_dir(out, force) as tmp:
         on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; nothing written to {out}",
                          cleanup=lambda: shutil.rmtree(tmp, ignore_errors=True))
         write_partial_study(tmp, done, all_runs, command, head)
-    line = (f"pa10-dnbs: interrupted after {kept} of {n} runs; kept their rows in {out}/study.partial.md (and "
+    line = (f"{opening}after {kept} of {n} runs; kept their rows in {out}/study.partial.md (and "
             ".json), marked partial: rerun with --force for the whole study")
     outputs_written(line)   # a Ctrl-C from here says this line, not "nothing written"
     say(line)
     outputs_written(AFTER_LINE)
-    return EXIT_INTERRUPTED
+    return code

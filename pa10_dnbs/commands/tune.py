@@ -21,10 +21,11 @@ from .options import TuneOptions
 from ..json_text import json_text
 from ..interrupt import EXIT_INTERRUPTED, check, deferred, immediate, on_second_sigint, say
 from ..output_lock import lock_key, lock_output
-from ..report.outputs import check_creatable, check_output_dir, check_tune_dir, tune_files
+from ..report.outputs import OutputExistsError, check_creatable, check_output_dir, check_tune_dir, tune_files
 from ..run_size import check_run_size, say_note
 from ..supervisor.fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
 from ..study.executor import Executor
+from ..study.lost_runs import RunsLost
 from ..study.scenarios import SCENARIOS, check_scenario_references
 from .name_list import name_list
 from ..tune.report import held_out_table, held_out_verdict, tune_figures, tune_markdown, tuned_yaml
@@ -32,7 +33,8 @@ from ..tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 from ..tune.space import select, start_values
 from ..run_settings import build_settings
 from ..run_steps import run_steps
-from ..tune.tuner import (TrialProgress, TuneSpec, completed, held_out, open_storage, open_study, optimize, refusal,
+from ..tune.tuner import (TrialProgress, TuneSpec, arm_digest, check_persistent, completed, held_out, open_storage,
+                          open_study, optimize, refusal, settings_digest, storage_key, stored_identity,
                           study_lock_key)
 
 HELD_OUT_SEED0 = 100   # held-out seeds are 100, 101, ...: never a training seed (0 .. --seeds - 1)
@@ -54,16 +56,57 @@ def run_tune(options: TuneOptions) -> int:
             state["bar"].close()
         say(_interrupted_line(state, options.trials))
         return EXIT_INTERRUPTED
+    except RunsLost as exc:   # a worker or the cluster lost: what the storage keeps, as for a Ctrl-C; exit 2
+        if state["bar"] is not None:
+            state["bar"].close()
+        say(_lost_line(exc, state, options.trials))
+        return 2
+
+
+def check_tune(o: TuneOptions) -> None:
+    """Every check a tune of ``o`` makes before it writes anything, and the study an interrupted tune left in
+    DIR/tune.db against these options; ConfigError or Refused (one line) if one fails; no note said. For a caller
+    that runs several tunes and checks them all first (scripts/equal_budget.py)."""
+    c = _checks(o, say=None)
+    spec = c["spec"]
+    if o.storage is None:
+        stored = stored_identity(c["out"] / "tune.db", spec.study_name)
+        if stored is not None and stored != spec.identity():
+            raise ConfigError(refusal(spec.study_name, stored, spec.identity()))
 
 
 def _checked_tune(o: TuneOptions, state: dict) -> int:
     """Check every input of ``o`` (nothing written), then tune; ``state`` says how far it got."""
+    c = _checks(o, say=say_note)
+    out, spec = c["out"], c["spec"]
+    lock_output(out)  # a second tune into DIR at once is refused (the same command later resumes)
+    url = o.storage if o.storage is not None else _default_storage(out)   # one tune of a study at a time, in
+    lock_key(study_lock_key(url, spec.study_name),    # whichever storage, however its URL is spelled
+             f"{'--storage' if o.storage is not None else '--out'}: study {spec.study_name} in {url} is being tuned "
+             "by another run (pid {pid}); wait for it to end (the same command then resumes it)")
+    where_kept = o.storage if o.storage is not None else str(out / "tune.db")
+    on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; the completed trials stay in {where_kept}; "
+                     "run the same command to resume")
+    state.update(phase="start", where_kept=where_kept, had_storage=o.storage is not None or (out / "tune.db").exists())
+    with deferred():   # a Ctrl-C stops the tune between two storage operations, never inside one
+        with immediate():   # seconds of imports on a busy machine: a Ctrl-C stops them at once
+            import optuna  # noqa: F401
+        return _tune(state, spec, c["base"], o.trials, out, o.storage, (c["pool"], c["batch"]), o.scheduler,
+                     c["train"], o.seeds, o.held_out_seeds, o.controller, c["base"].arm, c["config_path"],
+                     c["command"], o.progress)
+
+
+def _checks(o: TuneOptions, say) -> dict:
+    """Check every input of ``o`` (nothing written; ``say``: the notes of a long run or of faults); what the tune
+    needs of them."""
     param_list = select(o.controller, None if o.params is None else [n.strip() for n in o.params.split(",") if n.strip()])
     train = name_list("--scenarios", o.scenarios, list(SCENARIOS))
     out = Path(o.out)
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out: {out} exists and is not a directory")
     check_creatable(out, "--out")
+    if o.storage is not None:
+        check_persistent(o.storage)   # an in-memory database keeps nothing: refused before any run
     config_path = Path(o.config_path) if o.config_path else default_config_path()
     base = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
     the_arm = base.arm
@@ -76,33 +119,54 @@ def _checked_tune(o: TuneOptions, state: dict) -> int:
                 from None
     n_steps = run_steps(o.duration_s, base.simulation.dt_s)
     runs_per_trial = len(train) * o.seeds
-    at_once = 1 if o.scheduler is not None else min(runs_per_trial, o.jobs or os.cpu_count() or 1)
-    check_run_size(o.duration_s, n_steps, len(the_arm.joint_names), at_once=at_once,
-                   total_runs=runs_per_trial * o.trials, say=say_note)
-    if faults_active(base.faults):
-        say_note(IN_PROCESS_FAULTS_NOTE)
+    jobs = o.jobs or os.cpu_count() or 1
+    batch = max(1, jobs // runs_per_trial)   # trials asked at once with `jobs` workers (tune/tuner.py optimize)
+    n_held = 2 * len(SCENARIOS) * o.held_out_seeds   # the start and the best settings on every scenario
+    pool = min(jobs, max(runs_per_trial * min(batch, o.trials), n_held))   # the runs that ever step at once
+    check_run_size(o.duration_s, n_steps, len(the_arm.joint_names), at_once=1 if o.scheduler is not None else pool,
+                   total_runs=runs_per_trial * o.trials + n_held, say=say)
+    if faults_active(base.faults) and say is not None:
+        say(IN_PROCESS_FAULTS_NOTE)
     spec = TuneSpec(the_arm.name, o.controller, param_list, train, list(range(o.seeds)), o.duration_s,
-                    str(config_path.resolve()), o.seed, start_values(o.controller, base))
+                    str(config_path.resolve()), o.seed, start_values(o.controller, base),
+                    arm_digest(the_arm), settings_digest(base))
     command = _command(o.controller, o.trials, out, o.arm, config_path, o.storage, o.seed, o.scenarios, o.seeds, o.held_out_seeds,
                        o.duration_s, o.params)
     check_output_dir(out, False, "--out", inputs={"--config": config_path, "--arm": the_arm.file,
                                                    "arm URDF": the_arm.urdf},
                      resume=tune_files(out, o.storage))
     check_tune_dir(out, spec.study_name, spec.identity(), refusal)  # only this tune's own files: it resumes
-    lock_output(out)  # a second tune into DIR at once is refused (the same command later resumes)
-    if o.storage is not None:   # a shared storage: one tune of a study at a time
-        lock_key(study_lock_key(o.storage, spec.study_name),
-                 f"--storage: study {spec.study_name} in {o.storage} is being tuned by another run (pid {{pid}}); "
-                 "wait for it to end (the same command then resumes it)")
-    where_kept = o.storage if o.storage is not None else str(out / "tune.db")
-    on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; the completed trials stay in {where_kept}; "
-                     "run the same command to resume")
-    state.update(phase="start", where_kept=where_kept, had_storage=o.storage is not None or (out / "tune.db").exists())
-    with deferred():   # a Ctrl-C stops the tune between two storage operations, never inside one
-        with immediate():   # seconds of imports on a busy machine: a Ctrl-C stops them at once
-            import optuna  # noqa: F401
-        return _tune(state, spec, base, o.trials, out, o.storage, o.jobs, o.scheduler, train, o.seeds, o.held_out_seeds,
-                     o.controller, the_arm, config_path, command, o.progress)
+    _check_same_storage(out, o.storage)   # DIR's reports and tune.db are of this storage's study
+    return {"out": out, "spec": spec, "base": base, "pool": pool, "batch": batch, "train": train,
+            "config_path": config_path, "command": command}
+
+
+def _default_storage(out: Path) -> str:
+    """The storage of a tune without --storage: DIR/tune.db."""
+    return f"sqlite:///{(out / 'tune.db').resolve()}"
+
+
+def _check_same_storage(out: Path, storage: str | None) -> None:
+    """OutputExistsError (one line naming --out) if ``out`` holds another storage's tune: a tune.json written from
+    another storage, or its own tune.db while the trials go to a --storage elsewhere (the reports would be
+    replaced by another storage's study, and disagree with DIR/tune.db)."""
+    import json
+
+    url = storage if storage is not None else _default_storage(out)
+    try:
+        done = json.loads((out / "tune.json").read_text())
+    except (OSError, ValueError):
+        done = None
+    stored = done.get("storage") if isinstance(done, dict) else None
+    own = storage_key(_default_storage(out))
+    if isinstance(stored, str) and storage_key(stored) != storage_key(url):
+        that = "without --storage" if storage_key(stored) == own else f"with --storage {stored}"
+        raise OutputExistsError(f"--out: {out} holds the reports of the tune in {stored}, not in {url}: give another "
+                                f"--out for this tune (or rerun {that} to resume that one)")
+    if storage is not None and (out / "tune.db").is_file() and storage_key(url) != own:
+        raise OutputExistsError(f"--out: {out}/tune.db holds the trials of a tune without --storage, not of "
+                                f"{storage}: give another --out for this tune (or leave --storage out to resume "
+                                "that one)")
 
 
 def _interrupted_line(state: dict, trials: int) -> str:
@@ -126,21 +190,38 @@ def _interrupted_line(state: dict, trials: int) -> str:
             "reports were all written: run the same command to finish them")
 
 
-def _tune(state, spec, base, trials, out, storage, jobs, scheduler, train, seeds, held_out_seeds, controller,
+def _lost_line(exc: RunsLost, state: dict, trials: int) -> str:
+    """A local worker process or the cluster lost mid-tune: one line naming --jobs or --scheduler, how many
+    trials the storage keeps, where, and that the same command resumes."""
+    opening = f"pa10-dnbs: error: {exc.line()}"
+    if state["study"] is None:
+        return f"{opening}; before this run's first trial: run the same command again"
+    n, where_kept = len(completed(state["study"])), state["where_kept"]
+    if state["phase"] == "trials":
+        return (f"{opening}; kept {n} completed trial{'s' * (n != 1)} (of --trials {trials}) in {where_kept}; "
+                "run the same command to resume")
+    return (f"{opening}; after the trials ({n} kept in {where_kept}), before the held-out runs and reports were "
+            "written: run the same command to finish them")
+
+
+def _tune(state, spec, base, trials, out, storage, pool_batch, scheduler, train, seeds, held_out_seeds, controller,
           the_arm, config_path, command, progress) -> int:
     """The search, the held-out runs and the reports; ``state`` says how far it got (for an interruption)."""
-    with Executor(jobs, scheduler) as ex:   # an unreachable scheduler stops here, before any storage is touched
+    pool, batch = pool_batch   # local: the processes (no more than ever run at once) and the trials asked at once
+    with Executor(pool if scheduler is None else None, scheduler) as ex:   # an unreachable scheduler stops here,
+        # before any storage is touched
         storage_obj = open_storage(storage) if storage is not None else None
         if storage is None:
             out.mkdir(parents=True, exist_ok=True)
-            storage = f"sqlite:///{(out / 'tune.db').resolve()}"
+            storage = _default_storage(out)
             storage_obj = open_storage(storage)
-        batch = max(1, ex.jobs // (len(train) * seeds))
+        if scheduler is not None:
+            batch = max(1, ex.jobs // (len(train) * seeds))   # the cluster's workers
         study = open_study(storage_obj, spec, batch)
         state["study"], state["phase"] = study, "trials"
         t0 = time.monotonic()
         bar = state["bar"] = TrialProgress(study, trials, f"tune {controller} on {the_arm.name}", progress)
-        optimize(study, spec, base, trials, ex, bar)
+        optimize(study, spec, base, trials, ex, bar, batch=batch)
         bar.close()
         state["bar"], state["phase"] = None, "reports"
         trials_done = completed(study)

@@ -9,6 +9,11 @@ results are keyed, so a run that comes back twice is counted once and ``on_done`
   import the same pa10_dnbs (docs/tuning.md, "A cluster").
 - otherwise ``jobs`` local processes (default: one per core); ``jobs == 1`` runs in this process.
 
+The cluster lost while runs are out (its scheduler gone, or no worker for ``WORKERLESS_S``, or a run's workers
+killed again and again): :class:`ClusterLost`, one line naming ``--scheduler`` (exit 2); a local worker process
+killed (the OOM killer): :class:`PoolBroken`, naming ``--jobs``. The runs completed so far went to ``on_done``, so
+the command keeps them as for a Ctrl-C.
+
 Interrupted (Ctrl-C, an error) while runs are out: the local workers (which ignore SIGINT, pa10_dnbs/interrupt.py)
 are terminated and reaped within ``STOP_GRACE_S`` (then killed); a cluster's futures are cancelled, so the
 scheduler drops every run not started (a run already on a worker thread ends with that run, its result dropped).
@@ -16,18 +21,18 @@ scheduler drops every run not started (a run already on a worker thread ends wit
 from __future__ import annotations
 
 import os
-import re
 import time
 import uuid
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from typing import Callable, Hashable
 
 from ..config_error import ConfigError
 from ..interrupt import POLL_S, check, immediate, pool_worker_start, sigint_blocked
+from .cluster import CLOSE_TIMEOUT_S, ClusterWatch, connect
+from .lost_runs import ClusterLost, PoolBroken
 
-CONNECT_TIMEOUT_S = 10.0   # to reach the scheduler and to see its first worker
 STOP_GRACE_S = 2.0         # interrupted: SIGTERM to the workers, SIGKILL after this
-CLOSE_TIMEOUT_S = 5.0      # interrupted: the cluster connection closes within this
 
 
 class Executor:
@@ -43,7 +48,8 @@ class Executor:
 
     def __enter__(self) -> "Executor":
         if self.scheduler is not None:
-            self._client = connect(self.scheduler)
+            with immediate():   # seconds of waits (probe, handshake, a worker): a Ctrl-C stops them at once,
+                self._client = connect(self.scheduler)   # also inside a tune's deferred() (interrupt.py)
             self.jobs = max(1, len(self._client.scheduler_info(n_workers=-1)["workers"]))
         elif self.jobs > 1:
             self._pool = ProcessPoolExecutor(max_workers=self.jobs, initializer=pool_worker_start,
@@ -110,32 +116,54 @@ class Executor:
                 for i, (key, args) in enumerate(tasks.items()):
                     futures[self._client.submit(fn, *args, pure=False, key=f"{fn.__name__}-{token}-{i}")] = key
                 done = dask_completed(list(futures), loop=self._client.loop)
+                watch = ClusterWatch(self._client, self.scheduler)
                 while not done.is_empty():   # polled: a Ctrl-C noted meanwhile (interrupt.deferred) is raised here
                     batch = done.next_batch(block=False)
                     for fut in batch:
-                        finished(futures[fut], fut.result())
+                        finished(futures[fut], watch.result(fut, futures[fut]))
                     check()
                     if not batch:
+                        watch.check()   # the scheduler gone, or no worker for WORKERLESS_S: ClusterLost
                         time.sleep(POLL_S / 2)
-            except BaseException:
-                self._client.cancel(list(futures), force=True)   # the scheduler drops them: nothing left queued
+            except BaseException as exc:
+                if self._client.status == "running" and not isinstance(exc, ClusterLost) or \
+                        isinstance(exc, ClusterLost) and exc.scheduler_alive:
+                    self._client.cancel(list(futures), force=True)   # the scheduler drops them: nothing left queued
                 raise
         elif self._pool is not None:
-            futures, order = {}, {}
+            futures, order, procs = {}, {}, dict(self._pool._processes or {})
             try:
                 with sigint_blocked():   # the workers forked by the first submit must not see a Ctrl-C
                     for key, args in tasks.items():
-                        fut = self._pool.submit(fn, *args)
+                        try:
+                            fut = self._pool.submit(fn, *args)
+                        except BrokenProcessPool:   # a worker died between two calls of run (one idle)
+                            raise _pool_broken(self._pool, list(procs.values())) from None
                         futures[fut], order[fut] = key, len(order)
                 pending = set(futures)
                 while pending:   # polled: a Ctrl-C noted meanwhile (interrupt.deferred) is raised here
+                    procs.update(self._pool._processes or {})   # forked as needed: their exit codes, if one dies
                     done, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
+                    broken = False
                     for fut in sorted(done, key=lambda f: order[f]):
-                        finished(futures[fut], fut.result())
+                        if isinstance(fut.exception(), BrokenProcessPool):
+                            broken = True   # the runs that did complete first (on_done)
+                        else:
+                            finished(futures[fut], fut.result())
+                    if broken:
+                        raise _pool_broken(self._pool, list(procs.values()))
                     check()
-            except BaseException:
-                for fut in futures:
-                    fut.cancel()
+            except BaseException as exc:
+                procs.update(self._pool._processes or {})
+                if isinstance(exc, PoolBroken) or any(p.exitcode is not None for p in procs.values()):
+                    # broken (a worker gone: the group's SIGTERM of `timeout`): its manager thread fails every
+                    # future; none is cancelled under it (an InvalidStateError traceback in that thread)
+                    manager = getattr(self._pool, "_executor_manager_thread", None)
+                    if manager is not None:
+                        manager.join(STOP_GRACE_S)
+                else:
+                    for fut in futures:
+                        fut.cancel()
                 raise
         else:
             for key, args in tasks.items():
@@ -145,88 +173,21 @@ class Executor:
         return results
 
 
-# The address forms a Dask client reaches: [scheme://]host:port, host a name, an IPv4 or a bracketed IPv6 address
-_ADDRESS = re.compile(r"^(?:(?P<scheme>[a-z]+)://)?(?P<host>[A-Za-z0-9._-]+|\[[0-9A-Fa-f:.]+\]):(?P<port>[0-9]{1,5})$")
-_SCHEMES = ("tcp", "tls", "ws", "wss", "ucx")   # distributed's network comms (inproc is within one process)
+def _pool_broken(pool, procs) -> PoolBroken:
+    """The line of ``pool`` whose worker died: how (its signal), and the likely why. Its manager thread (which
+    fails every future and ends the other workers) is let finish first, and every worker reaped, so that the
+    exit codes are known (and no future is cancelled under it: an InvalidStateError in that thread)."""
+    import signal
 
-
-def check_address(address: str) -> str:
-    """``address`` as given, if it has a form a Dask client can reach (``tcp://host:port``); ConfigError else."""
-    m = _ADDRESS.match(address or "")
-    scheme = (m.group("scheme") or "tcp") if m else None
-    if m is None or scheme not in _SCHEMES or not 0 < int(m.group("port")) < 65536:
-        raise ConfigError(f"scheduler: {address!r} is not the address of a Dask scheduler (expected "
-                          f"tcp://host:port; schemes: {', '.join(_SCHEMES)})", setting="scheduler")
-    return address
-
-
-async def _identity(address: str) -> dict:
-    """The identity a Dask server at ``address`` gives (its ``type``: 'Scheduler' for a scheduler)."""
-    from distributed.comm import connect as comm_connect
-
-    comm = await comm_connect(address, timeout=CONNECT_TIMEOUT_S)
-    try:
-        await comm.write({"op": "identity", "reply": True})
-        return await comm.read()
-    finally:
-        comm.abort()
-
-
-def _probe(address: str) -> None:
-    """ConfigError unless a Dask scheduler answers at ``address`` within ``CONNECT_TIMEOUT_S`` (no Client yet:
-    a Client that failed to start closes itself only on garbage collection, 20 s later, with a traceback)."""
-    import asyncio
-    import socket
-
-    m = _ADDRESS.match(address)
-    if (m.group("scheme") or "tcp") != "ucx":   # a TCP port first: a refusal is said at once, not after retries
-        try:
-            socket.create_connection((m.group("host").strip("[]"), int(m.group("port"))), CONNECT_TIMEOUT_S).close()
-        except OSError as exc:
-            why = f"no answer within {CONNECT_TIMEOUT_S:g} s" if isinstance(exc, TimeoutError) else \
-                (exc.strerror or type(exc).__name__)
-            raise ConfigError(f"scheduler: cannot connect to {address}: {why}", setting="scheduler") from None
-    try:
-        reply = asyncio.run(asyncio.wait_for(_identity(address), CONNECT_TIMEOUT_S + 1.0))
-    except (asyncio.TimeoutError, TimeoutError):
-        why = f"no Dask answer within {CONNECT_TIMEOUT_S:g} s (is it a Dask scheduler's address?)"
-    except MemoryError:   # a length read from a reply that is not Dask's
-        why = "what answers there is not a Dask scheduler"
-    except Exception as exc:   # refused, reset, not Dask's protocol: said in one line
-        text = str(exc).splitlines()[0] if str(exc) else ""
-        why = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
-    else:
-        kind = reply.get("type") if isinstance(reply, dict) else None
-        if kind == "Scheduler":
-            return
-        why = f"what answers there is not a Dask scheduler (a {kind})" if kind else \
-            "what answers there is not a Dask scheduler"
-    raise ConfigError(f"scheduler: cannot connect to {address}: {why}", setting="scheduler")
-
-
-def connect(address: str):
-    """A ``distributed.Client`` to ``address`` with at least one worker; ConfigError (exit 2) for an address
-    that is malformed, unreachable, or answered by something other than a Dask scheduler, within
-    ``CONNECT_TIMEOUT_S`` for each of: reaching the scheduler, its handshake, its first worker."""
-    check_address(address)
-    try:
-        from distributed import Client
-    except ImportError:  # pragma: no cover - pinned in requirements.txt
-        raise ConfigError("scheduler: the 'distributed' package is not installed", setting="scheduler") from None
-    import logging
-
-    for name in ("distributed.client", "distributed.comm", "distributed.core", "distributed.batched"):
-        logging.getLogger(name).setLevel(logging.CRITICAL)  # its own connection errors: we say it in one line
-    _probe(address)
-    try:
-        client = Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
-    except Exception as exc:   # the scheduler went away since the probe
-        raise ConfigError(f"scheduler: cannot connect to {address}: "
-                          f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}", setting="scheduler") from None
-    try:
-        client.wait_for_workers(1, timeout=CONNECT_TIMEOUT_S)
-    except (OSError, TimeoutError):
-        client.close()
-        raise ConfigError(f"scheduler: {address} has no worker (waited {CONNECT_TIMEOUT_S:g} s)",
-                          setting="scheduler") from None
-    return client
+    manager = getattr(pool, "_executor_manager_thread", None)
+    if manager is not None:
+        manager.join(STOP_GRACE_S)
+    for p in procs:
+        p.join(STOP_GRACE_S)
+    codes = sorted({p.exitcode for p in procs if p.exitcode not in (None, 0)})
+    if len(codes) > 1 and -signal.SIGTERM in codes:   # the others, ended by the pool itself (terminate_broken)
+        codes.remove(-signal.SIGTERM)
+    how = ", ".join(f"killed by {signal.Signals(-c).name}" if c < 0 and -c in signal.valid_signals()
+                    else f"exit code {c}" for c in codes) or "ended"
+    oom = " (out of memory? fewer --jobs need less)" if -signal.SIGKILL in codes else ""
+    return PoolBroken(f"a local worker process died ({how}){oom}, so its run cannot finish")

@@ -56,27 +56,38 @@ def _short(v) -> str:
 
 
 def load_comparison(directory: Path) -> dict[str, dict]:
-    """{controller: its tune.json} of one comparison DIR, DNBS, PID and CTC first; ValueError when there is none."""
+    """{controller: its tune.json} of one finished comparison DIR (its comparison.md written), DNBS, PID and CTC
+    first; ValueError when there is none, or it is unfinished (an interrupted equal_budget.py)."""
     directory = Path(directory)
     results = {c.name: json.loads((c / "tune.json").read_text())
                for c in (sorted(directory.iterdir()) if directory.is_dir() else []) if (c / "tune.json").is_file()}
     if not results:
         raise ValueError(f"no DIR/<controller>/tune.json under {directory}")
+    if not (directory / "comparison.md").is_file():
+        raise ValueError(f"{directory} is an unfinished comparison (no comparison.md: its equal_budget.py was "
+                         "interrupted): run that command again to finish it")
     first = [c for c in ("dnbs", "pid", "ctc") if c in results]
     return {c: results[c] for c in first + [c for c in results if c not in first]}
 
 
+def budget(tune: dict) -> str:
+    """A tune's budget in words (tune.json): trials, training runs, held-out seeds, the sampler's seed."""
+    o = tune["options"]
+    return (f"{tune['trials']} trials of {len(o['scenarios'])} scenarios x {len(o['seeds'])} seeds x "
+            f"{o['duration_s']:g} s, {len(tune['held_out_seeds'])} held-out seeds, seed {o['seed']}")
+
+
 def arms_table(dirs: list[Path]) -> str:
     """Per scenario and arm, each tuned controller's held-out worst RMS [rad] (``DIR/<controller>/tune.json`` of
-    every comparison DIR); then each controller's objective over all its held-out runs, and the budget each
-    comparison gave (arms may differ). ValueError for a DIR without a tune or not finished (no comparison.md)."""
-    arms = []
+    every comparison DIR); the last row: each controller's objective over all its held-out runs."""
+    arms, budgets = [], {}
     for d in dirs:
         results = load_comparison(d)
-        if not (Path(d) / "comparison.md").is_file():
-            raise ValueError(f"{d}: an unfinished comparison (no comparison.md): the same scripts/equal_budget.py "
-                             "command finishes it")
         arms.append((next(iter(results.values()))["arm"], results))
+        for c, t in results.items():
+            budgets.setdefault(budget(t), f"{d}/{c}")
+    if len(budgets) > 1:   # the table says 'equal budget': so must its columns be
+        raise ValueError("not equal budgets: " + "; ".join(f"{where}: {text}" for text, where in budgets.items()))
     scenarios = list(dict.fromkeys(r["scenario"] for _, res in arms for t in res.values()
                                    for r in t["held_out"]["tuned"]))
     lines = ["| scenario | " + " | ".join(f"{arm} {' / '.join(c.upper() for c in res)}" for arm, res in arms) + " |",
@@ -88,13 +99,4 @@ def arms_table(dirs: list[Path]) -> str:
     lines.append("| objective, all held-out runs (shipped -> tuned) | " + " | ".join(" / ".join(
         f"{objective(t['held_out']['start']):.1f} -> {objective(t['held_out']['tuned']):.1f}" for t in res.values())
         for _, res in arms) + " |")
-    lines.append("| budget per controller | " + " | ".join(" / ".join(dict.fromkeys(_budget(t) for t in res.values()))
-                                                       for _, res in arms) + " |")
     return "\n".join(lines) + "\n"
-
-
-def _budget(tune: dict) -> str:
-    """'60 trials x 8 runs of 20 s' of one tune.json: its completed trials, training runs per trial, duration."""
-    o = tune["options"]
-    runs = len(o["scenarios"].split(",") if isinstance(o["scenarios"], str) else o["scenarios"]) * len(o["seeds"])
-    return f"{tune['trials']} trials x {runs} run{'s' * (runs != 1)} of {o['duration_s']:g} s"

@@ -6,7 +6,8 @@ Determinism: the sampler is TPE seeded with ``seed`` (plus the number of trials 
 resumed tune does not redraw the points it already tried). Trials are asked in batches of
 ``max(1, workers // runs per trial)`` and told in trial order, so the same command with the same number of
 workers gives the same trials; with at most one trial per batch (the default: 8 scenarios x 1 seed = 8 runs,
-fewer than 16 workers) the trials do not depend on the number of workers either.
+fewer than 16 workers) the trials do not depend on the number of workers either. ``--jobs`` sets the batch; the
+local pool has no more processes than the runs that step at once (commands/tune.py).
 """
 from __future__ import annotations
 
@@ -39,6 +40,8 @@ class TuneSpec:
     config_file: str
     seed: int = 0
     start: dict = field(default_factory=dict)  # the start point of the full space (space.start_values)
+    arm_digest: str = ""        # sha256 of the arm file's and its URDF's content (:func:`arm_digest`)
+    settings_digest: str = ""   # sha256 of the merged settings the trials start from (:func:`settings_digest`)
 
     @property
     def fixed(self) -> dict:
@@ -54,7 +57,31 @@ class TuneSpec:
         """The options a resumed study must share with the one in the storage."""
         return {"arm": self.arm_name, "controller": self.controller, "params": [p.name for p in self.params],
                 "scenarios": self.scenarios, "seeds": self.seeds, "duration_s": self.duration_s,
-                "config_file": self.config_file, "seed": self.seed}
+                "config_file": self.config_file, "seed": self.seed, "arm_digest": self.arm_digest,
+                "settings_digest": self.settings_digest}
+
+
+def arm_digest(arm) -> str:
+    """sha256 (hex) of what an arm is: its arm file's content and its URDF's (one file for a bare URDF); two arm
+    files of one name, or an arm file edited in place, differ."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for path in dict.fromkeys([arm.file, arm.urdf]):   # in order, once each
+        h.update(path.read_bytes())
+        h.update(b"\0")
+    return h.hexdigest()
+
+
+def settings_digest(settings: Settings) -> str:
+    """sha256 (hex) of the merged settings (config files, arm file, rules: everything a trial's run is set by but
+    the searched point), the arm file's path left out (the arm is :func:`arm_digest`): a config edited in place
+    differs."""
+    import hashlib
+    import json
+
+    mapping = {k: v for k, v in settings.to_config().items() if k != "arm"}
+    return hashlib.sha256(json.dumps(mapping, sort_keys=True, default=repr).encode()).hexdigest()
 
 
 def quiet_optuna() -> None:
@@ -65,14 +92,49 @@ def quiet_optuna() -> None:
     logging.getLogger("alembic").setLevel(logging.WARNING)
 
 
+def storage_key(url: str) -> str:
+    """What names the storage at ``url``: an SQLite file as ``sqlite:///`` and its resolved path (a relative
+    path, ``//`` in it, or a tune's default ``DIR/tune.db`` name the same file alike); any other URL as given."""
+    from sqlalchemy.engine import make_url
+
+    try:
+        u = make_url(url)
+    except Exception:   # noqa: BLE001 - not a URL: open_storage says so
+        return url
+    db = u.database or ""
+    if u.get_backend_name() != "sqlite" or db in ("", ":memory:") or db.startswith("file:"):
+        return url
+    from pathlib import Path
+
+    return f"sqlite:///{Path(db).expanduser().resolve()}"
+
+
 def study_lock_key(url: str, study_name: str) -> str:
     """The name of the lock a tune holds on its study in the storage at ``url`` (output_lock.lock_key): two tunes
-    of one study at once would each mark the other's running trial failed. As given: two spellings of one
-    SQLite file, or one server reached from two machines, are not caught."""
-    return f"optuna study {study_name} in {url}"
+    of one study at once would each mark the other's running trial failed. An SQLite file by its resolved path
+    (:func:`storage_key`); a server by its URL as given (one server reached by two names is not caught)."""
+    return f"optuna study {study_name} in {storage_key(url)}"
 
 
 STORAGE_OPEN_WAIT_S = 60.0   # how long a tune waits for another to finish opening the same storage [s]
+
+
+def check_persistent(url: str) -> None:
+    """ConfigError naming --storage for an in-memory SQLite URL (``sqlite://``, ``sqlite:///:memory:``, a
+    ``file::memory:`` or ``mode=memory`` URI with ``uri=true``): its trials end with the process, so nothing
+    could be kept or resumed. Other URLs are opened (and said wrong) by :func:`open_storage`."""
+    from sqlalchemy.engine import make_url
+
+    try:
+        u = make_url(url)
+    except Exception:   # noqa: BLE001 - not a URL: open_storage says so
+        return
+    db, uri = u.database or "", str(u.query.get("uri", "")).lower() == "true"   # uri=true: a file: URI (pysqlite)
+    if u.get_backend_name() == "sqlite" and (db in ("", ":memory:") or uri and (
+            db.startswith("file::memory:") or str(u.query.get("mode", "")) == "memory")):
+        raise ConfigError(f"storage: {url} is an in-memory database: its trials would end with this run, nothing "
+                          "kept or resumed; give a file (sqlite:///PATH.db), a database server, or leave --storage "
+                          "out (DIR/tune.db)", setting="storage")
 
 
 def open_storage(url: str):
@@ -83,7 +145,8 @@ def open_storage(url: str):
 
     quiet_optuna()
     try:
-        with waiting_for(f"optuna storage {url}", f"--storage: {url} is being opened by another run (pid {{pid}}) "
+        with waiting_for(f"optuna storage {storage_key(url)}",
+                         f"--storage: {url} is being opened by another run (pid {{pid}}) "
                          f"for over {STORAGE_OPEN_WAIT_S:g} s", STORAGE_OPEN_WAIT_S, between=check):
             return optuna.storages.RDBStorage(url)
     except OutputInUseError:
@@ -117,19 +180,47 @@ def open_study(storage, spec: TuneSpec, batch: int):
     return study
 
 
+def stored_identity(db, study_name: str) -> dict | None:
+    """The options stored with study ``study_name`` in the SQLite file ``db`` (read only, no Optuna), or None (no
+    file, no such study, not an Optuna storage)."""
+    import json
+    import sqlite3
+    from pathlib import Path
+
+    db = Path(db)
+    if not db.is_file():
+        return None
+    try:
+        con = sqlite3.connect(f"{db.resolve().as_uri()}?mode=ro", uri=True)
+        try:
+            row = con.execute("SELECT a.value_json FROM study_user_attributes a JOIN studies s ON a.study_id = "
+                              "s.study_id WHERE s.study_name = ? AND a.key = ?", (study_name, STUDY_ATTR)).fetchone()
+        finally:
+            con.close()
+        return json.loads(row[0]) if row else None
+    except (sqlite3.Error, ValueError):
+        return None
+
+
 IDENTITY_FLAGS = {"arm": "--arm", "controller": "--controller", "params": "--params", "scenarios": "--scenarios",
-                  "seeds": "--seeds", "duration_s": "--duration", "config_file": "--config", "seed": "--seed"}
+                  "seeds": "--seeds", "duration_s": "--duration", "config_file": "--config", "seed": "--seed",
+                  "arm_digest": "--arm", "settings_digest": "--config"}
+DIGESTS = {"arm_digest": "the arm file's and URDF's content", "settings_digest": "the merged settings"}
 
 
 def refusal(study_name: str, stored: dict, given: dict) -> str:
     """Why a stored study cannot go on with these options, and what to do: one line naming each flag that
     differs, as stored and as given."""
     def shown(key, v):
+        if key in DIGESTS:
+            return f"sha256 {v[:12]}" if isinstance(v, str) and v else "not recorded (an older pa10-dnbs's study)"
         if key == "seeds" and isinstance(v, list):
             return str(len(v))          # --seeds N means seeds 0..N-1
         return ",".join(map(str, v)) if isinstance(v, list) else f"{v:g}" if isinstance(v, float) else str(v)
-    diff = [f"{IDENTITY_FLAGS.get(k, k)} {shown(k, given.get(k))} (stored: {shown(k, stored.get(k))})"
-            for k in given if stored.get(k) != given[k]]
+    def differs(k):
+        what = f"{IDENTITY_FLAGS.get(k, k)}: {DIGESTS[k]}," if k in DIGESTS else IDENTITY_FLAGS.get(k, k)
+        return f"{what} {shown(k, given.get(k))} (stored: {shown(k, stored.get(k))})"
+    diff = [differs(k) for k in given if stored.get(k) != given[k]]
     return (f"--out/--storage: study {study_name!r} there was run with other options, so its trials do not "
             f"score the same objective: {'; '.join(diff)}; rerun with the stored options to resume it, or give "
             "another --out (or --storage) to start a new study")
@@ -146,14 +237,16 @@ def trial_settings(base: Settings, spec: TuneSpec, values: dict) -> Settings:
     return apply(base, settings_fragment(spec.controller, base, dict(spec.fixed, **values)))
 
 
-def optimize(study, spec: TuneSpec, base: Settings, n_trials: int, executor: Executor, progress=None) -> None:
-    """Run trials until the study holds ``n_trials`` completed ones. ``progress(done, best, runs_done, runs)``
-    after every run. Interrupted (Ctrl-C, an error): the trials of the batch are marked failed, the completed
-    ones stay in the storage, and the exception goes on."""
+def optimize(study, spec: TuneSpec, base: Settings, n_trials: int, executor: Executor, progress=None,
+             batch: int | None = None) -> None:
+    """Run trials until the study holds ``n_trials`` completed ones, ``batch`` at a time (default: as many as
+    the executor's workers run at once). ``progress(done, best, runs_done, runs)`` after every run.
+    Interrupted (Ctrl-C, an error): the trials of the batch are marked failed, the completed ones stay in the
+    storage, and the exception goes on."""
     from optuna.trial import TrialState
 
     runs_per_trial = len(spec.scenarios) * len(spec.seeds)
-    batch = max(1, executor.jobs // runs_per_trial)
+    batch = batch or max(1, executor.jobs // runs_per_trial)
     while (done := len(completed(study))) < n_trials:
         asked = [study.ask() for _ in range(min(batch, n_trials - done))]
         tasks = {}
