@@ -8,7 +8,9 @@ configured initial posture, velocity 0; stamped with a wall-clock-like time that
 for the JointState command stamped with it, then publishes the next state; re-sends a state every 0.25 s
 until its command comes. From step STEP on it injects FAULT: ``stop`` (publishes nothing more),
 ``missing`` (leaves joint index 2 of the arm out of the names), ``nan`` (position of the arm's second joint is
-NaN), ``none`` (no fault). Prints ``COMMAND <step> <stamp ns> <efforts>`` for every command it takes and ends
+NaN), ``dup`` (names the arm's first joint a second time, last, at 5 rad), ``beyond`` (the arm's first joint
+0.2 rad beyond its upper limit: past the joint controllers' guard margin), ``rival`` (a second publisher on the
+command topic from the start: another commander; it sends nothing), ``none`` (no fault). Prints ``COMMAND <step> <stamp ns> <efforts>`` for every command it takes and ends
 on SIGINT or SIGTERM with ``PROBE END``.
 """
 import os
@@ -39,6 +41,8 @@ def main() -> int:
     pub = node.create_publisher(JointState, "/robot_joint_states", qos)
     commands = []
     node.create_subscription(JointState, "/robot_joint_command", commands.append, qos)
+    if fault == "rival":
+        rival = node.create_publisher(JointState, "/robot_joint_command", qos)  # noqa: F841 - kept for the run
     stop = []
     signal.signal(signal.SIGINT, lambda *_: stop.append(1))
     signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
@@ -55,7 +59,11 @@ def main() -> int:
         pos = [float(q0[i]) for i in order]
         if fault == "nan" and k >= fault_step:
             pos[order.index(1)] = float("nan")
+        if fault == "beyond" and k >= fault_step:
+            pos[order.index(0)] = float(cfg.arm.upper_rad[0]) + 0.2
         msg.name, msg.position, msg.velocity = [names[i] for i in order], pos, [0.0] * len(order)
+        if fault == "dup" and k >= fault_step:
+            msg.name, msg.position, msg.velocity = msg.name + [names[0]], pos + [5.0], [0.0] * (len(order) + 1)
         silent = fault == "stop" and k >= fault_step
         answered = False
         next_send = 0.0

@@ -4,8 +4,8 @@ The project's PyBullet plant as that robot (``interface:=standard``): the record
 in-process run bit for bit, the bag holds the graph's topics as before, every process ends; paced
 (``--mode realtime``), the bus follows the robot's own ticks. A small probe robot
 (test/robot_probe.py, no /clock, stamps not starting at 0) for the faults: it stops publishing, a joint goes
-missing from its state, a position turns NaN. Each: one ``ROBOT FAULT`` line, the zero-effort safe command
-answering the last state, no traceback, every process ends (docs/your_robot.md).
+missing from its state, a position turns NaN, a joint is named twice. Each: one ``ROBOT FAULT`` line, the
+zero-effort safe command answering the last state, no traceback, every process ends (docs/your_robot.md).
 """
 import json
 import sys
@@ -109,6 +109,7 @@ FAULTS = [  # (fault, mode, what the one line says): each fault in lockstep, the
     ("stop", "lockstep", "(stale robot)"),
     ("missing", "lockstep", "joint_states lacks s3"),
     ("nan", "lockstep", "non-finite state of joint s2: position nan"),
+    ("dup", "lockstep", "joint_states names s1 more than once"),
     ("stop", "realtime", "(stale robot)"),
 ]
 

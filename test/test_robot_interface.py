@@ -41,6 +41,8 @@ def test_joints_are_matched_by_name_not_order():
     (PA10, [0.0, math.nan, 0, 0, 0, 0, 0], [0.0] * 7, "non-finite state of joint s2: position nan"),
     (PA10, [0.0] * 7, [0, 0, 0, 0, 0, 0, math.inf], "non-finite state of joint w2"),
     (PA10, [0.0] * 7, [], "7 names but 7 positions and 0 velocities"),
+    (PA10 + ("s1",), [0.0] * 7 + [5.0], [0.0] * 8, "joint_states names s1 more than once"),
+    (("s2",) + PA10 + ("gripper", "gripper"), [0.0] * 10, [0.0] * 10, "joint_states names s2 more than once"),
 ])
 def test_a_bad_state_is_a_robot_fault_naming_it(names, pos, vel, says):
     with pytest.raises(RobotFault, match=says.replace("(", r"\(")):

@@ -15,7 +15,7 @@ be at time 0). Otherwise the bus publishes the graph's /clock (``clock_hz``), th
 the first.
 
 Faults (one line ``ROBOT FAULT: ...``, the safe command of zero effort on every joint, exit 1): a joint of
-the arm missing from the robot's state, a non-finite position or velocity, no state within
+the arm missing from the robot's state or named twice, a non-finite position or velocity, no state within
 ``robot_timeout_s`` (``start_timeout_s`` for the first).
 """
 from __future__ import annotations
