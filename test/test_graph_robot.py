@@ -146,3 +146,32 @@ def test_a_robot_fault_is_one_line_and_the_safe_command(fault, mode, says, tmp_p
     codes = exit_codes(la.output)
     assert codes["joint_bus"] == 1 and all(c == 0 for n, c in codes.items() if n != "joint_bus"), codes
     _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)
+
+
+def test_states_the_guard_refuses_without_an_injected_fault_are_reported(tmp_path, domain):
+    """rev_e 1: a robot whose s1 is 0.2 rad beyond its URDF limit on every state (a wrong zero or offset): the
+    joint controller's guard refuses each one (its torque held at 0). No fault was injected, yet the report's
+    faults line names the counter (it was written only under injection), metrics.json has it, and the launcher
+    warns on stderr. The run itself ends as |e| > 1 rad makes it: diverged, exit 1."""
+    shm_before = shm_files()
+    out = tmp_path / "run"
+    robot = Proc([sys.executable, HERE / "robot_probe.py", domain, "beyond", 0], domain)
+    robot.wait_for("PROBE READY", 60)
+    la = Launcher("--robot", "external", "--duration", 0.3, "--out", out, domain_id=domain)
+    try:
+        pids = la.node_pids()
+        rc = la.wait(timeout=300)
+    finally:
+        la.kill()
+        robot.interrupt()
+        robot.wait(timeout=30)
+    assert rc == 1 and "DIVERGED" in la.output, la.output
+    m = json.loads((out / "metrics.json").read_text())
+    s1 = m["faults"]["joints"][0]
+    assert s1["name"] == "s1" and s1["controller"]["bad_states_position"] == s1["controller"]["states"] == 301, s1
+    assert all(j["controller"]["bad_states_position"] == 0 for j in m["faults"]["joints"][1:]), m["faults"]
+    report = (out / "report.md").read_text()
+    assert "- faults: s1: bad_states_position 301\n" in report, report
+    warning = [x for x in la.output.splitlines() if x.startswith("pa10-dnbs launch: warning: faults detected")]
+    assert len(warning) == 1 and "s1: bad_states_position 301" in warning[0], la.output
+    _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)

@@ -6,7 +6,7 @@ import sys
 
 from ..number_text import interval
 from ..supervisor.fault_flags import faults_active
-from ..supervisor.fault_report import fault_note
+from ..supervisor.fault_report import detected_faults, fault_note
 from .launch_plan import LaunchPlan
 from .options import LaunchOptions
 
@@ -36,13 +36,30 @@ def report_notes(plan: LaunchPlan, o: LaunchOptions, stats: dict, result, source
         notes.append(f"DNBS warm-started from the checkpoints in `{init_from}` (not a cold start)")
     if faults_active(settings.faults) or result.restarts:
         notes.append(fault_note(metrics["faults"]))
-    elif mode == "lockstep" and (nondeterministic := _unforced_timeouts(stats, o.effort_timeout_s)):
-        notes.append(nondeterministic)
-        print(f"pa10-dnbs launch: warning: {nondeterministic}", file=sys.stderr, flush=True)
+    else:
+        if unforced := _unforced_faults(metrics["faults"]):  # effort timeouts: their own note, next
+            notes.append(fault_note(metrics["faults"]))
+            print(f"pa10-dnbs launch: warning: {unforced}", file=sys.stderr, flush=True)
+        if mode == "lockstep" and (nondeterministic := _unforced_timeouts(stats, o.effort_timeout_s)):
+            notes.append(nondeterministic)
+            print(f"pa10-dnbs launch: warning: {nondeterministic}", file=sys.stderr, flush=True)
     if tuple(window) != tuple(settings.simulation.window_s):
         notes.append(f"run shorter than the configured window {interval(settings.simulation.window_s)} s: "
                      "metrics over the second half instead")
     return notes
+
+
+def _unforced_faults(faults: dict) -> str | None:
+    """What to say when a run without injected faults counted some anyway (the report's faults line names them
+    too), else None: a joint controller's guard refused states (a robot's joint beyond its URDF limit: a wrong
+    zero, offset or URDF), the plant got non-finite, out-of-range or undecodable efforts."""
+    parts = detected_faults(faults, skip=("effort_timeouts",))
+    if not parts:
+        return None
+    return (f"faults detected with none injected: {'; '.join(parts)} (bad_states_*: a joint controller refused "
+            "those states as beyond the joint's limits by more than guards.position_margin_rad, faster than "
+            "guards.max_speed_rad_s or non-finite, and answered them with guards.on_bad_state instead of its "
+            "law; a robot's joint zero, offset or URDF limits?)")
 
 
 def _unforced_timeouts(stats: dict, effort_timeout_s: float) -> str | None:

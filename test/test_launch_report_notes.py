@@ -1,0 +1,36 @@
+"""What a launched run's report says of counters nobody injected (commands/launch_report.py), without a graph:
+the guard and plant fault counters (rev_e 1); the graph tests run them end to end (test_graph_robot.py)."""
+from pa10_dnbs.commands.launch_report import _unforced_faults
+from pa10_dnbs.supervisor.fault_report import detected_faults, fault_note
+
+PLANT = {"effort_timeouts": 0, "nonfinite_efforts": 0, "out_of_range_efforts": 0, "malformed_efforts": 0,
+         "missed_ticks": 0, "resent_states": 0, "timeout_ranges": [], "injected_state_faults": None}
+CONTROLLER = {"bad_states_nonfinite": 0, "bad_states_position": 0, "bad_states_speed": 0, "nonfinite_torques": 0,
+              "ekf_resets_alpha": 0, "ekf_resets_torque": 0, "states": 301, "efforts": 301}
+
+
+def _faults(**changes):
+    """metrics.json's faults section of joints s1, s2; ``changes``: 'joint__side__counter' = value."""
+    joints = [{"name": n, "plant": dict(PLANT), "controller": dict(CONTROLLER)} for n in ("s1", "s2")]
+    for key, value in changes.items():
+        joint, side, counter = key.split("__")
+        next(j for j in joints if j["name"] == joint)[side][counter] = value
+    return {"joints": joints, "restarts": []}
+
+
+def test_a_clean_run_says_nothing():
+    assert detected_faults(_faults()) == [] and _unforced_faults(_faults()) is None
+    assert fault_note(_faults()) == "faults: none detected"
+
+
+def test_a_guard_counter_without_injection_is_named_in_the_note_and_the_warning():
+    f = _faults(s1__controller__bad_states_position=301, s2__plant__out_of_range_efforts=2)
+    assert fault_note(f) == "faults: s1: bad_states_position 301; s2: out_of_range_efforts 2"
+    msg = _unforced_faults(f)
+    assert msg.startswith("faults detected with none injected: s1: bad_states_position 301; "
+                          "s2: out_of_range_efforts 2 ("), msg
+
+
+def test_effort_timeouts_alone_are_left_to_their_own_note():
+    f = _faults(s2__plant__effort_timeouts=3)
+    assert _unforced_faults(f) is None and fault_note(f) == "faults: s2: effort_timeouts 3"
