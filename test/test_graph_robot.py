@@ -175,3 +175,29 @@ def test_states_the_guard_refuses_without_an_injected_fault_are_reported(tmp_pat
     warning = [x for x in la.output.splitlines() if x.startswith("pa10-dnbs launch: warning: faults detected")]
     assert len(warning) == 1 and "s1: bad_states_position 301" in warning[0], la.output
     _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)
+
+
+def test_a_second_commander_of_the_robot_is_a_robot_fault(tmp_path, domain):
+    """rev_e 2: another publisher on the robot's command topic (the probe's own, silent: as a forgotten second
+    graph would be) is a second commander; the robot would take whichever command came first. The bus sees it
+    (``get_publishers_info_by_topic``), sends the safe command and exits 1 with one ROBOT FAULT line naming it."""
+    shm_before = shm_files()
+    robot = Proc([sys.executable, HERE / "robot_probe.py", domain, "rival", 0], domain)
+    robot.wait_for("PROBE READY", 60)
+    la = Launcher("--robot", "external", "--duration", 3.0, "--out", tmp_path / "run", domain_id=domain)
+    try:
+        pids = la.node_pids()
+        rc = la.wait(timeout=300)
+    finally:
+        la.kill()
+        robot.interrupt()
+        robot.wait(timeout=30)
+    assert rc == 1, la.output
+    lines = [x for x in la.output.splitlines() if "ROBOT FAULT:" in x]
+    assert len(lines) == 1, la.output
+    assert ("another publisher on the robot's command topic /robot_joint_command besides this bus (publishers: "
+            "/pa10/joint_bus, /robot_probe)") in lines[0], lines
+    commands = [json.loads(x.split(" ", 3)[3]) for x in robot.output.splitlines() if x.startswith("COMMAND ")]
+    assert commands and commands[-1] == [0.0] * 7, commands[-3:]  # the safe command last
+    assert exit_codes(la.output)["joint_bus"] == 1
+    _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)

@@ -16,7 +16,8 @@ the first.
 
 Faults (one line ``ROBOT FAULT: ...``, the safe command of zero effort on every joint, exit 1): a joint of
 the arm missing from the robot's state or named twice, a non-finite position or velocity, no state within
-``robot_timeout_s`` (``start_timeout_s`` for the first).
+``robot_timeout_s`` (``start_timeout_s`` for the first), another publisher on the command topic (a second
+commander of the robot).
 """
 from __future__ import annotations
 

@@ -6,8 +6,11 @@ efforts, or a Float64MultiArray in the arm's joint order (``RobotCommand``). ``s
 answering the current state and blocks until the robot's next state (a newer stamp): lockstep, the robot
 waits for it. While waiting, a re-sent copy of the current state means the command was lost: it goes out
 again (JointState form only: a Float64MultiArray has no stamp, so a copy could be applied twice).
-Faults (``RobotFault``, one line): a joint missing, a non-finite position or velocity, no new state within
-``timeout_s`` of wall time; before raising, one command of zero effort on every joint goes out
+Faults (``RobotFault``, one line): a joint missing or named twice, a non-finite position or velocity, no new
+state within ``timeout_s`` of wall time, another publisher on the command topic (a second commander: another
+graph or controller driving the same robot, which would take whichever command came first; checked once the
+first state is in, then every ``COMMANDERS_CHECK_S`` of wall time, as ros2_control refuses a second
+controller claiming a joint); before raising, one command of zero effort on every joint goes out
 (``send_safe``). Joints are matched by name (``wire/robot_interface.py``).
 """
 from __future__ import annotations
@@ -27,6 +30,7 @@ from .polled import PolledSubscription, SubscriptionWaitSet
 
 SLICE_S = 0.05  # longest single wait for a robot state: the stop request is checked at least this often
 STATE_DEPTH = 100  # robot states kept between two takes
+COMMANDERS_CHECK_S = 0.2  # wall time between two looks for another publisher on the command topic
 
 
 class RemoteRobot:
@@ -36,6 +40,7 @@ class RemoteRobot:
         ``timeout_s``: wall time without a new state that makes the robot stale; ``stopped()``: True once the
         node is asked to stop (a wait then returns)."""
         self.arm = arm
+        self._node = node
         self.joint_names = arm.joint_names
         self.n_joints = len(self.joint_names)
         self.limit_hits = np.zeros(self.n_joints, dtype=np.int64)  # the robot's own: not seen from here
@@ -58,6 +63,7 @@ class RemoteRobot:
         self.commands_sent = 0
         self.commands_resent = 0
         self.unanswered_states = 0        # new states that came before the command of the previous one
+        self._next_commanders_check = 0.0  # time.monotonic() of the next look at the command topic
 
     @property
     def state(self) -> tuple[np.ndarray, np.ndarray]:
@@ -122,7 +128,24 @@ class RemoteRobot:
             if self._wait_set.wait(min(SLICE_S, left)):
                 self._take_new()
         self._advance()
+        self.check_commanders(force=True)
         return True
+
+    def check_commanders(self, force: bool = False) -> None:
+        """RobotFault (after the safe command) when the command topic has a publisher besides this bus: another
+        commander of the robot. Looks at most every COMMANDERS_CHECK_S of wall time unless ``force``."""
+        now = time.monotonic()
+        if not force and now < self._next_commanders_check:
+            return
+        self._next_commanders_check = now + COMMANDERS_CHECK_S
+        topic = self._pub.topic_name
+        if self._node.count_publishers(topic) <= 1:
+            return
+        who = sorted(f"{i.node_namespace.rstrip('/')}/{i.node_name}"
+                     for i in self._node.get_publishers_info_by_topic(topic))
+        self.fault(f"another publisher on the robot's command topic {topic} besides this bus (publishers: "
+                   f"{', '.join(who)}): a robot takes commands from one controller, and this one would get "
+                   "whichever came first (another graph or controller driving it? stop it)")
 
     def take_state(self) -> bool:
         """Paced: take what is queued; True when a new state became the current one (a newer one that came
@@ -153,6 +176,7 @@ class RemoteRobot:
 
     def send(self, tau) -> None:
         """Paced: the command ``tau`` [N m] (arm order) answering the current state."""
+        self.check_commanders()
         self._send(tau)
         self.commands_sent += 1
 
@@ -168,6 +192,7 @@ class RemoteRobot:
     def step(self, tau) -> None:
         """Send ``tau`` [N m] (arm order) answering the current state, then wait for the robot's next state."""
         self._take_new()  # copies queued before this command are not a lost command
+        self.check_commanders()
         self._send(tau)
         self.commands_sent += 1
         end = time.monotonic() + self.timeout_s
