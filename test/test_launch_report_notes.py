@@ -34,3 +34,18 @@ def test_a_guard_counter_without_injection_is_named_in_the_note_and_the_warning(
 def test_effort_timeouts_alone_are_left_to_their_own_note():
     f = _faults(s2__plant__effort_timeouts=3)
     assert _unforced_faults(f) is None and fault_note(f) == "faults: s2: effort_timeouts 3"
+
+
+def test_a_second_effort_publisher_is_named_unless_its_joint_was_restarted():
+    from pa10_dnbs.commands.launch_report import second_effort_publishers
+
+    def stats(*publishers):
+        return {"joints": [{"name": n, "effort_publishers": p, "stale_efforts": 7 * (p - 1)}
+                           for n, p in zip(("s1", "s2", "s3"), publishers)]}
+
+    assert second_effort_publishers(stats(1, 1, 1), []) is None
+    msg = second_effort_publishers(stats(2, 1, 3), [])
+    assert msg.startswith("a second publisher on an effort topic: s1: 2 publishers, 7 efforts for steps already "
+                          "applied, s3: 3 publishers, 14 efforts for steps already applied ("), msg
+    # a killed controller's publisher outlives it in the graph for a while: its restart is no second publisher
+    assert second_effort_publishers(stats(2, 1, 1), [{"joint": "s1", "exit_code": -9, "mode": "resume"}]) is None

@@ -22,7 +22,7 @@ from ..wire.topics import ArmTopics
 from ..wire.wire_record import load_wire_run
 from .launch_plan import plan_launch
 from .launch_record import bag_run
-from .launch_report import report_notes, timing_summary
+from .launch_report import report_notes, second_effort_publishers, timing_summary
 from .options import LaunchOptions
 
 
@@ -100,7 +100,8 @@ def run_launch(options: LaunchOptions) -> int:
     print(f"wrote {out}/report.md")
     if m.get("diverged"):
         print(f"DIVERGED: {diverged_text(m)}")
-    return 0 if run_ok(m) else 1
+    rivals = second_effort_publishers(stats, result.restarts)  # the report and a warning said which (exit 1)
+    return 0 if run_ok(m) and rivals is None else 1
 
 
 def _hard_stop_cleanup(tmp: Path, out: Path) -> str:

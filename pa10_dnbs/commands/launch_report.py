@@ -43,6 +43,9 @@ def report_notes(plan: LaunchPlan, o: LaunchOptions, stats: dict, result, source
         if mode == "lockstep" and (nondeterministic := _unforced_timeouts(stats, o.effort_timeout_s)):
             notes.append(nondeterministic)
             print(f"pa10-dnbs launch: warning: {nondeterministic}", file=sys.stderr, flush=True)
+    if rivals := second_effort_publishers(stats, result.restarts):
+        notes.append(rivals)
+        print(f"pa10-dnbs launch: warning: {rivals}", file=sys.stderr, flush=True)
     if tuple(window) != tuple(settings.simulation.window_s):
         notes.append(f"run shorter than the configured window {interval(settings.simulation.window_s)} s: "
                      "metrics over the second half instead")
@@ -60,6 +63,24 @@ def _unforced_faults(faults: dict) -> str | None:
             "those states as beyond the joint's limits by more than guards.position_margin_rad, faster than "
             "guards.max_speed_rad_s or non-finite, and answered them with guards.on_bad_state instead of its "
             "law; a robot's joint zero, offset or URDF limits?)")
+
+
+def second_effort_publishers(stats: dict, restarts: list[dict]) -> str | None:
+    """What to say when a joint's effort topic had a second publisher (the plant's ``effort_publishers``, the most
+    it saw at once: another controller answering that joint's states, whichever answer came first applied), else
+    None. A restarted joint is left out: its killed process's publisher stays in the graph for a while (DDS
+    forgets it after its lease, ~20 s). The run's numbers are then not those of its controller alone: the launcher
+    exits 1."""
+    restarted = {r["joint"] for r in restarts}
+    joints = [(j["name"], j.get("effort_publishers", 0), j.get("stale_efforts", 0)) for j in stats["joints"]
+              if j.get("effort_publishers", 0) > 1 and j["name"] not in restarted]
+    if not joints:
+        return None
+    return ("a second publisher on an effort topic: " + ", ".join(
+        f"{name}: {n} publishers, {stale} efforts for steps already applied" for name, n, stale in joints)
+        + " (another controller answered those joints' states and the plant applied whichever answer came first: "
+        "the run's numbers are not its controller's alone, nor, in lockstep, the in-process run's; the plant's "
+        "log names the publishers)")
 
 
 def _unforced_timeouts(stats: dict, effort_timeout_s: float) -> str | None:

@@ -141,8 +141,8 @@ class RemoteRobot:
         topic = self._pub.topic_name
         if self._node.count_publishers(topic) <= 1:
             return
-        who = sorted(f"{i.node_namespace.rstrip('/')}/{i.node_name}"
-                     for i in self._node.get_publishers_info_by_topic(topic))
+        who = sorted(f"{i.node_namespace.rstrip('/')}/{i.node_name}" if "_UNKNOWN_" not in i.node_name
+                     else "a node not known by name yet" for i in self._node.get_publishers_info_by_topic(topic))
         self.fault(f"another publisher on the robot's command topic {topic} besides this bus (publishers: "
                    f"{', '.join(who)}): a robot takes commands from one controller, and this one would get "
                    "whichever came first (another graph or controller driving it? stop it)")

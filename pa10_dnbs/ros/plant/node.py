@@ -23,7 +23,11 @@ paces the steps (``mode``):
 deadline (``realtime.py``). The plant itself runs on wall time (no use_sim_time).
 
 Defensive: a non-finite effort counts as missing (hold or zero, counted), an
-out-of-range one is saturated at its torque limit and counted. Faults configured in
+out-of-range one is saturated at its torque limit and counted. A second
+publisher on a joint's effort topic (another controller answering its
+states: whichever answer comes first is applied) is looked for every
+``EFFORT_PUBLISHERS_CHECK_S`` of wall time, warned about once per joint and
+its count kept (``effort_publishers`` in the stats: the most seen at once). Faults configured in
 ``faults.state`` are injected on each joint's state link. Fault counters go
 to /diagnostics every second; timing figures and counters go to
 ``stats_file`` (JSON, ``stats.py``) at exit.
@@ -57,6 +61,7 @@ from .stats import diagnostics_report, plant_stats
 from .standard_endpoints import StandardPlantEndpoints
 from .endpoints import PlantEndpoints
 from ..ready import ReadyListener
+from ..wall_timer import wall_timer
 from ..runtime import announce_ready
 from ..settings_params import NODE_SECTIONS
 from ..endpoints import StepClock, record_qos
@@ -100,6 +105,7 @@ PARAMS = {
 }
 
 
+EFFORT_PUBLISHERS_CHECK_S = 0.2  # wall time between two counts of each effort topic's publishers
 FINAL_FLUSH_S = 10.0  # wall seconds the finished plant waits for every reliable subscriber to acknowledge
 
 
@@ -163,6 +169,9 @@ class PlantNode(Node):
         self.ready = ReadyListener(self, expected) if expected else None  # the start handshake
         self.diagnostics = DiagnosticsReporter(self, lambda: diagnostics_report(self),
                                                lambda: self.clock_.stamp(self.gate.step))
+        self.effort_publishers = [0] * n  # the most publishers seen at once on each joint's effort topic
+        self._effort_publishers_warned: set[int] = set()  # joints whose second publisher was named in the log
+        self._effort_publishers_timer = wall_timer(self, EFFORT_PUBLISHERS_CHECK_S, self.count_effort_publishers)
         self.rt_applied, self.rt_message = apply_fifo(p["rt_priority"])
         if p["rt_priority"]:
             print(self.rt_message, flush=True)
@@ -193,6 +202,21 @@ class PlantNode(Node):
                               state_depth=1 if realtime else record_qos().depth,
                               effort_depth=1 if realtime else p["effort_queue_depth"], clock_hz=p["clock_hz"],
                               last_step=self.n_steps)
+
+    def count_effort_publishers(self) -> None:
+        """Count each effort topic's publishers (``effort_publishers``: the most seen); a second one is warned
+        about once per joint: another controller answers its states, and whichever answer comes first counts."""
+        for j, (topic, count) in enumerate(self.endpoints.effort_publishers()):
+            self.effort_publishers[j] = max(self.effort_publishers[j], count)
+            if count > 1 and j not in self._effort_publishers_warned:
+                who = sorted(f"{i.node_namespace.rstrip('/')}/{i.node_name}"
+                             for i in self.get_publishers_info_by_topic(topic))
+                if any("_UNKNOWN_" in w for w in who):
+                    continue  # its node's name is not discovered yet: the next count names it
+                self._effort_publishers_warned.add(j)
+                self.get_logger().warning(
+                    f"SECOND EFFORT PUBLISHER at step {self.gate.step}: {count} publishers on {topic} "
+                    f"({', '.join(who)}): whichever answer comes first is applied")
 
     # ---------------------------------------------------------------- stepping
     def publish_state(self, k: int, joints=None, observed: bool = True) -> None:
