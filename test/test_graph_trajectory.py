@@ -3,7 +3,9 @@ step the reference node names, every joint within 1e-3 rad RMS after its first 0
 unknown joint, a position beyond a limit, times not increasing), one before it and two while it runs, are
 refused with one line each and change nothing: the recorded reference is eq. 27 spliced with the example
 at that step, bit for bit, as core/trajectory_reference.py computes it, and the whole run equals the
-in-process loop given that reference, bit for bit. One graph, four sends."""
+in-process loop given that reference, bit for bit; the report and metrics.json name the reference followed and
+the refusals. One graph, four sends."""
+import json
 import re
 import sys
 
@@ -81,6 +83,18 @@ def test_a_trajectory_sent_while_running_is_tracked_and_wrong_ones_change_nothin
     start, end = int(started[0][0]), int(started[0][1])
     n = int(round(DURATION_S * 1000))
     assert 4000 < start and end - start in (4000, 4001) and end + 200 <= n, (start, end)  # 4001: rounding of k T
+
+    # the report and metrics.json name the reference followed and the refusals (rev_e 4)
+    m = json.loads((out / "metrics.json").read_text())["trajectories_received"]
+    assert m["trajectory_topic"] == "/pa10/trajectory" and m["trajectories_accepted"] == 1, m
+    assert m["accepted"] == [{"start_step": start, "end_step": end, "points": 5, "knots": 6, "dropped_points": 0}], m
+    assert m["trajectories_refused"] == 3 and [r in x for r, x in zip(("wrist_9", "1.7 rad", "2.4 s"),
+                                                                      m["refused_reasons"])] == [True] * 3, m
+    note = next(x for x in (out / "report.md").read_text().splitlines() if x.startswith("- reference: "))
+    assert note.startswith(f"- reference: eq. 27; from step {start} (t = {start / 1000:.3f} s) the trajectory "
+                           f"received on `/pa10/trajectory` (5 points), its last point reached at step {end} "
+                           f"(t = {end / 1000:.3f} s) and held; 3 received on `/pa10/trajectory` refused, changing "
+                           "nothing (the first: unknown joint 'wrist_9'"), note
 
     # the reference on the wire: eq. 27, then the example from `start`, and nothing else (the wrong ones)
     run = RunData.load_npz(out / "timeseries.npz")

@@ -49,3 +49,21 @@ def test_a_second_effort_publisher_is_named_unless_its_joint_was_restarted():
                           "applied, s3: 3 publishers, 14 efforts for steps already applied ("), msg
     # a killed controller's publisher outlives it in the graph for a while: its restart is no second publisher
     assert second_effort_publishers(stats(2, 1, 1), [{"joint": "s1", "exit_code": -9, "mode": "resume"}]) is None
+
+
+def test_the_reference_line_names_the_trajectories_taken_from_the_topic():
+    from pa10_dnbs.commands.launch_report import received_trajectories, reference_note
+
+    none = {"trajectory_topic": "/pa10/trajectory", "trajectories_accepted": 0, "trajectories_refused": 0,
+            "accepted": [], "refused_reasons": []}
+    assert not received_trajectories(None) and not received_trajectories(none)
+    assert reference_note("t.yaml", none, 1e-3).startswith("reference: the trajectory of `t.yaml` from t = 0")
+    taken = {**none, "trajectories_accepted": 1, "trajectories_refused": 2, "refused_reasons": ["no points", "x"],
+             "accepted": [{"start_step": 3300, "end_step": 4100, "points": 2, "knots": 3, "dropped_points": 0}]}
+    assert received_trajectories(taken)
+    assert reference_note(None, taken, 1e-3) == (
+        "reference: eq. 27; from step 3300 (t = 3.300 s) the trajectory received on `/pa10/trajectory` (2 points), "
+        "its last point reached at step 4100 (t = 4.100 s) and held; 2 received on `/pa10/trajectory` refused, "
+        "changing nothing (the first: no points; every reason in logs/reference.log)")
+    refused_only = {**none, "trajectories_refused": 1, "refused_reasons": ["no points"]}
+    assert reference_note(None, refused_only, 1e-3).startswith("reference: eq. 27; 1 received on")

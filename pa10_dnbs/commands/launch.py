@@ -71,6 +71,7 @@ def run_launch(options: LaunchOptions) -> int:
                     timing=timing_summary(stats, result.controllers, o.sched_batch),
                     node_exit_codes=result.exit_codes, bag=str(record) if record else None,
                     faults=fault_report(settings, stats, result),
+                    trajectories_received=result.reference,
                     **({"warm_start_from": str(init_from)} if init_from is not None else {}))
                 notes = report_notes(plan, o, stats, result, source, metrics)
                 write_report(tmp, [run], [metrics], title=f"{the_arm.description}: node graph run ({mode})",

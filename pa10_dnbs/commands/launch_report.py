@@ -23,9 +23,8 @@ def report_notes(plan: LaunchPlan, o: LaunchOptions, stats: dict, result, source
              f"source: ROS 2 node graph, {mode} mode, {reliability} QoS, domain {result.domain_id}; "
              f"time series rebuilt from {source}",
              _timing_note(stats)]
-    if trajectory is not None:
-        notes.append(f"reference: the trajectory of `{trajectory}` from t = 0, not eq. 27 "
-                     "(docs/trajectories.md)")
+    if trajectory is not None or received_trajectories(result.reference):
+        notes.append(reference_note(trajectory, result.reference, settings.simulation.dt_s))
     if own_robot:
         notes.append("plant: the arm in MuJoCo (`pa10-dnbs robot --engine mujoco`) behind the joint bus, "
                      "lockstep (docs/engines.md)")
@@ -50,6 +49,34 @@ def report_notes(plan: LaunchPlan, o: LaunchOptions, stats: dict, result, source
         notes.append(f"run shorter than the configured window {interval(settings.simulation.window_s)} s: "
                      "metrics over the second half instead")
     return notes
+
+
+def received_trajectories(reference: dict | None) -> bool:
+    """Whether the reference node took (or refused) any trajectory from its topic (``reference``: its stats)."""
+    return bool(reference and (reference["trajectories_accepted"] or reference["trajectories_refused"]))
+
+
+def reference_note(trajectory, reference: dict | None, dt_s: float) -> str:
+    """The report's line on the reference followed: eq. 27 or the file ``trajectory`` from t = 0, then each
+    trajectory accepted from the topic from its start step (``reference``: the reference node's stats), and how many
+    the node refused."""
+    if trajectory is not None:
+        note = f"reference: the trajectory of `{trajectory}` from t = 0, not eq. 27 (docs/trajectories.md)"
+    else:
+        note = "reference: eq. 27"
+    if not received_trajectories(reference):
+        return note
+    topic = reference["trajectory_topic"]
+    for a in reference["accepted"]:
+        note += (f"; from step {a['start_step']} (t = {a['start_step'] * dt_s:.3f} s) the trajectory received on "
+                 f"`{topic}` ({a['points']} points), its last point reached at step {a['end_step']} "
+                 f"(t = {a['end_step'] * dt_s:.3f} s) and held")
+    if len(reference["accepted"]) < reference["trajectories_accepted"]:
+        note += f"; {reference['trajectories_accepted'] - len(reference['accepted'])} more accepted (logs/reference.log)"
+    if reference["trajectories_refused"]:
+        note += (f"; {reference['trajectories_refused']} received on `{topic}` refused, changing nothing "
+                 f"(the first: {reference['refused_reasons'][0]}; every reason in logs/reference.log)")
+    return note
 
 
 def _unforced_faults(faults: dict) -> str | None:

@@ -65,6 +65,7 @@ class GraphResult:
     bag: Path | None = None
     restarts: list[dict] = field(default_factory=list)   # joint, exit code, wall time, resumed step
     controllers: dict[str, dict] = field(default_factory=dict)  # joint -> counters of its last incarnation
+    reference: dict | None = None  # the reference node's stats: trajectories taken from the topic (None: no file)
 
 
 def loop_reliability(opt: GraphOptions) -> str:
