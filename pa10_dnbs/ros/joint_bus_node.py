@@ -16,8 +16,9 @@ the first.
 
 Faults (one line ``ROBOT FAULT: ...``, the safe command of zero effort on every joint, exit 1): a joint of
 the arm missing from the robot's state or named twice, a non-finite position or velocity, no state within
-``robot_timeout_s`` (``start_timeout_s`` for the first), another publisher on the command topic (a second
-commander of the robot).
+``robot_timeout_s`` (``start_timeout_s`` for the first; the line counts the states that came meanwhile with
+the same or an earlier stamp), another publisher on the command topic (a second commander of the robot);
+lockstep: a state off the dt grid, or one before the command of the previous one (a robot that does not wait).
 """
 from __future__ import annotations
 
@@ -54,7 +55,7 @@ class JointBusNode(PlantNode):
         except ValueError as exc:
             raise ParameterError(f"parameter robot_command: {exc}") from None
         robot = RemoteRobot(self, settings.arm, self.clock_.dt_ns, p["robot_state_topic"] or default_state_topic(command),
-                            command, p["robot_timeout_s"], stopped=stop_requested)
+                            command, p["robot_timeout_s"], stopped=stop_requested, lockstep=p["mode"] == "lockstep")
         self.robot = robot
         print(f"JOINT BUS {robot.state_topic} -> {command.topic} ({command.form}), joints "
               f"{', '.join(robot.joint_names)}", flush=True)

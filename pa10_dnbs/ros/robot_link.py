@@ -30,16 +30,21 @@ from .polled import PolledSubscription, SubscriptionWaitSet
 
 SLICE_S = 0.05  # longest single wait for a robot state: the stop request is checked at least this often
 STATE_DEPTH = 100  # robot states kept between two takes
+OFF_GRID_TOLERANCE_NS = 1000  # lockstep: a new state's stamp may differ from the last one + dt by this much [ns]
 COMMANDERS_CHECK_S = 0.2  # wall time between two looks for another publisher on the command topic
 
 
 class RemoteRobot:
     def __init__(self, node, arm, dt_ns: int, state_topic: str, command: RobotCommand, timeout_s: float,
-                 stopped=lambda: False):
+                 stopped=lambda: False, lockstep: bool = False):
         """``arm``: the arm whose joints are matched by name; ``dt_ns``: the graph's step [ns];
         ``timeout_s``: wall time without a new state that makes the robot stale; ``stopped()``: True once the
-        node is asked to stop (a wait then returns)."""
+        node is asked to stop (a wait then returns); ``lockstep``: the robot must wait for each command and step
+        by ``dt_ns`` (a new state before the command of the previous one, or a stamp more than
+        OFF_GRID_TOLERANCE_NS off the last one + ``dt_ns``, is a RobotFault)."""
         self.arm = arm
+        self.lockstep = lockstep
+        self.dt_ns = dt_ns
         self._node = node
         self.joint_names = arm.joint_names
         self.n_joints = len(self.joint_names)
@@ -64,6 +69,8 @@ class RemoteRobot:
         self.commands_resent = 0
         self.unanswered_states = 0        # new states that came before the command of the previous one
         self._next_commanders_check = 0.0  # time.monotonic() of the next look at the command topic
+        self._copies_since_new = 0        # states since the last new one with its stamp (the stale fault says)
+        self._old_since_new = 0           # ... and with an earlier one
 
     @property
     def state(self) -> tuple[np.ndarray, np.ndarray]:
@@ -85,9 +92,17 @@ class RemoteRobot:
             sec, nanosec, names, position, velocity, _ = joint_state_cdr.decode(data)
         except (ValueError, IndexError, struct.error, UnicodeDecodeError) as exc:
             self.fault(f"undecodable JointState on {self.state_topic}: {exc}")
-        kind = self.timeline.classify(sec * NS_PER_S + nanosec)
+        stamp_ns = sec * NS_PER_S + nanosec
+        last_ns = self.timeline.last_ns
+        kind = self.timeline.classify(stamp_ns)
         if kind != "new":
             return kind, None, None, None
+        if self.lockstep and last_ns is not None and abs(stamp_ns - last_ns - self.dt_ns) > OFF_GRID_TOLERANCE_NS:
+            self.stamp = (sec, nanosec)  # the safe command answers it
+            self.fault(f"lockstep: the robot's state at robot time {stamp_ns / NS_PER_S:.6f} s comes "
+                       f"{(stamp_ns - last_ns) / 1e6:g} ms after the previous one, not simulation.dt_s = "
+                       f"{self.dt_ns / 1e6:g} ms: a lockstep robot steps by the graph's dt (set the robot's step, or "
+                       "simulation.dt_s, to match; docs/your_robot.md)")
         try:
             q, qd = self._matcher.read(names, position, velocity)
         except RobotFault as exc:
@@ -103,14 +118,24 @@ class RemoteRobot:
             kind, stamp, q, qd = self._decode(got[0])
             if kind == "duplicate":
                 self.duplicates += 1
+                self._copies_since_new += 1
                 copy = True
             elif kind == "old":
                 self.old_states += 1
+                self._old_since_new += 1
             elif self._next is None:
                 self._next = (stamp, q, qd)
+                self._copies_since_new = self._old_since_new = 0
             else:  # two new states before we answered one: the robot does not wait for commands
                 self.unanswered_states += 1
                 self._next = (stamp, q, qd)
+                self._copies_since_new = self._old_since_new = 0
+                if self.lockstep:
+                    self.stamp = stamp  # the safe command answers the latest state
+                    sec, nanosec = stamp
+                    self.fault(f"lockstep: the robot sent its state at robot time {sec + nanosec / NS_PER_S:.6f} s "
+                               "before the command answering the previous one: it does not wait for commands "
+                               "(a paced robot: --mode realtime; docs/your_robot.md)")
         return copy
 
     def wait_first(self, timeout_s: float) -> bool:
@@ -159,8 +184,15 @@ class RemoteRobot:
     def stale(self, waited_s: float):
         """The safe command and RobotFault: no new state for ``waited_s`` [s of wall time]."""
         sec, nanosec = self.stamp
+        why = ""
+        if self._copies_since_new:
+            why += (f"; meanwhile {self._copies_since_new} states with that same stamp (does its header.stamp "
+                    "advance? each state carries the robot's time, later at every step: docs/your_robot.md)")
+        if self._old_since_new:
+            why += (f"; meanwhile {self._old_since_new} states stamped earlier (the robot's time went back: a "
+                    "restarted simulation? restart the graph with it)")
         self.fault(f"no state from the robot on {self.state_topic} for {waited_s:.3g} s after robot time "
-                   f"{sec + nanosec / NS_PER_S:.6f} s (stale robot)")
+                   f"{sec + nanosec / NS_PER_S:.6f} s (stale robot){why}")
 
     def _advance(self) -> None:
         self.stamp, self.q, self.qd = self._next
