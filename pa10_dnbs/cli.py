@@ -271,7 +271,7 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--clock-hz", type=positive, default=100.0, metavar="HZ",
                     help="/clock rate in Hz of simulated time (default 100, as `ros2 bag play --clock`); every node "
                          "but the plant runs with use_sim_time:=true")
-    la.add_argument("--domain-id", type=whole_in(0, 101), default=None, help="ROS_DOMAIN_ID (default: a free one, leased for the run so concurrent runs never share it)")
+    la.add_argument("--domain-id", type=whole_in(0, 232), default=None, help="ROS_DOMAIN_ID, 0..232 as ROS 2 accepts (default: a free one in 1..101, leased for the run so concurrent runs never share it; above 101 the DDS ports may meet Linux's ephemeral ones)")
     la.add_argument("--reliability", choices=("reliable", "best_effort"), default=None,
                     help="QoS of the per-joint state/effort topics (default: best_effort, depth 1 in realtime, "
                          "the sensor-data convention; in lockstep best_effort too, reliable when --record or "

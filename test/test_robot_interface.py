@@ -89,9 +89,12 @@ def test_launch_flags_are_checked_with_one_line_naming_the_flag(monkeypatch):
     assert robot_domain() == 42
     monkeypatch.delenv("ROS_DOMAIN_ID")
     assert robot_domain() == 0
-    monkeypatch.setenv("ROS_DOMAIN_ID", "x")
-    with pytest.raises(ConfigError, match="^ROS_DOMAIN_ID"):
-        robot_domain()
+    monkeypatch.setenv("ROS_DOMAIN_ID", "232")
+    assert robot_domain() == 232
+    for bad in ("x", "300", "233", "-1"):  # rev_e 11: 300 started every node to fail, -1 ran on domain 0
+        monkeypatch.setenv("ROS_DOMAIN_ID", bad)
+        with pytest.raises(ConfigError, match="^ROS_DOMAIN_ID"):
+            robot_domain()
 
 
 def test_the_launcher_starts_the_joint_bus_in_the_plants_place(tmp_path):
