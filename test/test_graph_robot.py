@@ -100,6 +100,11 @@ def test_a_paced_robot_is_followed(tmp_path, domain):
     assert m["mode"] == "realtime" and m["all_finite"] and m["torques_within_limits"], m
     assert m["worst_rms_error_rad"] < 1e-2, m["worst_rms_error_rad"]
     assert 0 < m["timing"]["on_time_fraction"] <= 1, m["timing"]
+    # rev_e 8: no tick schedule of the graph's own is reported (it said "target real-time factor 1 (tick 1.00 ms")
+    assert m["timing"]["paced_by"] == "robot" and m["timing"]["target_real_time_factor"] is None, m["timing"]
+    report = (out / "report.md").read_text()
+    assert "paced by the robot (its next state is each state's deadline)" in report and "tick 1.00 ms" not in report
+    assert "realtime, paced by the robot: every effort before the robot's next state on " in la.output, la.output
     stats = json.loads((out / "plant_stats.json").read_text())
     assert stats["steps"] == 1000 and stats["robot"]["robot_commands"] >= 1000, stats["robot"]
     _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)
@@ -207,4 +212,28 @@ def test_a_second_commander_of_the_robot_is_a_robot_fault(tmp_path, domain):
     commands = [json.loads(x.split(" ", 3)[3]) for x in robot.output.splitlines() if x.startswith("COMMAND ")]
     assert commands and commands[-1] == [0.0] * 7, commands[-3:]  # the safe command last
     assert exit_codes(la.output)["joint_bus"] == 1
+    _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)
+
+
+def test_the_last_command_to_a_paced_robot_is_zero_effort(tmp_path, domain):
+    """rev_e 18: a paced robot (the probe, not waiting for commands) goes on applying the last command it got once
+    the run is over; the bus's last act is the zero-effort command, as on a fault."""
+    shm_before = shm_files()
+    robot = Proc([sys.executable, HERE / "robot_probe.py", domain, "nowait", 0], domain)
+    robot.wait_for("PROBE READY", 60)
+    la = Launcher("--robot", "external", "--mode", "realtime", "--duration", 0.3, "--out", tmp_path / "run",
+                  domain_id=domain)
+    try:
+        pids = la.node_pids()
+        rc = la.wait(timeout=300)
+        robot.wait_for("COMMAND .* \\[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0\\]", 10)
+    finally:
+        la.kill()
+        robot.interrupt()
+        robot.wait(timeout=30)
+    assert rc == 0, la.output
+    commands = [json.loads(x.split(" ", 3)[3]) for x in robot.output.splitlines() if x.startswith("COMMAND ")]
+    assert len(commands) > 100 and commands[-1] == [0.0] * 7 and any(v != 0.0 for v in commands[-2]), commands[-3:]
+    bus_log = (tmp_path / "run" / "logs" / "joint_bus.log").read_text()
+    assert "JOINT BUS zero effort on every joint sent as the last command (paced robot; acknowledged)" in bus_log
     _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)

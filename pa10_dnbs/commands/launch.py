@@ -48,7 +48,8 @@ def run_launch(options: LaunchOptions) -> int:
                 used = tmp / "config_used.yaml"
                 used.write_text(yaml.safe_dump(plain(settings.to_config()), sort_keys=False))
                 ros_params = write_params_file(tmp / "ros_params.yaml", settings, controller, namespace)
-                result = run_graph(dataclasses.replace(opt, config_path=used, params_file=ros_params), tmp,
+                result = run_graph(dataclasses.replace(opt, config_path=used, params_file=ros_params,
+                                                       recorded_config=str(Path(out).absolute() / used.name)), tmp,
                                    say=lambda s: print(s, flush=True),
                                    on_hard_stop=lambda: _hard_stop_cleanup(tmp, out))
                 stats = result.stats
@@ -88,7 +89,10 @@ def run_launch(options: LaunchOptions) -> int:
     print(f"{controller} ({mode}): worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over "
           f"{interval(m['window_s'])} s, "
           f"real-time factor {m['real_time_factor']:.2f}")
-    if mode == "realtime":
+    if mode == "realtime" and m["timing"].get("paced_by") == "robot":
+        print(f"realtime, paced by the robot: every effort before the robot's next state on "
+              f"{100 * m['timing']['on_time_fraction']:.2f} % of its states")
+    elif mode == "realtime":
         t = m["timing"]
         print(f"realtime --rtf {t['target_real_time_factor']:g}: every effort before the deadline on "
               f"{100 * t['on_time_fraction']:.2f} % of ticks, late tick starts {t['late_start_ticks']}")

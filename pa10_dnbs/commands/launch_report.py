@@ -131,8 +131,17 @@ def timing_summary(stats: dict, controllers: dict, sched_batch: bool) -> dict:
     """The timing part of metrics.json: the plant's pacing figures and, per joint, misses and latency; whether
     the nodes were asked for SCHED_BATCH and the policies the controllers ended with (their stats files)."""
     policies = sorted({c["sched_policy"] for c in controllers.values() if c and "sched_policy" in c})
-    return ({k: stats.get(k) for k in TIMING_KEYS}
-            | {"sched_batch": sched_batch, "controller_sched_policies": policies, "joints": stats["joints"]})
+    timing = ({k: stats.get(k) for k in TIMING_KEYS}
+              | {"sched_batch": sched_batch, "controller_sched_policies": policies, "joints": stats["joints"]})
+    if paced_by_robot(stats):  # no tick schedule of the graph's own: the robot's next state is the deadline
+        timing |= {"target_real_time_factor": None, "tick_period_s": None, "deadline_fraction": None,
+                   "paced_by": "robot"}
+    return timing
+
+
+def paced_by_robot(stats: dict) -> bool:
+    """A realtime run of the joint bus (its stats carry ``robot``): paced by the robot's own states."""
+    return stats["mode"] == "realtime" and "robot" in stats
 
 
 def _timing_note(stats: dict) -> str:
@@ -142,7 +151,11 @@ def _timing_note(stats: dict) -> str:
     s = (f"plant: {stats['steps']} steps, real-time factor {stats['real_time_factor']:.2f}; state-to-effort latency "
          f"p50 up to {med:.0f} us, p99 up to {p99:.0f} us; effort timeouts "
          f"{sum(x['effort_timeouts'] for x in j)}")
-    if stats["mode"] == "realtime":
+    if paced_by_robot(stats):
+        s += ("; paced by the robot (its next state is each state's deadline); states with every effort before the "
+              f"next one {100 * stats['on_time_fraction']:.2f} %, missed states per joint "
+              + ", ".join(f"{x['name']} {x['missed_ticks']}" for x in j))
+    elif stats["mode"] == "realtime":
         s += (f"; target real-time factor {stats['target_real_time_factor']:g} (tick {1e3 * stats['tick_period_s']:.2f}"
               f" ms, deadline {100 * stats['deadline_fraction']:.0f} %); ticks with every effort on time "
               f"{100 * stats['on_time_fraction']:.2f} %, late tick starts {stats['late_start_ticks']}, missed ticks "

@@ -26,6 +26,7 @@ from ..wire import joint_state_cdr
 from ..wire.robot_interface import JointMatcher, RobotCommand, RobotFault, RobotTimeline
 from ..wire.steps import NS_PER_S
 from .plant.standard_endpoints import robot_qos
+from .acked import wait_acked
 from .polled import PolledSubscription, SubscriptionWaitSet
 
 SLICE_S = 0.05  # longest single wait for a robot state: the stop request is checked at least this often
@@ -68,6 +69,7 @@ class RemoteRobot:
         self.commands_sent = 0
         self.commands_resent = 0
         self.unanswered_states = 0        # new states that came before the command of the previous one
+        self.last_was_safe = False        # the last command sent was the safe one (a fault's)
         self._next_commanders_check = 0.0  # time.monotonic() of the next look at the command topic
         self._copies_since_new = 0        # states since the last new one with its stamp (the stale fault says)
         self._old_since_new = 0           # ... and with an earlier one
@@ -131,12 +133,17 @@ class RemoteRobot:
                 self._next = (stamp, q, qd)
                 self._copies_since_new = self._old_since_new = 0
                 if self.lockstep:
-                    self.stamp = stamp  # the safe command answers the latest state
-                    sec, nanosec = stamp
-                    self.fault(f"lockstep: the robot sent its state at robot time {sec + nanosec / NS_PER_S:.6f} s "
-                               "before the command answering the previous one: it does not wait for commands "
-                               "(a paced robot: --mode realtime; docs/your_robot.md)")
+                    self._not_waiting()
         return copy
+
+    def _not_waiting(self):
+        """Lockstep: the safe command answering the newest state (``_next``), then RobotFault: the robot sent it
+        before the command answering the previous one."""
+        self.stamp = self._next[0]
+        sec, nanosec = self.stamp
+        self.fault(f"lockstep: the robot sent its state at robot time {sec + nanosec / NS_PER_S:.6f} s before the "
+                   "command answering the previous one: it does not wait for commands (a paced robot: --mode "
+                   "realtime; docs/your_robot.md)")
 
     def wait_first(self, timeout_s: float) -> bool:
         """Block until the robot's first state (it becomes the current state, step 0); False when stopped.
@@ -200,6 +207,7 @@ class RemoteRobot:
 
     # ------------------------------------------------------------- commands
     def _send(self, tau) -> None:
+        self.last_was_safe = False
         if self._forward_msg is not None:
             self._forward_msg.data = [float(u) for u in tau]
             self._pub.publish(self._forward_msg)
@@ -215,6 +223,13 @@ class RemoteRobot:
     def send_safe(self) -> None:
         """The safe command: zero effort on every joint, answering the current state."""
         self._send([0.0] * self.n_joints)
+        self.last_was_safe = True
+
+    def stop_command(self, timeout_s: float = 1.0) -> bool:
+        """The safe command as the bus's last act (a paced robot goes on applying the last command it got), waiting
+        at most ``timeout_s`` [s of wall time] for the robot to acknowledge it; True when it did."""
+        self.send_safe()
+        return wait_acked([self._pub], timeout_s)
 
     def fault(self, message: str):
         """Send the safe command, then raise RobotFault(``message``)."""
@@ -224,6 +239,8 @@ class RemoteRobot:
     def step(self, tau) -> None:
         """Send ``tau`` [N m] (arm order) answering the current state, then wait for the robot's next state."""
         self._take_new()  # copies queued before this command are not a lost command
+        if self.lockstep and self._next is not None:  # the next state came before this command: it did not wait
+            self._not_waiting()
         self.check_commanders()
         self._send(tau)
         self.commands_sent += 1

@@ -19,6 +19,8 @@ class GraphFailure(RuntimeError):
 @dataclass
 class GraphOptions:
     config_path: Path
+    recorded_config: str = ""        # the config path a bag names ('' = config_path; launch: <out>/config_used.yaml,
+                                     # where config_path is its temporary output folder's, gone after the run)
     mode: str = "lockstep"
     controller: str = "dnbs"
     duration_s: float = 20.0

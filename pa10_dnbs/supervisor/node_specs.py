@@ -105,7 +105,8 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
     else:  # the recorder is the observer: the run is rebuilt from the bag
         end_ns = int(round(opt.duration_s / opt.dt_s)) * int(round(opt.dt_s * 1e9))
         custom = [f"controller={opt.controller}", f"mode={opt.mode}", f"duration_s={opt.duration_s!r}",
-                  f"reliability={loop_reliability(opt)}", f"config_file={config_file}", f"clock_hz={opt.clock_hz!r}",
+                  f"reliability={loop_reliability(opt)}", f"config_file={opt.recorded_config or config_file}",
+                  f"clock_hz={opt.clock_hz!r}",
                   f"namespace={opt.namespace}"]
         cmds = [("recorder", py + ["pa10_dnbs.ros.recorder_node"] + ros("recorder", {
             "config_file": config_file, "bag": str(opt.record_bag), "force": str(opt.force_bag).lower(),
