@@ -105,7 +105,8 @@ class ReferenceNode(Node):
         self.clock_backwards = 0
         dt = settings.simulation.dt_s
         # a run of known length: nothing past its last step + lookahead (so a bag's count is fixed)
-        self.last_step = duration_steps(p["duration_s"], dt) + self.lookahead if p["duration_s"] > 0 else None
+        self.run_steps = duration_steps(p["duration_s"], dt) if p["duration_s"] > 0 else None  # None: open-ended
+        self.last_step = self.run_steps + self.lookahead if self.run_steps is not None else None
         self.joint_names = settings.arm.joint_names
         self._pubs = [self.create_publisher(JointTrajectory, reference_topic(j), reference_qos())
                       for j in self.joint_names]
@@ -169,6 +170,10 @@ class ReferenceNode(Node):
                                          [list(p.accelerations) for p in msg.points])
             if any(len(p.effort) for p in msg.points):
                 raise TrajectoryError("points carry efforts: only positions are followed")
+            if self.run_steps is not None and start >= self.run_steps:  # nothing of it would be followed
+                raise TrajectoryError(f"it would start at step {start} (t = {start * dt:.3f} s), at or after the "
+                                      f"run's end at step {self.run_steps} (t = {self.run_steps * dt:.3f} s): "
+                                      "nothing of it would be followed")
             s = self.reference.start(traj, start, origin)
         except TrajectoryError as exc:
             self.trajectories["refused"] += 1
