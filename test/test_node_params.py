@@ -26,6 +26,11 @@ CASES = [  # (node module, bad parameter, word the error line must hold): each n
     # a joint controller's setting: its joint's one value (a strict bound; a list where one double is its value)
     ("joint_controller_node", ("joint:=s1", "dnbs.alpha_net.error_scale_rad:=0.0"), "dnbs.alpha_net.error_scale_rad"),
     ("joint_controller_node", ("joint:=s1", "controller:=pid", "pid.kp:=[1.0,2.0]"), "pid.kp"),
+    # rev_e 15: a value rcl itself cannot read (it failed rclpy.init: an RCLError traceback, exit 1)
+    ("joint_bus_node", "robot_command:=forward:", "robot_command"),
+    ("plant.node", "duration_s:=[1,", "duration_s"),
+    # rev_e 16: the plant as a robot reading its own states as commands
+    ("plant.node", ("interface:=standard", "robot_state_topic:=/a", "robot_command_topic:=/a"), "robot_command_topic"),
 ]
 
 

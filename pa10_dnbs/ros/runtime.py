@@ -45,6 +45,7 @@ from rclpy.task import Future
 
 from . import exit_deadline
 from ..wire.robot_interface import RobotFault
+from .param_overrides import bad_param_override
 from .params import ParameterError
 
 SLICE_S = 0.2  # longest a spin call runs before the stop future is checked again
@@ -112,6 +113,10 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
     ``exit_code`` (int), ``loop(executor, stop)`` (its own spin loop, which
     must return once ``stop`` is done) and ``close()`` (write files, report).
     """
+    bad = bad_param_override(list(sys.argv if args is None else args))
+    if bad is not None:  # rclpy.init would end in a traceback after an rcl log line: one line, exit 2
+        print(f"FAILED {bad}", file=sys.stderr, flush=True)
+        return 2
     rclpy.init(args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     stop = SignalStop()
     _STOP.append(stop)
