@@ -3,8 +3,8 @@
     python test/paced_start_probe.py DOMAIN_ID WAIT_S
 
 Subscribes /robot_joint_states and holds a publisher on /robot_joint_command (matched like the joint bus, silent)
-until the first state comes and WAIT_S s of wall time more, then sends one zero command and listens 1 s more. Prints ``BEFORE <distinct stamps
-[ns]>`` and ``AFTER <distinct stamps>`` and ends with ``PROBE END``.
+until the first state comes and WAIT_S s of wall time more, then sends one zero command and listens 1 s more.
+Prints ``BEFORE <distinct stamps [ns]>`` and ``AFTER <distinct stamps>`` and ends with ``PROBE END``.
 """
 import json
 import os

@@ -13,8 +13,8 @@ NaN), ``dup`` (names the arm's first joint a second time, last, at 5 rad), ``bey
 command topic from the start: another commander; it sends nothing), ``frozen`` (every state from STEP on stamped
 as state STEP), ``back`` (the stamps restart from the first one's at STEP: a restarted simulation), ``skip`` (the
 stamps from STEP on one step later: 2 steps after the previous one), ``nowait`` (from STEP on, states every 1 ms
-of wall time without waiting for commands), ``none`` (no fault). Prints ``COMMAND <step> <stamp ns> <efforts>`` for every command it takes and ends
-on SIGINT or SIGTERM with ``PROBE END``.
+of wall time without waiting for commands), ``none`` (no fault). Prints ``COMMAND <step> <stamp ns> <efforts>``
+for every command it takes and ends on SIGINT or SIGTERM with ``PROBE END``.
 """
 import os
 import signal

@@ -72,7 +72,8 @@ def reference_note(trajectory, reference: dict | None, dt_s: float) -> str:
                  f"`{topic}` ({a['points']} points), its last point reached at step {a['end_step']} "
                  f"(t = {a['end_step'] * dt_s:.3f} s) and held")
     if len(reference["accepted"]) < reference["trajectories_accepted"]:
-        note += f"; {reference['trajectories_accepted'] - len(reference['accepted'])} more accepted (logs/reference.log)"
+        more = reference["trajectories_accepted"] - len(reference["accepted"])
+        note += f"; {more} more accepted (logs/reference.log)"
     if reference["trajectories_refused"]:
         note += (f"; {reference['trajectories_refused']} received on `{topic}` refused, changing nothing "
                  f"(the first: {reference['refused_reasons'][0]}; every reason in logs/reference.log)")

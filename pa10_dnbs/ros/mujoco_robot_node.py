@@ -10,7 +10,8 @@ the plant: ``plant/mujoco_plant.py`` (T = ``simulation.dt_s``, 1 ms). Lockstep r
 ``resend_s`` while its command is missing. State 0 goes out once a command publisher and a state subscriber have
 matched; paced, it is held (re-sent every ``resend_s``, /clock at 0) until the first command comes, so the robot's
 time starts with the graph's first answer, not when the bus's endpoints appear (the graph's start handshake takes
-seconds: a paced robot running meanwhile raced it). Runs ``duration_s`` of robot time, or until SIGINT (0); then one summary line and exit 0.
+seconds: a paced robot running meanwhile raced it). Runs ``duration_s`` of robot time, or until SIGINT (0); then
+one summary line and exit 0.
 """
 from __future__ import annotations
 
@@ -45,7 +46,8 @@ PARAMS = {
     "state_topic": Param("/robot_joint_states", "where the robot's JointState goes"),
     "command_topic": Param("/robot_joint_command", "where its JointState effort commands come from"),
     "clock_hz": Param(DEFAULT_CLOCK_HZ, "/clock rate [Hz of robot time]; 0 = no /clock", 0.0, 1e6),
-    "resend_s": Param(0.25, "lockstep (and paced before the first command): wall time before the current state is sent again [s]", 0.0),
+    "resend_s": Param(0.25, "lockstep (and paced before the first command): wall time before the current state "
+                            "is sent again [s]", 0.0),
 }
 STATE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
                        durability=DurabilityPolicy.VOLATILE)
