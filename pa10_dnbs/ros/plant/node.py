@@ -172,7 +172,7 @@ class PlantNode(Node):
         self.diagnostics = DiagnosticsReporter(self, lambda: diagnostics_report(self),
                                                lambda: self.clock_.stamp(self.gate.step))
         self.effort_publishers = [0] * n  # the most publishers seen at once on each joint's effort topic
-        self._effort_publishers_warned: set[int] = set()  # joints whose second publisher was named in the log
+        self._effort_publishers_warned: set[str] = set()  # topics whose second publisher was named in the log
         self._effort_publishers_timer = wall_timer(self, EFFORT_PUBLISHERS_CHECK_S, self.count_effort_publishers)
         self.rt_applied, self.rt_message = apply_fifo(p["rt_priority"])
         if p["rt_priority"]:
@@ -219,15 +219,16 @@ class PlantNode(Node):
 
     def count_effort_publishers(self) -> None:
         """Count each effort topic's publishers (``effort_publishers``: the most seen); a second one is warned
-        about once per joint: another controller answers its states, and whichever answer comes first counts."""
+        about once per topic (the standard interface's one command topic serves every joint): another controller
+        answers the states, and whichever answer comes first counts."""
         for j, (topic, count) in enumerate(self.endpoints.effort_publishers()):
             self.effort_publishers[j] = max(self.effort_publishers[j], count)
-            if count > 1 and j not in self._effort_publishers_warned:
+            if count > 1 and topic not in self._effort_publishers_warned:
                 who = sorted(f"{i.node_namespace.rstrip('/')}/{i.node_name}"
                              for i in self.get_publishers_info_by_topic(topic))
                 if any("_UNKNOWN_" in w for w in who):
                     continue  # its node's name is not discovered yet: the next count names it
-                self._effort_publishers_warned.add(j)
+                self._effort_publishers_warned.add(topic)
                 self.get_logger().warning(
                     f"SECOND EFFORT PUBLISHER at step {self.gate.step}: {count} publishers on {topic} "
                     f"({', '.join(who)}): whichever answer comes first is applied")
