@@ -73,6 +73,9 @@ def _launch_options(args: argparse.Namespace):
     _unused_flags(args, [("rtf", realtime, "only with --mode realtime (lockstep runs as fast as the graph answers)"),
                          ("deadline_fraction", realtime, "only with --mode realtime (lockstep has no deadlines)"),
                          ("bag_compression", args.record is not None, "only with --record")])
+    paced_by_robot = "not with --robot external (a paced robot runs at its own rate: its next state is the deadline)"
+    _unused_flags(args, [("rtf", args.robot is None, paced_by_robot),
+                         ("deadline_fraction", args.robot is None, paced_by_robot)])
     _live_defaults(args)
     return LaunchOptions(
         out=args.out, config_path=args.config, mode=args.mode, controller=args.controller, duration_s=args.duration,
@@ -271,7 +274,7 @@ def build_parser() -> argparse.ArgumentParser:
     la.add_argument("--clock-hz", type=positive, default=100.0, metavar="HZ",
                     help="/clock rate in Hz of simulated time (default 100, as `ros2 bag play --clock`); every node "
                          "but the plant runs with use_sim_time:=true")
-    la.add_argument("--domain-id", type=whole_in(0, 101), default=None, help="ROS_DOMAIN_ID (default: a free one, leased for the run so concurrent runs never share it)")
+    la.add_argument("--domain-id", type=whole_in(0, 232), default=None, help="ROS_DOMAIN_ID, 0..232 as ROS 2 accepts (default: a free one in 1..101, leased for the run so concurrent runs never share it; above 101 the DDS ports may meet Linux's ephemeral ones)")
     la.add_argument("--reliability", choices=("reliable", "best_effort"), default=None,
                     help="QoS of the per-joint state/effort topics (default: best_effort, depth 1 in realtime, "
                          "the sensor-data convention; in lockstep best_effort too, reliable when --record or "
@@ -326,9 +329,11 @@ def build_parser() -> argparse.ArgumentParser:
     rb.add_argument("--duration", type=seconds, default=None, metavar="SECONDS",
                     help="robot time to run [s], > 0 (default: until Ctrl-C)")
     rb.add_argument("--state-topic", default="/robot_joint_states", metavar="TOPIC",
-                    help="the robot's JointState topic (default /robot_joint_states)")
+                    help="the robot's JointState topic (default /robot_joint_states; a relative name resolves in the "
+                         "arm's namespace, /pa10 for the PA10, as launch --robot external's)")
     rb.add_argument("--command-topic", default="/robot_joint_command", metavar="TOPIC",
-                    help="its JointState effort command topic (default /robot_joint_command)")
+                    help="its JointState effort command topic (default /robot_joint_command; relative: as "
+                         "--state-topic)")
     rb.add_argument("--clock-hz", type=nonnegative, default=100.0, metavar="HZ",
                     help="/clock rate in Hz of robot time (default 100; 0: none)")
     rb.set_defaults(func=_run, func_name="robot")

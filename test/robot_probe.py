@@ -8,8 +8,13 @@ configured initial posture, velocity 0; stamped with a wall-clock-like time that
 for the JointState command stamped with it, then publishes the next state; re-sends a state every 0.25 s
 until its command comes. From step STEP on it injects FAULT: ``stop`` (publishes nothing more),
 ``missing`` (leaves joint index 2 of the arm out of the names), ``nan`` (position of the arm's second joint is
-NaN), ``none`` (no fault). Prints ``COMMAND <step> <stamp ns> <efforts>`` for every command it takes and ends
-on SIGINT or SIGTERM with ``PROBE END``.
+NaN), ``dup`` (names the arm's first joint a second time, last, at 5 rad), ``beyond`` (the arm's first joint
+0.2 rad beyond its upper limit: past the joint controllers' guard margin), ``rival`` (a second publisher on the
+command topic from the start: another commander; it sends nothing), ``frozen`` (every state from STEP on stamped
+as state STEP), ``back`` (the stamps restart from the first one's at STEP: a restarted simulation), ``skip`` (the
+stamps from STEP on one step later: 2 steps after the previous one), ``nowait`` (from STEP on, states every 1 ms
+of wall time without waiting for commands), ``none`` (no fault). Prints ``COMMAND <step> <stamp ns> <efforts>``
+for every command it takes and ends on SIGINT or SIGTERM with ``PROBE END``.
 """
 import os
 import signal
@@ -39,6 +44,8 @@ def main() -> int:
     pub = node.create_publisher(JointState, "/robot_joint_states", qos)
     commands = []
     node.create_subscription(JointState, "/robot_joint_command", commands.append, qos)
+    if fault == "rival":
+        rival = node.create_publisher(JointState, "/robot_joint_command", qos)  # noqa: F841 - kept for the run
     stop = []
     signal.signal(signal.SIGINT, lambda *_: stop.append(1))
     signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
@@ -46,7 +53,9 @@ def main() -> int:
     k = 0
     print("PROBE READY", flush=True)
     while not stop:
-        stamp = t0_ns + k * dt_ns
+        step = {"frozen": min(k, fault_step), "back": k - fault_step if k >= fault_step else k,
+                "skip": k + 1 if k >= fault_step else k}.get(fault, k)
+        stamp = t0_ns + step * dt_ns
         msg = JointState()
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 10**9)
         order = list(reversed(range(len(names))))
@@ -55,7 +64,11 @@ def main() -> int:
         pos = [float(q0[i]) for i in order]
         if fault == "nan" and k >= fault_step:
             pos[order.index(1)] = float("nan")
+        if fault == "beyond" and k >= fault_step:
+            pos[order.index(0)] = float(cfg.arm.upper_rad[0]) + 0.2
         msg.name, msg.position, msg.velocity = [names[i] for i in order], pos, [0.0] * len(order)
+        if fault == "dup" and k >= fault_step:
+            msg.name, msg.position, msg.velocity = msg.name + [names[0]], pos + [5.0], [0.0] * (len(order) + 1)
         silent = fault == "stop" and k >= fault_step
         answered = False
         next_send = 0.0
@@ -63,12 +76,16 @@ def main() -> int:
             if not silent and time.monotonic() >= next_send:
                 pub.publish(msg)
                 next_send = time.monotonic() + 0.25
-            rclpy.spin_once(node, timeout_sec=0.02)
+            nowait = fault == "nowait" and k >= fault_step
+            rclpy.spin_once(node, timeout_sec=0.0 if nowait else 0.02)
             while commands:
                 c = commands.pop(0)
                 c_ns = c.header.stamp.sec * 10**9 + c.header.stamp.nanosec
                 print(f"COMMAND {(c_ns - t0_ns) // dt_ns} {c_ns} {list(c.effort)}", flush=True)
                 answered = answered or c_ns == stamp
+            if nowait:
+                time.sleep(0.001)
+                answered = True
         k += 1
     print("PROBE END", flush=True)
     sys.stdout.flush()

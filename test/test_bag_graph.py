@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -271,3 +272,11 @@ def test_existing_bag_is_not_overwritten_without_force(tmp_path, domain):
                         "--record", bag, "--domain-id", str(domain)], cwd=REPO, capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and "--force" in r.stderr and "Traceback" not in r.stderr
     assert (bag / "keep.txt").read_text() == "mine" and not (tmp_path / "run").exists()
+
+
+def test_the_bag_names_the_config_where_the_run_left_it(lockstep_run, bag):
+    """rev_e 9: the bag's (and so analyse's) config path is <out>/config_used.yaml, which exists after the run; it
+    named the run's temporary output folder (.<out>.partial-XXXX), renamed at the end."""
+    meta = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    named = meta["custom_data"]["pa10_dnbs.config_file"]
+    assert named == str(lockstep_run["out"] / "config_used.yaml") and Path(named).is_file(), named

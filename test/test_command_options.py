@@ -36,6 +36,10 @@ def test_launch_options_carry_the_fault_flags_not_the_namespace():
     assert built.faults == opts.FaultFlags(drop_states=0.1, kill=("s1@2",), fault_seed=3)
     with pytest.raises(ConfigError, match="^--rtf: only with --mode realtime"):
         cli.command_options(cli.build_parser().parse_args(["launch", "--out", "o", "--rtf", "0.5"]))
+    for flag in ("--rtf", "--deadline-fraction"):  # rev_e 8: a paced robot's next state is the deadline
+        with pytest.raises(ConfigError, match=f"^{flag}: not with --robot external"):
+            cli.command_options(cli.build_parser().parse_args(["launch", "--out", "o", "--mode", "realtime",
+                                                               "--robot", "external", flag, "0.5"]))
 
 
 def test_each_setting_a_library_names_has_a_flag_on_the_command_line():

@@ -4,8 +4,8 @@ The project's PyBullet plant as that robot (``interface:=standard``): the record
 in-process run bit for bit, the bag holds the graph's topics as before, every process ends; paced
 (``--mode realtime``), the bus follows the robot's own ticks. A small probe robot
 (test/robot_probe.py, no /clock, stamps not starting at 0) for the faults: it stops publishing, a joint goes
-missing from its state, a position turns NaN. Each: one ``ROBOT FAULT`` line, the zero-effort safe command
-answering the last state, no traceback, every process ends (docs/your_robot.md).
+missing from its state, a position turns NaN, a joint is named twice. Each: one ``ROBOT FAULT`` line, the
+zero-effort safe command answering the last state, no traceback, every process ends (docs/your_robot.md).
 """
 import json
 import sys
@@ -100,6 +100,11 @@ def test_a_paced_robot_is_followed(tmp_path, domain):
     assert m["mode"] == "realtime" and m["all_finite"] and m["torques_within_limits"], m
     assert m["worst_rms_error_rad"] < 1e-2, m["worst_rms_error_rad"]
     assert 0 < m["timing"]["on_time_fraction"] <= 1, m["timing"]
+    # rev_e 8: no tick schedule of the graph's own is reported (it said "target real-time factor 1 (tick 1.00 ms")
+    assert m["timing"]["paced_by"] == "robot" and m["timing"]["target_real_time_factor"] is None, m["timing"]
+    report = (out / "report.md").read_text()
+    assert "paced by the robot (its next state is each state's deadline)" in report and "tick 1.00 ms" not in report
+    assert "realtime, paced by the robot: every effort before the robot's next state on " in la.output, la.output
     stats = json.loads((out / "plant_stats.json").read_text())
     assert stats["steps"] == 1000 and stats["robot"]["robot_commands"] >= 1000, stats["robot"]
     _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)
@@ -109,6 +114,11 @@ FAULTS = [  # (fault, mode, what the one line says): each fault in lockstep, the
     ("stop", "lockstep", "(stale robot)"),
     ("missing", "lockstep", "joint_states lacks s3"),
     ("nan", "lockstep", "non-finite state of joint s2: position nan"),
+    ("dup", "lockstep", "joint_states names s1 more than once"),
+    ("frozen", "lockstep", "(stale robot); meanwhile "),  # rev_e 12: the count of copies follows
+    ("back", "lockstep", "states stamped earlier (the robot's time went back"),
+    ("skip", "lockstep", "comes 2 ms after the previous one, not simulation.dt_s = 1 ms"),  # rev_e 10
+    ("nowait", "lockstep", "before the command answering the previous one: it does not wait for commands"),
     ("stop", "realtime", "(stale robot)"),
 ]
 
@@ -140,8 +150,90 @@ def test_a_robot_fault_is_one_line_and_the_safe_command(fault, mode, says, tmp_p
     commands = [x.split(" ", 3) for x in robot.output.splitlines() if x.startswith("COMMAND ")]
     step, _, efforts = int(commands[-1][1]), commands[-1][2], json.loads(commands[-1][3])
     assert efforts == [0.0] * 7, commands[-3:]
-    assert step == (at - 1 if fault == "stop" else at), commands[-3:]
+    # the state it answers: the last new one (stop, back), the bad one (skip: stamped as step at + 1), the latest
+    # unanswered one (nowait)
+    expected = {"stop": at - 1, "back": at - 1, "skip": at + 1}.get(fault, at)
+    assert step >= at if fault == "nowait" else step == expected, commands[-3:]
     assert all(any(v != 0.0 for v in json.loads(c[3])) for c in commands[:-1]), "a zero command before the fault"
     codes = exit_codes(la.output)
     assert codes["joint_bus"] == 1 and all(c == 0 for n, c in codes.items() if n != "joint_bus"), codes
+    _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)
+
+
+def test_states_the_guard_refuses_without_an_injected_fault_are_reported(tmp_path, domain):
+    """rev_e 1: a robot whose s1 is 0.2 rad beyond its URDF limit on every state (a wrong zero or offset): the
+    joint controller's guard refuses each one (its torque held at 0). No fault was injected, yet the report's
+    faults line names the counter (it was written only under injection), metrics.json has it, and the launcher
+    warns on stderr. The run itself ends as |e| > 1 rad makes it: diverged, exit 1."""
+    shm_before = shm_files()
+    out = tmp_path / "run"
+    robot = Proc([sys.executable, HERE / "robot_probe.py", domain, "beyond", 0], domain)
+    robot.wait_for("PROBE READY", 60)
+    la = Launcher("--robot", "external", "--duration", 0.3, "--out", out, domain_id=domain)
+    try:
+        pids = la.node_pids()
+        rc = la.wait(timeout=300)
+    finally:
+        la.kill()
+        robot.interrupt()
+        robot.wait(timeout=30)
+    assert rc == 1 and "DIVERGED" in la.output, la.output
+    m = json.loads((out / "metrics.json").read_text())
+    s1 = m["faults"]["joints"][0]
+    assert s1["name"] == "s1" and s1["controller"]["bad_states_position"] == s1["controller"]["states"] == 301, s1
+    assert all(j["controller"]["bad_states_position"] == 0 for j in m["faults"]["joints"][1:]), m["faults"]
+    report = (out / "report.md").read_text()
+    assert "- faults: s1: bad_states_position 301\n" in report, report
+    warning = [x for x in la.output.splitlines() if x.startswith("pa10-dnbs launch: warning: faults detected")]
+    assert len(warning) == 1 and "s1: bad_states_position 301" in warning[0], la.output
+    _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)
+
+
+def test_a_second_commander_of_the_robot_is_a_robot_fault(tmp_path, domain):
+    """rev_e 2: another publisher on the robot's command topic (the probe's own, silent: as a forgotten second
+    graph would be) is a second commander; the robot would take whichever command came first. The bus sees it
+    (``get_publishers_info_by_topic``), sends the safe command and exits 1 with one ROBOT FAULT line naming it."""
+    shm_before = shm_files()
+    robot = Proc([sys.executable, HERE / "robot_probe.py", domain, "rival", 0], domain)
+    robot.wait_for("PROBE READY", 60)
+    la = Launcher("--robot", "external", "--duration", 3.0, "--out", tmp_path / "run", domain_id=domain)
+    try:
+        pids = la.node_pids()
+        rc = la.wait(timeout=300)
+    finally:
+        la.kill()
+        robot.interrupt()
+        robot.wait(timeout=30)
+    assert rc == 1, la.output
+    lines = [x for x in la.output.splitlines() if "ROBOT FAULT:" in x]
+    assert len(lines) == 1, la.output
+    assert ("another publisher on the robot's command topic /robot_joint_command besides this bus (publishers: "
+            "/pa10/joint_bus, /robot_probe)") in lines[0], lines
+    commands = [json.loads(x.split(" ", 3)[3]) for x in robot.output.splitlines() if x.startswith("COMMAND ")]
+    assert commands and commands[-1] == [0.0] * 7, commands[-3:]  # the safe command last
+    assert exit_codes(la.output)["joint_bus"] == 1
+    _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)
+
+
+def test_the_last_command_to_a_paced_robot_is_zero_effort(tmp_path, domain):
+    """rev_e 18: a paced robot (the probe, not waiting for commands) goes on applying the last command it got once
+    the run is over; the bus's last act is the zero-effort command, as on a fault."""
+    shm_before = shm_files()
+    robot = Proc([sys.executable, HERE / "robot_probe.py", domain, "nowait", 0], domain)
+    robot.wait_for("PROBE READY", 60)
+    la = Launcher("--robot", "external", "--mode", "realtime", "--duration", 0.3, "--out", tmp_path / "run",
+                  domain_id=domain)
+    try:
+        pids = la.node_pids()
+        rc = la.wait(timeout=300)
+        robot.wait_for("COMMAND .* \\[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0\\]", 10)
+    finally:
+        la.kill()
+        robot.interrupt()
+        robot.wait(timeout=30)
+    assert rc == 0, la.output
+    commands = [json.loads(x.split(" ", 3)[3]) for x in robot.output.splitlines() if x.startswith("COMMAND ")]
+    assert len(commands) > 100 and commands[-1] == [0.0] * 7 and any(v != 0.0 for v in commands[-2]), commands[-3:]
+    bus_log = (tmp_path / "run" / "logs" / "joint_bus.log").read_text()
+    assert "JOINT BUS zero effort on every joint sent as the last command (paced robot; acknowledged)" in bus_log
     _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)

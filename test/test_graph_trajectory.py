@@ -1,9 +1,11 @@
 """Trajectories sent to a running lockstep graph (issue 37): the 5-point, 4 s example is followed from the
 step the reference node names, every joint within 1e-3 rad RMS after its first 0.5 s; three wrong ones (an
 unknown joint, a position beyond a limit, times not increasing), one before it and two while it runs, are
-refused with one line each and change nothing: the recorded reference is eq. 27 spliced with the example
-at that step, bit for bit, as core/trajectory_reference.py computes it, and the whole run equals the
-in-process loop given that reference, bit for bit. One graph, four sends."""
+refused with one line each and change nothing, as is one stamped to start after the run's end: the recorded
+reference is eq. 27 spliced with the example at that step, bit for bit, as core/trajectory_reference.py computes
+it, and the whole run equals the in-process loop given that reference, bit for bit; the report and metrics.json
+name the reference followed and the refusals. One graph, five sends."""
+import json
 import re
 import sys
 
@@ -61,26 +63,46 @@ def test_a_trajectory_sent_while_running_is_tracked_and_wrong_ones_change_nothin
     # process started just before the launcher): it sends from 4 s of simulated time on, after that
     sender = Proc([sys.executable, "-m", "pa10_dnbs.ros.trajectory_sender", unknown, EXAMPLE, beyond, backwards,
                    "--after-clock", "4.0", "--clock-gap", "0.3", "--wait", "240"], domain)
+    # rev_e 13: one stamped to start at 100 s, after the run's end: refused, not "accepted ... then held"
+    late = Proc([sys.executable, "-m", "pa10_dnbs.ros.trajectory_sender", EXAMPLE, "--stamp", "100",
+                 "--after-clock", "6.0", "--wait", "240"], domain)
     try:
         pids = la.node_pids()
         sender_rc = sender.wait(timeout=300)
+        late_rc = late.wait(timeout=300)
         rc = la.wait(timeout=600)
     finally:
         sender.kill()
+        late.kill()
         la.kill()
     assert sender_rc == 0 and sender.output.count("sent ") == 4, sender.output
+    assert late_rc == 0 and late.output.count("sent ") == 1, late.output
     assert rc == 0, la.output
     log = (out / "logs" / "reference.log").read_text()
     refused = [x for x in log.splitlines() if "TRAJECTORY refused" in x]
-    assert [x.split(": ", 1)[0] for x in refused] == ["TRAJECTORY refused"] * 3, log
+    assert [x.split(": ", 1)[0] for x in refused] == ["TRAJECTORY refused"] * 4, log
     assert "unknown joint 'wrist_9'" in refused[0], refused
     assert "points[2].positions of joint 's2' = 1.7 rad is beyond its limits" in refused[1], refused
     assert "points[3].time_from_start = 2 s is not after points[2]'s 2.4 s" in refused[2], refused
+    assert ("it would start at step 100000 (t = 100.000 s), at or after the run's end at step 9000 (t = 9.000 s): "
+            "nothing of it would be followed") in refused[3], refused
     started = re.findall(r"TRAJECTORY accepted: 5 points, 6 knots from step (\d+) .* to step (\d+)", log)
     assert len(started) == 1, log
     start, end = int(started[0][0]), int(started[0][1])
     n = int(round(DURATION_S * 1000))
     assert 4000 < start and end - start in (4000, 4001) and end + 200 <= n, (start, end)  # 4001: rounding of k T
+
+    # the report and metrics.json name the reference followed and the refusals (rev_e 4)
+    m = json.loads((out / "metrics.json").read_text())["trajectories_received"]
+    assert m["trajectory_topic"] == "/pa10/trajectory" and m["trajectories_accepted"] == 1, m
+    assert m["accepted"] == [{"start_step": start, "end_step": end, "points": 5, "knots": 6, "dropped_points": 0}], m
+    assert m["trajectories_refused"] == 4 and [r in x for r, x in zip(("wrist_9", "1.7 rad", "2.4 s", "run's end"),
+                                                                      m["refused_reasons"])] == [True] * 4, m
+    note = next(x for x in (out / "report.md").read_text().splitlines() if x.startswith("- reference: "))
+    assert note.startswith(f"- reference: eq. 27; from step {start} (t = {start / 1000:.3f} s) the trajectory "
+                           f"received on `/pa10/trajectory` (5 points), its last point reached at step {end} "
+                           f"(t = {end / 1000:.3f} s) and held; 4 received on `/pa10/trajectory` refused, changing "
+                           "nothing (the first: unknown joint 'wrist_9'"), note
 
     # the reference on the wire: eq. 27, then the example from `start`, and nothing else (the wrong ones)
     run = RunData.load_npz(out / "timeseries.npz")

@@ -77,7 +77,7 @@ def test_the_name_rules():
     (("--state-topic", "/関節"), ["--state-topic", "'/関節'"]),
     (("--command-topic", "/a//b"), ["--command-topic"]),
     (("--state-topic", "/x", "--command-topic", "/x"), ["--command-topic", "--state-topic", "'/x'"]),
-    (("--state-topic", "x", "--command-topic", "/x"), ["--command-topic", "--state-topic"]),
+    (("--state-topic", "x", "--command-topic", "/pa10/x"), ["--command-topic", "--state-topic", "/pa10/x in /pa10"]),
 ])
 def test_robot_topics_are_checked(args, words):
     _refused(run_cli("robot", "--duration", "0.1", *args), words)

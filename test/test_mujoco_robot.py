@@ -103,3 +103,32 @@ def test_robot_refuses_bad_arguments_in_one_line_before_starting(flags, message)
 
     r = run_cli("robot", "--engine", "mujoco", *flags)
     assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr, r.stderr
+
+
+@pytest.mark.graph
+def test_a_paced_robot_holds_state_0_until_the_first_command(domain):
+    """rev_e 17: matched by a silent commander (as by the joint bus during the graph's start handshake), the paced
+    robot re-sends state 0 and does not step (it stepped at once: its time ran seconds ahead of the graph's); the
+    first command starts it."""
+    from pa10_dnbs.supervisor.shm_cleanup import remove_stale, shm_files
+
+    shm_before = shm_files()
+    robot = Proc([sys.executable, "-m", "pa10_dnbs.cli", "robot", "--engine", "mujoco", "--mode", "paced",
+                  "--duration", "20"], domain)
+    probe = None
+    try:
+        robot.wait_for(r"READY mujoco_robot", 60)
+        probe = Proc([sys.executable, str(REPO / "test" / "paced_start_probe.py"), domain, 2.0], domain)
+        assert probe.wait(60) == 0, probe.output
+        robot.interrupt()
+        assert robot.wait(30) == 0, robot.output
+    finally:
+        robot.kill()
+        if probe is not None:
+            probe.kill()
+    before = json.loads(probe.wait_for(r"BEFORE (.*)", 1).group(1))
+    after = int(probe.wait_for(r"AFTER (\d+)", 1).group(1))
+    assert before == [0], before  # state 0 only, re-sent
+    assert after > 100, after     # stepping every 1 ms once a command came
+    remove_stale(shm_files() - shm_before)
+    assert_no_leftovers([robot.proc.pid, probe.proc.pid], shm_before)

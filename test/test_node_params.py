@@ -26,9 +26,11 @@ CASES = [  # (node module, bad parameter, word the error line must hold): each n
     # a joint controller's setting: its joint's one value (a strict bound; a list where one double is its value)
     ("joint_controller_node", ("joint:=s1", "dnbs.alpha_net.error_scale_rad:=0.0"), "dnbs.alpha_net.error_scale_rad"),
     ("joint_controller_node", ("joint:=s1", "controller:=pid", "pid.kp:=[1.0,2.0]"), "pid.kp"),
-    # a value rcl cannot parse as YAML: refused by rclpy.init itself (was an RCLError traceback, exit 1)
-    ("joint_bus_node", "robot_command:=forward:", "parameter override rule: '-p robot_command:=forward:'"),
-    ("plant.node", "duration_s:=[1,", "'-p duration_s:=[1,'"),
+    # rev_e 15: a value rcl itself cannot read (it failed rclpy.init: an RCLError traceback, exit 1)
+    ("joint_bus_node", "robot_command:=forward:", "robot_command"),
+    ("plant.node", "duration_s:=[1,", "duration_s"),
+    # rev_e 16: the plant as a robot reading its own states as commands
+    ("plant.node", ("interface:=standard", "robot_state_topic:=/a", "robot_command_topic:=/a"), "robot_command_topic"),
 ]
 
 
@@ -89,3 +91,12 @@ def test_a_wrong_type_in_a_complete_params_file_is_one_line_naming_the_key(cfg, 
     lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
     assert p.returncode == 2 and len(lines) == 1 and "plant.payload_kg" in lines[0], p.stderr
     assert "Traceback" not in p.stderr
+
+
+def test_an_unknown_ros_argument_is_one_line(domain):
+    """rclpy.init refuses it (UnknownROSArgsError, after rcl's own log line): one line, exit 2, not a traceback."""
+    p = subprocess.run(["timeout", "-k", "5", str(TIMEOUT_S), sys.executable, "-m", "pa10_dnbs.ros.joint_bus_node",
+                        "--ros-args", "--bogus"], cwd=REPO, env=ros_env(domain), text=True, capture_output=True,
+                       timeout=TIMEOUT_S + 10)
+    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    assert p.returncode == 2 and lines == ["FAILED unknown ROS arguments ['--bogus']"], (p.returncode, p.stderr)

@@ -41,6 +41,8 @@ def test_joints_are_matched_by_name_not_order():
     (PA10, [0.0, math.nan, 0, 0, 0, 0, 0], [0.0] * 7, "non-finite state of joint s2: position nan"),
     (PA10, [0.0] * 7, [0, 0, 0, 0, 0, 0, math.inf], "non-finite state of joint w2"),
     (PA10, [0.0] * 7, [], "7 names but 7 positions and 0 velocities"),
+    (PA10 + ("s1",), [0.0] * 7 + [5.0], [0.0] * 8, "joint_states names s1 more than once"),
+    (("s2",) + PA10 + ("gripper", "gripper"), [0.0] * 10, [0.0] * 10, "joint_states names s2 more than once"),
 ])
 def test_a_bad_state_is_a_robot_fault_naming_it(names, pos, vel, says):
     with pytest.raises(RobotFault, match=says.replace("(", r"\(")):
@@ -87,9 +89,12 @@ def test_launch_flags_are_checked_with_one_line_naming_the_flag(monkeypatch):
     assert robot_domain() == 42
     monkeypatch.delenv("ROS_DOMAIN_ID")
     assert robot_domain() == 0
-    monkeypatch.setenv("ROS_DOMAIN_ID", "x")
-    with pytest.raises(ConfigError, match="^ROS_DOMAIN_ID"):
-        robot_domain()
+    monkeypatch.setenv("ROS_DOMAIN_ID", "232")
+    assert robot_domain() == 232
+    for bad in ("x", "300", "233", "-1"):  # rev_e 11: 300 started every node to fail, -1 ran on domain 0
+        monkeypatch.setenv("ROS_DOMAIN_ID", bad)
+        with pytest.raises(ConfigError, match="^ROS_DOMAIN_ID"):
+            robot_domain()
 
 
 def test_the_launcher_starts_the_joint_bus_in_the_plants_place(tmp_path):

@@ -1,5 +1,7 @@
 """``pa10-dnbs robot``: the arm simulated by MuJoCo as an external robot on the standard robot interface
-(docs/your_robot.md, docs/engines.md), a ROS 2 node of its own (``ros/mujoco_robot_node.py``).
+(docs/your_robot.md, docs/engines.md), a ROS 2 node of its own (``ros/mujoco_robot_node.py``), in the arm's
+namespace (/pa10 for the PA10), where ``launch --robot external``'s joint bus runs: a relative topic name resolves
+the same for both.
 
 The arguments and the config are checked here (one line, exit 2), then the node runs as a child process: SIGINT
 and SIGTERM are passed on to it, and once it has ended the shared-memory files its DDS participant left in
@@ -19,7 +21,7 @@ from ..run_settings import build_settings
 from ..run_steps import run_steps
 from ..supervisor.shm_cleanup import remove_stale, shm_files
 from ..wire.clock_schedule import check_clock_hz
-from ..wire.topics import check_topic_name, resolve
+from ..wire.topics import check_topic_name, default_namespace, resolve
 
 
 def robot_argv(options: RobotCommandOptions) -> list[str]:
@@ -39,12 +41,16 @@ def robot_argv(options: RobotCommandOptions) -> list[str]:
             check_topic_name(topic)
         except ValueError as exc:
             raise ConfigError(f"{flag}: {exc}") from None
-    if resolve(o.state_topic, "") == resolve(o.command_topic, ""):  # the node runs at the root: x is /x
-        raise ConfigError(f"--command-topic: must differ from --state-topic (both {o.command_topic!r}): the robot "
-                          f"would read its own states as commands")
+    namespace = default_namespace(settings.arm.name)  # the bus's (launch's default): relative names meet there
+    if resolve(o.state_topic, namespace) == resolve(o.command_topic, namespace):
+        same = "" if o.state_topic == o.command_topic else (f", {o.state_topic!r} is "
+                                                              f"{resolve(o.state_topic, namespace)} in {namespace}")
+        raise ConfigError(f"--command-topic: must differ from --state-topic (both {o.command_topic!r}{same}): the "
+                          "robot would read its own states as commands")
     params = {"config_file": config_path.resolve(), "arm": settings.arm.file, "mode": o.mode, "duration_s": duration_s,
               "state_topic": o.state_topic, "command_topic": o.command_topic, "clock_hz": float(o.clock_hz)}
-    args = [sys.executable, "-m", "pa10_dnbs.ros.mujoco_robot_node", "--ros-args", "-r", "__node:=mujoco_robot"]
+    args = [sys.executable, "-m", "pa10_dnbs.ros.mujoco_robot_node", "--ros-args", "-r", "__node:=mujoco_robot",
+            "-r", f"__ns:={namespace}"]
     for k, v in params.items():
         args += ["-p", f"{k}:={v}"]
     return args

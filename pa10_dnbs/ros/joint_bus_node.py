@@ -15,8 +15,12 @@ be at time 0). Otherwise the bus publishes the graph's /clock (``clock_hz``), th
 the first.
 
 Faults (one line ``ROBOT FAULT: ...``, the safe command of zero effort on every joint, exit 1): a joint of
-the arm missing from the robot's state, a non-finite position or velocity, no state within
-``robot_timeout_s`` (``start_timeout_s`` for the first).
+the arm missing from the robot's state or named twice, a non-finite position or velocity, no state within
+``robot_timeout_s`` (``start_timeout_s`` for the first; the line counts the states that came meanwhile with
+the same or an earlier stamp), another publisher on the command topic (a second commander of the robot);
+lockstep: a state off the dt grid, or one before the command of the previous one (a robot that does not wait).
+Paced, the bus's last command (at the run's end, or stopped) is the same zero effort: the robot goes on applying
+the last command it got, with no controller answering any more.
 """
 from __future__ import annotations
 
@@ -53,9 +57,10 @@ class JointBusNode(PlantNode):
         except ValueError as exc:
             raise ParameterError(f"parameter robot_command: {exc}") from None
         robot = RemoteRobot(self, settings.arm, self.clock_.dt_ns, p["robot_state_topic"] or default_state_topic(command),
-                            command, p["robot_timeout_s"], stopped=stop_requested)
+                            command, p["robot_timeout_s"], stopped=stop_requested, lockstep=p["mode"] == "lockstep")
         self.robot = robot
-        print(f"JOINT BUS {robot.state_topic} -> {command.topic} ({command.form}), joints "
+        print(f"JOINT BUS {self.resolve_topic_name(robot.state_topic)} -> {self.resolve_topic_name(command.topic)} "
+              f"({command.form}), joints "
               f"{', '.join(robot.joint_names)}", flush=True)
         if not robot.wait_first(p["start_timeout_s"]):
             raise KeyboardInterrupt  # stopped before the robot's first state: a clean stop (run_node: exit 0)
@@ -87,6 +92,12 @@ class JointBusNode(PlantNode):
         run_paced(self, executor, stop)
 
     def _close_plant(self) -> None:
+        # paced, the robot would go on applying the last torque: zero effort last (unless a fault's safe command
+        # was; a lockstep robot waits for its next command)
+        if self.p["mode"] == "realtime" and self.robot.q is not None and not self.robot.last_was_safe:
+            acked = self.robot.stop_command()
+            print(f"JOINT BUS zero effort on every joint sent as the last command (paced robot; "
+                  f"{'acknowledged' if acked else 'not acknowledged within 1 s'})", flush=True)
         print("STATS joint_bus: " + ", ".join(f"{k} {v}" for k, v in self.robot.counters().items()), flush=True)
         self.robot.close()
 

@@ -8,7 +8,10 @@ robot time). Takes ``sensor_msgs/JointState`` effort commands on ``command_topic
 header.stamp = the stamp of the state they answer. The stepping rule (lockstep or paced): ``loop/robot_stepper.py``;
 the plant: ``plant/mujoco_plant.py`` (T = ``simulation.dt_s``, 1 ms). Lockstep re-sends the current state every
 ``resend_s`` while its command is missing. State 0 goes out once a command publisher and a state subscriber have
-matched. Runs ``duration_s`` of robot time, or until SIGINT (0); then one summary line and exit 0.
+matched; paced, it is held (re-sent every ``resend_s``, /clock at 0) until the first command comes, so the robot's
+time starts with the graph's first answer, not when the bus's endpoints appear (the graph's start handshake takes
+seconds: a paced robot running meanwhile raced it). Runs ``duration_s`` of robot time, or until SIGINT (0); then
+one summary line and exit 0.
 """
 from __future__ import annotations
 
@@ -43,7 +46,8 @@ PARAMS = {
     "state_topic": Param("/robot_joint_states", "where the robot's JointState goes"),
     "command_topic": Param("/robot_joint_command", "where its JointState effort commands come from"),
     "clock_hz": Param(DEFAULT_CLOCK_HZ, "/clock rate [Hz of robot time]; 0 = no /clock", 0.0, 1e6),
-    "resend_s": Param(0.25, "lockstep: wall time before the current state is sent again [s]", 0.0),
+    "resend_s": Param(0.25, "lockstep (and paced before the first command): wall time before the current state "
+                            "is sent again [s]", 0.0),
 }
 STATE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
                        durability=DurabilityPolicy.VOLATILE)
@@ -84,7 +88,8 @@ class MuJoCoRobotNode(Node):
         self.wall_start = self.wall_end = None
         self.exit_code = 0
         self.get_logger().info(f"MuJoCo {self.plant.arm.name} ({len(self.joint_names)} joints), {p['mode']}, "
-                               f"state {self._state_pub.topic_name}, commands {p['command_topic']}")
+                               f"state {self._state_pub.topic_name}, commands "
+                               f"{self.resolve_topic_name(p['command_topic'])}")
         announce_ready("mujoco_robot")
 
     # ---------------------------------------------------------------- wire
@@ -142,7 +147,8 @@ class MuJoCoRobotNode(Node):
             if self._commands.get_publisher_count() > 0 and self._state_pub.get_subscription_count() > 0:
                 return True
             if not said:
-                print(f"WAITING for a controller on {self.p['command_topic']} and {self._state_pub.topic_name}",
+                print(f"WAITING for a controller on {self.resolve_topic_name(self.p['command_topic'])} and "
+                      f"{self._state_pub.topic_name}",
                       flush=True)
                 said = True
             time.sleep(MATCH_POLL_S)
@@ -177,6 +183,14 @@ class MuJoCoRobotNode(Node):
     def _run_paced(self, stop) -> None:
         tick_ns = int(round(self.dt * NS))
         self._publish_state()
+        sent = time.monotonic()
+        while not stop.done() and self.stepper.commands == 0:  # state 0 held until the graph's first answer
+            self._wait_set.wait(0.05)
+            self._take_commands()
+            if self.stepper.commands == 0 and time.monotonic() - sent >= self.p["resend_s"]:
+                self.resends += 1
+                self._publish_state()
+                sent = time.monotonic()
         next_ns = time.perf_counter_ns() + tick_ns
         while not stop.done() and self.stepper.step < self.last_step:
             left = next_ns - time.perf_counter_ns()

@@ -15,7 +15,9 @@ per message: the lookahead covers many polls.
 Trajectories (docs/trajectories.md): ``trajectory_file`` (YAML or JSON) is followed from step 0 instead of
 eq. 27; a trajectory_msgs/JointTrajectory on <ns>/trajectory is followed while running, from the first step
 not yet published (or from its header stamp when that is non-zero and later), starting from the desired state
-there (``core/trajectory_reference.py``). A wrong one is refused with one line and changes nothing.
+there (``core/trajectory_reference.py``). A wrong one is refused with one line and changes nothing. What came
+goes to ``stats_file`` at exit (JSON: each accepted trajectory's steps, the refused count and the first
+reasons), for the launcher's report.
 """
 from __future__ import annotations
 
@@ -29,6 +31,7 @@ from rosgraph_msgs.msg import Clock
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from trajectory_msgs.msg import JointTrajectory
 
+from ..atomic_file import write_json
 from ..config_error import ConfigError
 from ..controller_factory import build_reference, load_reference_trajectory, switchable_reference
 from ..core.joint_trajectory import TrajectoryError, trajectory_from_lists
@@ -48,6 +51,7 @@ from .endpoints import CLOCK, StepClock, record_qos, reference_qos, reference_to
 
 
 FAULT_KEYS = ("clock_backwards",)
+MAX_KEPT = 100  # accepted trajectories and refusal reasons kept for the stats file
 CLOCK_DEPTH = 1000  # /clock messages kept between two polls
 NOW = Duration(seconds=0)  # wait_for_all_acked: just look
 
@@ -64,6 +68,8 @@ PARAMS = {
                                    "batches (its controller, the observers) before the node says ready", 0),
     "trajectory_file": Param("", "a JointTrajectory (YAML or JSON) followed from step 0 instead of eq. 27 "
                              "(docs/trajectories.md); '' = eq. 27"),
+    "stats_file": Param("", "JSON file at exit: the trajectories received on the trajectory topic, accepted (their "
+                        "steps) and refused (why); '' = none"),
 }
 TRAJECTORY_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
                             durability=DurabilityPolicy.VOLATILE)  # as `ros2 topic pub` and JTC's clients offer
@@ -87,6 +93,8 @@ class ReferenceNode(Node):
                 raise ParameterError(exc.named("parameter trajectory_file:")) from None
         self.reference = switchable_reference(settings, build_reference(settings, trajectory))
         self.trajectories = {"accepted": 0, "refused": 0}
+        self.accepted: list[dict] = []  # the first MAX_KEPT accepted: steps, points, knots
+        self.refusals: list[str] = []   # the first MAX_KEPT refusals' reasons
         self.clock_ = StepClock(settings.simulation.dt_s)
         self.p = p
         self.batch = p["batch_steps"]
@@ -97,7 +105,8 @@ class ReferenceNode(Node):
         self.clock_backwards = 0
         dt = settings.simulation.dt_s
         # a run of known length: nothing past its last step + lookahead (so a bag's count is fixed)
-        self.last_step = duration_steps(p["duration_s"], dt) + self.lookahead if p["duration_s"] > 0 else None
+        self.run_steps = duration_steps(p["duration_s"], dt) if p["duration_s"] > 0 else None  # None: open-ended
+        self.last_step = self.run_steps + self.lookahead if self.run_steps is not None else None
         self.joint_names = settings.arm.joint_names
         self._pubs = [self.create_publisher(JointTrajectory, reference_topic(j), reference_qos())
                       for j in self.joint_names]
@@ -161,18 +170,36 @@ class ReferenceNode(Node):
                                          [list(p.accelerations) for p in msg.points])
             if any(len(p.effort) for p in msg.points):
                 raise TrajectoryError("points carry efforts: only positions are followed")
+            if self.run_steps is not None and start >= self.run_steps:  # nothing of it would be followed
+                raise TrajectoryError(f"it would start at step {start} (t = {start * dt:.3f} s), at or after the "
+                                      f"run's end at step {self.run_steps} (t = {self.run_steps * dt:.3f} s): "
+                                      "nothing of it would be followed")
             s = self.reference.start(traj, start, origin)
         except TrajectoryError as exc:
             self.trajectories["refused"] += 1
+            if len(self.refusals) < MAX_KEPT:
+                self.refusals.append(str(exc))
             print(f"TRAJECTORY refused: {exc}", flush=True)
             return
         self.trajectories["accepted"] += 1
+        if len(self.accepted) < MAX_KEPT:
+            self.accepted.append({"start_step": s.start_step, "end_step": s.end_step, "points": len(msg.points),
+                                  "knots": s.knots, "dropped_points": s.dropped})
         print(f"TRAJECTORY accepted: {len(msg.points)} points, {s.knots} knots from step {s.start_step} "
               f"(t = {s.start_step * dt:.3f} s) to step {s.end_step} (t = {s.end_step * dt:.3f} s), then the last "
               f"point held" + (f"; {s.dropped} points before the start left out" if s.dropped else ""), flush=True)
 
     def close(self) -> None:
         print(self.cpu.line("reference"), flush=True)
+        if self.p["stats_file"]:
+            write_json(self.p["stats_file"], self.stats())
+
+    def stats(self) -> dict:
+        """The trajectories received on the trajectory topic (resolved name): counts, each accepted one's steps
+        (first MAX_KEPT), the first MAX_KEPT refusals' reasons."""
+        return {"trajectory_topic": self.resolve_topic_name(TRAJECTORY), "trajectories_accepted":
+                self.trajectories["accepted"], "trajectories_refused": self.trajectories["refused"],
+                "accepted": self.accepted, "refused_reasons": self.refusals}
 
     def _diagnostics(self) -> list:
         counters = {"clock_messages": self.clock_messages, "clock_backwards": self.clock_backwards,

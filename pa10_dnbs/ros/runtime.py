@@ -45,6 +45,7 @@ from rclpy.task import Future
 
 from . import exit_deadline
 from ..wire.robot_interface import RobotFault
+from .param_overrides import bad_param_override
 from .params import ParameterError
 
 SLICE_S = 0.2  # longest a spin call runs before the stop future is checked again
@@ -135,8 +136,10 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
     ``exit_code`` (int), ``loop(executor, stop)`` (its own spin loop, which
     must return once ``stop`` is done) and ``close()`` (write files, report).
     """
-    refused = _init_rcl(args)
-    if refused is not None:   # its --ros-args: the user's input (graph.md, "Parameters"): one line, exit 2
+    # a -p value rcl cannot read: named before rclpy.init (ros/param_overrides.py); anything else rcl refuses in
+    # its --ros-args (an unknown argument): from rclpy.init itself. The user's input: one line, exit 2
+    refused = bad_param_override(list(sys.argv if args is None else args)) or _init_rcl(args)
+    if refused is not None:
         print(f"FAILED {refused}", file=sys.stderr, flush=True)
         return 2
     stop = SignalStop()

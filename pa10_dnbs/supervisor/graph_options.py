@@ -19,6 +19,8 @@ class GraphFailure(RuntimeError):
 @dataclass
 class GraphOptions:
     config_path: Path
+    recorded_config: str = ""        # the config path a bag names ('' = config_path; launch: <out>/config_used.yaml,
+                                     # where config_path is its temporary output folder's, gone after the run)
     mode: str = "lockstep"
     controller: str = "dnbs"
     duration_s: float = 20.0
@@ -65,6 +67,7 @@ class GraphResult:
     bag: Path | None = None
     restarts: list[dict] = field(default_factory=list)   # joint, exit code, wall time, resumed step
     controllers: dict[str, dict] = field(default_factory=dict)  # joint -> counters of its last incarnation
+    reference: dict | None = None  # the reference node's stats: trajectories taken from the topic (None: no file)
 
 
 def loop_reliability(opt: GraphOptions) -> str:

@@ -23,7 +23,7 @@ from ..interrupt import EXIT_INTERRUPTED
 from .domain_ids import lease_domain
 from .graph_options import GraphFailure, GraphOptions, GraphResult, loop_reliability
 from .netns import in_netns, node_env, parse_netns
-from .node_specs import LIVE_VIEW, graph_topics, node_commands
+from .node_specs import LIVE_VIEW, REFERENCE_STATS, graph_topics, node_commands
 from .processes import ManagedProcess, kill_now, stop_all
 from .shm_cleanup import remove_stale, shm_files
 from .supervision import Restarter, StopRequest, catch_signals, wait_ready, watch
@@ -108,9 +108,11 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print, on_hard_stop=None) ->
     for j in opt.joint_names:
         f = workdir / f"controller_{j}.json"
         controllers[j] = json.loads(f.read_text()) if f.is_file() else None
+    reference = workdir / REFERENCE_STATS
     return GraphResult(stats=stats, exit_codes=codes, domain_id=domain, wall_total_s=time.monotonic() - t_start,
                        wire_file=wire_file if opt.record_bag is None else None, bag=opt.record_bag,
-                       restarts=restarts, controllers=controllers)
+                       restarts=restarts, controllers=controllers,
+                       reference=json.loads(reference.read_text()) if reference.is_file() else None)
 
 
 def _hard_stop(procs: list[ManagedProcess], lease, opt: GraphOptions, on_hard_stop) -> None:

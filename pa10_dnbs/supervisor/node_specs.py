@@ -22,6 +22,7 @@ NODE_GROUPS = ("observer", "reference", "controllers", "plant")
 
 
 LIVE_VIEW = "live_view"  # the live observer: display only, its failure does not fail the run
+REFERENCE_STATS = "reference_stats.json"  # the reference node's stats file, beside the plant's
 JOINT_BUS = "joint_bus"  # --robot external: in the plant's place, in front of the robot (docs/your_robot.md)
 
 
@@ -104,7 +105,8 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
     else:  # the recorder is the observer: the run is rebuilt from the bag
         end_ns = int(round(opt.duration_s / opt.dt_s)) * int(round(opt.dt_s * 1e9))
         custom = [f"controller={opt.controller}", f"mode={opt.mode}", f"duration_s={opt.duration_s!r}",
-                  f"reliability={loop_reliability(opt)}", f"config_file={config_file}", f"clock_hz={opt.clock_hz!r}",
+                  f"reliability={loop_reliability(opt)}", f"config_file={opt.recorded_config or config_file}",
+                  f"clock_hz={opt.clock_hz!r}",
                   f"namespace={opt.namespace}"]
         cmds = [("recorder", py + ["pa10_dnbs.ros.recorder_node"] + ros("recorder", {
             "config_file": config_file, "bag": str(opt.record_bag), "force": str(opt.force_bag).lower(),
@@ -120,6 +122,7 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
         "reference", {"config_file": config_file, "duration_s": opt.duration_s, "batch_steps": batch,
                       "lookahead_steps": reference_lookahead(opt),
                       "reference_subscribers": 2,  # the joint's controller and the observer
+                      "stats_file": str(stats_file.parent / REFERENCE_STATS),  # the trajectories it took
                       **({"trajectory_file": str(opt.trajectory_file)} if opt.trajectory_file else {})})))
     if not opt.joint_names:
         raise ValueError("GraphOptions.joint_names: the arm's joints are needed to start one controller each")

@@ -19,7 +19,8 @@ COMMAND_FORMS = ("joint_state", "forward")
 
 
 class RobotFault(RuntimeError):
-    """The robot broke the interface (a joint missing, a non-finite value, no state in time): one line."""
+    """The robot broke the interface (a joint missing or named twice, a non-finite value, no state in time, another
+    commander on its command topic): one line."""
 
 
 @dataclass(frozen=True)
@@ -64,7 +65,7 @@ class JointMatcher:
 
     def indices(self, names) -> list[int]:
         """For each arm joint, its index in ``names`` (a state's name list); RobotFault naming the joints
-        that are not there."""
+        that are not there, or those named more than once (which of the values would be the joint's?)."""
         key = tuple(names)
         found = self._cache.get(key)
         if found is None:
@@ -73,6 +74,10 @@ class JointMatcher:
             if lacking:
                 raise RobotFault(f"joint_states lacks {', '.join(lacking)} (it names {', '.join(key) or 'none'}; "
                                  f"the arm's joints: {', '.join(self.joint_names)})")
+            twice = [j for j in self.joint_names if key.count(j) > 1]
+            if twice:
+                raise RobotFault(f"joint_states names {', '.join(twice)} more than once (it names {', '.join(key)}; "
+                                 "each of the arm's joints must be named once)")
             found = self._cache[key] = [where[j] for j in self.joint_names]
         return found
 

@@ -6,7 +6,7 @@ FAULT_KEYS = ("effort_timeouts", "nonfinite_efforts", "out_of_range_efforts", "m
 # every counter, per joint (counts of steps or messages)
 COUNTER_KEYS = FAULT_KEYS + ("missed_ticks", "resent_states")
 # what metrics.json's faults section keeps of a joint's plant stats
-REPORT_KEYS = COUNTER_KEYS + ("timeout_ranges", "injected_state_faults")
+REPORT_KEYS = COUNTER_KEYS + ("timeout_ranges", "injected_state_faults", "stale_efforts", "effort_publishers")
 
 
 def plant_counters(gate, endpoints, resends, i: int) -> dict:

@@ -115,6 +115,10 @@ class PlantEndpoints:
         """The polled effort subscriptions, one per joint in joint order (the joint bus's paced loop waits on them)."""
         return list(self._effort_subs)
 
+    def effort_publishers(self) -> list[tuple[str, int]]:
+        """Per joint: its effort topic (resolved) and how many publishers it has (one: its joint controller)."""
+        return [(self.node.resolve_topic_name(sub.topic), sub.get_publisher_count()) for sub in self._effort_subs]
+
     def wait(self, timeout_s: float) -> list[int]:
         """Block until some effort is queued or ``timeout_s`` [s] passed; the joints with efforts queued."""
         ready = self._wait_set.wait(timeout_s)

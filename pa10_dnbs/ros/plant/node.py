@@ -23,7 +23,11 @@ paces the steps (``mode``):
 deadline (``realtime.py``). The plant itself runs on wall time (no use_sim_time).
 
 Defensive: a non-finite effort counts as missing (hold or zero, counted), an
-out-of-range one is saturated at its torque limit and counted. Faults configured in
+out-of-range one is saturated at its torque limit and counted. A second
+publisher on a joint's effort topic (another controller answering its
+states: whichever answer comes first is applied) is looked for every
+``EFFORT_PUBLISHERS_CHECK_S`` of wall time, warned about once per joint and
+its count kept (``effort_publishers`` in the stats: the most seen at once). Faults configured in
 ``faults.state`` are injected on each joint's state link. Fault counters go
 to /diagnostics every second; timing figures and counters go to
 ``stats_file`` (JSON, ``stats.py``) at exit.
@@ -57,6 +61,7 @@ from .stats import diagnostics_report, plant_stats
 from .standard_endpoints import StandardPlantEndpoints
 from .endpoints import PlantEndpoints
 from ..ready import ReadyListener
+from ..wall_timer import wall_timer
 from ..runtime import announce_ready
 from ..settings_params import NODE_SECTIONS
 from ..endpoints import StepClock, record_qos
@@ -100,6 +105,7 @@ PARAMS = {
 }
 
 
+EFFORT_PUBLISHERS_CHECK_S = 0.2  # wall time between two counts of each effort topic's publishers
 FINAL_FLUSH_S = 10.0  # wall seconds the finished plant waits for every reliable subscriber to acknowledge
 
 
@@ -115,6 +121,8 @@ class PlantNode(Node):
         if p.setdefault("interface", "") not in ("", "standard"):
             raise ParameterError(f"parameter interface must be '' (the per-joint topics) or standard, got "
                                  f"{p['interface']!r}")
+        if p["interface"] == "standard":  # before anything is logged: a refusal is the node's one line
+            self._check_robot_topics(p)
         realtime = p["mode"] == "realtime"
         if not p["reliability"]:  # realtime: the sensor-data convention; lockstep: lossless
             p["reliability"] = "best_effort" if realtime else "reliable"
@@ -163,10 +171,25 @@ class PlantNode(Node):
         self.ready = ReadyListener(self, expected) if expected else None  # the start handshake
         self.diagnostics = DiagnosticsReporter(self, lambda: diagnostics_report(self),
                                                lambda: self.clock_.stamp(self.gate.step))
+        self.effort_publishers = [0] * n  # the most publishers seen at once on each joint's effort topic
+        self._effort_publishers_warned: set[str] = set()  # topics whose second publisher was named in the log
+        self._effort_publishers_timer = wall_timer(self, EFFORT_PUBLISHERS_CHECK_S, self.count_effort_publishers)
         self.rt_applied, self.rt_message = apply_fifo(p["rt_priority"])
         if p["rt_priority"]:
             print(self.rt_message, flush=True)
         announce_ready("plant")
+
+    def _check_robot_topics(self, p: dict) -> None:
+        """interface:=standard: ParameterError when the command form is bad or the state and command topics are one
+        (resolved): the robot would read its own states as commands."""
+        try:
+            command = parse_robot_command(p["robot_command"], p["robot_command_topic"] or None)
+        except ValueError as exc:
+            raise ParameterError(f"parameter robot_command: {exc}") from None
+        state = self.resolve_topic_name(p["robot_state_topic"] or default_state_topic(command))
+        if state == self.resolve_topic_name(command.topic):
+            raise ParameterError(f"parameter robot_command_topic: must differ from robot_state_topic (both {state}): "
+                                 "the robot would read its own states as commands")
 
     def _open_plant(self, settings: Settings):
         """The physics: the PyBullet plant of the config's arm, at its initial state."""
@@ -185,14 +208,30 @@ class PlantNode(Node):
                 command = parse_robot_command(p["robot_command"], p["robot_command_topic"] or None)
             except ValueError as exc:
                 raise ParameterError(f"parameter robot_command: {exc}") from None
+            state_topic = p["robot_state_topic"] or default_state_topic(command)
             p["effort_timeout_s"] = math.inf  # a robot in lockstep waits for its command (docs/your_robot.md)
-            return StandardPlantEndpoints(self, settings, self.clock_,
-                                          p["robot_state_topic"] or default_state_topic(command),
+            return StandardPlantEndpoints(self, settings, self.clock_, state_topic,
                                           command, p["clock_hz"], self.n_steps, lambda: self.gate.step)
         return PlantEndpoints(self, settings, self.clock_, p["reliability"],
                               state_depth=1 if realtime else record_qos().depth,
                               effort_depth=1 if realtime else p["effort_queue_depth"], clock_hz=p["clock_hz"],
                               last_step=self.n_steps)
+
+    def count_effort_publishers(self) -> None:
+        """Count each effort topic's publishers (``effort_publishers``: the most seen); a second one is warned
+        about once per topic (the standard interface's one command topic serves every joint): another controller
+        answers the states, and whichever answer comes first counts."""
+        for j, (topic, count) in enumerate(self.endpoints.effort_publishers()):
+            self.effort_publishers[j] = max(self.effort_publishers[j], count)
+            if count > 1 and topic not in self._effort_publishers_warned:
+                who = sorted(f"{i.node_namespace.rstrip('/')}/{i.node_name}"
+                             for i in self.get_publishers_info_by_topic(topic))
+                if any("_UNKNOWN_" in w for w in who):
+                    continue  # its node's name is not discovered yet: the next count names it
+                self._effort_publishers_warned.add(topic)
+                self.get_logger().warning(
+                    f"SECOND EFFORT PUBLISHER at step {self.gate.step}: {count} publishers on {topic} "
+                    f"({', '.join(who)}): whichever answer comes first is applied")
 
     # ---------------------------------------------------------------- stepping
     def publish_state(self, k: int, joints=None, observed: bool = True) -> None:

@@ -94,6 +94,12 @@ class StandardPlantEndpoints:
             self._clock_pub.publish(CLOCK_CDR.pack(0x0100, 0, sec, nanosec))
 
     # ------------------------------------------------------------- in
+    def effort_publishers(self) -> list[tuple[str, int]]:
+        """Per joint: the command topic (resolved) and how many publishers it has (one: the bus, the robot's one
+        commander), the same for every joint."""
+        topic = self.node.resolve_topic_name(self._command_sub.topic)
+        return [(topic, self._command_sub.get_publisher_count())] * len(self.joint_names)
+
     def wait(self, timeout_s: float) -> list[int]:
         """Block until a command is queued or ``timeout_s`` passed; every joint when one is (a command carries
         them all)."""

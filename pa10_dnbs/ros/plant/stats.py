@@ -45,6 +45,7 @@ def plant_stats(node) -> dict:
             "first_missed_step": gate.miss_steps[i][0] if gate.miss_steps[i] else None,
             "miss_ranges": step_ranges(gate.miss_steps[i], MAX_RANGES),
             "stale_efforts": int(gate.stale[i]),
+            "effort_publishers": node.effort_publishers[i],  # the most seen at once (1: the joint's controller)
             "ahead_efforts_dropped": int(gate.dropped_ahead[i]),
             "timeout_ranges": step_ranges(gate.timeout_steps[i]),
             "resent_step_ranges": step_ranges(node.resent_steps[i], MAX_RANGES),  # lockstep: which states were re-sent

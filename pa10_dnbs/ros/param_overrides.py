@@ -1,0 +1,35 @@
+"""The ``-p name:=value`` rules of a node's command line, checked before ``rclpy.init`` parses them.
+
+rcl reads each value as YAML and takes a scalar or a list of scalars; anything else (``forward:``, a mapping;
+``[1,``, not YAML) fails ``rclpy.init`` itself, outside a node's one-line error handling, as an RCLError
+traceback after an rcl log line. Checked here first, the user's mistake is one line naming the rule (exit 2, as
+every other bad parameter, docs/graph.md). No rclpy here.
+"""
+from __future__ import annotations
+
+import yaml
+
+
+def bad_param_override(argv: list[str]) -> str | None:
+    """What is wrong with the first ``-p``/``--param`` rule of ``argv`` (a node's command line) rcl cannot read,
+    else None. Only the rules inside ``--ros-args`` ... (``--`` or the end) count."""
+    inside = False
+    for i, arg in enumerate(argv):
+        if arg == "--ros-args":
+            inside = True
+        elif arg == "--":
+            inside = False
+        elif inside and arg in ("-p", "--param") and i + 1 < len(argv):
+            rule = argv[i + 1]
+            name, sep, value = rule.partition(":=")
+            if not sep or not name:
+                return f"parameter override '{arg} {rule}': expected name:=value"
+            try:
+                parsed = yaml.safe_load(value)
+            except yaml.YAMLError:
+                parsed = {}  # not YAML at all
+            if isinstance(parsed, dict) or (isinstance(parsed, list)
+                                             and any(isinstance(v, (dict, list)) for v in parsed)):
+                return (f"parameter {name}: the override '{arg} {rule}' is not a value rcl can read (a scalar or a "
+                        f"list of scalars, as YAML; quote a string holding ':' or '[': -p '{name}:=\"{value}\"')")
+    return None
