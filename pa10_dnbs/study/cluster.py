@@ -7,6 +7,7 @@ import re
 import time
 
 from ..config_error import ConfigError
+from ..interrupt import check
 from .lost_runs import ClusterLost
 
 CONNECT_TIMEOUT_S = 10.0   # to reach the scheduler and to see its first worker
@@ -28,12 +29,20 @@ class ClusterWatch:
         return ClusterLost(why, scheduler_alive)
 
     def result(self, fut, key=None):
-        """``fut.result()``; ClusterLost for a run the cluster could not finish (not an error of the run)."""
+        """``fut.result()``; ClusterLost for a run the cluster could not finish (not an error of the run). Waited
+        for in WATCH_S slices, the cluster checked between them: a run that finished on a worker that died
+        before its result was fetched is computed again, and with no worker left that wait never ended."""
         from distributed import CancelledError
+        from distributed import TimeoutError as DaskTimeout
         from distributed.scheduler import KilledWorker
 
         try:
-            return fut.result()
+            while True:
+                try:
+                    return fut.result(timeout=WATCH_S)
+                except DaskTimeout:
+                    check()        # a Ctrl-C noted meanwhile (interrupt.deferred)
+                    self.check()   # the scheduler gone, or no worker for WORKERLESS_S: ClusterLost
         except CancelledError:
             raise self.lost(f"lost the connection to the scheduler {self.address} (its process ended, or its "
                             "host or the network went down)") from None
