@@ -10,9 +10,10 @@ from __future__ import annotations
 import yaml
 
 
-def bad_param_override(argv: list[str]) -> str | None:
-    """What is wrong with the first ``-p``/``--param`` rule of ``argv`` (a node's command line) rcl cannot read,
-    else None. Only the rules inside ``--ros-args`` ... (``--`` or the end) count."""
+def param_rules(argv):
+    """(flag, rule) of each ``-p``/``--param`` rule of ``argv`` (a node's command line), in order; only those
+    inside ``--ros-args`` ... (``--`` or the end) count."""
+    argv = list(argv)
     inside = False
     for i, arg in enumerate(argv):
         if arg == "--ros-args":
@@ -20,16 +21,22 @@ def bad_param_override(argv: list[str]) -> str | None:
         elif arg == "--":
             inside = False
         elif inside and arg in ("-p", "--param") and i + 1 < len(argv):
-            rule = argv[i + 1]
-            name, sep, value = rule.partition(":=")
-            if not sep or not name:
-                return f"parameter override '{arg} {rule}': expected name:=value"
-            try:
-                parsed = yaml.safe_load(value)
-            except yaml.YAMLError:
-                parsed = {}  # not YAML at all
-            if isinstance(parsed, dict) or (isinstance(parsed, list)
-                                             and any(isinstance(v, (dict, list)) for v in parsed)):
-                return (f"parameter {name}: the override '{arg} {rule}' is not a value rcl can read (a scalar or a "
-                        f"list of scalars, as YAML; quote a string holding ':' or '[': -p '{name}:=\"{value}\"')")
+            yield arg, argv[i + 1]
+
+
+def bad_param_override(argv: list[str]) -> str | None:
+    """What is wrong with the first ``-p``/``--param`` rule of ``argv`` (a node's command line) rcl cannot read,
+    else None (:func:`param_rules`)."""
+    for arg, rule in param_rules(argv):
+        name, sep, value = rule.partition(":=")
+        if not sep or not name:
+            return f"parameter override '{arg} {rule}': expected name:=value"
+        try:
+            parsed = yaml.safe_load(value)
+        except yaml.YAMLError:
+            parsed = {}  # not YAML at all
+        if isinstance(parsed, dict) or (isinstance(parsed, list)
+                                         and any(isinstance(v, (dict, list)) for v in parsed)):
+            return (f"parameter {name}: the override '{arg} {rule}' is not a value rcl can read (a scalar or a "
+                    f"list of scalars, as YAML; quote a string holding ':' or '[': -p '{name}:=\"{value}\"')")
     return None

@@ -24,6 +24,7 @@ from ..config import ConfigError, default_config_path
 from ..run_settings import build_settings
 from ..run_steps import run_steps
 from ..settings import Settings
+from .param_overrides import param_rules
 from .settings_params import (ARM_FILE, ARM_FILE_DESCRIPTION, joint_node_settings, joint_params, joint_values,
                               node_settings, section_params, section_values)
 
@@ -88,17 +89,10 @@ def _one_line(exc: Exception) -> str:
 def cli_parameter(argv, name: str) -> str | None:
     """The value of ``-p name:=value`` (or ``--param``) among the ROS arguments of ``argv``, else None (what a
     node needs before it exists, e.g. for its name; a params file is not read here)."""
-    in_ros = False
-    argv = list(argv)
-    for i, a in enumerate(argv):
-        if a == "--ros-args":
-            in_ros = True
-        elif a == "--":
-            in_ros = False
-        elif in_ros and a in ("-p", "--param") and i + 1 < len(argv):
-            key, sep, value = argv[i + 1].partition(":=")
-            if sep and key == name:
-                return value.strip("'\"")
+    for _, rule in param_rules(argv):
+        key, sep, value = rule.partition(":=")
+        if sep and key == name:
+            return value.strip("'\"")
     return None
 
 
