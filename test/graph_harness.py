@@ -95,6 +95,23 @@ class Launcher(Proc):
         super().__init__([sys.executable, "-m", "pa10_dnbs.cli", "launch", "--domain-id", domain_id, "--no-progress",
                           *extra, *args], domain_id)
 
+    @classmethod
+    def beside(cls, other: Proc, *args, domain_id: int, then=None) -> tuple[int, "Launcher", dict, int]:
+        """``launch ARGS`` run to its end beside ``other`` (a robot or a rival publisher, started and ready);
+        ``then()`` after the launch ended; both stopped whatever happens (``other`` by SIGINT). Returns (the
+        launch's exit code, the launcher, its nodes' pids, ``other``'s exit code)."""
+        la = cls(*args, domain_id=domain_id)
+        try:
+            pids = la.node_pids()
+            rc = la.wait(timeout=300)
+            if then is not None:
+                then()
+        finally:
+            la.kill()
+            other.interrupt()
+            other_rc = other.wait(timeout=30)
+        return rc, la, pids, other_rc
+
     def node_pids(self) -> dict[str, int]:
         m = self.wait_for(r"launch: domain \d+, \d+ nodes: (.*); observer (\w+)=(\d+)", 60)
         pids = {k: int(v) for k, v in (kv.split("=") for kv in m.group(1).split(", "))}

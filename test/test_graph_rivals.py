@@ -21,13 +21,7 @@ def test_a_second_publisher_on_an_effort_topic_is_reported_and_fails_the_run(tmp
     out = tmp_path / "run"
     rival = Proc([sys.executable, HERE / "rival_publisher.py", domain, "/pa10/s1/effort"], domain)
     rival.wait_for("RIVAL READY", 60)
-    la = Launcher("--mode", "lockstep", "--duration", 1.0, "--out", out, domain_id=domain)
-    try:
-        pids = la.node_pids()
-        rc = la.wait(timeout=300)
-    finally:
-        la.kill()
-        rival.kill()
+    rc, la, pids, _ = Launcher.beside(rival, "--mode", "lockstep", "--duration", 1.0, "--out", out, domain_id=domain)
     assert rc == 1, la.output
     stats = json.loads((out / "plant_stats.json").read_text())
     assert [j["effort_publishers"] for j in stats["joints"]] == [2, 1, 1, 1, 1, 1, 1], stats["joints"]

@@ -20,6 +20,24 @@ from robot_interface_probe import effort
 STEPS = 300
 
 
+def _probe_beside_robot(domain: int, robot_args: tuple, probe_args: tuple, probe_timeout_s: float):
+    """``pa10-dnbs robot --engine mujoco ROBOT_ARGS`` until ready, then ``python PROBE_ARGS`` against it to its
+    end (exit 0), then the robot stopped by SIGINT (exit 0); both killed whatever happens. (robot, probe)."""
+    robot = Proc([sys.executable, "-m", "pa10_dnbs.cli", "robot", "--engine", "mujoco", *robot_args], domain)
+    probe = None
+    try:
+        robot.wait_for(r"READY mujoco_robot", 60)
+        probe = Proc([sys.executable, *probe_args], domain)
+        assert probe.wait(probe_timeout_s) == 0, probe.output
+        robot.interrupt()
+        assert robot.wait(30) == 0, robot.output
+    finally:
+        robot.kill()
+        if probe is not None:
+            probe.kill()
+    return robot, probe
+
+
 class _Recorder:
     """A plant stand-in that records what it is stepped with (the stepper's unit test)."""
 
@@ -61,21 +79,9 @@ def test_the_robot_node_answers_lockstep_bit_for_bit_and_stops_on_sigint(domain,
 
     shm_before = shm_files()
     arm = load_arm("iiwa")
-    robot = Proc([sys.executable, "-m", "pa10_dnbs.cli", "robot", "--engine", "mujoco", "--arm", "iiwa",
-                  "--clock-hz", "1000"], domain)
-    probe = None
-    try:
-        robot.wait_for(r"READY mujoco_robot", 60)
-        out = tmp_path / "probe.json"
-        probe = Proc([sys.executable, str(REPO / "test" / "robot_interface_probe.py"), ",".join(arm.joint_names),
-                      STEPS, out], domain)
-        assert probe.wait(120) == 0, probe.output
-        robot.interrupt()
-        assert robot.wait(30) == 0, robot.output
-    finally:
-        robot.kill()
-        if probe is not None:
-            probe.kill()
+    out = tmp_path / "probe.json"
+    probe_args = (str(REPO / "test" / "robot_interface_probe.py"), ",".join(arm.joint_names), STEPS, out)
+    robot, probe = _probe_beside_robot(domain, ("--arm", "iiwa", "--clock-hz", "1000"), probe_args, 120)
     assert "Traceback" not in robot.output
     summary = robot.wait_for(r"mujoco_robot: (\d+) steps", 1)
     assert int(summary.group(1)) == STEPS, robot.output
@@ -113,19 +119,8 @@ def test_a_paced_robot_holds_state_0_until_the_first_command(domain):
     from pa10_dnbs.supervisor.shm_cleanup import remove_stale, shm_files
 
     shm_before = shm_files()
-    robot = Proc([sys.executable, "-m", "pa10_dnbs.cli", "robot", "--engine", "mujoco", "--mode", "paced",
-                  "--duration", "20"], domain)
-    probe = None
-    try:
-        robot.wait_for(r"READY mujoco_robot", 60)
-        probe = Proc([sys.executable, str(REPO / "test" / "paced_start_probe.py"), domain, 2.0], domain)
-        assert probe.wait(60) == 0, probe.output
-        robot.interrupt()
-        assert robot.wait(30) == 0, robot.output
-    finally:
-        robot.kill()
-        if probe is not None:
-            probe.kill()
+    robot, probe = _probe_beside_robot(domain, ("--mode", "paced", "--duration", "20"),
+                                       (str(REPO / "test" / "paced_start_probe.py"), domain, 2.0), 60)
     before = json.loads(probe.wait_for(r"BEFORE (.*)", 1).group(1))
     after = int(probe.wait_for(r"AFTER (\d+)", 1).group(1))
     assert before == [0], before  # state 0 only, re-sent

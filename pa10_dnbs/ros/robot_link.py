@@ -263,4 +263,8 @@ class RemoteRobot:
                 "robot_unanswered_states": self.unanswered_states, "robot_off_grid_states": self.timeline.off_grid}
 
     def close(self) -> None:
+        """The subscription's wait set destroyed, and the command publisher: its endpoint leaves the robot's
+        domain now, not when the participant's lease runs out (~20 s; the node exits without destroying it), so a
+        next run against the same robot does not see it as a second commander."""
         self._wait_set.destroy()
+        self._node.destroy_publisher(self._pub)

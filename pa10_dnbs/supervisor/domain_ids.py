@@ -87,10 +87,17 @@ def try_lease(domain_id: int) -> DomainLease | None:
     return DomainLease(domain_id, fd)
 
 
+_leases = [0]   # leases taken by this process: the next search starts further on
+
+
 def lease_domain() -> DomainLease:
-    """The first free id, searched from an offset derived from the PID (so concurrent callers rarely race)."""
+    """The first free id, searched from an offset derived from the PID (so concurrent callers rarely race) and
+    moved on by every lease this process took: a process leasing one domain after another (a test suite) does not
+    take the one it just let go, where the DDS participants of its exited nodes (they exit without destroying
+    them) stay in discovery for their lease duration (~20 s): a new graph there saw their publishers."""
     n = len(DOMAIN_IDS)
-    start = os.getpid() % n
+    start = (os.getpid() + 37 * _leases[0]) % n
+    _leases[0] += 1
     for i in range(n):
         lease = try_lease(DOMAIN_IDS[(start + i) % n])
         if lease is not None:
