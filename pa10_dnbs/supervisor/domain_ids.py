@@ -87,19 +87,25 @@ def try_lease(domain_id: int) -> DomainLease | None:
     return DomainLease(domain_id, fd)
 
 
-_leases = [0]   # leases taken by this process: the next search starts further on
+def _last_leased(domain_id: int) -> float:
+    """When ``domain_id`` was last leased on this host (its lock file's mtime), 0 for never."""
+    try:
+        return (LOCK_DIR / f"{domain_id}.lock").stat().st_mtime
+    except OSError:
+        return 0.0
 
 
 def lease_domain() -> DomainLease:
-    """The first free id, searched from an offset derived from the PID (so concurrent callers rarely race) and
-    moved on by every lease this process took: a process leasing one domain after another (a test suite) does not
-    take the one it just let go, where the DDS participants of its exited nodes (they exit without destroying
-    them) stay in discovery for their lease duration (~20 s): a new graph there saw their publishers."""
+    """The free id leased longest ago (ties: from an offset derived from the PID, so concurrent callers rarely
+    race). Not the one just let go: a graph's nodes exit without destroying their DDS participants, whose
+    endpoints stay in discovery for their lease duration (~20 s); a new graph there saw their publishers (a second
+    commander, a second effort publisher)."""
     n = len(DOMAIN_IDS)
-    start = (os.getpid() + 37 * _leases[0]) % n
-    _leases[0] += 1
-    for i in range(n):
-        lease = try_lease(DOMAIN_IDS[(start + i) % n])
+    start = os.getpid() % n
+    ids = sorted((DOMAIN_IDS[(start + i) % n] for i in range(n)), key=_last_leased)   # stable: offset order on ties
+    for domain_id in ids:
+        lease = try_lease(domain_id)
         if lease is not None:
+            os.utime(LOCK_DIR / f"{domain_id}.lock")
             return lease
     raise NoFreeDomain(f"all {n} ROS domain ids are in use by other runs on this host ({LOCK_DIR})")
