@@ -12,8 +12,8 @@ NaN), ``dup`` (names the arm's first joint a second time, last, at 5 rad), ``bey
 0.2 rad beyond its upper limit: past the joint controllers' guard margin), ``rival`` (a second publisher on the
 command topic from the start: another commander; it sends nothing), ``frozen`` (every state from STEP on stamped
 as state STEP), ``back`` (the stamps restart from the first one's at STEP: a restarted simulation), ``skip`` (the
-stamps from STEP on one step later: 2 steps after the previous one), ``nowait`` (from STEP on, states every 1 ms
-of wall time without waiting for commands), ``none`` (no fault). Prints ``COMMAND <step> <stamp ns> <efforts>``
+stamps from STEP on one step later: 2 steps after the previous one), ``nowait`` (from STEP on, states without waiting for
+commands: STEP + 1's right behind STEP's, then every 1 ms of wall time), ``none`` (no fault). Prints ``COMMAND <step> <stamp ns> <efforts>``
 for every command it takes and ends on SIGINT or SIGTERM with ``PROBE END``.
 """
 import os
@@ -70,12 +70,19 @@ def main() -> int:
         if fault == "dup" and k >= fault_step:
             msg.name, msg.position, msg.velocity = msg.name + [names[0]], pos + [5.0], [0.0] * (len(order) + 1)
         silent = fault == "stop" and k >= fault_step
+        if fault == "nowait" and k == fault_step > 0:
+            ahead = JointState()
+            ahead.header.stamp.sec, ahead.header.stamp.nanosec = divmod(stamp + dt_ns, 10**9)
+            ahead.name, ahead.position, ahead.velocity = msg.name, msg.position, msg.velocity
         answered = False
         next_send = 0.0
         while not stop and not answered:
             if not silent and time.monotonic() >= next_send:
                 pub.publish(msg)
                 next_send = time.monotonic() + 0.25
+                if fault == "nowait" and k == fault_step > 0:   # the next state right behind it, built beforehand:
+                    pub.publish(ahead)                           # in lockstep always before the command answering it
+                    k += 1
             nowait = fault == "nowait" and k >= fault_step
             rclpy.spin_once(node, timeout_sec=0.0 if nowait else 0.02)
             while commands:
