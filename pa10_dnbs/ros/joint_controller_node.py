@@ -257,9 +257,7 @@ class JointControllerNode(Node):
 
     def counters(self) -> dict:
         loop = self.loop_
-        c = {f"bad_states_{k}": v for k, v in loop.bad_states.items()}
-        c["nonfinite_torques"] = loop.nonfinite_torques
-        c.update(loop.controller.counters(0))
+        c = loop.guarded.counters(0)   # the guard's and the controller's (EKF resets), as in-process runs report
         c.update({"malformed_states": self.malformed, "malformed_references": self.malformed_references, "states": self.states_received, "efforts": self.efforts_sent,
                   "duplicate_states": loop.duplicates, "last_step": loop.last_step,
                   "held_until_matched": self.held_answers})

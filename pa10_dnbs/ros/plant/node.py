@@ -122,7 +122,7 @@ class PlantNode(Node):
             raise ParameterError(f"parameter interface must be '' (the per-joint topics) or standard, got "
                                  f"{p['interface']!r}")
         if p["interface"] == "standard":  # before anything is logged: a refusal is the node's one line
-            self._check_robot_topics(p)
+            self._robot_topics = self._checked_robot_topics(p)
         realtime = p["mode"] == "realtime"
         if not p["reliability"]:  # realtime: the sensor-data convention; lockstep: lossless
             p["reliability"] = "best_effort" if realtime else "reliable"
@@ -179,17 +179,19 @@ class PlantNode(Node):
             print(self.rt_message, flush=True)
         announce_ready("plant")
 
-    def _check_robot_topics(self, p: dict) -> None:
-        """interface:=standard: ParameterError when the command form is bad or the state and command topics are one
-        (resolved): the robot would read its own states as commands."""
+    def _checked_robot_topics(self, p: dict):
+        """interface:=standard: (the command, the state topic); ParameterError when the command form is bad or the
+        state and command topics are one (resolved): the robot would read its own states as commands."""
         try:
             command = parse_robot_command(p["robot_command"], p["robot_command_topic"] or None)
         except ValueError as exc:
             raise ParameterError(f"parameter robot_command: {exc}") from None
-        state = self.resolve_topic_name(p["robot_state_topic"] or default_state_topic(command))
+        state_topic = p["robot_state_topic"] or default_state_topic(command)
+        state = self.resolve_topic_name(state_topic)
         if state == self.resolve_topic_name(command.topic):
             raise ParameterError(f"parameter robot_command_topic: must differ from robot_state_topic (both {state}): "
                                  "the robot would read its own states as commands")
+        return command, state_topic
 
     def _open_plant(self, settings: Settings):
         """The physics: the PyBullet plant of the config's arm, at its initial state."""
@@ -204,11 +206,7 @@ class PlantNode(Node):
         (``standard_endpoints.py``): there the plant waits for every command (no effort timeout)."""
         p = self.p
         if p["interface"] == "standard":
-            try:
-                command = parse_robot_command(p["robot_command"], p["robot_command_topic"] or None)
-            except ValueError as exc:
-                raise ParameterError(f"parameter robot_command: {exc}") from None
-            state_topic = p["robot_state_topic"] or default_state_topic(command)
+            command, state_topic = self._robot_topics   # checked in __init__
             p["effort_timeout_s"] = math.inf  # a robot in lockstep waits for its command (docs/your_robot.md)
             return StandardPlantEndpoints(self, settings, self.clock_, state_topic,
                                           command, p["clock_hz"], self.n_steps, lambda: self.gate.step)
