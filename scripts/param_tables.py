@@ -30,7 +30,7 @@ def main(argv: list[str] | None = None) -> int:
     import argparse
 
     argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args(argv)  # --help; no options
-    from pa10_dnbs.supervisor.shm_cleanup import remove_stale, shm_files
+    from pa10_dnbs.ros.shm_cleanup import remove_stale, shm_files
 
     before = shm_files()
     for name, module in NODES:

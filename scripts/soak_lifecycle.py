@@ -52,7 +52,7 @@ from bench_record import record_path  # noqa: E402
 from flag_values import folder  # noqa: E402
 
 from pa10_dnbs.cli_values import OneLineParser, positive, seconds, whole_in  # noqa: E402
-from pa10_dnbs.supervisor.shm_cleanup import shm_files, unused  # noqa: E402
+from pa10_dnbs.ros.shm_cleanup import shm_files, unused  # noqa: E402
 
 HUNG_MARK = "Timeout ("  # faulthandler's header when a node's teardown outlived its limit
 NODES_LINE = re.compile(r"launch: domain (\d+), \d+ nodes: (.*); observer (\w+)=(\d+)")

@@ -16,7 +16,7 @@ def pytest_unconfigure(config):
     """Remove the /dev/shm files of dead processes (shm_cleanup.py), this session's own in-process participants
     counted as dead: the LTTng-UST wait files rcl creates here when a test loads rclpy, and what a test's
     client left (the launcher cleans up after its nodes)."""
-    from pa10_dnbs.supervisor.shm_cleanup import remove_stale, shm_files
+    from pa10_dnbs.ros.shm_cleanup import remove_stale, shm_files
 
     remove_stale(shm_files(), ignore_pids=frozenset({os.getpid()}))
 
@@ -46,7 +46,7 @@ def domain():
     import time
 
     from pa10_dnbs.supervisor.domain_ids import is_occupied, lease_domain
-    from pa10_dnbs.supervisor.shm_cleanup import remove_stale, shm_files
+    from pa10_dnbs.ros.shm_cleanup import remove_stale, shm_files
 
     with lease_domain() as lease:
         yield lease.domain_id
@@ -64,7 +64,7 @@ def lockstep_run(tmp_path_factory):
     """A 3 s lockstep DNBS run of the node graph, recorded into a bag: output dir, bag, exit code, output."""
     from graph_harness import Launcher
 
-    from pa10_dnbs.supervisor.shm_cleanup import shm_files
+    from pa10_dnbs.ros.shm_cleanup import shm_files
 
     base = tmp_path_factory.mktemp("graph")
     out, bag = base / "run", base / "bag"

@@ -147,7 +147,7 @@ def assert_no_leftovers(pids, shm_before: set[str], settle_s: float = 20.0) -> N
     and its launcher's clean-up a moment later are not either: a leftover is one still there after
     ``settle_s`` [s].
     """
-    from pa10_dnbs.supervisor.shm_cleanup import shm_files, unused
+    from pa10_dnbs.ros.shm_cleanup import shm_files, unused
 
     alive_now = sorted(str(p) for p in pids if alive(p))
     assert not alive_now, f"processes still alive: {alive_now}"

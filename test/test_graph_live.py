@@ -13,7 +13,7 @@ from graph_harness import REPO, Launcher, Proc, assert_no_leftovers, exit_codes
 from pa10_dnbs.arm import load_arm
 JOINT_NAMES = load_arm("pa10").joint_names
 from pa10_dnbs.config import default_config_path
-from pa10_dnbs.supervisor.shm_cleanup import shm_files
+from pa10_dnbs.ros.shm_cleanup import shm_files
 
 pytestmark = pytest.mark.graph  # starts ROS processes
 

@@ -11,7 +11,7 @@ from graph_harness import Launcher, assert_no_leftovers
 
 @pytest.mark.graph
 def test_launch_plant_mujoco_runs_reports_and_equals_the_in_process_engine(domain, tmp_path):
-    from pa10_dnbs.supervisor.shm_cleanup import shm_files
+    from pa10_dnbs.ros.shm_cleanup import shm_files
 
     shm_before = shm_files()
     out = tmp_path / "graph"
@@ -50,7 +50,7 @@ def test_relative_topic_names_meet_in_the_arms_namespace(domain, tmp_path):
     import sys
 
     from graph_harness import Proc
-    from pa10_dnbs.supervisor.shm_cleanup import remove_stale, shm_files
+    from pa10_dnbs.ros.shm_cleanup import remove_stale, shm_files
 
     shm_before = shm_files()
     robot = Proc([sys.executable, "-m", "pa10_dnbs.cli", "robot", "--engine", "mujoco", "--duration", "0.3",

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from graph_harness import Launcher, Proc, assert_no_leftovers
-from pa10_dnbs.supervisor.shm_cleanup import remove_stale, shm_files
+from pa10_dnbs.ros.shm_cleanup import remove_stale, shm_files
 
 pytestmark = pytest.mark.graph  # starts ROS processes
 

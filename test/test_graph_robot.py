@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from graph_harness import Launcher, Proc, assert_no_leftovers, exit_codes
-from pa10_dnbs.supervisor.shm_cleanup import remove_stale, shm_files
+from pa10_dnbs.ros.shm_cleanup import remove_stale, shm_files
 from pa10_dnbs.run_data import RunData
 from pa10_dnbs.sim.closed_loop import simulate
 

@@ -52,7 +52,7 @@ def _bad_files(tmp_path):
 
 def test_a_trajectory_sent_while_running_is_tracked_and_wrong_ones_change_nothing(tmp_path, domain, cfg,
                                                                                    monkeypatch):
-    from pa10_dnbs.supervisor.shm_cleanup import shm_files
+    from pa10_dnbs.ros.shm_cleanup import shm_files
 
     shm_before = shm_files()
     unknown, beyond, backwards = _bad_files(tmp_path)
@@ -133,3 +133,30 @@ def test_a_trajectory_sent_while_running_is_tracked_and_wrong_ones_change_nothin
         assert np.array_equal(a, b), f"{field}: max diff {np.abs(a - b).max()}"
     assert all(c == 0 for c in exit_codes(la.output).values())
     assert_no_leftovers(pids.values(), shm_before)
+
+
+def test_a_sender_that_outlives_the_graph_leaves_no_shared_memory_behind(tmp_path, domain):
+    """The graph's nodes leave their Fast DDS files for the launcher to sweep, which skips what a live process
+    still maps: a sender still running when the graph ends (here waiting 1000 s of /clock between its two
+    files) maps the nodes' ports, so the sweep is the sender's when it leaves, after a Ctrl-C here (CI once
+    found 49 files left after a sender that was slow to leave)."""
+    from pa10_dnbs.ros.shm_cleanup import shm_files
+
+    shm_before = shm_files()
+    sender = Proc([sys.executable, "-m", "pa10_dnbs.ros.trajectory_sender", EXAMPLE, EXAMPLE, "--after-clock", "1.0",
+                   "--clock-gap", "1000", "--wait", "240"], domain)
+    la = Launcher("--mode", "lockstep", "--controller", "pid", "--duration", 10.0, "--out", tmp_path / "run",
+                  domain_id=domain)
+    try:
+        pids = la.node_pids()
+        sender.wait_for(r"^sent .* at /clock", timeout=120)  # matched: it maps the reference node's port
+        rc = la.wait(timeout=300)
+        assert sender.proc.poll() is None, sender.output  # still waiting for its second file's /clock
+        sender.interrupt()
+        sender_rc = sender.wait(timeout=60)
+    finally:
+        sender.kill()
+        la.kill()
+    assert rc == 0, la.output
+    assert sender_rc == 130, sender.output
+    assert_no_leftovers([*pids.values(), sender.proc.pid], shm_before)

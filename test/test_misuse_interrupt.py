@@ -621,7 +621,7 @@ def test_launch_ctrl_c_once_or_twice_stops_every_node_and_writes_nothing(tmp_pat
     every node had gone 0.17 s after a Ctrl-C here, and once in CI the launcher had ended before it."""
     from graph_harness import assert_no_leftovers
 
-    from pa10_dnbs.supervisor.shm_cleanup import shm_files
+    from pa10_dnbs.ros.shm_cleanup import shm_files
 
     monkeypatch.setattr(os, "environ", dict(os.environ))   # _launch's ROS_* settings stay in this test
     shm_before = shm_files()

@@ -75,7 +75,7 @@ def test_paced_steps_every_tick_with_the_latest_command():
 
 @pytest.mark.graph
 def test_the_robot_node_answers_lockstep_bit_for_bit_and_stops_on_sigint(domain, tmp_path):
-    from pa10_dnbs.supervisor.shm_cleanup import shm_files
+    from pa10_dnbs.ros.shm_cleanup import shm_files
 
     shm_before = shm_files()
     arm = load_arm("iiwa")
@@ -116,7 +116,7 @@ def test_a_paced_robot_holds_state_0_until_the_first_command(domain):
     """rev_e 17: matched by a silent commander (as by the joint bus during the graph's start handshake), the paced
     robot re-sends state 0 and does not step (it stepped at once: its time ran seconds ahead of the graph's); the
     first command starts it."""
-    from pa10_dnbs.supervisor.shm_cleanup import remove_stale, shm_files
+    from pa10_dnbs.ros.shm_cleanup import remove_stale, shm_files
 
     shm_before = shm_files()
     robot, probe = _probe_beside_robot(domain, ("--mode", "paced", "--duration", "20"),

@@ -57,7 +57,7 @@ def test_a_half_built_node_is_freed_only_under_the_exit_deadline(domain):
     forever with the GIL held (a plant that rejected a parameter once spun for 10 min, SIGTERM ignored)."""
     import json
 
-    from pa10_dnbs.supervisor.shm_cleanup import shm_files, unused
+    from pa10_dnbs.ros.shm_cleanup import shm_files, unused
 
     before = shm_files()
     p = subprocess.run(["timeout", "-k", "5", str(TIMEOUT_S), sys.executable,

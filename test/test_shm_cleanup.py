@@ -12,7 +12,7 @@ from contextlib import contextmanager
 
 import pytest
 
-from pa10_dnbs.supervisor.shm_cleanup import SHM_DIR, remove_stale, shm_files, unused
+from pa10_dnbs.ros.shm_cleanup import SHM_DIR, remove_stale, shm_files, unused
 
 
 HERE = frozenset({os.getpid()})
@@ -69,7 +69,7 @@ def test_file_mapped_by_another_process_is_kept(shm_file):
 
 def test_snapshot_then_since_removes_only_the_new_unused_files(shm_file, tmp_path):
     """The hand-start clean-up of docs/graph.md: a file in the snapshot stays, one created after it goes."""
-    from pa10_dnbs.supervisor.shm_cleanup import main
+    from pa10_dnbs.ros.shm_cleanup import main
 
     old_name, old_path = shm_file
     snap = tmp_path / "before.txt"
@@ -140,7 +140,7 @@ def test_a_port_locked_by_an_ignored_process_goes(port_files):
 def test_a_path_it_cannot_use_is_one_line_and_exit_2(flag, path, why, tmp_path, capsys):
     """The hand-start clean-up's own mistakes: no traceback (``--snapshot ''`` fell through to --since with None,
     a directory or a binary file raised), and --since removes nothing it was not given a snapshot for."""
-    from pa10_dnbs.supervisor.shm_cleanup import main
+    from pa10_dnbs.ros.shm_cleanup import main
 
     (tmp_path / "binary.bin").write_bytes(bytes(range(256)))
     (tmp_path / "other.txt").write_text("fastrtps_port7000\n")

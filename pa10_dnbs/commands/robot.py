@@ -19,7 +19,7 @@ from ..config import ConfigError, default_config_path
 from .options import RobotCommandOptions
 from ..run_settings import build_settings
 from ..run_steps import run_steps
-from ..supervisor.shm_cleanup import remove_stale, shm_files
+from ..ros.shm_cleanup import remove_stale, shm_files
 from ..wire.clock_schedule import check_clock_hz
 from ..wire.topics import check_topic_name, default_namespace, resolve
 

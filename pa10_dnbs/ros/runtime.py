@@ -192,7 +192,7 @@ def exit_process(code: int) -> NoReturn:
     context (also at finalization, by the garbage collection of their handles) publishes graph updates
     through the shared-memory ports and can block there with the GIL held. Files are written and closed by
     ``close()`` before this is called. The DDS participant's shared-memory files in /dev/shm stay behind:
-    the launcher removes them (``supervisor/shm_cleanup.py``), as it does for a killed node.
+    the launcher removes them (``ros/shm_cleanup.py``), as it does for a killed node.
     """
     sys.stdout.flush()
     sys.stderr.flush()

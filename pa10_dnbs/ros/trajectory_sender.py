@@ -38,6 +38,7 @@ from ..interrupt import EXIT_INTERRUPTED
 from ..trajectory_file import read_sendable
 from ..wire.topics import CLOCK, DEFAULT_NS, TRAJECTORY, check_topic_name, resolve
 from .reference_node import TRAJECTORY_QOS
+from .shm_cleanup import remove_stale, shm_files
 
 
 INT32_MAX = 2**31 - 1   # builtin_interfaces Time/Duration sec is an int32: a larger one wraps on the wire
@@ -126,6 +127,10 @@ def main(argv=None) -> int:
         closing = threading.Thread(target=lambda: (node.destroy_node(), rclpy.try_shutdown()), daemon=True)
         closing.start()
         closing.join(5.0)
+        # the graph's nodes leave their files for the launcher's sweep, which skips what a live process maps: a
+        # sender that outlived the graph mapped its ports, so it sweeps too (its own files, if the teardown was
+        # left, and any other dead process's, as the launcher does)
+        remove_stale(shm_files(), ignore_pids=frozenset({os.getpid()}))
 
 
 def _send(node, msgs, args) -> int:

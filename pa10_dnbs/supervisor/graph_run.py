@@ -25,7 +25,7 @@ from .graph_options import GraphFailure, GraphOptions, GraphResult, loop_reliabi
 from .netns import in_netns, node_env, parse_netns
 from .node_specs import LIVE_VIEW, REFERENCE_STATS, graph_topics, node_commands
 from .processes import ManagedProcess, kill_now, stop_all
-from .shm_cleanup import remove_stale, shm_files
+from ..ros.shm_cleanup import remove_stale, shm_files
 from .supervision import Restarter, StopRequest, catch_signals, wait_ready, watch
 
 # faulthandler's header when a node's close() outlives its limit and the exit deadline ends it (ros/runtime.py)

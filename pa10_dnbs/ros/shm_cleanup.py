@@ -22,7 +22,9 @@ a new segment under the name), so that run's discovery never completes.
 
 So a launcher sweeps every dead file at the end of its run (``remove_stale(shm_files())``),
 its own and those another run could not remove because this run still mapped
-them; ``--snapshot``/``--since`` remove only what appeared meanwhile.
+them, and so does a trajectory sender when it leaves (it maps the graph's ports,
+so a sender that outlives the graph keeps them from the launcher's sweep);
+``--snapshot``/``--since`` remove only what appeared meanwhile.
 
 The ROS wheels' rcl and rmw also load LTTng-UST (tracetools), which creates
 ``lttng-ust-wait-<version>[-<uid>]`` (4 KB each, for waking traced apps when
@@ -151,17 +153,17 @@ def remove_stale(created_during_run: set[str], ignore_pids: frozenset[int] = fro
     return sorted(removed)
 
 
-SNAPSHOT_HEADER = "# pa10_dnbs.supervisor.shm_cleanup snapshot of /dev/shm"
+SNAPSHOT_HEADER = "# pa10_dnbs.ros.shm_cleanup snapshot of /dev/shm"
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m pa10_dnbs.supervisor.shm_cleanup --snapshot FILE`` before a hand-started session writes the names
+    """``python -m pa10_dnbs.ros.shm_cleanup --snapshot FILE`` before a hand-started session writes the names
     present; ``--since FILE`` after it removes the files that appeared since, whose creator is gone and that no
     live process maps. A path that cannot be written or read, or a file that is no snapshot: one line, exit 2."""
     import argparse
     import sys
 
-    ap = argparse.ArgumentParser(prog="python -m pa10_dnbs.supervisor.shm_cleanup", description=main.__doc__)
+    ap = argparse.ArgumentParser(prog="python -m pa10_dnbs.ros.shm_cleanup", description=main.__doc__)
     group = ap.add_mutually_exclusive_group(required=True)
     group.add_argument("--snapshot", metavar="FILE", help="write the Fast DDS / LTTng-UST names in /dev/shm now")
     group.add_argument("--since", metavar="FILE", help="remove the unused files that are not in this snapshot")
