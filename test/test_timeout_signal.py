@@ -1,7 +1,7 @@
 """``timeout`` (GNU) sends its signal to the command and then to the command's whole process group: the command
-gets it twice, microseconds apart, and its pool workers get it too. That is one stop, as a Ctrl-C (docs/tuning.md,
-"Interrupting": the completed runs kept, one line, exit 130), not a second Ctrl-C that drops them; and no thread
-traceback from the pool whose workers the group's signal ended."""
+gets it twice, microseconds apart (SIGTERM, or SIGINT with ``-s INT``), and its pool workers get it too. That is
+one stop, as a Ctrl-C (docs/tuning.md, "Interrupting": the completed runs kept, one line, exit 130), not a second
+Ctrl-C that drops them; and no thread traceback from the pool whose workers the group's signal ended."""
 import json
 import os
 import re
@@ -17,8 +17,8 @@ from pa10_dnbs.interrupt import child_pids
 pytestmark = pytest.mark.slow
 
 
-def test_timeouts_sigterm_to_the_command_then_its_group_is_one_stop(tmp_path):
-    sig = signal.SIGTERM   # timeout's default (a second SIGINT stays a second Ctrl-C, however soon)
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["timeout", "timeout -s INT"])
+def test_timeouts_signal_to_the_command_then_its_group_is_one_stop(tmp_path, sig):
     c = Command("study", "--scenarios", "nominal,payload_2kg", "--controllers", "pid", "--seeds", 4, "--duration",
                 30, "--jobs", 2, "--no-progress", "--out", tmp_path / "s")
     try:

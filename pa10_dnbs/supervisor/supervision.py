@@ -10,6 +10,7 @@ import signal
 import time
 from pathlib import Path
 
+from ..interrupt import same_stop
 from .graph_options import GraphOptions
 from .netns import in_netns
 from .node_specs import LIVE_VIEW, controller_command
@@ -24,16 +25,20 @@ class StopRequest:
     so a signal can neither orphan a child being started nor interrupt the shutdown).
 
     A second signal while the first is handled (a second Ctrl-C during the nodes' graces) calls ``hard_stop``
-    (set by the launcher once its children exist: it kills them, cleans up and ends the process at once)."""
+    (set by the launcher once its children exist: it kills them, cleans up and ends the process at once); the
+    same signal again within ``interrupt.SAME_STOP_S`` is the first one sent twice (GNU timeout: to the command,
+    then to its group), not a second Ctrl-C."""
 
     def __init__(self):
         self.signal_name: str | None = None
         self.hard_stop = None
+        self._first: tuple[int, float] | None = None
 
     def __call__(self, signum, _frame):
         if self.signal_name is None:
             self.signal_name = signal.Signals(signum).name
-        elif self.hard_stop is not None:
+            self._first = (signum, time.monotonic())
+        elif self.hard_stop is not None and not same_stop(self._first, signum):
             self.hard_stop()
 
 
