@@ -5,6 +5,7 @@ command. A second SIGINT ends at once, leaving nothing either. (The 50-try stati
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -614,6 +615,22 @@ def _running(c: Command) -> None:
     pytest.fail("the graph never ran: " + c.proc.stderr.read())
 
 
+@contextlib.contextmanager
+def _graph_stepping(tmp_path: Path, domain: int, monkeypatch):
+    """``launch`` into ``tmp_path/run``, once its plant steps: (the command, its children's pids, the /dev/shm
+    names before it started); killed whatever happens."""
+    from pa10_dnbs.ros.shm_cleanup import shm_files
+
+    monkeypatch.setattr(os, "environ", dict(os.environ))   # _launch's ROS_* settings stay in this test
+    shm_before = shm_files()
+    c = _launch(tmp_path / "run", domain)
+    try:
+        _running(c)
+        yield c, child_pids(c.proc.pid), shm_before
+    finally:
+        c.kill()
+
+
 @pytest.mark.graph
 @pytest.mark.parametrize("presses", [1, 2])
 def test_launch_ctrl_c_once_or_twice_stops_every_node_and_writes_nothing(tmp_path, domain, monkeypatch, presses):
@@ -623,14 +640,7 @@ def test_launch_ctrl_c_once_or_twice_stops_every_node_and_writes_nothing(tmp_pat
     every node had gone 0.17 s after a Ctrl-C here, and once in CI the launcher had ended before it."""
     from graph_harness import assert_no_leftovers
 
-    from pa10_dnbs.ros.shm_cleanup import shm_files
-
-    monkeypatch.setattr(os, "environ", dict(os.environ))   # _launch's ROS_* settings stay in this test
-    shm_before = shm_files()
-    c = _launch(tmp_path / "run", domain)
-    try:
-        _running(c)
-        nodes = child_pids(c.proc.pid)
+    with _graph_stepping(tmp_path, domain, monkeypatch) as (c, nodes, shm_before):
         if presses == 2:
             os.kill(nodes[0], signal.SIGSTOP)  # a node that does not answer SIGINT: the graces would run
         for i in range(presses):
@@ -638,8 +648,6 @@ def test_launch_ctrl_c_once_or_twice_stops_every_node_and_writes_nothing(tmp_pat
                 time.sleep(SECOND_PRESS_S)
             c.ctrl_c()
         rc, seconds, err = c.end(bound_s=20.0 if presses == 1 else 5.0)
-    finally:
-        c.kill()
     print(f"launch: {presses} Ctrl-C, exit after {seconds:.2f} s")
     assert rc == 130 and seconds < (20.0 if presses == 1 else 2.5), (rc, seconds, err)
     assert "Traceback" not in err and "interrupted" in err, err
@@ -652,8 +660,6 @@ def test_launch_ctrl_c_once_or_twice_stops_every_node_and_writes_nothing(tmp_pat
     assert list(tmp_path.iterdir()) == []   # neither the output nor its half-written folder
 
 
-
-
 @pytest.mark.graph
 def test_launch_under_timeout_s_int_is_one_stop_not_a_second_ctrl_c(tmp_path, domain, monkeypatch):
     """``timeout -s INT`` (as docs/engines.md runs launch) sends SIGINT to the launcher, then to its process group:
@@ -662,22 +668,12 @@ def test_launch_under_timeout_s_int_is_one_stop_not_a_second_ctrl_c(tmp_path, do
     "interrupted (SIGINT)"), not a second Ctrl-C that kills every node ("interrupted again", as it was)."""
     from graph_harness import assert_no_leftovers
 
-    from pa10_dnbs.ros.shm_cleanup import shm_files
-
-    monkeypatch.setattr(os, "environ", dict(os.environ))   # _launch's ROS_* settings stay in this test
-    shm_before = shm_files()
-    c = _launch(tmp_path / "run", domain)
-    try:
-        _running(c)
-        nodes = child_pids(c.proc.pid)
-        c.t_sigint = time.monotonic()
+    with _graph_stepping(tmp_path, domain, monkeypatch) as (c, nodes, shm_before):
         os.kill(c.proc.pid, signal.SIGINT)     # timeout's kill(pid, sig) ...
         time.sleep(0.02)
         os.killpg(c.proc.pid, signal.SIGINT)   # ... then kill(0, sig): the launcher again and its nodes
         out, err = c.proc.communicate(timeout=30)   # the nodes' graces: 5 s, then 3 s
         rc = c.proc.returncode
-    finally:
-        c.kill()
     assert rc == 130 and one_line(err) == "pa10-dnbs launch: FAILED: interrupted (SIGINT)", (rc, err)
     stopped = re.search(r"launch: stopped: ([^;\n]*)", out)
     codes = dict(kv.split("=") for kv in stopped.group(1).split())
