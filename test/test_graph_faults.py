@@ -89,8 +89,11 @@ def test_killed_controller_is_restarted_from_its_checkpoint(tmp_path, domain):
     err = np.abs(run.error_rad)
     assert m["torques_within_limits"] and m["all_finite"]
     assert err[3500:].max() < 0.02, err[3500:].max(axis=0)  # recovered: bounded errors after the restart
-    with Bag(bag) as b:
-        assert b.topics["/pa10/e1/effort"].count >= 3990
+    missed = outage[0][1] - outage[0][0] + 1   # steps the plant took without e1's answer (1 s of wall time each)
+    with Bag(bag) as b:   # every other step answered, whatever the restart took (a fixed 3990 failed past ~12 s)
+        count = b.topics["/pa10/e1/effort"].count
+    print(f"e1: {count} efforts recorded, {missed} steps without one")
+    assert count >= 4000 - missed, (count, missed)
     # every node said what happened on /diagnostics: the plant WARNs about e1's outage, and only e1's
     diag = _last_diagnostics(bag)
     assert {f"pa10/{node}/{j}" for node in ("plant", "joint_controller") for j in JOINT_NAMES} | {"pa10/reference"} \
@@ -98,7 +101,7 @@ def test_killed_controller_is_restarted_from_its_checkpoint(tmp_path, domain):
     for j in JOINT_NAMES:
         st = diag[f"pa10/plant/{j}"]
         values = {kv.key: kv.value for kv in st.values}
-        timeouts = outage[0][1] - outage[0][0] + 1 if j == "e1" else 0
+        timeouts = missed if j == "e1" else 0
         assert int(values["effort_timeouts"]) == timeouts, (j, values)
         assert int(st.level) == (1 if j == "e1" else 0), (j, st.level, st.message)  # WARN / OK
     assert int(diag["pa10/reference"].level) == 0

@@ -21,9 +21,10 @@ pytestmark = pytest.mark.graph  # starts ROS processes
 def _introspect(domain_id: int, timeout: float = 20.0, joints: str = "", settle_s: float = 1.0) -> dict:
     """Each controller's (subscribed, published) topic sets, from a probe node in its own process."""
     env = {**os.environ, "PYTHONPATH": str(REPO)}
+    # + 90 s: the probe's imports and rclpy.init took 35 s with 12 busy loops on the 2 cores (discovery: 0.25-1 s)
     out = subprocess.run([sys.executable, str(REPO / "test" / "graph_probe.py"), str(domain_id), str(timeout), joints,
                           str(settle_s)],
-                         capture_output=True, text=True, env=env, timeout=timeout + 30, check=True)
+                         capture_output=True, text=True, env=env, timeout=timeout + 90, check=True)
     return {j: (set(v["subscribes"]), set(v["publishes"])) for j, v in json.loads(out.stdout).items()}
 
 

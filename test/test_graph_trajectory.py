@@ -22,7 +22,7 @@ from pa10_dnbs.trajectory_file import read_trajectory
 
 pytestmark = pytest.mark.graph  # starts ROS processes
 
-DURATION_S = 9.0
+DURATION_S = 12.0  # the example (4 s) must end 0.2 s before the run: room for a sender starved by a busy host
 EXAMPLE = REPO / "config" / "trajectory_example.yaml"
 RMS_LIMIT_RAD = 1e-3
 SETTLE_S = 0.5  # the first 0.5 s of the trajectory are not counted
@@ -65,7 +65,7 @@ def test_a_trajectory_sent_while_running_is_tracked_and_wrong_ones_change_nothin
                    "--after-clock", "4.0", "--clock-gap", "0.3", "--wait", "240"], domain)
     # rev_e 13: one stamped to start at 100 s, after the run's end: refused, not "accepted ... then held"
     late = Proc([sys.executable, "-m", "pa10_dnbs.ros.trajectory_sender", EXAMPLE, "--stamp", "100",
-                 "--after-clock", "6.0", "--wait", "240"], domain)
+                 "--after-clock", "8.0", "--wait", "240"], domain)
     try:
         pids = la.node_pids()
         sender_rc = sender.wait(timeout=300)
@@ -81,11 +81,15 @@ def test_a_trajectory_sent_while_running_is_tracked_and_wrong_ones_change_nothin
     log = (out / "logs" / "reference.log").read_text()
     refused = [x for x in log.splitlines() if "TRAJECTORY refused" in x]
     assert [x.split(": ", 1)[0] for x in refused] == ["TRAJECTORY refused"] * 4, log
-    assert "unknown joint 'wrist_9'" in refused[0], refused
-    assert "points[2].positions of joint 's2' = 1.7 rad is beyond its limits" in refused[1], refused
-    assert "points[3].time_from_start = 2 s is not after points[2]'s 2.4 s" in refused[2], refused
-    assert ("it would start at step 100000 (t = 100.000 s), at or after the run's end at step 9000 (t = 9.000 s): "
-            "nothing of it would be followed") in refused[3], refused
+    # the sender's three in its order; the late one's whenever it came (two processes, each starved its own way
+    # on a busy host: no order between them)
+    late_ones = [x for x in refused if "at or after the run's end" in x]
+    ours = [x for x in refused if x not in late_ones]
+    assert "unknown joint 'wrist_9'" in ours[0], refused
+    assert "points[2].positions of joint 's2' = 1.7 rad is beyond its limits" in ours[1], refused
+    assert "points[3].time_from_start = 2 s is not after points[2]'s 2.4 s" in ours[2], refused
+    assert len(late_ones) == 1 and ("it would start at step 100000 (t = 100.000 s), at or after the run's end at step "
+                                    "12000 (t = 12.000 s): nothing of it would be followed") in late_ones[0], refused
     started = re.findall(r"TRAJECTORY accepted: 5 points, 6 knots from step (\d+) .* to step (\d+)", log)
     assert len(started) == 1, log
     start, end = int(started[0][0]), int(started[0][1])
@@ -96,8 +100,10 @@ def test_a_trajectory_sent_while_running_is_tracked_and_wrong_ones_change_nothin
     m = json.loads((out / "metrics.json").read_text())["trajectories_received"]
     assert m["trajectory_topic"] == "/pa10/trajectory" and m["trajectories_accepted"] == 1, m
     assert m["accepted"] == [{"start_step": start, "end_step": end, "points": 5, "knots": 6, "dropped_points": 0}], m
-    assert m["trajectories_refused"] == 4 and [r in x for r, x in zip(("wrist_9", "1.7 rad", "2.4 s", "run's end"),
-                                                                      m["refused_reasons"])] == [True] * 4, m
+    reasons = m["refused_reasons"]
+    assert m["trajectories_refused"] == 4 and [r in x for r, x in zip(
+        ("wrist_9", "1.7 rad", "2.4 s"), [x for x in reasons if "run's end" not in x])] == [True] * 3, m
+    assert sum("run's end" in x for x in reasons) == 1, m
     note = next(x for x in (out / "report.md").read_text().splitlines() if x.startswith("- reference: "))
     assert note.startswith(f"- reference: eq. 27; from step {start} (t = {start / 1000:.3f} s) the trajectory "
                            f"received on `/pa10/trajectory` (5 points), its last point reached at step {end} "
