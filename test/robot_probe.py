@@ -12,9 +12,9 @@ NaN), ``dup`` (names the arm's first joint a second time, last, at 5 rad), ``bey
 0.2 rad beyond its upper limit: past the joint controllers' guard margin), ``rival`` (a second publisher on the
 command topic from the start: another commander; it sends nothing), ``frozen`` (every state from STEP on stamped
 as state STEP), ``back`` (the stamps restart from the first one's at STEP: a restarted simulation), ``skip`` (the
-stamps from STEP on one step later: 2 steps after the previous one), ``nowait`` (from STEP on, states without waiting for
-commands: STEP + 1's right behind STEP's, then every 1 ms of wall time), ``none`` (no fault). Prints ``COMMAND <step> <stamp ns> <efforts>``
-for every command it takes and ends on SIGINT or SIGTERM with ``PROBE END``.
+stamps from STEP on one step later: 2 steps after the previous one), ``nowait`` (from STEP on, states without
+waiting for commands: STEP + 1's right behind STEP's, then every 1 ms of wall time), ``none`` (no fault). Prints
+``COMMAND <step> <stamp ns> <efforts>`` for every command it takes and ends on SIGINT or SIGTERM with ``PROBE END``.
 """
 import os
 import signal

@@ -151,18 +151,16 @@ def test_a_sender_that_outlives_the_graph_leaves_no_shared_memory_behind(tmp_pat
     shm_before = shm_files()
     sender = Proc([sys.executable, "-m", "pa10_dnbs.ros.trajectory_sender", EXAMPLE, EXAMPLE, "--after-clock", "1.0",
                    "--clock-gap", "1000", "--wait", "240"], domain)
-    la = Launcher("--mode", "lockstep", "--controller", "pid", "--duration", 10.0, "--out", tmp_path / "run",
-                  domain_id=domain)
-    try:
-        pids = la.node_pids()
-        sender.wait_for(r"^sent .* at /clock", timeout=120)  # matched: it maps the reference node's port
-        rc = la.wait(timeout=300)
-        assert sender.proc.poll() is None, sender.output  # still waiting for its second file's /clock
-        sender.interrupt()
-        sender_rc = sender.wait(timeout=60)
+
+    def still_waiting():   # after the run: it had matched the graph (it maps the reference node's port) and waits
+        sender.wait_for(r"^sent .* at /clock", timeout=10)   # for its second file's /clock
+        assert sender.proc.poll() is None, sender.output
+
+    try:   # the sender stopped by a Ctrl-C once the run has ended
+        rc, la, pids, sender_rc = Launcher.beside(sender, "--mode", "lockstep", "--controller", "pid", "--duration",
+                                                  10.0, "--out", tmp_path / "run", domain_id=domain, then=still_waiting)
     finally:
         sender.kill()
-        la.kill()
     assert rc == 0, la.output
     assert sender_rc == 130, sender.output
     assert_no_leftovers([*pids.values(), sender.proc.pid], shm_before)
