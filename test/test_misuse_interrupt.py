@@ -78,12 +78,13 @@ def wait_until(predicate, what: str, timeout_s: float = 60.0, proc: Command | No
         time.sleep(0.02)
 
 
-def completed_trials(db: Path) -> int:
+def stored_trials(db: Path, state: str = "COMPLETE") -> int:
+    """How many trials of the tune's SQLite storage are in ``state`` (0 before the schema is made)."""
     if not db.exists():
         return 0
     try:
         with sqlite3.connect(f"file:{db}?mode=ro", uri=True, timeout=5) as con:
-            return con.execute("SELECT count(*) FROM trials WHERE state = 'COMPLETE'").fetchone()[0]
+            return con.execute("SELECT count(*) FROM trials WHERE state = ?", (state,)).fetchone()[0]
     except sqlite3.OperationalError:   # the schema is still being made
         return 0
 
@@ -96,15 +97,16 @@ def one_line(err: str) -> str:
     return lines[0]
 
 
-def tune(out: Path, trials: int = 3, held_out: int = 1, jobs: int = 2) -> Command:
-    """A short tune: one 0.5 s training run per trial, two trials per batch; held-out: 16 runs per seed."""
-    return Command("tune", "--controller", "pid", "--trials", trials, "--duration", 0.5, "--scenarios", "nominal",
-                   "--held-out-seeds", held_out, "--jobs", jobs, "--no-progress", "--out", out)
+def tune(out: Path, trials: int = 3, held_out: int = 1, jobs: int = 2, duration_s: float = 0.5) -> Command:
+    """A short tune: one ``duration_s`` training run per trial, two trials per batch; held-out: 16 runs per seed.
+    (A 0.5 s PID run takes 0.02-0.05 s of wall time, a 20 s one 0.6-0.9 s.)"""
+    return Command("tune", "--controller", "pid", "--trials", trials, "--duration", duration_s, "--scenarios",
+                   "nominal", "--held-out-seeds", held_out, "--jobs", jobs, "--no-progress", "--out", out)
 
 
-def resumes(out: Path, trials: int = 3, held_out: int = 1) -> None:
+def resumes(out: Path, trials: int = 3, held_out: int = 1, duration_s: float = 0.5) -> None:
     """The same command runs to its end: the study holds ``trials`` trials, the reports are written."""
-    c = tune(out, trials, held_out)
+    c = tune(out, trials, held_out, duration_s=duration_s)
     try:
         _, err = c.proc.communicate(timeout=300)
     finally:
@@ -126,7 +128,7 @@ def test_tune_ctrl_c_at_start_up_says_nothing_was_kept(tmp_path):
     assert re.fullmatch(r"pa10-dnbs: interrupted (while starting, before any work: nothing changed|before the first "
                         r"trial; no trial kept: run the same command to start|while checking its input, before any "
                         r"trial: nothing written or changed; run the same command again)", line), line
-    assert completed_trials(tmp_path / "t" / "tune.db") == 0
+    assert stored_trials(tmp_path / "t" / "tune.db") == 0
 
 
 def test_tune_ctrl_c_while_it_checks_its_input_says_nothing_was_written(monkeypatch, capsys, tmp_path):
@@ -150,14 +152,14 @@ def test_tune_ctrl_c_mid_run_keeps_the_completed_trials_says_how_many_and_resume
     out = tmp_path / "t"
     c = tune(out)
     try:
-        wait_until(lambda: completed_trials(out / "tune.db") >= 1, "a completed trial", proc=c)
+        wait_until(lambda: stored_trials(out / "tune.db") >= 1, "a completed trial", proc=c)
         c.ctrl_c()
         rc, seconds, err = c.end()
     finally:
         c.kill()
     line = one_line(err)
     assert rc == 130 and seconds < BOUND_S, (rc, seconds)
-    n = completed_trials(out / "tune.db")
+    n = stored_trials(out / "tune.db")
     if n < 3:   # the Ctrl-C came during the trials (else, on a slow machine, after them: the next test's case)
         assert line == (f"pa10-dnbs: interrupted: kept {n} completed trial{'s' * (n != 1)} (of --trials 3) in "
                         f"{out / 'tune.db'}; run the same command to resume"), line
@@ -169,7 +171,7 @@ def test_tune_ctrl_c_during_the_held_out_runs_keeps_the_trials_and_the_same_comm
     out = tmp_path / "t"
     c = tune(out, trials=1, held_out=2)   # 1 trial (1 run), then 2 x 8 x 2 held-out runs: a second or more
     try:
-        wait_until(lambda: completed_trials(out / "tune.db") >= 1, "the trial completed", proc=c)
+        wait_until(lambda: stored_trials(out / "tune.db") >= 1, "the trial completed", proc=c)
         time.sleep(0.2)
         c.ctrl_c()
         rc, seconds, err = c.end()
@@ -183,11 +185,13 @@ def test_tune_ctrl_c_during_the_held_out_runs_keeps_the_trials_and_the_same_comm
 
 
 def test_tune_second_ctrl_c_ends_at_once_and_leaves_nothing(tmp_path):
+    """The first Ctrl-C lets the trials in flight finish (20 s runs: 0.6 s or more of wall time here), the second
+    one, 0.15 s later, ends it at once. (With 0.5 s runs the three trials could all be done 0.3 s after the pool
+    started, on CI: the first Ctrl-C then ended the command before the second.)"""
     out = tmp_path / "t"
-    c = tune(out)
+    c = tune(out, held_out=0, duration_s=20.0)
     try:
-        wait_until(lambda: len(child_pids(c.proc.pid)) == 2, "two pool workers", proc=c)
-        time.sleep(0.3)
+        wait_until(lambda: stored_trials(out / "tune.db", "RUNNING") >= 1, "a trial in flight", proc=c)
         c.ctrl_c()
         time.sleep(SECOND_PRESS_S)
         c.ctrl_c()
@@ -197,7 +201,8 @@ def test_tune_second_ctrl_c_ends_at_once_and_leaves_nothing(tmp_path):
     lines = [ln for ln in err.splitlines() if ln.strip()]
     assert rc == 130 and seconds < 3.0, (rc, seconds, err)
     assert "Traceback" not in err and 1 <= len(lines) <= 2 and lines[-1].startswith("pa10-dnbs: interrupted"), err
-    resumes(out)   # whatever the second Ctrl-C cut short, the storage still opens and the tune completes
+    resumes(out, held_out=0, duration_s=20.0)   # whatever the second Ctrl-C cut short, the storage still opens and
+    #                                            the tune completes
 
 
 def test_study_ctrl_c_at_start_up_and_before_a_run_ends_stops_the_workers_and_writes_nothing(tmp_path):
@@ -386,7 +391,7 @@ def test_equal_budget_ctrl_c_mid_tune_exits_130_with_the_tunes_line_and_the_same
     c = Command("--controllers", "pid", "--trials", 2, "--scenarios", "nominal", "--duration", 0.5,
                 "--held-out-seeds", 1, "--jobs", 2, "--out", out, script="scripts/equal_budget.py")
     try:
-        wait_until(lambda: completed_trials(out / "pid" / "tune.db") >= 1, "a completed pid trial", proc=c)
+        wait_until(lambda: stored_trials(out / "pid" / "tune.db") >= 1, "a completed pid trial", proc=c)
         c.ctrl_c()
         rc, seconds, err = c.end()
     finally:
