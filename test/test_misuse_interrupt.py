@@ -169,8 +169,8 @@ def test_tune_ctrl_c_mid_run_keeps_the_completed_trials_says_how_many_and_resume
 
 def test_tune_ctrl_c_during_the_held_out_runs_keeps_the_trials_and_the_same_command_finishes(tmp_path):
     out = tmp_path / "t"
-    c = tune(out, trials=1, held_out=2)   # 1 trial (1 run), then 2 x 8 x 2 held-out runs: a second or more
-    try:
+    c = tune(out, trials=1, held_out=2, duration_s=3.0)   # 1 trial (1 run), then 2 x 8 x 2 held-out 3 s runs: 0.1 s
+    try:                                                     # of wall time or more each, 1.6 s or more in all
         wait_until(lambda: stored_trials(out / "tune.db") >= 1, "the trial completed", proc=c)
         time.sleep(0.2)
         c.ctrl_c()
@@ -181,7 +181,7 @@ def test_tune_ctrl_c_during_the_held_out_runs_keeps_the_trials_and_the_same_comm
     assert one_line(err) == (f"pa10-dnbs: interrupted after the trials (1 kept in {out / 'tune.db'}), before the "
                              "held-out runs and reports were all written: run the same command to finish them")
     assert not (out / "tune.json").exists()
-    resumes(out, trials=1, held_out=2)
+    resumes(out, trials=1, held_out=2, duration_s=3.0)
 
 
 def test_tune_second_ctrl_c_ends_at_once_and_leaves_nothing(tmp_path):
