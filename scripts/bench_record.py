@@ -7,7 +7,8 @@ One JSON file per benchmark in ``benchmarks/`` (``--save-record FILE`` of the be
 - ``date_utc``: when it started, ISO 8601 in UTC to the second; ``wall_s``: how long it ran [s];
 - ``command``: the command line as run (relative to the checkout), ``git_commit`` and ``git_dirty``
   (tracked files other than benchmarks/ changed against that commit), both taken when it started;
-- ``machine``: ``nproc`` (usable CPUs), ``model_name`` (/proc/cpuinfo), ``python``;
+- ``machine``: ``nproc`` (usable CPUs), ``model_name`` (/proc/cpuinfo), ``python``, ``numeric_platform``
+  (pa10_dnbs/numeric_platform.py: the BLAS kernels and numpy SIMD loops, on which a result's last bits hold);
 - ``load_before`` and ``load_after``: the 1, 5 and 15 minute load averages (/proc/loadavg), the figures
   mean little on a busy machine;
 - ``figures``: the benchmark's own figures (names with their units).
@@ -30,6 +31,10 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from pa10_dnbs.numeric_platform import numeric_platform  # noqa: E402
+
 RECORDS = ROOT / "benchmarks"
 KEYS = ("benchmark", "date_utc", "wall_s", "command", "git_commit", "git_dirty", "machine", "load_before",
         "load_after", "figures")
@@ -44,7 +49,7 @@ def load_average() -> list[float]:
 
 
 def machine() -> dict:
-    """nproc (CPUs this process may use), the CPU's model name, the Python version."""
+    """nproc (CPUs this process may use), the CPU's model name, the Python version, the numeric platform."""
     model = "?"
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
@@ -53,7 +58,8 @@ def machine() -> dict:
                 break
     except OSError:
         pass
-    return {"nproc": len(os.sched_getaffinity(0)), "model_name": model, "python": platform.python_version()}
+    return {"nproc": len(os.sched_getaffinity(0)), "model_name": model, "python": platform.python_version(),
+            "numeric_platform": numeric_platform()}
 
 
 def _git(*args: str) -> str:

@@ -19,7 +19,9 @@ fingerprint differs from the file's. Typical use around a change that must not m
 config/default.yaml, is the compiled step where it builds (the line it prints says which). ``--kernel c``
 compared with ``--kernel numpy`` fingerprints shows that the kernel gives the reference's bits.
 
-Fingerprints depend on numpy's build and the CPU's SIMD paths (tanh): compare on one machine.
+Fingerprints depend on the numeric platform (pa10_dnbs/numeric_platform.py, printed first): the closed-loop
+scenarios on OpenBLAS's kernels (the plant's solve), all on numpy's build and SIMD loops. Compare on one
+machine, or set ``OPENBLAS_CORETYPE`` (and ``NPY_DISABLE_CPU_FEATURES``) to the other run's platform.
 """
 from __future__ import annotations
 
@@ -43,6 +45,7 @@ from pa10_dnbs.settings import replace_in  # noqa: E402
 from pa10_dnbs.controller_factory import dnbs_params  # noqa: E402
 from pa10_dnbs.core.dnbs_controller import DNBSControllers, Remedies  # noqa: E402
 from pa10_dnbs.core.reference import ReferenceSample  # noqa: E402
+from pa10_dnbs.numeric_platform import numeric_platform  # noqa: E402
 from pa10_dnbs.paths import share_path  # noqa: E402
 from pa10_dnbs.sim.closed_loop import Disturbances, simulate  # noqa: E402
 
@@ -143,6 +146,8 @@ def main() -> int:
                        help="compare with a file written by --save; exit 1 on a difference")
     ap.add_argument("--kernel", choices=KERNELS, default="auto", help="the DNBS step's kernel (dnbs.kernel)")
     args = ap.parse_args()
+    p = numeric_platform()
+    print(f"numeric platform: OpenBLAS {p['blas_core']} kernels, numpy {p['numpy']} SIMD {' '.join(p['numpy_simd'])}")
     if args.kernel == "auto":
         print(auto_kernel().line)
     prints = fingerprints(args.kernel)

@@ -1,0 +1,68 @@
+"""The numeric platform of this process: which BLAS kernels and which numpy SIMD loops its arithmetic runs on.
+
+A run's last bits hold on one platform, not across machines. The plant's forward dynamics go through LAPACK and
+BLAS (``np.linalg.solve``, ``inv``, ``@`` in plant/pybullet_plant.py), and OpenBLAS picks its kernels by CPU
+when it loads: on one AMD EPYC its ``SkylakeX`` (AVX-512) kernels give the PA10 main job a worst RMS of
+3.159710322586883e-05 rad, its ``Zen`` or ``Haswell`` kernels 3.159710322586797e-05 (``OPENBLAS_CORETYPE``,
+set before numpy loads, picks them). numpy's SIMD loops (``NPY_DISABLE_CPU_FEATURES`` switches them off) move
+the closed loop's bits too. The DNBS step avoids BLAS (core/ekf.py: fixed-order sums, no matmul): the banks'
+fingerprints (scripts/result_fingerprint.py) stay the same under either switch; the closed loop's do not.
+Records (scripts/bench_record.py) say the platform they were made on.
+"""
+from __future__ import annotations
+
+import ctypes
+from pathlib import Path
+
+import numpy as np
+
+#: The CPU flags (/proc/cpuinfo) an OpenBLAS core's kernels need, for the cores of x86-64 machines today.
+CORE_FLAGS = {
+    "Haswell": ("avx2", "fma"), "Zen": ("avx2", "fma"),
+    "SkylakeX": ("avx512f", "avx512cd", "avx512bw", "avx512dq", "avx512vl"),
+    "Cooperlake": ("avx512f", "avx512cd", "avx512bw", "avx512dq", "avx512vl", "avx512_bf16"),
+    "SapphireRapids": ("avx512f", "avx512cd", "avx512bw", "avx512dq", "avx512vl", "avx512_bf16", "amx_tile"),
+}
+_CORENAME_SYMBOLS = ("scipy_openblas_get_corename64_", "scipy_openblas_get_corename", "openblas_get_corename")
+
+
+def blas_core() -> str | None:
+    """The OpenBLAS core whose kernels numpy's BLAS runs here (``SkylakeX``, ``Zen``, ``Haswell``, ...); None
+    where numpy's BLAS is not an OpenBLAS this can ask."""
+    libs = Path(np.__file__).resolve().parent.parent / "numpy.libs"
+    for path in sorted(libs.glob("lib*openblas*.so*")):
+        lib = ctypes.CDLL(str(path))   # already loaded by numpy: the same library, not a second copy
+        for symbol in _CORENAME_SYMBOLS:
+            corename = getattr(lib, symbol, None)
+            if corename is not None:
+                corename.restype = ctypes.c_char_p
+                return corename().decode().strip()
+    return None
+
+
+def numpy_simd() -> list[str]:
+    """The SIMD extensions numpy found on this CPU and dispatches its loops to (``X86_V3``, ``X86_V4``, ...)."""
+    try:   # numpy's own np.show_runtime() reads the same two names
+        from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
+    except ImportError:
+        return []
+    return [name for name in __cpu_dispatch__ if __cpu_features__.get(name)]
+
+
+def numeric_platform() -> dict:
+    """``{"blas_core": ..., "numpy_simd": [...], "numpy": version}``: what a record's bits hold on."""
+    return {"blas_core": blas_core(), "numpy_simd": numpy_simd(), "numpy": np.__version__}
+
+
+def can_run_core(core: str, cpuinfo: str | None = None) -> bool:
+    """Whether this CPU has the flags OpenBLAS's ``core`` kernels need (``cpuinfo``: /proc/cpuinfo's text, read
+    when None); False for a core not in :data:`CORE_FLAGS`."""
+    if core not in CORE_FLAGS:
+        return False
+    if cpuinfo is None:
+        try:
+            cpuinfo = Path("/proc/cpuinfo").read_text()
+        except OSError:
+            return False
+    flags = next((line.split(":", 1)[1].split() for line in cpuinfo.splitlines() if line.startswith("flags")), [])
+    return all(flag in flags for flag in CORE_FLAGS[core])
