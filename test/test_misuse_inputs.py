@@ -12,6 +12,7 @@ import io
 import math
 import os
 import re
+import signal
 import subprocess
 import sys
 import time
@@ -274,6 +275,18 @@ def _wait_for_lock(out: Path | str, proc: subprocess.Popen, timeout_s: float = 1
         time.sleep(0.05)
 
 
+@contextlib.contextmanager
+def _paused(proc: subprocess.Popen):
+    """``proc`` stopped (SIGSTOP) while the block runs, then continued (SIGCONT): it keeps what it holds (its
+    lock) until the block is done, however fast the machine (a first run of 1-3 s of wall time against a second
+    copy's 0.5-0.7 s was 2-4x of room)."""
+    proc.send_signal(signal.SIGSTOP)
+    try:
+        yield
+    finally:
+        proc.send_signal(signal.SIGCONT)
+
+
 def _leftovers(marker: str) -> list[str]:
     """Processes whose command line names ``marker`` (a test's own folder): none may outlive a test."""
     found = []
@@ -295,8 +308,9 @@ def test_a_second_simulate_into_a_running_ones_out_is_refused_and_the_first_is_i
     first = _cli_process("simulate", "--controller", "pid", "--duration", "20", "--no-figures", "--out", out)
     try:
         _wait_for_lock(out, first)
-        r = run_cli("simulate", "--controller", "pid", "--duration", "0.2", "--no-figures", "--out", out,
-                    *(["--force"] if force else []))
+        with _paused(first):
+            r = run_cli("simulate", "--controller", "pid", "--duration", "0.2", "--no-figures", "--out", out,
+                        *(["--force"] if force else []))
         _assert_one_line(r.returncode, r.stdout, r.stderr, "in use by another run")
         stdout, stderr = first.communicate(timeout=300)
     finally:
@@ -324,8 +338,9 @@ def test_a_second_tune_into_one_out_at_once_is_refused(tmp_path):
                          "--held-out-seeds", "0", "--duration", "20", "--jobs", "1", "--out", out)
     try:
         _wait_for_lock(out, first)
-        r = run_cli("tune", "--controller", "pid", "--trials", "1", "--scenarios", "nominal", "--seeds", "1",
-                    "--held-out-seeds", "0", "--duration", "0.2", "--jobs", "1", "--out", out)
+        with _paused(first):
+            r = run_cli("tune", "--controller", "pid", "--trials", "1", "--scenarios", "nominal", "--seeds", "1",
+                        "--held-out-seeds", "0", "--duration", "0.2", "--jobs", "1", "--out", out)
         _assert_one_line(r.returncode, r.stdout, r.stderr, "in use by another run")
     finally:
         _ctrl_c(first)  # the tune stops, keeps its storage and drops its lock (and its lock file)
@@ -344,7 +359,8 @@ def test_a_second_tune_of_one_study_in_a_shared_storage_at_once_is_refused(tmp_p
     first = _cli_process(*args, "--duration", "20", "--out", tmp_path / "a")
     try:
         _wait_for_lock(study_lock_key(url, "pa10-pid"), first)
-        r = run_cli(*args, "--duration", "20", "--out", tmp_path / "b")
+        with _paused(first):
+            r = run_cli(*args, "--duration", "20", "--out", tmp_path / "b")
         _assert_one_line(r.returncode, r.stdout, r.stderr, f"--storage: study pa10-pid in {url} is being tuned by "
                                                             f"another run (pid {first.pid})")
         assert not (tmp_path / "b").exists()

@@ -206,8 +206,8 @@ def test_tune_second_ctrl_c_ends_at_once_and_leaves_nothing(tmp_path):
 
 
 def test_study_ctrl_c_at_start_up_and_before_a_run_ends_stops_the_workers_and_writes_nothing(tmp_path):
-    args = ("study", "--scenarios", "nominal,coulomb", "--controllers", "pid", "--seeds", 4, "--duration", 10,
-            "--jobs", 2, "--no-progress")
+    args = ("study", "--scenarios", "nominal,coulomb", "--controllers", "pid", "--seeds", 4, "--duration", 60,
+            "--jobs", 2, "--no-progress")   # 60 s runs: 2.7 s of wall time each here (10 s runs, 0.45 s, left 2x)
     c = Command(*args, "--out", tmp_path / "s0")
     try:
         time.sleep(0.3)
@@ -226,7 +226,7 @@ def test_study_ctrl_c_at_start_up_and_before_a_run_ends_stops_the_workers_and_wr
         c.kill()
     assert rc == 130 and seconds < BOUND_S, (rc, seconds)
     assert re.fullmatch(r"pa10-dnbs: interrupted after 0 of 8 runs; nothing written to \S+/s1: run the same "
-                        r"command again", one_line(err)), err   # 10 s runs: none finished 0.2 s in
+                        r"command again", one_line(err)), err   # none finished 0.2 s in
     assert sorted(p.name for p in tmp_path.iterdir()) == []   # no output, no partial folder
 
 
@@ -264,34 +264,35 @@ def _alive(pid: int) -> bool:
 
 def test_study_ctrl_c_mid_run_keeps_the_completed_runs_marked_partial_and_a_rerun_is_refused(tmp_path):
     out = tmp_path / "s"
-    args = ("study", "--scenarios", "nominal", "--controllers", "pid", "--seeds", 40, "--duration", 5, "--jobs", 2,
+    args = ("study", "--scenarios", "nominal", "--controllers", "pid", "--seeds", 120, "--duration", 5, "--jobs", 2,
             "--no-progress", "--out", out)
     c = Command(*args)
     try:
         wait_until(lambda: len(child_pids(c.proc.pid)) == 2, "two pool workers", proc=c)
-        time.sleep(1.0)   # a 5 s run takes ~0.2 s: some are complete, most are not
+        time.sleep(2.0)   # a 5 s run takes ~0.25 s (the first ends 0.57 s in): some are complete, most are not
+        #                   (the 120 take 15 s here; 40 took 5 s, all done in 1 s on a 5x faster machine)
         c.ctrl_c()
         rc, seconds, err = c.end()
     finally:
         c.kill()
     assert rc == 130 and seconds < BOUND_S, (rc, seconds)
-    m = re.fullmatch(r"pa10-dnbs: interrupted after (\d+) of 40 runs; kept their rows in (\S+)/study\.partial\.md "
+    m = re.fullmatch(r"pa10-dnbs: interrupted after (\d+) of 120 runs; kept their rows in (\S+)/study\.partial\.md "
                      r"\(and \.json\), marked partial: rerun with --force for the whole study", one_line(err))
-    assert m and 1 <= int(m[1]) < 40 and m[2] == str(out), err
+    assert m and 1 <= int(m[1]) < 120 and m[2] == str(out), err
     kept = int(m[1])
     assert sorted(p.name for p in out.iterdir()) == [".pa10-dnbs-output", "interrupted.json", "study.partial.json",
                                                       "study.partial.md"]
     data = json.loads((out / "study.partial.json").read_text())
-    assert data["interrupted"] is True and data["completed"] == kept == len(data["rows"]) and data["total"] == 40
-    assert len(data["missing"]) == 40 - kept and all(r["worst_rms_error_rad"] > 0 for r in data["rows"])
+    assert data["interrupted"] is True and data["completed"] == kept == len(data["rows"]) and data["total"] == 120
+    assert len(data["missing"]) == 120 - kept and all(r["worst_rms_error_rad"] > 0 for r in data["rows"])
     assert sorted(r["seed"] for r in data["rows"]) == sorted({r["seed"] for r in data["rows"]})
     md = (out / "study.partial.md").read_text()
-    assert "PARTIAL" in md and f"after {kept} of 40 runs" in md and md.count("| nominal | pid |") == kept
+    assert "PARTIAL" in md and f"after {kept} of 120 runs" in md and md.count("| nominal | pid |") == kept
     assert json.loads((out / "interrupted.json").read_text())["completed"] == kept
     r = subprocess.run(Command.argv(*args), cwd=REPO, capture_output=True, text=True, timeout=120)
     assert r.returncode == 2 and one_line(r.stderr) == (
         f"pa10-dnbs: error: output directory exists: {out} holds the partial outputs of an interrupted run "
-        f"({kept} of 40 done; use --force to replace it with a complete run)"), r.stderr
+        f"({kept} of 120 done; use --force to replace it with a complete run)"), r.stderr
     assert (out / "study.partial.json").read_text() == json.dumps(data, indent=2) + "\n"   # untouched
 
 
@@ -474,7 +475,10 @@ def test_the_robot_node_stopped_while_rclpy_loads_says_one_line(tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "pa10_dnbs.ros.mujoco_robot_node"], cwd=REPO,
                             env=dict(os.environ, PYTHONPATH=str(REPO)), stderr=subprocess.PIPE, text=True)
     try:
-        wait_until(lambda: _maps(proc.pid, "librcl"), "rclpy loading")   # inside the node's imports
+        t0 = time.monotonic()
+        while not _maps(proc.pid, "librcl"):   # inside the node's imports, which end 0.17-0.26 s later here:
+            assert proc.poll() is None and time.monotonic() - t0 < 60.0, "never loaded rclpy"   # polled each ms
+            time.sleep(0.001)
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=BOUND_S)
     finally:

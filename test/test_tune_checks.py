@@ -140,7 +140,7 @@ def test_one_study_is_tuned_once_however_its_sqlite_file_is_named(tmp_path):
     """A tune into --out A (its storage A/tune.db, no --storage) and one naming that file as its --storage,
     spelled otherwise (``//`` in the path): the second is refused while the first runs (both ran, and one ended
     in Optuna's UpdateFinishedTrialError traceback)."""
-    from test_misuse_inputs import _cli_process, _ctrl_c, _leftovers, _wait_for_lock
+    from test_misuse_inputs import _cli_process, _ctrl_c, _leftovers, _paused, _wait_for_lock
 
     from pa10_dnbs.tune.tuner import study_lock_key
 
@@ -150,7 +150,8 @@ def test_one_study_is_tuned_once_however_its_sqlite_file_is_named(tmp_path):
     try:
         _wait_for_lock(study_lock_key(f"sqlite:///{tmp_path / 'a' / 'tune.db'}", "pa10-pid"), first)
         url = f"sqlite:///{tmp_path}//a/tune.db"
-        r = run_cli(*args, "--storage", url, "--out", tmp_path / "b")
+        with _paused(first):
+            r = run_cli(*args, "--storage", url, "--out", tmp_path / "b")
         assert r.returncode == 2 and r.stderr == (f"pa10-dnbs: error: --storage: study pa10-pid in {url} is being "
                                                   f"tuned by another run (pid {first.pid}); wait for it to end (the "
                                                   "same command then resumes it)\n"), r.stderr
