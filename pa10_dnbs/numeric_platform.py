@@ -3,11 +3,13 @@
 A run's last bits hold on one platform, not across machines. The plant's forward dynamics go through LAPACK and
 BLAS (``np.linalg.solve``, ``inv``, ``@`` in plant/pybullet_plant.py), and OpenBLAS picks its kernels by CPU
 when it loads: on one AMD EPYC its ``SkylakeX`` (AVX-512) kernels give the PA10 main job a worst RMS of
-3.159710322586883e-05 rad, its ``Zen`` or ``Haswell`` kernels 3.159710322586797e-05 (``OPENBLAS_CORETYPE``,
-set before numpy loads, picks them). numpy's SIMD loops (``NPY_DISABLE_CPU_FEATURES`` switches them off) move
-the closed loop's bits too. The DNBS step avoids BLAS (core/ekf.py: fixed-order sums, no matmul): the banks'
-fingerprints (scripts/result_fingerprint.py) stay the same under either switch; the closed loop's do not.
-Records (scripts/bench_record.py) say the platform they were made on.
+3.159710322586883e-05 rad, its ``Haswell`` kernels 3.159710322586797e-05 (``OPENBLAS_CORETYPE``, set before
+numpy loads, picks them; ``Zen`` selects the same kernels and reports ``Haswell``). numpy's SIMD loops
+(``NPY_DISABLE_CPU_FEATURES`` switches them off) move the closed loop's bits too. The DNBS step avoids BLAS
+(core/ekf.py: fixed-order sums, no matmul): the banks' fingerprints (scripts/result_fingerprint.py) were the
+same here with the Haswell kernels and with numpy's AVX-512 loops off, the closed loop's were not; its
+``np.tanh`` still runs numpy's SIMD loops, so a CPU without AVX2 may give the banks other bits. Records
+(scripts/bench_record.py) say the platform they were made on.
 """
 from __future__ import annotations
 
@@ -23,21 +25,33 @@ CORE_FLAGS = {
     "Cooperlake": ("avx512f", "avx512cd", "avx512bw", "avx512dq", "avx512vl", "avx512_bf16"),
     "SapphireRapids": ("avx512f", "avx512cd", "avx512bw", "avx512dq", "avx512vl", "avx512_bf16", "amx_tile"),
 }
-_CORENAME_SYMBOLS = ("scipy_openblas_get_corename64_", "scipy_openblas_get_corename", "openblas_get_corename")
+_CORENAME_SYMBOLS = ("scipy_openblas_get_corename64_", "scipy_openblas_get_corename", "openblas_get_corename64_",
+                     "openblas_get_corename")
+_CONFIG_SYMBOLS = ("scipy_openblas_get_config64_", "scipy_openblas_get_config", "openblas_get_config64_",
+                   "openblas_get_config")
+
+
+def _openblas_text(symbols: tuple[str, ...]) -> str | None:
+    """What the first of ``symbols`` that numpy's bundled OpenBLAS exports returns (a C string); None where numpy
+    bundles no OpenBLAS this can open (a pip wheel's numpy.libs holds it; conda and distro builds do not)."""
+    libs = Path(np.__file__).resolve().parent.parent / "numpy.libs"
+    for path in sorted(libs.glob("lib*openblas*.so*")):
+        try:
+            lib = ctypes.CDLL(str(path))   # already loaded by numpy: the same library, not a second copy
+        except OSError:
+            continue
+        for symbol in symbols:
+            function = getattr(lib, symbol, None)
+            if function is not None:
+                function.restype = ctypes.c_char_p
+                return function().decode().strip()
+    return None
 
 
 def blas_core() -> str | None:
-    """The OpenBLAS core whose kernels numpy's BLAS runs here (``SkylakeX``, ``Zen``, ``Haswell``, ...); None
-    where numpy's BLAS is not an OpenBLAS this can ask."""
-    libs = Path(np.__file__).resolve().parent.parent / "numpy.libs"
-    for path in sorted(libs.glob("lib*openblas*.so*")):
-        lib = ctypes.CDLL(str(path))   # already loaded by numpy: the same library, not a second copy
-        for symbol in _CORENAME_SYMBOLS:
-            corename = getattr(lib, symbol, None)
-            if corename is not None:
-                corename.restype = ctypes.c_char_p
-                return corename().decode().strip()
-    return None
+    """The OpenBLAS core whose kernels numpy's BLAS runs here (``SkylakeX``, ``Haswell``, ...); None where
+    numpy's BLAS is not an OpenBLAS this can ask."""
+    return _openblas_text(_CORENAME_SYMBOLS)
 
 
 def numpy_simd() -> list[str]:
@@ -50,13 +64,22 @@ def numpy_simd() -> list[str]:
 
 
 def numeric_platform() -> dict:
-    """``{"blas_core": ..., "numpy_simd": [...], "numpy": version}``: what a record's bits hold on."""
-    return {"blas_core": blas_core(), "numpy_simd": numpy_simd(), "numpy": np.__version__}
+    """``{"blas_core": ..., "numpy_simd": [...], "numpy": version, "blas": OpenBLAS's build line}``: what a
+    record's bits hold on."""
+    return {"blas_core": blas_core(), "numpy_simd": numpy_simd(), "numpy": np.__version__,
+            "blas": _openblas_text(_CONFIG_SYMBOLS)}
+
+
+def platform_line(platform: dict) -> str:
+    """``platform`` (:func:`numeric_platform`) in one line."""
+    blas = " ".join((platform.get("blas") or "no OpenBLAS found").split()[:2])
+    return (f"{blas}, {platform['blas_core'] or 'unknown'} kernels; numpy {platform['numpy']}, SIMD "
+            f"{' '.join(platform['numpy_simd']) or 'baseline only'}")
 
 
 def can_run_core(core: str, cpuinfo: str | None = None) -> bool:
     """Whether this CPU has the flags OpenBLAS's ``core`` kernels need (``cpuinfo``: /proc/cpuinfo's text, read
-    when None); False for a core not in :data:`CORE_FLAGS`."""
+    when None); False for a core not in :data:`CORE_FLAGS` (older ones, Sandybridge say: not asked, not tried)."""
     if core not in CORE_FLAGS:
         return False
     if cpuinfo is None:

@@ -20,8 +20,9 @@ config/default.yaml, is the compiled step where it builds (the line it prints sa
 compared with ``--kernel numpy`` fingerprints shows that the kernel gives the reference's bits.
 
 Fingerprints depend on the numeric platform (pa10_dnbs/numeric_platform.py, printed first): the closed-loop
-scenarios on OpenBLAS's kernels (the plant's solve), all on numpy's build and SIMD loops. Compare on one
-machine, or set ``OPENBLAS_CORETYPE`` (and ``NPY_DISABLE_CPU_FEATURES``) to the other run's platform.
+scenarios on OpenBLAS's kernels (the plant's solve) and numpy's SIMD loops, the banks on numpy's tanh. ``--save``
+keeps the platform's line (key ``platform``) and ``--compare`` says when it differs: compare on one machine,
+or set ``OPENBLAS_CORETYPE`` (and ``NPY_DISABLE_CPU_FEATURES``) to the other run's platform.
 """
 from __future__ import annotations
 
@@ -45,7 +46,7 @@ from pa10_dnbs.settings import replace_in  # noqa: E402
 from pa10_dnbs.controller_factory import dnbs_params  # noqa: E402
 from pa10_dnbs.core.dnbs_controller import DNBSControllers, Remedies  # noqa: E402
 from pa10_dnbs.core.reference import ReferenceSample  # noqa: E402
-from pa10_dnbs.numeric_platform import numeric_platform  # noqa: E402
+from pa10_dnbs.numeric_platform import numeric_platform, platform_line  # noqa: E402
 from pa10_dnbs.paths import share_path  # noqa: E402
 from pa10_dnbs.sim.closed_loop import Disturbances, simulate  # noqa: E402
 
@@ -146,17 +147,21 @@ def main() -> int:
                        help="compare with a file written by --save; exit 1 on a difference")
     ap.add_argument("--kernel", choices=KERNELS, default="auto", help="the DNBS step's kernel (dnbs.kernel)")
     args = ap.parse_args()
-    p = numeric_platform()
-    print(f"numeric platform: OpenBLAS {p['blas_core']} kernels, numpy {p['numpy']} SIMD {' '.join(p['numpy_simd'])}")
+    platform = platform_line(numeric_platform())
+    print(f"numeric platform: {platform}")
     if args.kernel == "auto":
         print(auto_kernel().line)
     prints = fingerprints(args.kernel)
     for name, h in prints.items():
         print(f"{name:10s} {h}")
     if args.save:
-        args.save.write_text(json.dumps(prints, indent=1) + "\n")
+        args.save.write_text(json.dumps(dict(prints, platform=platform), indent=1) + "\n")
     if args.compare:
-        before = args.compare
+        before = dict(args.compare)
+        saved_on = before.pop("platform", None)
+        if saved_on is not None and saved_on != platform:
+            print(f"note: saved on another numeric platform ({saved_on}): the closed-loop scenarios can differ "
+                  f"with no change of the code")
         differ = sorted(n for n in prints.keys() | before.keys() if prints.get(n) != before.get(n))
         print(f"{len(prints)} scenarios, {len(differ)} differ" + (f": {', '.join(differ)}" if differ else ""))
         return 1 if differ else 0

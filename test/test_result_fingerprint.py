@@ -50,3 +50,27 @@ def test_the_compiled_kernel_gives_the_banks_fingerprint():
 
     p = dataclasses.replace(dnbs_params(build_settings(default_config_path())), remedies=fp.ALL_REMEDIES)
     assert fp.digest(fp.banks(p, steps=250, kernel="c")) == fp.digest(fp.banks(p, steps=250))
+
+
+def test_save_keeps_the_platform_and_compare_says_when_it_differs(tmp_path, monkeypatch, capsys):
+    """The closed-loop scenarios' bits differ between OpenBLAS kernels (pa10_dnbs/numeric_platform.py): a
+    comparison with a file saved on another platform says so, beside its verdict."""
+    import json
+    import sys
+
+    monkeypatch.setattr(fp, "fingerprints", lambda kernel: {"default": "ab", "bare": "cd"})
+    saved = tmp_path / "before.json"
+    monkeypatch.setattr(sys, "argv", ["result_fingerprint.py", "--kernel", "numpy", "--save", str(saved)])
+    assert fp.main() == 0
+    data = json.loads(saved.read_text())
+    assert data["platform"] == fp.platform_line(fp.numeric_platform()) and data["default"] == "ab"
+    monkeypatch.setattr(sys, "argv", ["result_fingerprint.py", "--kernel", "numpy", "--compare", str(saved)])
+    capsys.readouterr()
+    assert fp.main() == 0
+    assert "another numeric platform" not in capsys.readouterr().out
+    saved.write_text(json.dumps(dict(data, platform="OpenBLAS 0.3.31, Haswell kernels; numpy 2.4.6, SIMD X86_V3",
+                                     bare="ce")))
+    assert fp.main() == 1
+    out = capsys.readouterr().out
+    assert "note: saved on another numeric platform (OpenBLAS 0.3.31, Haswell kernels" in out
+    assert out.rstrip().endswith("2 scenarios, 1 differ: bare")

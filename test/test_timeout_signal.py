@@ -20,7 +20,7 @@ pytestmark = pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["timeout", "timeout -s INT"])
 def test_timeouts_signal_to_the_command_then_its_group_is_one_stop(tmp_path, sig):
     c = Command("study", "--scenarios", "nominal,payload_2kg", "--controllers", "pid", "--seeds", 20, "--duration",
-                30, "--jobs", 2, "--no-progress", "--out", tmp_path / "s")   # 40 runs of ~1.3 s: 26 s of work
+                30, "--jobs", 2, "--no-progress", "--out", tmp_path / "s")   # 40 runs of ~1.3 s: 26 s on 2 workers
     try:
         wait_until(lambda: len(child_pids(c.proc.pid)) == 2, "two pool workers", proc=c)
         time.sleep(2.0)   # some runs complete, never all (8 runs took 5.8 s here: too few for a 3x faster machine)
