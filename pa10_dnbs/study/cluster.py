@@ -14,6 +14,7 @@ CONNECT_TIMEOUT_S = 10.0   # to reach the scheduler and to see its first worker
 CLOSE_TIMEOUT_S = 5.0      # a failed or interrupted connection closes within this
 WORKERLESS_S = CONNECT_TIMEOUT_S   # runs out and the scheduler without a worker this long: the cluster is lost
 WATCH_S = 1.0              # how often a waiting executor asks the scheduler for its number of workers
+CLOSED_RETRY_S = 0.05      # a result's fetch whose connection closed is tried again after this
 
 
 class ClusterWatch:
@@ -34,15 +35,25 @@ class ClusterWatch:
         before its result was fetched is computed again, and with no worker left that wait never ended."""
         from distributed import CancelledError
         from distributed import TimeoutError as DaskTimeout
+        from distributed.comm.core import CommClosedError
         from distributed.scheduler import KilledWorker
 
         try:
+            closed_since = None
             while True:
                 try:
                     return fut.result(timeout=WATCH_S)
                 except DaskTimeout:
-                    check()        # a Ctrl-C noted meanwhile (interrupt.deferred)
-                    self.check()   # the scheduler gone, or no worker for WORKERLESS_S: ClusterLost
+                    pass
+                except CommClosedError as exc:   # a connection closed under the fetch: the scheduler's (its death
+                    now = time.monotonic()       # shows in the client's status within moments) or a worker's
+                    closed_since = now if closed_since is None else closed_since   # (Dask computes it again)
+                    if now - closed_since > CLOSE_TIMEOUT_S:
+                        raise self.lost(f"lost a connection to the cluster of {self.address} and could not fetch "
+                                        f"a run's result for {CLOSE_TIMEOUT_S:g} s ({exc})") from None
+                    time.sleep(CLOSED_RETRY_S)
+                check()        # a Ctrl-C noted meanwhile (interrupt.deferred)
+                self.check()   # the scheduler gone, or no worker for WORKERLESS_S: ClusterLost
         except CancelledError:
             raise self.lost(f"lost the connection to the scheduler {self.address} (its process ended, or its "
                             "host or the network went down)") from None
