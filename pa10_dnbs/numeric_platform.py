@@ -14,6 +14,7 @@ same here with the Haswell kernels and with numpy's AVX-512 loops off, the close
 from __future__ import annotations
 
 import ctypes
+import functools
 from pathlib import Path
 
 import numpy as np
@@ -31,20 +32,26 @@ _CONFIG_SYMBOLS = ("scipy_openblas_get_config64_", "scipy_openblas_get_config", 
                    "openblas_get_config")
 
 
-def _openblas_text(symbols: tuple[str, ...]) -> str | None:
-    """What the first of ``symbols`` that numpy's bundled OpenBLAS exports returns (a C string); None where numpy
-    bundles no OpenBLAS this can open (a pip wheel's numpy.libs holds it; conda and distro builds do not)."""
-    libs = Path(np.__file__).resolve().parent.parent / "numpy.libs"
-    for path in sorted(libs.glob("lib*openblas*.so*")):
+@functools.cache
+def _openblas():
+    """numpy's bundled OpenBLAS (a ctypes library: the one numpy loaded, not a second copy); None where numpy
+    bundles none this can open (a pip wheel's numpy.libs holds it; conda and distro builds do not)."""
+    for path in sorted((Path(np.__file__).resolve().parent.parent / "numpy.libs").glob("lib*openblas*.so*")):
         try:
-            lib = ctypes.CDLL(str(path))   # already loaded by numpy: the same library, not a second copy
+            return ctypes.CDLL(str(path))
         except OSError:
             continue
-        for symbol in symbols:
-            function = getattr(lib, symbol, None)
-            if function is not None:
-                function.restype = ctypes.c_char_p
-                return function().decode().strip()
+    return None
+
+
+def _openblas_text(symbols: tuple[str, ...]) -> str | None:
+    """What the first of ``symbols`` that numpy's OpenBLAS exports returns (a C string); None without one."""
+    lib = _openblas()
+    for symbol in symbols if lib is not None else ():
+        function = getattr(lib, symbol, None)
+        if function is not None:
+            function.restype = ctypes.c_char_p
+            return function().decode().strip()
     return None
 
 
@@ -89,3 +96,21 @@ def can_run_core(core: str, cpuinfo: str | None = None) -> bool:
             return False
     flags = next((line.split(":", 1)[1].split() for line in cpuinfo.splitlines() if line.startswith("flags")), [])
     return all(flag in flags for flag in CORE_FLAGS[core])
+
+
+def platform_env(recorded: dict, here: dict, cpuinfo: str | None = None) -> dict | None:
+    """The environment variables that run numpy on this machine (``here``: its :func:`numeric_platform`) on the
+    ``recorded`` platform: ``OPENBLAS_CORETYPE`` for its OpenBLAS core, ``NPY_DISABLE_CPU_FEATURES`` for numpy's
+    SIMD loops past the recorded ones (numpy refuses it beside ``NPY_ENABLE_CPU_FEATURES``); None where this CPU
+    cannot (it lacks a recorded core's or loop's instructions)."""
+    env = {}
+    if recorded["blas_core"] != here["blas_core"]:
+        if not can_run_core(recorded["blas_core"], cpuinfo):
+            return None
+        env["OPENBLAS_CORETYPE"] = recorded["blas_core"]
+    if not set(recorded["numpy_simd"]) <= set(here["numpy_simd"]):
+        return None
+    extra = [name for name in here["numpy_simd"] if name not in recorded["numpy_simd"]]
+    if extra:
+        env["NPY_DISABLE_CPU_FEATURES"] = " ".join(extra)
+    return env

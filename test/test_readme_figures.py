@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from pa10_dnbs import numeric_platform
+from pa10_dnbs.numeric_platform import numeric_platform, platform_env
 from script_module import load_script
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -125,23 +125,6 @@ print(json.dumps({"rms": rms, "platform": numeric_platform()}))
 """
 
 
-def platform_env(recorded: dict, here: dict, cpuinfo: str | None = None) -> dict | None:
-    """The environment that runs this machine's numpy on the ``recorded`` numeric platform (its OpenBLAS core,
-    numpy's SIMD loops past the recorded ones switched off), or None where this CPU cannot (it lacks a recorded
-    core's or loop's instructions)."""
-    env = {}
-    if recorded["blas_core"] != here["blas_core"]:
-        if not numeric_platform.can_run_core(recorded["blas_core"], cpuinfo):
-            return None
-        env["OPENBLAS_CORETYPE"] = recorded["blas_core"]
-    if not set(recorded["numpy_simd"]) <= set(here["numpy_simd"]):
-        return None
-    extra = [name for name in here["numpy_simd"] if name not in recorded["numpy_simd"]]
-    if extra:
-        env["NPY_DISABLE_CPU_FEATURES"] = " ".join(extra)
-    return env
-
-
 def test_a_record_of_another_platform_is_rerun_on_its_own_kernels_where_the_cpu_has_them():
     here = {"blas_core": "SkylakeX", "numpy_simd": ["X86_V3", "X86_V4", "AVX512_ICL"]}
     avx512 = "flags\t: fpu sse2 avx avx2 fma avx512f avx512cd avx512bw avx512dq avx512vl\n"
@@ -164,7 +147,7 @@ def test_the_recorded_main_jobs_error_is_the_in_process_runs_bit_for_bit():
     rec = json.loads((ROOT / "benchmarks" / "main_job.json").read_text())
     record, recorded = rec["figures"], rec["machine"].get("numeric_platform")
     assert recorded, "benchmarks/main_job.json does not say its numeric platform: record it again"
-    env = platform_env(recorded, numeric_platform.numeric_platform())   # None: this CPU cannot run it
+    env = platform_env(recorded, numeric_platform())   # None: this CPU cannot run it
     run_env = dict(os.environ, PYTHONPATH=str(ROOT), **(env or {}))
     if "NPY_DISABLE_CPU_FEATURES" in (env or {}):
         run_env.pop("NPY_ENABLE_CPU_FEATURES", None)   # numpy refuses both at once
