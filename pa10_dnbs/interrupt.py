@@ -12,10 +12,12 @@ A terminal's Ctrl-C sends SIGINT to every process of the foreground group: the c
   signal again within ``SAME_STOP_S`` is the same stop (``timeout`` signals the command, then its group).
   SIGTERM (``kill``, ``timeout``, a batch scheduler's cancel) is taken as a Ctrl-C (STOP_SIGNALS): no half-written
   output folder is left behind by it.
-- Code that talks to a database (the tune's Optuna storage) runs :func:`deferred`: there the first SIGINT is
-  only noted, and :func:`check` raises KeyboardInterrupt at the next safe point (the executor checks every
-  ``POLL_S``), never inside a SQL statement (an interrupted cursor prints SQLAlchemy's traceback and can leave
-  the connection unusable). Pure computation may run :func:`immediate` inside it.
+- Code that talks to a database (the tune's Optuna storage) or waits on a pool's or a cluster's futures runs
+  :func:`deferred`: there the first SIGINT is only noted, and :func:`check` raises KeyboardInterrupt at the next
+  safe point (the executor checks every ``POLL_S``), never inside a SQL statement (an interrupted cursor prints
+  SQLAlchemy's traceback and can leave the connection unusable) nor inside concurrent.futures' locks (one left
+  taken blocks the pool's manager thread, which the interpreter's exit then waits for forever). Pure computation
+  may run :func:`immediate` inside it.
 - The end: once a command's outputs are in place (:func:`outputs_written`) a Ctrl-C says where they are; after it
   returned (:func:`quiet_end`) one line; once the interpreter finalizes, SIGINT is ignored and the command's exit
   code stands (:func:`_hold_sigint_to_the_end`).

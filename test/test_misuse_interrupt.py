@@ -534,6 +534,31 @@ def test_an_interrupted_executor_stops_its_busy_workers_within_seconds():
     assert len(workers) == 2 and not [p for p in workers if p in child_pids()], workers
 
 
+def test_a_ctrl_c_while_the_pool_is_waited_on_is_raised_by_the_executor_not_inside_the_wait(monkeypatch):
+    """A Ctrl-C raised inside concurrent.futures' wait() can leave a future's lock taken by the main thread: the
+    pool's manager thread then blocks on it, and the interpreter's exit joins that thread forever (the hang of
+    ``timeout study``, once in a loaded fast tier). The command notes the Ctrl-C there; the executor raises it."""
+    from pa10_dnbs.interrupt import two_stage_sigint
+    from pa10_dnbs.study import executor
+
+    real_wait, waits = executor.wait, []
+
+    def wait_hit_by_a_ctrl_c(fs, timeout=None, return_when=None):
+        os.kill(os.getpid(), signal.SIGINT)   # as if it came while wait() held the futures' locks
+        for _ in range(10_000):               # the handler runs at one of these bytecodes
+            pass
+        waits.append("whole")
+        return real_wait(fs, timeout=timeout, return_when=return_when)
+
+    monkeypatch.setattr(executor, "wait", wait_hit_by_a_ctrl_c)
+    with two_stage_sigint(), pytest.raises(KeyboardInterrupt):
+        with executor.Executor(2) as ex:
+            pool = ex._pool
+            ex.run(time.sleep, {i: (0.2,) for i in range(4)})
+    assert waits == ["whole"]   # not interrupted halfway
+    assert not pool._executor_manager_thread or not pool._executor_manager_thread.is_alive()
+
+
 def test_a_refused_resume_names_each_differing_flag_and_what_to_do():
     stored = {"arm": "pa10", "controller": "pid", "params": ["kp"], "scenarios": ["nominal"], "seeds": [0],
               "duration_s": 2.0, "config_file": "/c.yaml", "seed": 0}

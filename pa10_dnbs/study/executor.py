@@ -14,6 +14,9 @@ killed again and again): :class:`ClusterLost`, one line naming ``--scheduler`` (
 killed (the OOM killer): :class:`PoolBroken`, naming ``--jobs``. The runs completed so far went to ``on_done``, so
 the command keeps them as for a Ctrl-C.
 
+A Ctrl-C (or SIGTERM) while runs are out is noted and raised at the wait loop's next check (every ``POLL_S``),
+never inside concurrent.futures' or Dask's own code: raised there, it can leave a future's lock held by this
+thread, and the pool's manager thread, blocked on that lock, then holds the interpreter's exit forever.
 Interrupted (Ctrl-C, an error) while runs are out: the local workers (which ignore SIGINT, pa10_dnbs/interrupt.py)
 are terminated and reaped within ``STOP_GRACE_S`` (then killed); a cluster's futures are cancelled, so the
 scheduler drops every run not started (a run already on a worker thread ends with that run, its result dropped).
@@ -28,7 +31,7 @@ from concurrent.futures.process import BrokenProcessPool
 from typing import Callable, Hashable
 
 from ..config_error import ConfigError
-from ..interrupt import POLL_S, check, immediate, pool_worker_start, sigint_blocked
+from ..interrupt import POLL_S, check, deferred, immediate, pool_worker_start, sigint_blocked
 from .cluster import CLOSE_TIMEOUT_S, ClusterWatch, connect
 from .lost_runs import ClusterLost, PoolBroken
 
@@ -108,69 +111,81 @@ class Executor:
                 on_done(key, value)
 
         if self._client is not None:
-            from distributed import as_completed as dask_completed
-
-            token = uuid.uuid4().hex[:12]
-            futures = {}
-            try:
-                for i, (key, args) in enumerate(tasks.items()):
-                    futures[self._client.submit(fn, *args, pure=False, key=f"{fn.__name__}-{token}-{i}")] = key
-                done = dask_completed(list(futures), loop=self._client.loop)
-                watch = ClusterWatch(self._client, self.scheduler)
-                while not done.is_empty():   # polled: a Ctrl-C noted meanwhile (interrupt.deferred) is raised here
-                    batch = done.next_batch(block=False)
-                    for fut in batch:
-                        finished(futures[fut], watch.result(fut, futures[fut]))
-                    check()
-                    if not batch:
-                        watch.check()   # the scheduler gone, or no worker for WORKERLESS_S: ClusterLost
-                        time.sleep(POLL_S / 2)
-            except BaseException as exc:
-                if self._client.status == "running" and not isinstance(exc, ClusterLost) or \
-                        isinstance(exc, ClusterLost) and exc.scheduler_alive:
-                    self._client.cancel(list(futures), force=True)   # the scheduler drops them: nothing left queued
-                raise
+            with deferred():   # a Ctrl-C raised by check() below, at a point where no lock is held
+                self._run_on_cluster(fn, tasks, finished)
         elif self._pool is not None:
-            futures, order, procs = {}, {}, dict(self._pool._processes or {})
-            try:
-                with sigint_blocked():   # the workers forked by the first submit must not see a Ctrl-C
-                    for key, args in tasks.items():
-                        try:
-                            fut = self._pool.submit(fn, *args)
-                        except BrokenProcessPool:   # a worker died between two calls of run (one idle)
-                            raise _pool_broken(self._pool, list(procs.values())) from None
-                        futures[fut], order[fut] = key, len(order)
-                pending = set(futures)
-                while pending:   # polled: a Ctrl-C noted meanwhile (interrupt.deferred) is raised here
-                    procs.update(self._pool._processes or {})   # forked as needed: their exit codes, if one dies
-                    done, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
-                    broken = False
-                    for fut in sorted(done, key=lambda f: order[f]):
-                        if isinstance(fut.exception(), BrokenProcessPool):
-                            broken = True   # the runs that did complete first (on_done)
-                        else:
-                            finished(futures[fut], fut.result())
-                    if broken:
-                        raise _pool_broken(self._pool, list(procs.values()))
-                    check()
-            except BaseException as exc:
-                procs.update(self._pool._processes or {})
-                if isinstance(exc, PoolBroken) or any(p.exitcode is not None for p in procs.values()):
-                    # broken (a worker gone: the group's SIGTERM of `timeout`): its manager thread fails every
-                    # future; none is cancelled under it (an InvalidStateError traceback in that thread)
-                    manager = getattr(self._pool, "_executor_manager_thread", None)
-                    if manager is not None:
-                        manager.join(STOP_GRACE_S)
-                else:
-                    for fut in futures:
-                        fut.cancel()
-                raise
+            with deferred():
+                self._run_in_pool(fn, tasks, finished)
         else:
             for key, args in tasks.items():
                 with immediate():   # pure computation: a Ctrl-C stops it at once
                     value = fn(*args)
                 finished(key, value)
         return results
+
+    def _run_on_cluster(self, fn: Callable, tasks: dict[Hashable, tuple], finished: Callable) -> None:
+        """Every task as a Dask future; ``finished(key, result)`` as each comes back (polled every ``POLL_S / 2``)."""
+        from distributed import as_completed as dask_completed
+
+        token = uuid.uuid4().hex[:12]
+        futures = {}
+        try:
+            for i, (key, args) in enumerate(tasks.items()):
+                futures[self._client.submit(fn, *args, pure=False, key=f"{fn.__name__}-{token}-{i}")] = key
+            done = dask_completed(list(futures), loop=self._client.loop)
+            watch = ClusterWatch(self._client, self.scheduler)
+            while not done.is_empty():   # polled: a Ctrl-C noted meanwhile (interrupt.deferred) is raised here
+                batch = done.next_batch(block=False)
+                for fut in batch:
+                    finished(futures[fut], watch.result(fut, futures[fut]))
+                check()
+                if not batch:
+                    watch.check()   # the scheduler gone, or no worker for WORKERLESS_S: ClusterLost
+                    time.sleep(POLL_S / 2)
+        except BaseException as exc:
+            if self._client.status == "running" and not isinstance(exc, ClusterLost) or \
+                    isinstance(exc, ClusterLost) and exc.scheduler_alive:
+                self._client.cancel(list(futures), force=True)   # the scheduler drops them: nothing left queued
+            raise
+
+    def _run_in_pool(self, fn: Callable, tasks: dict[Hashable, tuple], finished: Callable) -> None:
+        """Every task to the local pool; ``finished(key, result)`` in submission order within each poll (``POLL_S``)."""
+        futures, order, procs = {}, {}, dict(self._pool._processes or {})
+        try:
+            with sigint_blocked():   # the workers forked by the first submit must not see a Ctrl-C
+                for key, args in tasks.items():
+                    try:
+                        fut = self._pool.submit(fn, *args)
+                    except BrokenProcessPool:   # a worker died between two calls of run (one idle)
+                        check()   # ... by the group's signal of a stop noted meanwhile: the stop, not a lost worker
+                        raise _pool_broken(self._pool, list(procs.values())) from None
+                    futures[fut], order[fut] = key, len(order)
+            pending = set(futures)
+            while pending:   # polled: a Ctrl-C noted meanwhile (interrupt.deferred) is raised here
+                procs.update(self._pool._processes or {})   # forked as needed: their exit codes, if one dies
+                done, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
+                broken = False
+                for fut in sorted(done, key=lambda f: order[f]):
+                    if isinstance(fut.exception(), BrokenProcessPool):
+                        broken = True   # the runs that did complete first (on_done)
+                    else:
+                        finished(futures[fut], fut.result())
+                if broken:
+                    check()   # the workers ended by a stop's signal to the whole group (`timeout`): the stop
+                    raise _pool_broken(self._pool, list(procs.values()))
+                check()
+        except BaseException as exc:
+            procs.update(self._pool._processes or {})
+            if isinstance(exc, PoolBroken) or any(p.exitcode is not None for p in procs.values()):
+                # broken (a worker gone: the group's SIGTERM of `timeout`): its manager thread fails every
+                # future; none is cancelled under it (an InvalidStateError traceback in that thread)
+                manager = getattr(self._pool, "_executor_manager_thread", None)
+                if manager is not None:
+                    manager.join(STOP_GRACE_S)
+            else:
+                for fut in futures:
+                    fut.cancel()
+            raise
 
 
 def _pool_broken(pool, procs) -> PoolBroken:
