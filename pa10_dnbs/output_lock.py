@@ -58,17 +58,26 @@ def _sweep_stale(directory: Path) -> None:
             os.close(fd)
 
 
+def path_key(path: Path) -> str:
+    """The lock's name for ``path``: its resolved form; made absolute only, where links loop or the path is too
+    long to resolve (nothing can be read or written there: the command's own check says so)."""
+    try:
+        return str(Path(path).resolve())
+    except (OSError, RuntimeError):   # RuntimeError: Path.resolve's "Symlink loop from ..."
+        return os.path.abspath(path)
+
+
 def lock_output(path: Path, what: str = "output directory") -> None:
     """Hold the lock of ``path`` for this process, alone (again: no-op); raises OutputInUseError if another run
     holds it (writing or reading)."""
-    lock_key(str(Path(path).resolve()), f"{what} {path} is in use by another run (pid {{pid}}); wait for it to end or "
+    lock_key(path_key(path), f"{what} {path} is in use by another run (pid {{pid}}); wait for it to end or "
                                         "choose another path")
 
 
 def lock_input(path: Path, what: str = "bag") -> None:
     """Hold the lock of ``path`` for this process, shared with other readers (again: no-op); raises
     OutputInUseError if a run that writes it holds it."""
-    lock_key(str(Path(path).resolve()), f"{what} {path} is in use by another run (pid {{pid}}), which writes it; "
+    lock_key(path_key(path), f"{what} {path} is in use by another run (pid {{pid}}), which writes it; "
                                         "wait for it to end", shared=True)
 
 
@@ -134,9 +143,15 @@ def _upgrade(key: str, in_use: str) -> None:
     os.pwrite(fd, f"{os.getpid()} {key}\n".encode(), 0)
 
 
+def holds_output(path: Path) -> bool:
+    """Whether this process holds the lock of ``path`` alone (as a run writing it)."""
+    key = path_key(path)
+    return key in _held and key not in _shared
+
+
 def release_output(path: Path) -> None:
     """Drop the lock of ``path`` if this process holds it (its lock file is removed)."""
-    release_key(str(Path(path).resolve()))
+    release_key(path_key(path))
 
 
 def release_key(key: str) -> None:

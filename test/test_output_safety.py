@@ -315,3 +315,93 @@ def test_an_output_given_up_removes_the_folders_above_it_that_it_made(tmp_path):
     with atomic_output_dir(tmp_path / "deep" / "a" / "b", force=False) as tmp:
         (tmp / "whole.txt").write_text("done\n")
     assert (tmp_path / "deep" / "a" / "b" / "whole.txt").is_file()
+
+
+def test_a_folder_made_at_out_while_the_run_goes_on_is_left_as_it_was(tmp_path):
+    """Something else makes --out (or swaps the folder --force was to replace) after the run's first look: the
+    end of the run moved it aside and deleted it (a user's notes lost, exit 0). Now it is left as it was, and the
+    finished outputs go to a visible sibling that the one-line error names."""
+    import os
+
+    from pa10_dnbs.report.outputs import OutputExistsError, atomic_output_dir, check_output_dir
+
+    def notes(folder: Path) -> Path:
+        folder.mkdir()
+        (folder / "notes.txt").write_text("mine\n")
+        return folder
+
+    cases = {"made before the last look": "before", "made while the outputs are written": "inside",
+             "a previous output swapped for a folder of the user's": "swapped"}
+    for i, when in enumerate(cases.values()):
+        out = tmp_path / f"out{i}"
+        if when == "swapped":
+            _simulate(out)
+        check_output_dir(out, force=True)   # the command's first look (simulate: before its runs)
+        if when == "swapped":
+            out.rename(tmp_path / f"moved{i}")
+        if when in ("before", "swapped"):
+            notes(out)
+        with pytest.raises(OutputExistsError, match="created by something else while this run went on") as err:
+            with atomic_output_dir(out, force=True) as tmp:
+                (tmp / "report.md").write_text("the run's\n")
+                if when == "inside":
+                    notes(out)
+        kept = tmp_path / f"out{i}.finished-{os.getpid()}"
+        assert str(kept) in str(err.value) and "\n" not in str(err.value)
+        assert _tree(out) == {"notes.txt": b"mine\n"}, when
+        assert (kept / "report.md").read_text() == "the run's\n", when
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]   # no hidden copy left
+
+
+def test_an_out_the_system_cannot_look_at_is_one_line(tmp_path):
+    """A path longer than the system takes, below a link to nothing, or through a loop of links: Errno lines
+    (exit 1, a dangling parent only after the whole run) or a RuntimeError traceback; now refused up front."""
+    (tmp_path / "dangling").symlink_to(tmp_path / "nowhere" / "dir")
+    (tmp_path / "loop1").symlink_to(tmp_path / "loop2")
+    (tmp_path / "loop2").symlink_to(tmp_path / "loop1")
+    for out, words in ((tmp_path / "dangling" / "x", ("symbolic link to", "does not exist")),
+                       (tmp_path / ("b/" * 3000), ("File name too long",)),
+                       (tmp_path / "loop1" / "x", ("a loop of symbolic links",))):
+        _refused(run_cli("simulate", "--controller", "pid", *TINY, "--out", out), "--out", *words)
+    _refused(run_cli(*TUNE, "--controller", "pid", "--out", tmp_path / "loop1"), "--out", "a loop of symbolic links")
+    r = run_cli(*TUNE, "--controller", "pid", "--out", tmp_path / "t", "--storage", f"sqlite:///{tmp_path}/loop1")
+    assert r.returncode == 2 and "Traceback" not in r.stderr and "--storage" in r.stderr, r.stderr
+    r = run_cli("analyse", tmp_path / "loop1", "--out", tmp_path / "a", "--no-figures")
+    assert r.returncode == 2 and "no such bag (a symbolic link to nothing, or a loop of links)" in r.stderr, r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dangling", "loop1", "loop2"]
+
+
+def _as_a_user(*args) -> subprocess.CompletedProcess:
+    """``pa10-dnbs ARGS`` in a process without root's power over file modes (setpriv drops it), as a user runs it."""
+    import os
+    import shutil
+
+    drop = []
+    if os.geteuid() == 0:
+        if shutil.which("setpriv") is None:
+            pytest.skip("root, and no setpriv to drop root's override of file modes")
+        drop = ["setpriv", "--bounding-set=-dac_override,-dac_read_search",
+                "--inh-caps=-dac_override,-dac_read_search"]
+    return subprocess.run([*drop, sys.executable, "-m", "pa10_dnbs.cli", *map(str, args)], capture_output=True,
+                          text=True, timeout=120, cwd=REPO)
+
+
+def test_folders_a_user_cannot_search_or_write_are_handled(tmp_path):
+    """An --out folder without permissions: "[Errno 13] Permission denied" (exit 1), now one line naming --out.
+    A previous output made read-only, replaced with --force: the old copy was left as a hidden .NAME.old-PID."""
+    shut = tmp_path / "shut"
+    shut.mkdir(mode=0o000)
+    try:
+        for args in (("simulate", "--controller", "pid", *TINY, "--out", shut, "--force"),
+                     ("simulate", "--controller", "pid", *TINY, "--out", shut / "sub"),
+                     (*TUNE, "--controller", "pid", "--out", shut)):
+            r = _as_a_user(*args)
+            assert r.returncode == 2 and r.stderr.count("\n") == 1 and "--out" in r.stderr, r.stderr
+            assert "Permission denied" in r.stderr and "Traceback" not in r.stderr, r.stderr
+    finally:
+        shut.chmod(0o755)
+    previous = _simulate(tmp_path / "previous")
+    previous.chmod(0o555)
+    r = _as_a_user("simulate", "--controller", "pid", *TINY, "--out", previous, "--force")
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["previous", "shut"]

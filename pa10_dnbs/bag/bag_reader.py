@@ -103,7 +103,8 @@ class Bag:
 
 def _bag_dir(path: Path) -> Path:
     if not path.exists():
-        raise BagError(f"{path}: no such bag (the path does not exist)")
+        raise BagError(f"{path}: no such bag (" + ("a symbolic link to nothing, or a loop of links)" if path.is_symlink()
+                                                   else "the path does not exist)"))
     if path.is_file():
         if path.suffix == ".mcap" and (path.parent / "metadata.yaml").is_file():
             return path.parent

@@ -4,7 +4,10 @@ Files go to a temporary sibling directory that is renamed into place only
 when everything was written; an existing directory is replaced only with
 ``force``, and only if it is empty or a previous pa10-dnbs output (it holds
 OUTPUT_MARK); never the current directory, its parents, the root, or a path
-that is, holds or lies in one of the run's inputs (check_output_dir).
+that is, holds or lies in one of the run's inputs (check_output_dir). A folder
+that something else makes at ``out`` while the run goes on is left as it was:
+the finished outputs go to ``<out>.finished-<pid>`` beside it, and the
+one-line error says so.
 
 matplotlib (about 0.25 s to import) is loaded only when figures are drawn: the output checks every command
 makes first, a run without figures (``--no-figures``) and the CLI never load it.
@@ -25,7 +28,7 @@ import yaml
 from ..interrupt import deferred, on_second_sigint, outputs_written
 from ..json_text import json_text
 from ..kinematics.urdf_chain import UrdfChain
-from ..output_lock import lock_output, release_output
+from ..output_lock import holds_output, lock_output, path_key, release_output
 from ..output_mark import OUTPUT_MARK, OUTPUT_MARK_TEXT, is_previous_output
 from ..refused import Refused
 from ..run_data import RunData
@@ -57,14 +60,55 @@ def tune_files(out: Path, storage: str | None) -> frozenset[str]:
     journals): what a tune's DIR may hold when it resumes."""
     if not storage or not storage.startswith("sqlite:///"):
         return TUNE_FILES
-    file = Path(storage[len("sqlite:///"):]).resolve()
-    if file.parent != Path(out).resolve():
+    file = Path(path_key(storage[len("sqlite:///"):]))
+    if file.parent != Path(path_key(out)):
         return TUNE_FILES
     return TUNE_FILES | {file.name + end for end in ("", "-journal", "-wal", "-shm")}
 
 
 def check_output_dir(out: Path, force: bool, flag: str = "--out", inputs: dict | None = None,
                      resume: frozenset[str] | None = None) -> None:
+    """:func:`_check_output_dir`; a path the system cannot look at (too long, a folder that cannot be searched,
+    a loop of symbolic links) is refused in one line naming ``flag``, as the other refusals. Checked again by the
+    same run (its outputs about to be written) after something else made or swapped ``out`` meanwhile: not
+    refused, :func:`atomic_output_dir` then keeps the finished outputs beside it."""
+    key = os.path.abspath(out)
+    with _one_line(out, flag):
+        if not holds_output(out):   # a new run (a command called again in one process): a first look
+            _checked.pop(key, None)
+        elif key in _checked and _identity(out) != _checked[key]:
+            return
+        _check_output_dir(out, force, flag, inputs, resume)
+        _checked.setdefault(key, _identity(out))
+
+
+@contextmanager
+def _one_line(out: Path, flag: str):
+    """Within: an OSError (a path too long, a folder that cannot be searched) or a loop of symbolic links while
+    looking at ``out`` becomes an OutputExistsError, one line naming ``flag``."""
+    try:
+        yield
+    except OutputExistsError:
+        raise
+    except RuntimeError:   # Path.resolve's "Symlink loop from ..."
+        raise OutputExistsError(f"{flag}: {shown_path(out)}: a loop of symbolic links in the path") from None
+    except OSError as exc:
+        where = f" ({shown_path(exc.filename)})" if exc.filename and str(exc.filename) != str(out) else ""
+        raise OutputExistsError(f"{flag}: {shown_path(out)}: {exc.strerror or exc}{where}") from None
+
+
+#: abspath -> what was there ((device, inode) or None) when the run holding its lock first checked that folder
+_checked: dict[str, tuple[int, int] | None] = {}
+
+
+def shown_path(path, room: int = 120) -> str:
+    """``path`` as a message shows it: whole up to ``room`` characters, else its start and end around '...'."""
+    text = str(path)
+    return text if len(text) <= room else f"{text[:room // 2]}...{text[-(room // 2 - 3):]}"
+
+
+def _check_output_dir(out: Path, force: bool, flag: str, inputs: dict | None,
+                      resume: frozenset[str] | None) -> None:
     """Fail early, before any work, if ``out`` is in use by another run (output_lock.py: this process then
     holds it until the output is in place), exists and may not be replaced, or cannot be created. ``flag``:
     how the message names the output (a command passes its flag).
@@ -157,7 +201,7 @@ def check_apart(out: Path, inputs: dict, flag: str) -> None:
 
 def _both(path) -> set[Path]:
     """``path`` made absolute and normalised (os.path.abspath: links kept) and resolved (links followed)."""
-    return {Path(os.path.abspath(path)), Path(path).resolve()}
+    return {Path(os.path.abspath(path)), Path(path_key(path))}
 
 
 def config_files(path: Path) -> list[Path]:
@@ -237,6 +281,17 @@ def _sqlite_study_names(db: Path) -> list[str]:
 def check_creatable(path: Path, flag: str) -> None:
     """``path`` can be made: its nearest existing ancestor is a directory in which a folder can be created
     (tried with a temporary one, removed at once: a check that holds for root and read-only mounts too)."""
+    with _one_line(path, flag):
+        _check_creatable(path, flag)
+
+
+def _check_creatable(path: Path, flag: str) -> None:
+    for above in Path(os.path.abspath(path)).parents:   # the nearest existing folder above, links not followed
+        if os.path.lexists(above):
+            if above.is_symlink() and not above.exists():   # a link to nothing: the run's end could not make it
+                raise OutputExistsError(f"{flag}: {above} is a symbolic link to {os.readlink(above)}, which does "
+                                        f"not exist (output {shown_path(path)})")
+            break
     parent = Path(path).resolve().parent
     while not parent.exists():
         parent = parent.parent
@@ -254,34 +309,57 @@ def atomic_output_dir(out: Path, force: bool):
     ``out`` it made: an interrupted or failed command leaves nothing)."""
     out = Path(out)
     check_output_dir(out, force)
+    checked = _checked.get(os.path.abspath(out))   # what --force may replace: the folder this run checked first
     made = [p for p in (out.parent, *out.parent.parents) if not p.exists()][::-1]   # outermost first
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     except BaseException:
         _remove_empty(made)
-        release_output(out)
+        _release(out)
         raise
     try:
         yield tmp
         (tmp / OUTPUT_MARK).write_text(OUTPUT_MARK_TEXT)   # what --force may later replace (is_previous_output)
         old = None
-        if out.exists():
+        if os.path.lexists(out):
+            if checked is None or _identity(out) != checked:   # made (or swapped) by someone else meanwhile
+                raise _appeared(out, tmp)
             old = out.with_name(f".{out.name}.old-{os.getpid()}")
             out.rename(old)
         try:
             tmp.rename(out)
-        except BaseException:
+        except BaseException as exc:
             if old is not None:
                 old.rename(out)  # put the previous output back
+            elif isinstance(exc, OSError) and os.path.lexists(out):   # made in the instant since the look above
+                raise _appeared(out, tmp) from None
             raise
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         _remove_empty(made)
-        release_output(out)
+        _release(out)
         raise
     if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
+        _remove_tree(old)
+    _release(out)
+
+
+def _remove_tree(folder: Path) -> None:
+    """Remove ``folder`` (the output --force replaced), also where the user had made it or a folder in it
+    read-only (write permission given back to its owner first; what still resists is left)."""
+    def writable_parent(func, path, exc_info):
+        parent = os.path.dirname(path)
+        with contextlib.suppress(OSError):
+            os.chmod(parent, os.stat(parent).st_mode | 0o700)
+            func(path)
+
+    shutil.rmtree(folder, onerror=writable_parent)
+
+
+def _release(out: Path) -> None:
+    """The run is done with ``out``: its lock dropped and its first look forgotten."""
+    _checked.pop(os.path.abspath(out), None)
     release_output(out)
 
 
@@ -297,6 +375,24 @@ def finished_output_dir(out: Path, force: bool, main_file: str):
                              cleanup=lambda: shutil.rmtree(tmp, ignore_errors=True))
             yield tmp
         outputs_written(f"pa10-dnbs: interrupted as it finished: {out} is written whole ({out}/{main_file})")
+
+
+def _identity(path: Path) -> tuple[int, int] | None:
+    """(device, inode) of ``path`` itself (a link not followed), or None when nothing is there."""
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return None
+    return st.st_dev, st.st_ino
+
+
+def _appeared(out: Path, tmp: Path) -> OutputExistsError:
+    """``out`` was made while the run went on: left as it is; the finished outputs renamed from ``tmp`` to a
+    visible sibling, which the error names (they are whole: never deleted for a folder not ours)."""
+    kept = out.with_name(f"{out.name}.finished-{os.getpid()}")
+    tmp.rename(kept)
+    return OutputExistsError(f"--out: {out} was created by something else while this run went on; it is left as "
+                             f"it was, and this run's finished outputs are in {kept}")
 
 
 def _remove_empty(folders: list[Path]) -> None:

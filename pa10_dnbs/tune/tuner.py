@@ -106,7 +106,9 @@ def storage_key(url: str) -> str:
         return url
     from pathlib import Path
 
-    return f"sqlite:///{Path(db).expanduser().resolve()}"
+    from ..output_lock import path_key
+
+    return f"sqlite:///{path_key(Path(db).expanduser())}"
 
 
 def study_lock_key(url: str, study_name: str) -> str:
