@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .config_error import ConfigError  # re-exported: the CLI and the nodes catch it from here
+from .config_error import ConfigError, first_unknown  # ConfigError re-exported: the CLI and the nodes catch it here
 from .config_yaml import read_config_yaml
 from .file_path import PathProblem, file_or_folder
 
@@ -181,12 +181,13 @@ def _number(key: str, value: Any, spec: Num) -> float | int:
 
 
 def _check_mapping(key: str, value: Any, spec: dict) -> None:
-    """``value`` is a mapping whose keys are all in ``spec`` (ConfigError naming the first unknown key)."""
+    """``value`` is a mapping whose keys are all in ``spec`` (ConfigError naming the first unknown key, a key that
+    is not a name too: ``1:``, ``~:``)."""
     if not isinstance(value, dict):
         raise ConfigError(f"{key or '<root>'}: expected a mapping, got {type(value).__name__}")
-    unknown = sorted(set(value) - set(spec))
-    if unknown:
-        raise ConfigError(f"{key + '.' if key else ''}{unknown[0]}: unknown key "
+    unknown = first_unknown(value, spec)
+    if unknown is not None:
+        raise ConfigError(f"{key + '.' if key else ''}{unknown}: unknown key "
                           f"(allowed: {', '.join(sorted(spec))})")
 
 

@@ -20,3 +20,41 @@ class ConfigError(ValueError):
         if name and self.setting and text.startswith(self.setting):
             return name + text[len(self.setting):]
         return text
+
+
+SHORT_CHARS = 80   # a value shown in a message is cut to this many characters (the message stays one line)
+
+
+def short(value) -> str:
+    """``value``'s repr for a message, cut to SHORT_CHARS characters (a list of a million items stays readable)."""
+    try:
+        text = repr(value)
+    except ValueError:   # an int past Python's 4300 digits inside it
+        return "a value too long to show"
+    return text if len(text) <= SHORT_CHARS else text[:SHORT_CHARS - 3] + "..."
+
+
+def key_text(key) -> str:
+    """A mapping's key as a message names it: a name as it is; a key that is not one (YAML reads ``1:`` as a
+    number, ``~:`` as null, ``2024-01-01:`` as a date) as YAML writes it, said so: ``1 (a number, not a name)``."""
+    if isinstance(key, str):
+        return key
+    if key is None:
+        return "null (not a name)"
+    if isinstance(key, bool):
+        return f"{str(key).lower()} (a boolean, not a name)"
+    if isinstance(key, (int, float)):
+        return f"{short(key)} (a number, not a name)"
+    kind = "a date" if hasattr(key, "isoformat") else f"a {type(key).__name__}"
+    shown = key.isoformat() if hasattr(key, "isoformat") else short(key)
+    return f"{shown} ({kind}, not a name)"
+
+
+def first_unknown(keys, allowed) -> str | None:
+    """The first of ``keys`` not in ``allowed`` (names in order, then keys that are not names), as :func:`key_text`
+    names it; None when every key is allowed. Names and numbers are never compared (sorted() would raise)."""
+    unknown = [k for k in keys if not (isinstance(k, str) and k in allowed)]
+    if not unknown:
+        return None
+    names = sorted(k for k in unknown if isinstance(k, str))
+    return key_text(names[0] if names else unknown[0])

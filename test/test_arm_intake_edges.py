@@ -186,3 +186,16 @@ def test_a_pipe_is_not_taken_for_a_missing_file(tmp_path):
     os.mkfifo(tmp_path / "fifo")
     assert _refused(tmp_path / "fifo") == (f"--arm: {tmp_path / 'fifo'}: not a regular file (a pipe or a device): "
                                            f"give the path of a file")
+
+
+@pytest.mark.parametrize("extra, said", [
+    ("1: x\nfoo: y\n", "foo: unknown key"),
+    ("1: x\n", "1 (a number, not a name): unknown key"),
+    ("settings: {1: a, b: c}\n", "settings.b: unknown key"),
+    ("settings: {~: a}\n", "settings.null (not a name): unknown key"),
+])
+def test_a_key_that_is_not_a_name_is_one_line(tmp_path, extra, said):
+    """Keys of mixed types (``1:`` is a number to YAML) were a TypeError traceback from sorting the unknown ones."""
+    _write(tmp_path / "chain.urdf", _chain())
+    path = _write(tmp_path / "arm.yaml", "name: t\nurdf: chain.urdf\nsources: {urdf: test}\n" + extra)
+    assert _refused(path).startswith(f"{path}: {said} (allowed: ")

@@ -144,3 +144,20 @@ def test_a_configs_arm_path_is_relative_to_it_and_a_symlink_loop_is_one_line(tmp
     r = run_cli("arm", "--config", cfg)
     assert r.returncode == 2, r.stderr
     assert r.stderr.strip() == f"pa10-dnbs: error: arm: {tmp_path / 'a'}: a loop of symbolic links", r.stderr
+
+
+@pytest.mark.parametrize("text, said", [
+    ("1: 2\nfoo: 3\n", "foo: unknown key"),
+    ("~: 1\nfoo: 2\n", "foo: unknown key"),
+    ("1: 2\n", "1 (a number, not a name): unknown key"),
+    ("simulation: {1: 2, a: 3}\n", "simulation.a: unknown key"),
+    ("simulation: {~: 2}\n", "simulation.null (not a name): unknown key"),
+])
+def test_a_key_that_is_not_a_name_is_one_line(tmp_path, text, said):
+    """Keys of mixed types (YAML reads ``1:`` as a number, ``~:`` as null) were a TypeError traceback from sorting
+    them to name the first unknown one; a key that is not a name is named so."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(text)
+    r = run_cli("arm", "--config", cfg)
+    assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, r.stderr
+    assert r.stderr.startswith(f"pa10-dnbs: error: {said} (allowed: "), r.stderr

@@ -212,3 +212,21 @@ def test_mapping_velocities_for_some_points_only_is_refused():
     with pytest.raises(TrajectoryError, match=r"points\[1\].velocities: 0 values for 1 joint names \(given for "
                                               r"every point or none\)"):
         trajectory_from_mapping(doc)
+
+
+@pytest.mark.parametrize("change, said", [
+    (lambda d: d.update({1: "a", "foo": "b"}), "unknown key 'foo' (expected joint_names, points)"),
+    (lambda d: d.update({1: "a"}), "unknown key 1 (expected joint_names, points)"),
+    (lambda d: d["points"][0].update({1: "a", "foo": "b"}), "points[0]: unknown key 'foo' (expected positions"),
+    (lambda d: d["points"][0].update(time_from_start={1: 2, "foo": 3}),
+     "points[0].time_from_start: unknown key 'foo' (expected sec, nanosec)"),
+    (lambda d: d["points"][0].update(time_from_start={None: 2}),
+     "points[0].time_from_start: unknown key None (expected sec, nanosec)"),
+])
+def test_a_key_that_is_not_a_name_is_one_line(change, said):
+    """Keys of mixed types (YAML reads ``1:`` as a number) were a TypeError traceback from sorting them."""
+    doc = {"joint_names": ["a"], "points": [{"time_from_start": 1, "positions": [0]}]}
+    change(doc)
+    with pytest.raises(TrajectoryError) as err:
+        trajectory_from_mapping(doc)
+    assert str(err.value).startswith(said), str(err.value)

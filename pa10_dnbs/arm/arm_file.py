@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..config_error import first_unknown
 from ..config_yaml import read_yaml
 from ..kinematics.urdf_chain import UrdfChain
 from ..kinematics.urdf_tree import UrdfError
@@ -50,9 +51,9 @@ def _load(path_text: str) -> Arm:
 
 
 def _build(path: Path, raw: dict, bare: bool) -> Arm:
-    unknown = sorted(set(raw) - KEYS)
-    if unknown:
-        raise ArmError(f"{path}: {unknown[0]}: unknown key (allowed: {', '.join(sorted(KEYS))})")
+    unknown = first_unknown(raw, KEYS)
+    if unknown is not None:
+        raise ArmError(f"{path}: {unknown}: unknown key (allowed: {', '.join(sorted(KEYS))})")
     for key in ("name", "urdf"):
         if not isinstance(raw.get(key), str) or not raw[key]:
             raise ArmError(f"{path}: {key}: expected a non-empty string")

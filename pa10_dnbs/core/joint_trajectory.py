@@ -50,7 +50,7 @@ def _seconds(value, where: str) -> float:
     if isinstance(value, dict):
         unknown = set(value) - {"sec", "nanosec"}
         if unknown:
-            raise TrajectoryError(f"{where}: unknown key {sorted(unknown)[0]!r} (expected sec, nanosec)")
+            raise TrajectoryError(f"{where}: unknown key {_first(unknown)} (expected sec, nanosec)")
         if not value:
             raise TrajectoryError(f"{where}: {{}} gives no time (expected sec and nanosec)")
         sec, nanosec = value.get("sec", 0), value.get("nanosec", 0)
@@ -88,6 +88,13 @@ def _short(value) -> str:
     return text if len(text) <= 80 else text[:77] + "..."
 
 
+def _first(keys) -> str:
+    """The first of the unknown ``keys`` for a message (:func:`_short`): names in order, then keys that are not names
+    (YAML's ``1:``, ``~:``), never compared with a name (sorted() would raise)."""
+    names = sorted(k for k in keys if isinstance(k, str))
+    return _short(names[0] if names else next(iter(keys)))
+
+
 POINT_KEYS = ("positions", "velocities", "accelerations", "effort", "time_from_start")
 
 
@@ -100,7 +107,7 @@ def trajectory_from_mapping(data) -> JointTrajectory:
         raise TrajectoryError("a trajectory is a mapping with joint_names and points")
     unknown = set(data) - {"joint_names", "points", "header"}
     if unknown:
-        raise TrajectoryError(f"unknown key {sorted(unknown)[0]!r} (expected joint_names, points)")
+        raise TrajectoryError(f"unknown key {_first(unknown)} (expected joint_names, points)")
     if "header" in data and not isinstance(data["header"], dict):
         raise TrajectoryError(f"header: expected a mapping (stamp, frame_id) or none, got {_short(data['header'])}")
     names = data.get("joint_names")
@@ -116,7 +123,7 @@ def trajectory_from_mapping(data) -> JointTrajectory:
             raise TrajectoryError(f"{where}: expected a mapping with positions and time_from_start")
         unknown = set(pt) - set(POINT_KEYS)
         if unknown:
-            raise TrajectoryError(f"{where}: unknown key {sorted(unknown)[0]!r} (expected {', '.join(POINT_KEYS)})")
+            raise TrajectoryError(f"{where}: unknown key {_first(unknown)} (expected {', '.join(POINT_KEYS)})")
         if "time_from_start" not in pt:
             raise TrajectoryError(f"{where}.time_from_start: missing")
         times.append(_seconds(pt["time_from_start"], f"{where}.time_from_start"))
