@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .config_error import ConfigError, first_unknown  # ConfigError re-exported: the CLI and the nodes catch it here
+from .config_error import ConfigError, first_unknown, too_large  # ConfigError re-exported: the CLI and the nodes catch it here
 from .config_yaml import read_config_yaml
 from .file_path import PathProblem, file_or_folder
 
@@ -168,9 +168,13 @@ class MissingKeyError(ConfigError):
 def _number(key: str, value: Any, spec: Num) -> float | int:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ConfigError(f"{key}: expected a number, got {type(value).__name__} {value!r}")
-    if spec.integer and not (isinstance(value, int) or float(value).is_integer()):
+    try:
+        real = float(value)
+    except OverflowError:   # an int past the largest float
+        raise ConfigError(f"{key}: {too_large(value)}") from None
+    if spec.integer and not (isinstance(value, int) or real.is_integer()):
         raise ConfigError(f"{key}: expected an integer, got {value!r}")
-    if not math.isfinite(value):
+    if not math.isfinite(real):
         raise ConfigError(f"{key}: must be finite, got {value!r}")
     if spec.low is not None and (value <= spec.low if spec.strict else value < spec.low):
         rel = ">" if spec.strict else ">="

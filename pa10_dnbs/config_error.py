@@ -58,3 +58,11 @@ def first_unknown(keys, allowed) -> str | None:
         return None
     names = sorted(k for k in unknown if isinstance(k, str))
     return key_text(names[0] if names else unknown[0])
+
+
+def too_large(value: int) -> str:
+    """What is wrong with a whole number past the largest float (~1.8e308), by its size: ``str()`` of one past
+    Python's 4300 digits would raise."""
+    bits = abs(value).bit_length()
+    digits = len(str(abs(value))) if bits <= 14_000 else f"about {int(bits * 0.30103)}"
+    return f"a whole number of {digits} digits is too large (at most ~1.8e308)"

@@ -199,3 +199,15 @@ def test_a_key_that_is_not_a_name_is_one_line(tmp_path, extra, said):
     _write(tmp_path / "chain.urdf", _chain())
     path = _write(tmp_path / "arm.yaml", "name: t\nurdf: chain.urdf\nsources: {urdf: test}\n" + extra)
     assert _refused(path).startswith(f"{path}: {said} (allowed: ")
+
+
+@pytest.mark.parametrize("extra, where", [
+    ("torque_limit_nm: HUGE\nsources: {urdf: t, torque_limit_nm: t}\n", "torque_limit_nm[0]"),
+    ("coulomb_nm: [1, -HUGE, 1]\nsources: {urdf: t, coulomb_nm: t}\n", "coulomb_nm[1]"),
+    ("settings: {pid: {kp: HUGE}}\nsources: {urdf: t}\n", "settings.pid.kp"),
+])
+def test_a_whole_number_too_large_for_a_float_is_one_line(tmp_path, extra, where):
+    """An arm file's ``torque_limit_nm: <401 digits>`` was an OverflowError traceback."""
+    _write(tmp_path / "chain.urdf", _chain())
+    path = _write(tmp_path / "arm.yaml", "name: t\nurdf: chain.urdf\n" + extra.replace("HUGE", "9" * 401))
+    assert _refused(path) == f"{path}: {where}: a whole number of 401 digits is too large (at most ~1.8e308)"

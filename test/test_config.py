@@ -161,3 +161,13 @@ def test_a_key_that_is_not_a_name_is_one_line(tmp_path, text, said):
     r = run_cli("arm", "--config", cfg)
     assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, r.stderr
     assert r.stderr.startswith(f"pa10-dnbs: error: {said} (allowed: "), r.stderr
+
+
+@pytest.mark.parametrize("key", ["seed", "duration_s"])
+def test_a_whole_number_too_large_for_a_float_is_one_line(tmp_path, key):
+    """``seed: <401 digits>`` was an OverflowError traceback (math.isfinite of an int past the largest float)."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(f"extends: {default_config_path()}\nsimulation:\n  {key}: {'9' * 401}\n")
+    r = run_cli("arm", "--config", cfg)
+    assert r.returncode == 2 and r.stderr == (f"pa10-dnbs: error: simulation.{key}: a whole number of 401 digits is "
+                                              f"too large (at most ~1.8e308)\n"), r.stderr

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config_error import first_unknown
+from ..config_error import first_unknown, too_large
 from ..config_yaml import read_yaml
 from ..kinematics.urdf_chain import UrdfChain
 from ..kinematics.urdf_tree import UrdfError
@@ -201,6 +201,8 @@ def _vector(path: Path, key: str, value, n: int, strict: bool) -> np.ndarray:
         raise ArmError(f"{path}: {key}: expected {n} values (one per actuated joint), got {len(items)}")
     out = []
     for i, v in enumerate(items):
+        if isinstance(v, int) and not isinstance(v, bool) and abs(v) > sys.float_info.max:
+            raise ArmError(f"{path}: {key}[{i}]: {too_large(v)}")
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
             raise ArmError(f"{path}: {key}[{i}]: expected a finite number, got {v!r}")
         if (v <= 0.0) if strict else (v < 0.0):
