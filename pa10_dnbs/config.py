@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .config_error import ConfigError, first_unknown, too_large  # ConfigError re-exported: the CLI and the nodes catch it here
+from .config_error import ConfigError, first_unknown, short, too_large  # ConfigError: the CLI and nodes catch it here
 from .config_yaml import read_config_yaml
 from .file_path import PathProblem, file_or_folder
 
@@ -167,20 +167,20 @@ class MissingKeyError(ConfigError):
 
 def _number(key: str, value: Any, spec: Num) -> float | int:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ConfigError(f"{key}: expected a number, got {type(value).__name__} {value!r}")
+        raise ConfigError(f"{key}: expected a number, got {type(value).__name__} {short(value)}")
     try:
         real = float(value)
     except OverflowError:   # an int past the largest float
         raise ConfigError(f"{key}: {too_large(value)}") from None
     if spec.integer and not (isinstance(value, int) or real.is_integer()):
-        raise ConfigError(f"{key}: expected an integer, got {value!r}")
+        raise ConfigError(f"{key}: expected an integer, got {short(value)}")
     if not math.isfinite(real):
-        raise ConfigError(f"{key}: must be finite, got {value!r}")
+        raise ConfigError(f"{key}: must be finite, got {short(value)}")
     if spec.low is not None and (value <= spec.low if spec.strict else value < spec.low):
         rel = ">" if spec.strict else ">="
-        raise ConfigError(f"{key}: must be {rel} {spec.low:g}, got {value!r}")
+        raise ConfigError(f"{key}: must be {rel} {spec.low:g}, got {short(value)}")
     if spec.high is not None and (value >= spec.high if spec.high_strict else value > spec.high):
-        raise ConfigError(f"{key}: must be {'<' if spec.high_strict else '<='} {spec.high:g}, got {value!r}")
+        raise ConfigError(f"{key}: must be {'<' if spec.high_strict else '<='} {spec.high:g}, got {short(value)}")
     return int(value) if spec.integer else float(value)
 
 
@@ -215,24 +215,24 @@ def check_value(key: str, value: Any, spec: Any, n: int | None) -> Any:
         return (_number(key, value, spec.num),) * (1 if n is None else n)
     if isinstance(spec, tuple):
         if not isinstance(value, (list, tuple)) or len(value) != len(spec):
-            raise ConfigError(f"{key}: expected a list of {len(spec)} numbers, got {value!r}")
+            raise ConfigError(f"{key}: expected a list of {len(spec)} numbers, got {short(value)}")
         return tuple(_number(f"{key}[{i}]", v, s) for i, (v, s) in enumerate(zip(value, spec)))
     if isinstance(spec, Pair):
         if not isinstance(value, (list, tuple)) or len(value) != 2:
-            raise ConfigError(f"{key}: expected [t0, t1], got {value!r}")
+            raise ConfigError(f"{key}: expected [t0, t1], got {short(value)}")
         t0, t1 = (_number(f"{key}[{i}]", v, NONNEG) for i, v in enumerate(value))
         if t1 <= t0:
-            raise ConfigError(f"{key}: t1 must be greater than t0, got {value!r}")
+            raise ConfigError(f"{key}: t1 must be greater than t0, got {short(value)}")
         return (t0, t1)
     if isinstance(spec, Flag):
         if not isinstance(value, bool):
-            raise ConfigError(f"{key}: expected true or false, got {value!r}")
+            raise ConfigError(f"{key}: expected true or false, got {short(value)}")
         return value
     if isinstance(spec, Text):
         if not isinstance(value, str) or not value:
-            raise ConfigError(f"{key}: expected a non-empty string, got {value!r}")
+            raise ConfigError(f"{key}: expected a non-empty string, got {short(value)}")
         if spec.choices and value not in spec.choices:
-            raise ConfigError(f"{key}: must be one of {', '.join(spec.choices)}, got {value!r}")
+            raise ConfigError(f"{key}: must be one of {', '.join(spec.choices)}, got {short(value)}")
         return value
     raise TypeError(f"bad schema entry at {key}")  # pragma: no cover
 
@@ -277,7 +277,7 @@ def _read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict:
         return raw
     base = raw.pop("extends")
     if not isinstance(base, str) or not base:
-        raise ConfigError(f"{path}: extends: expected the path of a config file, got {base!r}")
+        raise ConfigError(f"{path}: extends: expected the path of a config file, got {short(base)}")
     try:
         _config_file(path.parent / base)
     except ConfigError as exc:

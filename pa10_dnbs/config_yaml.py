@@ -4,6 +4,10 @@
 - a key given twice in one mapping (PyYAML keeps the last silently, so a whole section could vanish):
   ``FILE:LINE: key 'k' given twice in one mapping (first at line N)`` (two ``<<`` merge keys too);
 - an integer of more than Python's 4300 digits, or nesting too deep for the parser: one line too;
+- aliases that repeat more than ``MAX_ALIASED_NODES`` nodes (a "billion laughs" document: nine levels of anchors,
+  each ten aliases of the one below, 600 bytes that a message's ``repr`` or ``str`` would expand to 10**9 strings
+  and exhaust memory): one line ``FILE: refused: its aliases (*name) expand it to N nodes ...``, counted on the
+  composed nodes before any object is built; ordinary anchors and aliases (``<<: *base``) read as before;
 - ``1e-3``, ``1e3``, ``2.5e3`` are numbers (floats), as in YAML 1.2 and JSON: PyYAML's YAML 1.1 float rule
   wants a dot and a signed exponent (``1.0e-3``) and reads the others as strings. Every value the 1.1 rule
   reads is read exactly as before (the extra rule is tried after it), so existing files keep their values.
@@ -31,8 +35,55 @@ class DuplicateKeyError(yaml.constructor.ConstructorError):
 _INT, _FLOAT, _STR = "tag:yaml.org,2002:int", "tag:yaml.org,2002:float", "tag:yaml.org,2002:str"
 
 
-class StrictConfigLoader(yaml.SafeLoader):
-    """``yaml.SafeLoader`` that refuses a key given twice in one mapping, reads ``1e-3`` as a float and leaves
+#: the nodes aliases may add to a document (each alias counted as the nodes of its anchor, expanded): far above
+#: any config, arm file or trajectory's own use of them, far below what exhausts memory when shown
+MAX_ALIASED_NODES = 1_000_000
+
+
+def expanded_nodes(root) -> tuple[int, int]:
+    """(the nodes of the composed document ``root`` with every alias expanded, the nodes written): counted once per
+    node (memoised), never built. An alias inside its own anchor (a document that holds itself) counts one."""
+    size: dict[int, int] = {}
+    open_nodes: set[int] = set()
+    stack = [(root, False)]
+    while stack:
+        node, closing = stack.pop()
+        children = node.value if isinstance(node, yaml.SequenceNode) else \
+            [n for pair in node.value for n in pair] if isinstance(node, yaml.MappingNode) else ()
+        if closing:
+            size[id(node)] = 1 + sum(size.get(id(c), 1) for c in children)  # not yet counted: an ancestor's alias
+            open_nodes.discard(id(node))
+        elif id(node) not in size and id(node) not in open_nodes:
+            open_nodes.add(id(node))
+            stack.append((node, True))
+            stack.extend((c, False) for c in children)
+    return size[id(root)], len(size)
+
+
+class BoundedSafeLoader(yaml.SafeLoader):
+    """``yaml.SafeLoader`` that refuses a document whose aliases expand past MAX_ALIASED_NODES
+    (:class:`AliasBombError`) before it is built (a file the user gives that is not a config: a bag's metadata)."""
+
+    aliased = False   # set when the document holds an alias (only then are its nodes counted)
+
+    def compose_node(self, parent, index):
+        if self.check_event(yaml.AliasEvent):
+            self.aliased = True
+        return super().compose_node(parent, index)
+
+    def get_single_data(self):
+        node = self.get_single_node()
+        if node is None:
+            return None
+        expanded, written = expanded_nodes(node) if self.aliased else (0, 0)
+        if expanded - written > MAX_ALIASED_NODES:
+            raise AliasBombError(f"refused: its aliases (*name) expand it to {expanded:.3g} nodes, from {written} "
+                                 f"written (aliases may add at most {MAX_ALIASED_NODES}: a YAML alias bomb?)")
+        return self.construct_document(node)
+
+
+class StrictConfigLoader(BoundedSafeLoader):
+    """:class:`BoundedSafeLoader` that refuses a key given twice in one mapping, reads ``1e-3`` as a float and leaves
     a sexagesimal ``1:30`` a string."""
 
     def resolve(self, kind, value, implicit):
@@ -89,6 +140,10 @@ class UnusableYamlError(yaml.YAMLError):
         self.problem = problem
 
 
+class AliasBombError(UnusableYamlError):
+    """A document whose aliases expand past MAX_ALIASED_NODES nodes."""
+
+
 def load_strict(text: str):
     """``text``'s YAML (or JSON) document read with :class:`StrictConfigLoader`; every fault a yaml.YAMLError
     (:class:`UnusableYamlError` for nesting too deep or an integer past Python's 4300-digit limit)."""
@@ -105,7 +160,7 @@ def yaml_error_line(path: Path, exc: yaml.YAMLError) -> str:
     """``FILE:LINE: not valid YAML: problem`` in one line (PyYAML's message spans several)."""
     mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
     where = f"{path}:{mark.line + 1}" if mark is not None else str(path)
-    if isinstance(exc, DuplicateKeyError):
+    if isinstance(exc, (DuplicateKeyError, AliasBombError)):
         return f"{where}: {exc.problem}"
     problem = getattr(exc, "problem", None) or (str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
     context = getattr(exc, "context", None)

@@ -25,7 +25,7 @@ import numpy as np
 import yaml
 
 from .config_error import ConfigError
-from .config_yaml import load_strict
+from .config_yaml import AliasBombError, load_strict
 from .core.joint_trajectory import JointTrajectory, TrajectoryError, check_trajectory, trajectory_from_mapping
 from .core.trajectory_reference import MAX_TIME_FROM_START_S, check_span
 from .run_size import say_note
@@ -82,6 +82,8 @@ def read_trajectory(path: Path, say=None) -> JointTrajectory:
                 say(f"trajectory {path}: {len(text) / 1e6:.0f} MB of YAML: the YAML reader takes about 2 s per MB "
                     f"(the same points as plain JSON read in about 0.1 s per MB)")
             data = load_strict(text)
+    except AliasBombError as exc:
+        raise TrajectoryError(exc.problem) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""

@@ -211,3 +211,21 @@ def test_a_whole_number_too_large_for_a_float_is_one_line(tmp_path, extra, where
     _write(tmp_path / "chain.urdf", _chain())
     path = _write(tmp_path / "arm.yaml", "name: t\nurdf: chain.urdf\n" + extra.replace("HUGE", "9" * 401))
     assert _refused(path) == f"{path}: {where}: a whole number of 401 digits is too large (at most ~1.8e308)"
+
+
+def test_a_yaml_alias_bomb_is_refused_before_it_is_built(tmp_path):
+    """``description:`` a "billion laughs" document (anchors, each ten aliases of the one below) was built and
+    str()-ed whole, taking all memory; now one line naming the arm file."""
+    from yaml_bomb import alias_bomb
+    _write(tmp_path / "chain.urdf", _chain())
+    path = _write(tmp_path / "arm.yaml", "name: t\nurdf: chain.urdf\nsources: {urdf: test}\ndescription:\n"
+                  + alias_bomb())
+    assert _refused(path).startswith(f"{path}: refused: its aliases (*name) expand it to 1.23e+07 nodes")
+
+
+def test_a_long_value_in_a_message_is_cut_to_one_readable_line(tmp_path):
+    """``coulomb_nm: [[0, 0, ... 10000 zeros]]`` was shown whole; now its first 80 characters."""
+    path = _arm_file(tmp_path, coulomb_nm=[[0] * 10000, 0, 0], sources={"urdf": "t", "coulomb_nm": "t"})
+    said = _refused(path)
+    assert said.startswith(f"{path}: coulomb_nm[0]: expected a finite number, got [0, 0,") and said.endswith("...")
+    assert len(said) < len(str(path)) + 130, said

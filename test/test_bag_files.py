@@ -534,3 +534,15 @@ def test_replay_of_only_unplayable_topics_is_refused_before_ros(tmp_path):
     _assert_clear_error(r, "--topics: nothing to play: /tf (tf2_msgs/msg/TFMessage: no Python message package "
                            "installed for it); /tf_static (")
     assert r.stdout == "" and len(r.stderr.strip().splitlines()) == 1, r.stdout + r.stderr
+
+
+def test_a_yaml_alias_bomb_in_metadata_is_refused_before_it_is_built(tmp_path):
+    """A "billion laughs" relative_file_paths was expanded by its error message's repr; now one line."""
+    from yaml_bomb import alias_bomb
+    bag = tmp_path / "bag"
+    bag.mkdir()
+    (bag / "metadata.yaml").write_text("rosbag2_bagfile_information:\n  relative_file_paths:\n"
+                                       + alias_bomb(indent="    "))
+    r = _analyse(bag, tmp_path)
+    _assert_clear_error(r, f"{bag}/metadata.yaml: refused: its aliases (*name) expand it to 1.23e+07 nodes")
+    assert len(r.stderr) < 300, r.stderr[:300]

@@ -171,3 +171,42 @@ def test_a_whole_number_too_large_for_a_float_is_one_line(tmp_path, key):
     r = run_cli("arm", "--config", cfg)
     assert r.returncode == 2 and r.stderr == (f"pa10-dnbs: error: simulation.{key}: a whole number of 401 digits is "
                                               f"too large (at most ~1.8e308)\n"), r.stderr
+
+
+ALIAS_BOMB_WORDS = "refused: its aliases (*name) expand it to 1.23e+07 nodes"
+
+
+def test_a_yaml_alias_bomb_is_refused_before_it_is_built(tmp_path):
+    """Nine levels of anchors, each ten aliases of the one below, were a 600-byte config whose error message
+    (``simulation.window_s: expected [t0, t1], got <repr>``) took all memory; now one line naming the file."""
+    from yaml_bomb import alias_bomb
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("simulation:\n  window_s:\n" + alias_bomb(indent="    "))
+    r = run_cli("arm", "--config", cfg)
+    assert r.returncode == 2 and len(r.stderr) < 300, r.stderr[:300]
+    assert r.stderr.startswith(f"pa10-dnbs: error: {cfg}: {ALIAS_BOMB_WORDS}"), r.stderr[:300]
+
+
+def test_ordinary_anchors_and_aliases_still_read(tmp_path):
+    """A merge key (``<<: *base``) and aliases of lists read as before; a document holding itself counts once."""
+    from pa10_dnbs.config_yaml import StrictConfigLoader, expanded_nodes, load_strict
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(f"extends: {default_config_path()}\nsimulation:\n  window_s: &w [1.0, 2.0]\n"
+                   "pid: {kp: &g [1, 2, 3, 4, 5, 6, 7], kd: *g}\n")
+    raw = load_config(cfg)
+    assert raw["simulation"]["window_s"] == [1.0, 2.0] and raw["pid"]["kd"] == [1, 2, 3, 4, 5, 6, 7]
+    assert load_strict("base: &b {x: 1}\nover: {<<: *b, y: 2}\n")["over"] == {"x": 1, "y": 2}
+    node = yaml.compose("a: &a [1, 2]\nb: [*a, *a]\n", Loader=StrictConfigLoader)
+    assert expanded_nodes(node) == (13, 7)   # (with the aliases expanded, written): each alias of a is 3 nodes
+    cyclic = load_strict("a: &a [*a]\n")
+    assert cyclic["a"][0] is cyclic["a"]
+
+
+def test_a_long_value_in_a_message_is_cut_to_one_readable_line(tmp_path):
+    """``{value!r}`` showed a value whole (a list of 10000 numbers: 60 kB on one line); now its first 80 characters."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(f"extends: {default_config_path()}\nsimulation:\n  window_s: {list(range(10000))}\n")
+    r = run_cli("arm", "--config", cfg)
+    assert r.returncode == 2 and r.stderr.startswith("pa10-dnbs: error: simulation.window_s: expected [t0, t1], got "
+                                                     "[0, 1, 2, 3,"), r.stderr[:300]
+    assert r.stderr.endswith("...\n") and len(r.stderr) < 200, r.stderr[:300]

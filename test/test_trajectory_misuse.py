@@ -185,3 +185,18 @@ def test_the_sender_refuses_a_whole_number_too_large_for_a_float(tmp_path, field
     f.write_text(_text("json", field))
     rc, err = _sender(f)
     _one_line(rc, err, "trajectory_sender: error:", f, "too large for a float")
+
+
+def test_a_yaml_alias_bomb_is_refused_before_it_is_built(tmp_path):
+    """A "billion laughs" ``effort:`` (anchors, each ten aliases of the one below) was expanded by the message's
+    repr, taking all memory; now one line naming the file."""
+    from yaml_bomb import alias_bomb
+    f = tmp_path / "bomb.yaml"
+    f.write_text("joint_names: [a]\npoints:\n  - time_from_start: 1\n    positions: [0]\n    effort:\n"
+                 + alias_bomb(indent="      "))
+    with pytest.raises(TrajectoryError, match=re.escape("refused: its aliases (*name) expand it to 1.23e+07 nodes")):
+        read_trajectory(f)
+    r = run_cli("simulate", "--trajectory", f, "--controller", "pid", "--duration", "0.02", "--no-figures",
+                "--out", tmp_path / "o")
+    _one_line(r.returncode, r.stderr[-300:], "--trajectory", f, "refused: its aliases")
+    assert len(r.stderr.splitlines()[-1]) < 300 and not (tmp_path / "o").exists()

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config_error import first_unknown, too_large
+from ..config_error import first_unknown, short, too_large
 from ..config_yaml import read_yaml
 from ..kinematics.urdf_chain import UrdfChain
 from ..kinematics.urdf_tree import UrdfError
@@ -175,7 +175,7 @@ def _check_link_name(path: Path, key: str, value) -> None:
         raise ArmError(f'{path}: {key}: expected a link name (a string), got the number {value!r}: quote it '
                        f'({key}: "{value}") if the URDF has a link named so')
     kind = {list: "a list", dict: "a mapping", bool: "a boolean"}.get(type(value), type(value).__name__)
-    raise ArmError(f"{path}: {key}: expected a link name (a string), got {kind}: {value!r}")
+    raise ArmError(f"{path}: {key}: expected a link name (a string), got {kind}: {short(value)}")
 
 
 MAX_FILE_NAME_BYTES = 200   # a joint's name in UTF-8: "<joint>.npz.tmp.npz" within the usual 255-byte limit
@@ -204,9 +204,9 @@ def _vector(path: Path, key: str, value, n: int, strict: bool) -> np.ndarray:
         if isinstance(v, int) and not isinstance(v, bool) and abs(v) > sys.float_info.max:
             raise ArmError(f"{path}: {key}[{i}]: {too_large(v)}")
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-            raise ArmError(f"{path}: {key}[{i}]: expected a finite number, got {v!r}")
+            raise ArmError(f"{path}: {key}[{i}]: expected a finite number, got {short(v)}")
         if (v <= 0.0) if strict else (v < 0.0):
-            raise ArmError(f"{path}: {key}[{i}]: must be {'> 0' if strict else '>= 0'}, got {v!r}")
+            raise ArmError(f"{path}: {key}[{i}]: must be {'> 0' if strict else '>= 0'}, got {short(v)}")
         out.append(float(v))
     return np.array(out)
 

@@ -17,7 +17,7 @@ from typing import Iterator
 
 import yaml
 
-from ..config_yaml import yaml_error_line
+from ..config_yaml import BoundedSafeLoader, yaml_error_line
 from ..refused import Refused
 from .metadata_check import check_metadata, read_summary
 
@@ -116,7 +116,7 @@ def _bag_dir(path: Path) -> Path:
 
 def _load_metadata(bag: Path) -> dict:
     try:
-        meta = yaml.safe_load((bag / "metadata.yaml").read_text(encoding="utf-8"))
+        meta = yaml.load((bag / "metadata.yaml").read_text(encoding="utf-8"), Loader=BoundedSafeLoader)
     except UnicodeDecodeError as exc:
         raise BagError(f"{bag}/metadata.yaml: not valid YAML: not UTF-8 text (byte {exc.start})") from None
     except yaml.YAMLError as exc:
