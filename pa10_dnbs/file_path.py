@@ -9,15 +9,16 @@ import stat
 from pathlib import Path
 
 SHOWN_PATH_CHARS = 200     # a longer path is shown shortened in a message (its head and tail, and its length)
+NOT_REGULAR = "not a regular file (a pipe or a device): give the path of a file"
 
 
 class PathProblem(ValueError):
     """A path names no readable file or folder; ``str()`` says why, naming the path; ``missing``: nothing is there
-    (``path``: the absolute path looked for)."""
+    (``path``: the absolute path looked for); ``special``: a pipe or a device is there (NOT_REGULAR)."""
 
-    def __init__(self, text: str, path: Path | None = None, missing: bool = False):
+    def __init__(self, text: str, path: Path | None = None, missing: bool = False, special: bool = False):
         super().__init__(text)
-        self.path, self.missing = path, missing
+        self.path, self.missing, self.special = path, missing, special
 
 
 def shown(path) -> str:
@@ -52,5 +53,5 @@ def file_or_folder(path) -> tuple[Path, bool]:
         why = "a loop of symbolic links" if exc.errno == errno.ELOOP else (exc.strerror or str(exc))
         raise PathProblem(f"{shown(absolute(path))}: {why}") from None
     if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
-        raise PathProblem(f"{shown(path)}: not a regular file (a pipe or a device): give the path of a file")
+        raise PathProblem(f"{shown(path)}: {NOT_REGULAR}", special=True)
     return absolute(path), stat.S_ISDIR(mode)

@@ -28,6 +28,7 @@ from .config_error import ConfigError
 from .config_yaml import AliasBombError, load_strict
 from .core.joint_trajectory import JointTrajectory, TrajectoryError, check_trajectory, trajectory_from_mapping
 from .core.trajectory_reference import MAX_TIME_FROM_START_S, check_span
+from .file_path import NOT_REGULAR, PathProblem, file_or_folder
 from .run_size import say_note
 
 SAY_YAML_BYTES = 1_000_000   # a YAML trajectory text longer than this is announced before it is read
@@ -71,9 +72,21 @@ def plain_json(text: str):
         return None
 
 
+def _not_special(path: Path) -> None:
+    """TrajectoryError for a pipe or a device, as --config and --arm refuse them (file_path.file_or_folder): a FIFO
+    without a writer blocked the read forever, /dev/zero filled memory. Other faults are the read's to say."""
+    try:
+        file_or_folder(path)
+    except PathProblem as exc:
+        if exc.special:
+            raise TrajectoryError(NOT_REGULAR) from None
+
+
 def read_trajectory(path: Path, say=None) -> JointTrajectory:
     """The file's JointTrajectory (shapes and types checked), or TrajectoryError / OSError; ``say(line)``: told
-    before a YAML text of over SAY_YAML_BYTES is read (the YAML reader is pure Python, ~2 s per MB)."""
+    before a YAML text of over SAY_YAML_BYTES is read (the YAML reader is pure Python, ~2 s per MB). A pipe or a
+    device (bash's ``<(...)`` too) is refused unread."""
+    _not_special(Path(path))
     try:
         text = Path(path).read_text(encoding="utf-8")
         data = plain_json(text)

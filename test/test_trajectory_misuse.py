@@ -4,9 +4,11 @@ sender); the sender's flags out of range (--stamp, --wait, the gaps, --namespace
 on the wire (refused as --trajectory refuses them), all before ROS starts; Ctrl-C while the sender waits: one
 line, exit 130. Tab-indented JSON reads as the same trajectory as the same content in YAML."""
 import json
+import os
 import re
 import subprocess
 import sys
+import threading
 import time
 
 import pytest
@@ -200,3 +202,32 @@ def test_a_yaml_alias_bomb_is_refused_before_it_is_built(tmp_path):
                 "--out", tmp_path / "o")
     _one_line(r.returncode, r.stderr[-300:], "--trajectory", f, "refused: its aliases")
     assert len(r.stderr.splitlines()[-1]) < 300 and not (tmp_path / "o").exists()
+
+
+def test_a_pipe_or_a_device_is_refused_unread(tmp_path):
+    """A FIFO with no writer blocked the read forever, /dev/zero read until MemoryError: refused as --config and
+    --arm refuse them, unread (bash's ``<(...)`` is a pipe too). A FIFO still read (old code) is unblocked here."""
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    said = []
+
+    def read():
+        try:
+            read_trajectory(fifo)
+        except TrajectoryError as exc:
+            said.append(str(exc))
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    reader.join(timeout=10)
+    if reader.is_alive():   # blocked opening the FIFO: a writer that closes at once ends the read
+        os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
+        reader.join(timeout=30)
+    assert said == ["not a regular file (a pipe or a device): give the path of a file"], said
+    for device in ("/dev/null", "/dev/zero"):
+        r = run_cli("simulate", "--trajectory", device, "--controller", "pid", "--duration", "0.02", "--no-figures",
+                    "--out", tmp_path / "o")
+        assert r.returncode == 2 and r.stderr.splitlines()[-1] == (f"pa10-dnbs: error: --trajectory {device}: not a "
+                                                                   f"regular file (a pipe or a device): give the path "
+                                                                   f"of a file"), r.stderr[-500:]
+        assert not (tmp_path / "o").exists()
