@@ -229,3 +229,15 @@ def test_a_long_value_in_a_message_is_cut_to_one_readable_line(tmp_path):
     said = _refused(path)
     assert said.startswith(f"{path}: coulomb_nm[0]: expected a finite number, got [0, 0,") and said.endswith("...")
     assert len(said) < len(str(path)) + 130, said
+
+
+@pytest.mark.parametrize("source, said", [(5, "5"), (["a", "b"], "['a', 'b']"), ({"x": 1}, "{'x': 1}")])
+def test_a_source_that_is_not_a_text_is_said_so(tmp_path, source, said):
+    """``sources: {torque_limit_nm: 5}`` was reported "missing"; a source given is told to be a text."""
+    path = _arm_file(tmp_path, torque_limit_nm=5, sources={"urdf": "t", "torque_limit_nm": source})
+    assert _refused(path) == f"{path}: sources.torque_limit_nm: must be a text (where the fact came from), got {said}"
+
+
+def test_a_blank_or_absent_source_is_still_missing(tmp_path):
+    path = _arm_file(tmp_path, torque_limit_nm=5, sources={"urdf": "t", "torque_limit_nm": " "})
+    assert _refused(path) == f"{path}: sources.torque_limit_nm: missing (every fact needs its source)"

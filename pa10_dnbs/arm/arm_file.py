@@ -103,7 +103,11 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
         raise ArmError(f"{path}: sources: expected a mapping of fact -> where its numbers came from")
     if not bare:
         for key in ("urdf",) + FACTS:
-            if key in raw and not (isinstance(sources.get(key), str) and sources[key].strip()):
+            source = sources.get(key)
+            if key in raw and source is not None and not isinstance(source, str):
+                raise ArmError(f"{path}: sources.{key}: must be a text (where the fact came from), got "
+                               f"{short(source)}")
+            if key in raw and not (isinstance(source, str) and source.strip()):
                 raise ArmError(f"{path}: sources.{key}: missing (every fact needs its source)")
     if "torque_limit_nm" in raw:
         torque = _vector(path, "torque_limit_nm", raw["torque_limit_nm"], n, strict=True)
