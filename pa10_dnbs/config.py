@@ -96,10 +96,16 @@ def _link_faults() -> dict:
 
 
 
+#: simulation.dt_s's lower bound [s]: 10 us, a 100 kHz loop, far below any arm's control period (1 ms on the presets)
+#: and above the 1 us a lockstep robot's stamps are matched within; 1e-300 made every duration a count of steps past
+#: counting, blamed on simulation.duration_s
+MIN_DT_S = 1e-5
+
+
 SCHEMA: dict[str, Any] = {
     "arm": Text(),  # a preset's name (urdf/<name>/) or the path of an arm file or URDF; resolved to its file
     "simulation": {
-        "dt_s": Num(0.0, high=0.1),
+        "dt_s": Num(MIN_DT_S, strict=False, high=0.1),
         "duration_s": POS,
         "window_s": Pair(),
         "seed": Num(0, strict=False, integer=True),

@@ -210,3 +210,21 @@ def test_a_long_value_in_a_message_is_cut_to_one_readable_line(tmp_path):
     assert r.returncode == 2 and r.stderr.startswith("pa10-dnbs: error: simulation.window_s: expected [t0, t1], got "
                                                      "[0, 1, 2, 3,"), r.stderr[:300]
     assert r.stderr.endswith("...\n") and len(r.stderr) < 200, r.stderr[:300]
+
+
+@pytest.mark.parametrize("dt", ["1.0e-300", "0", "9.0e-6"])
+def test_a_step_too_short_names_dt_s_not_the_duration(tmp_path, dt):
+    """``dt_s: 1e-300`` with ``--duration 0.3`` blamed "simulation.duration_s: 20 s is 2e+301 steps ..."; the step
+    is what is absurd: below 10 us (a 100 kHz loop) it is refused by its own key."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(f"extends: {default_config_path()}\nsimulation:\n  dt_s: {dt}\n")
+    r = run_cli("simulate", "--config", cfg, "--duration", "0.3", "--out", tmp_path / "o")
+    assert r.returncode == 2 and r.stderr.startswith("pa10-dnbs: error: simulation.dt_s: must be >= 1e-05, got "), \
+        r.stderr
+    assert len(r.stderr.splitlines()) == 1 and not (tmp_path / "o").exists()
+
+
+def test_a_step_of_10_us_is_accepted(tmp_path):
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(f"extends: {default_config_path()}\nsimulation:\n  dt_s: 1.0e-5\n")
+    assert build_settings(cfg).simulation.dt_s == 1e-5

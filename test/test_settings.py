@@ -44,7 +44,7 @@ def test_load_config_only_parses_and_checks_what_the_file_gives(tmp_path):
     with pytest.raises(ConfigError, match="no_such_arm"):
         build_settings(p)
     p.write_text("simulation: {dt_s: -1}\n")
-    with pytest.raises(ConfigError, match=r"^simulation\.dt_s: must be > 0, got -1$"):
+    with pytest.raises(ConfigError, match=r"^simulation\.dt_s: must be >= 1e-05, got -1$"):
         load_config(p)
     p.write_text("plant: {payload: 1}\n")
     with pytest.raises(ConfigError, match=r"^plant\.payload: unknown key"):

@@ -53,7 +53,7 @@ def test_every_parameter_has_a_unit_and_the_keys_range():
     assert "[N m s/rad]" in params["plant.viscous_nms_per_rad"].description
     assert "[kg m^2]" in params["plant.rotor_inertia_kgm2"].description
     assert "[rad/s]" in params["reference.frequency_rad_s"].description
-    assert (params["simulation.dt_s"].lo, params["simulation.dt_s"].hi) == (0.0, 0.1)
+    assert (params["simulation.dt_s"].lo, params["simulation.dt_s"].hi) == (1e-5, 0.1)
     assert (params["reference.preview_steps"].lo, params["reference.preview_steps"].hi) == (0, 100)
     assert "[N m/rad]" in params["pid.kp"].description
     assert "one of nan, inf, out_of_range" in params["faults.state.corrupt_kind"].description
