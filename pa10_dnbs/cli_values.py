@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -50,21 +51,28 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
+#: a number as the flags take it: ASCII digits, a dot, an exponent (float() also reads ``1_0`` as 10, ``١`` as 1 and
+#: surrounding spaces); inf and nan spellings too, refused as not finite
+_PLAIN_NUMBER = re.compile(r"[-+]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?|inf|infinity|nan)", re.IGNORECASE)
+_PLAIN_WHOLE = re.compile(r"[-+]?[0-9]+")
+
+
 def _number(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not _PLAIN_NUMBER.fullmatch(text):
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}")
+    v = float(text)
     if not math.isfinite(v):
         raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
     return v
 
 
 def _integer(text: str) -> int:
+    if not _PLAIN_WHOLE.fullmatch(text):
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}")
     try:
         return int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    except ValueError:   # past Python's 4300 digits
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {len(text)} digits") from None
 
 
 def seconds(text: str) -> float:

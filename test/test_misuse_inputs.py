@@ -551,3 +551,31 @@ def test_two_tunes_opening_one_new_storage_at_once_both_open_it(tmp_path):
     for out, err in outs:
         assert out.split("\n")[:-1] == ["ok"] * 8, out + err
     assert not [f for f in _lock_file("x").parent.glob("*.lock") if str(tmp_path) in f.read_text()]  # none left
+
+
+ODD_NUMBER_CASES = [
+    (["simulate", "--duration", "1_0"], "--duration: expected a number, got '1_0'"),          # ran 10 s
+    (["simulate", "--duration", "\u0661"], "--duration: expected a number, got '\u0661'"),    # Arabic-Indic 1: ran 1 s
+    (["simulate", "--duration", " 1"], "--duration: expected a number, got ' 1'"),
+    (["study", "--seeds", "1_0"], "--seeds: expected a whole number, got '1_0'"),
+    (["study", "--seeds", "\u0662"], "--seeds: expected a whole number, got '\u0662'"),
+    (["tune", "--controller", "pid", "--duration", "2_0.5"], "--duration: expected a number, got '2_0.5'"),
+]
+
+
+@pytest.mark.parametrize("words,said", ODD_NUMBER_CASES, ids=[" ".join(w) for w, _ in ODD_NUMBER_CASES])
+def test_a_number_in_an_odd_spelling_is_refused(tmp_path, words, said):
+    """float() and int() read ``1_0`` as 10 and an Arabic-Indic digit as its value: a flag takes plain ASCII
+    digits only (``10``, ``0.5``, ``1e-3``); inf and nan are still refused as not finite."""
+    before = {p.name for p in tmp_path.iterdir()}
+    r = run_cli(*words, "--out", tmp_path / "run", "--no-progress")
+    _assert_one_line(r.returncode, r.stdout, r.stderr, said)
+    _untouched(tmp_path, before)
+
+
+@pytest.mark.parametrize("text", ["10", "+10", "0.5", ".5", "5.", "1e-3", "2.5E+3"])
+def test_a_plainly_written_number_is_read(text):
+    from pa10_dnbs.cli_values import seconds, whole_in
+    assert seconds(text) == float(text)
+    if text.lstrip("+").isdigit():
+        assert whole_in(1)(text) == int(text)
