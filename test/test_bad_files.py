@@ -69,6 +69,17 @@ def test_truncated_checkpoint(tmp_path, checkpoints):
         _one_line_error(r, "--init-from", f, "not a readable checkpoint")
 
 
+def test_a_npy_file_named_npz_is_not_a_checkpoint(tmp_path, checkpoints):
+    """np.save's output renamed <joint>.npz: a TypeError traceback (np.load returned an array); now one line."""
+    ck = _copy(checkpoints, tmp_path / "ck")
+    with open(ck / "s1.npz", "wb") as f:
+        np.save(f, np.zeros(3))
+    out = tmp_path / "out"
+    r = run_cli("simulate", "--controller", "dnbs", *TINY, "--init-from", ck, "--out", out)
+    _one_line_error(r, "--init-from", ck / "s1.npz", "not a checkpoint (.npz)", ".npy")
+    assert not out.exists()
+
+
 def test_checkpoint_of_another_network(tmp_path, checkpoints):
     cfg = tmp_path / "degree0.yaml"
     cfg.write_text(f"extends: {DEFAULT}\ndnbs:\n  alpha_net:\n    max_degree: 0\n")

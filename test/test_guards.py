@@ -111,8 +111,24 @@ def test_checkpoint_resume_continues_exactly(cfg, tmp_path):
     with pytest.raises(ValueError, match="joint index 1, expected 2"):
         build_controllers(cfg, "dnbs", [2]).load_state_dict(0, state)
     (tmp_path / "junk.npz").write_bytes(b"not a checkpoint")
-    with pytest.raises(ValueError, match="not a readable checkpoint"):
+    with pytest.raises(ValueError, match=r"not a checkpoint \(.npz\)"):
         load_checkpoint(tmp_path / "junk.npz")
+
+
+@pytest.mark.parametrize("content,why", [("npy", "a single array (.npy, np.save's output)"), ("text", "it starts with b'step: '"),
+                                         ("empty", "an empty file")])
+def test_a_file_that_is_no_zip_archive_is_not_a_checkpoint(tmp_path, content, why):
+    """A .npy renamed .npz made np.load return an array (TypeError: no context manager); a text file got numpy's
+    advice about allow_pickle. Both: one line naming the file."""
+    f = tmp_path / "s1.npz"
+    if content == "npy":
+        with open(f, "wb") as out:
+            np.save(out, np.zeros(3))
+    else:
+        f.write_text("step: 3\n" if content == "text" else "")
+    with pytest.raises(ValueError) as e:
+        load_checkpoint(f)
+    assert str(e.value) == f"{f}: not a checkpoint (.npz): not a zip archive: {why}"
 
 
 def test_periodic_checkpoints_of_the_joints_are_spread_over_the_period():

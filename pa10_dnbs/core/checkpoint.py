@@ -44,14 +44,30 @@ def checkpoint_due(step: int, every: int, phase: int) -> bool:
 def load_checkpoint(path: Path) -> tuple[dict, int]:
     """(state dict, step) from ``save_checkpoint``; ValueError if the file is not a readable checkpoint."""
     try:
-        with np.load(Path(path)) as z:
-            state = {k: z[k] for k in z.files}
+        not_zip = _not_zip(path)
+        if not not_zip:
+            with np.load(Path(path), allow_pickle=False) as z:
+                state = {k: z[k] for k in z.files}
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as exc:
         why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise ValueError(f"{path}: not a readable checkpoint (truncated or not an .npz file: {why})") from None
+    if not_zip:
+        raise ValueError(f"{path}: not a checkpoint (.npz): not a zip archive: {not_zip}")
     if "step" not in state:
         raise ValueError(f"{path}: not a checkpoint (no step)")
     return state, _whole_number(path, state.pop("step"), "step")
+
+
+def _not_zip(path: Path) -> str:
+    """What ``path`` is when it does not start like a zip archive (an .npz), else "": ``np.load`` would return a
+    .npy file's array (no archive) or advise ``allow_pickle`` on any other file."""
+    with open(path, "rb") as f:
+        head = f.read(6)
+    if head.startswith(b"PK"):
+        return ""
+    if head.startswith(b"\x93NUMPY"):
+        return "a single array (.npy, np.save's output)"
+    return f"it starts with {head!r}" if head else "an empty file"
 
 
 def _whole_number(path: Path, value: np.ndarray, what: str) -> int:
