@@ -132,3 +132,21 @@ def test_torques_within_the_limits_is_what_the_controllers_asked_not_what_the_pl
     run = simulate(settings, "pid", 0.05)
     assert np.all(np.abs(run.torque_nm) <= limit)   # the plant clipped them
     assert run.extra["torques_asked_beyond_limits"] == [50] * 7 and not within(run)
+
+
+def test_huge_but_finite_values_are_left_out_of_the_figures(tmp_path):
+    """A bag whose joint states swing between +-1e308 (finite): matplotlib's ticks overflowed (ValueError
+    'arange: cannot compute length', analyse ended in a traceback). Samples beyond PLOT_BOUND are not drawn."""
+    from pa10_dnbs.report.figures import error_figure, startup_figure, torque_figure, tracking_figure
+    from pa10_dnbs.run_data import RunData
+
+    n = 300
+    q = np.zeros((n, 2))
+    q[150:] = np.where(np.arange(n - 150) % 2, 1e308, -1e308)[:, None]
+    run = RunData("dnbs", 0.001, ("s1", "s2"), np.array([10.0, 10.0]), q, q.copy(), np.zeros((n, 2)), q.copy())
+    error_figure([run], tmp_path / "errors.png", (0.15, 0.3), [[None, None]])
+    tracking_figure(run, tmp_path / "tracking.png")
+    startup_figure(run, tmp_path / "startup.png", 0.01, [None, None])
+    torque_figure(run, tmp_path / "torques.png")
+    for name in ("errors.png", "tracking.png", "startup.png", "torques.png"):
+        assert (tmp_path / name).stat().st_size > 0, name

@@ -34,7 +34,8 @@ def joint_metrics(error_rad: np.ndarray, torque_nm: np.ndarray, torque_limit_nm,
     limit = np.asarray(torque_limit_nm, dtype=float)
     w = window_slice(error_rad.shape[0], dt_s, window_s)
     ew = error_rad[w]
-    rms = np.sqrt(np.mean(ew**2, axis=0))
+    with np.errstate(over="ignore"):   # a diverged run's huge errors: RMS inf, no warning on stderr
+        rms = np.sqrt(np.mean(ew**2, axis=0))
     emax = np.max(np.abs(ew), axis=0)
     tmax = np.max(np.abs(torque_nm), axis=0)
     sat = np.mean(np.abs(torque_nm) >= limit * (1.0 - 1e-9), axis=0)

@@ -10,6 +10,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ..run_data import RunData  # noqa: E402
+from .finite_view import drawable  # noqa: E402
 
 _MAX_POINTS = 4000  # plotted samples per curve; the npz keeps every step
 
@@ -39,6 +40,7 @@ def _bottom(axes, n: int) -> list:
 
 def tracking_figure(run: RunData, path: Path) -> None:
     """Reference (solid) and actual (dashed) angle per joint, as Figs. 4-10."""
+    run = drawable(run)
     s = _stride(run.n_steps)
     t = run.time_s[::s]
     fig, axes = _grid(f"Trajectory tracking ({run.controller.upper()})", len(run.joint_names))
@@ -61,6 +63,7 @@ def error_figure(runs: list[RunData], path: Path, window_s: tuple[float, float] 
 
     ``settling_s``: per run, per joint, the settling time [s] (None: never), drawn as a dotted line.
     """
+    runs = [drawable(r) for r in runs]
     fig, axes = _grid("Tracking errors " + " vs ".join(r.controller.upper() for r in runs), len(runs[0].joint_names))
     for i, run in enumerate(runs):
         s = _stride(run.n_steps)
@@ -88,6 +91,7 @@ def error_figure(runs: list[RunData], path: Path, window_s: tuple[float, float] 
 
 def torque_figure(run: RunData, path: Path) -> None:
     """Applied torque per joint with its limits (dotted)."""
+    run = drawable(run)
     s = _stride(run.n_steps)
     t = run.time_s[::s]
     fig, axes = _grid(f"Applied torques ({run.controller.upper()}) and torque limits", len(run.joint_names))
@@ -108,6 +112,7 @@ def torque_figure(run: RunData, path: Path) -> None:
 
 def startup_figure(run: RunData, path: Path, settle_band_rad: float, settling_s: list[float | None]) -> None:
     """The first seconds: error per joint with the settling band and settling time (dotted), torque with limits."""
+    run = drawable(run)
     done = [t for t in settling_s if t is not None]
     t_show = min(run.n_steps * run.dt_s, max(1.0, 1.5 * max(done)) if len(done) == len(settling_s) else 5.0)
     n = max(2, int(round(t_show / run.dt_s)))
