@@ -7,6 +7,7 @@ import pytest
 
 from cli_runner import run_cli
 from pa10_dnbs.arm import load_arm
+from pa10_dnbs.config import default_config_path
 from pa10_dnbs.plant.from_config import arm_plant_params, open_client
 from pa10_dnbs.plant.mujoco_plant import MuJoCoArmPlant
 from pa10_dnbs.plant.pybullet_plant import PyBulletArmPlant
@@ -202,3 +203,28 @@ def test_a_step_that_blows_up_keeps_its_state_and_writes_no_log(tmp_path, monkey
     q, _ = plant.state
     assert np.all((q == arm.upper_rad) | (q == arm.lower_rad)), q
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("tiny", ["urdf", "link_mass_scale"])
+def test_an_inertia_too_small_for_mujoco_is_one_line_naming_the_urdf(tmp_path, tiny):
+    """A link of mass and inertia 1e-30 (PyBullet takes it), or every link scaled by plant.link_mass_scale 1e-15:
+    MuJoCo's compile refused it in a traceback (ValueError 'inertia must have positive eigenvalues')."""
+    from test_arms import _link
+
+    urdf = three_link_urdf()
+    config = []
+    if tiny == "urdf":
+        urdf = urdf.replace(_link("l3", 2.0, 0.01), _link("l3", 1e-30, 1e-30))
+        assert urdf != three_link_urdf()
+    else:
+        (tmp_path / "tiny.yaml").write_text(f"extends: {default_config_path()}\nplant:\n  link_mass_scale: 1.0e-15\n")
+        config = ["--config", tmp_path / "tiny.yaml"]
+    arm = write_arm(tmp_path, urdf)
+    r = run_cli("simulate", "--engine", "mujoco", "--arm", arm, *config, "--controller", "pid", "--duration", 0.02,
+                "--no-figures", "--no-progress", "--out", tmp_path / "out")
+    last = r.stderr.strip().splitlines()[-1]
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    assert last.startswith(f"pa10-dnbs: error: {tmp_path / 'arm.urdf'}: MuJoCo cannot compile this URDF") \
+        and "inertia must have positive eigenvalues" in last, last
+    assert ("plant.link_mass_scale 1e-15" in last) == (tiny == "link_mass_scale"), last
+    assert not (tmp_path / "out").exists()

@@ -71,7 +71,20 @@ def build_model(arm: Arm, params):
     # and go on, silently.
     opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_AUTORESET)
     _quiet_warnings(mujoco)
-    return spec.compile()
+    return _compile(spec, arm, params, urdf_path)
+
+
+def _compile(spec, arm: Arm, params, urdf_path: str):
+    """``spec.compile()``; MuJoCo's refusal (an inertia too small for its checks, which PyBullet accepts) as one
+    line naming the URDF, and ``plant.link_mass_scale`` when it scaled the inertias."""
+    try:
+        return spec.compile()
+    except ValueError as exc:
+        why = " ".join(str(exc).split())
+        scaled = f" with plant.link_mass_scale {params.link_mass_scale:g}" if params.link_mass_scale != 1.0 else ""
+        raise ArmError(f"{arm.urdf}: MuJoCo cannot compile this URDF"
+                       + (f" (its cleaned copy {urdf_path})" if arm.plant_urdf is not None else "")
+                       + f"{scaled}: {why}") from None
 
 
 def _ignore_warning(text: str) -> None:
