@@ -241,3 +241,18 @@ def test_a_source_that_is_not_a_text_is_said_so(tmp_path, source, said):
 def test_a_blank_or_absent_source_is_still_missing(tmp_path):
     path = _arm_file(tmp_path, torque_limit_nm=5, sources={"urdf": "t", "torque_limit_nm": " "})
     assert _refused(path) == f"{path}: sources.torque_limit_nm: missing (every fact needs its source)"
+
+
+@pytest.mark.parametrize("flange", ["base", "camera"])
+def test_a_flange_link_no_actuated_joint_moves_is_refused(tmp_path, flange):
+    """flange_link: the root link (or one fixed to it) was accepted, then a payload (plant.payload_kg, the study's
+    payload scenarios) failed with "the URDF has no link named 'base'", which was untrue: it is the root."""
+    camera = ('<link name="camera"/><joint name="camera_joint" type="fixed"><parent link="base"/>'
+              '<child link="camera"/></joint>\n</robot>')
+    _write(tmp_path / "camera.urdf", _chain().replace("</robot>", camera))
+    path = _arm_file(tmp_path, urdf="camera.urdf", flange_link=flange)
+    where = ("the URDF's root link" if flange == "base" else
+             "fixed to the root link 'base' (no actuated joint moves it)")
+    assert _refused(path) == (f"{path}: flange_link: {flange!r} is {where}: the flange must be a link the "
+                              "actuated joints carry (the tip is 'l3')")
+    assert load_arm(_arm_file(tmp_path, name="l1.yaml", urdf="camera.urdf", flange_link="l1")).flange_link == "l1"

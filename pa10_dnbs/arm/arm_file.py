@@ -124,6 +124,7 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
     flange = raw.get("flange_link") or actuated[-1].child
     if flange not in links:
         raise ArmError(f"{path}: flange_link: no link {flange!r} in the URDF")
+    _check_flange_moves(path, chain, flange, actuated)
     settings = raw.get("settings") or {}
     if not isinstance(settings, dict):
         raise ArmError(f"{path}: settings: expected a mapping (config keys of this arm)")
@@ -180,6 +181,22 @@ def _check_link_name(path: Path, key: str, value) -> None:
                        f'({key}: "{value}") if the URDF has a link named so')
     kind = {list: "a list", dict: "a mapping", bool: "a boolean"}.get(type(value), type(value).__name__)
     raise ArmError(f"{path}: {key}: expected a link name (a string), got {kind}: {short(value)}")
+
+
+def _check_flange_moves(path: Path, chain: UrdfChain, flange: str, actuated) -> None:
+    """``flange`` (the link that carries a payload) lies after an actuated joint: the root link, or a link fixed
+    to it, carries nothing the joints lift (the plant found no such link when a payload was put there)."""
+    parent_joint = {j.child: j for j in chain.joints}
+    names = {j.name for j in actuated}
+    link = flange
+    while link in parent_joint:
+        if parent_joint[link].name in names:
+            return
+        link = parent_joint[link].parent
+    where = ("the URDF's root link" if flange == chain.root_link else
+             f"fixed to the root link {chain.root_link!r} (no actuated joint moves it)")
+    raise ArmError(f"{path}: flange_link: {flange!r} is {where}: the flange must be a link the actuated "
+                   f"joints carry (the tip is {actuated[-1].child!r})")
 
 
 MAX_FILE_NAME_BYTES = 200   # a joint's name in UTF-8: "<joint>.npz.tmp.npz" within the usual 255-byte limit
