@@ -39,7 +39,7 @@ NO_OUTPUTS = frozenset({"robot", "replay", "arm"})
 
 
 def _progress(args: argparse.Namespace) -> bool:
-    return not args.no_progress and sys.stderr.isatty()
+    return not args.no_progress and sys.stderr is not None and sys.stderr.isatty()
 
 
 def _simulate_options(args: argparse.Namespace):

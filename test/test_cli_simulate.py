@@ -116,3 +116,17 @@ def test_a_configs_faults_are_said_not_injected_in_process(tmp_path):
     r = run_cli("simulate", "--controller", "pid", "--duration", "0.05", "--no-figures", "--no-progress",
                 "--out", tmp_path / "plain")
     assert "faults" not in r.stderr and "faults" not in (tmp_path / "plain" / "report.md").read_text()
+
+
+@pytest.mark.parametrize("closed", [">&-", "2>&-", ">&- 2>&-"])
+def test_a_closed_stdout_or_stderr_is_no_error(tmp_path, closed):
+    """``simulate ... >&-``: sys.stdout is None, and the PyBullet print guard's flush ended in an AttributeError
+    traceback at import, exit 1. The run is written, exit 0; a closed descriptor gets /dev/null (no file opened
+    later takes its number for C-level prints)."""
+    out = tmp_path / "out"
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    r = subprocess.run(["sh", "-c", f'exec "$@" {closed}', "sh", sys.executable, "-m", "pa10_dnbs.cli", "simulate",
+                        "--controller", "pid", "--duration", "0.05", "--no-figures", "--out", str(out)],
+                       capture_output=True, text=True, env=env, timeout=300)
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+    assert (out / "report.md").is_file() and (out / "metrics.json").is_file()

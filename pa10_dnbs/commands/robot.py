@@ -60,8 +60,9 @@ def run_robot(options: RobotCommandOptions) -> int:
     """Check the arguments, run the robot node until it ends (its exit code; 0 after Ctrl-C)."""
     argv = robot_argv(options)
     before = shm_files()
-    sys.stdout.flush()
-    sys.stderr.flush()
+    for stream in (sys.stdout, sys.stderr):   # None when closed at start (>&-)
+        if stream is not None:
+            stream.flush()
     child = subprocess.Popen(argv)
     passed_on = {sig: signal.signal(sig, lambda signum, _f: child.send_signal(signum))
                  for sig in (signal.SIGINT, signal.SIGTERM)}

@@ -15,11 +15,31 @@ from contextlib import contextmanager
 _libc = ctypes.CDLL(None)
 
 
+def flush_std_streams() -> None:
+    """Flush sys.stdout and sys.stderr; either is None when its descriptor was closed at start (``>&-``)."""
+    for stream in (sys.stdout, sys.stderr):
+        if stream is not None:
+            stream.flush()
+
+
+def fill_closed_std_fds() -> None:
+    """A closed descriptor 1 or 2 (``>&-``) opened on /dev/null for good: else the next file opened takes its
+    number and C-level prints (PyBullet's "argv[0]=") land in that file."""
+    for fd in (1, 2):
+        try:
+            os.fstat(fd)
+        except OSError:
+            null = os.open(os.devnull, os.O_WRONLY)
+            if null != fd:
+                os.dup2(null, fd)
+                os.close(null)
+
+
 @contextmanager
 def quiet_c_stdout():
     """Send file descriptors 1 and 2 to /dev/null for the duration of the block."""
-    sys.stdout.flush()
-    sys.stderr.flush()
+    flush_std_streams()
+    fill_closed_std_fds()
     saved = {fd: os.dup(fd) for fd in (1, 2)}
     try:
         with open(os.devnull, "wb") as null:
