@@ -424,7 +424,16 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _lossless_streams() -> None:
+    """stdout and stderr write what their encoding cannot (a path or joint name outside ASCII under LC_ALL=POSIX)
+    as backslash escapes: a "wrote ..." line never fails the run it reports."""
+    for stream in (sys.stdout, sys.stderr):
+        if hasattr(stream, "reconfigure"):   # None when closed (>&-); a StringIO when redirected in-process
+            stream.reconfigure(errors="backslashreplace")
+
+
 def main(argv: list[str] | None = None) -> int:
+    _lossless_streams()   # before the wrap below: it reconfigures the streams themselves
     if argv is None:   # this process is the command: a reader gone from its stdout does not end its run
         forgive_stdout()
     args = build_parser().parse_args(argv)

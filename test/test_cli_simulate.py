@@ -130,3 +130,24 @@ def test_a_closed_stdout_or_stderr_is_no_error(tmp_path, closed):
                        capture_output=True, text=True, env=env, timeout=300)
     assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
     assert (out / "report.md").is_file() and (out / "metrics.json").is_file()
+
+
+@pytest.mark.parametrize("command", ["simulate", "arm"])
+def test_an_ascii_only_stdout_writes_other_characters_as_escapes(tmp_path, command):
+    """Under LC_ALL=POSIX PYTHONIOENCODING=ascii, an output path (or an arm's joint names) outside ASCII ended the
+    run with a UnicodeEncodeError traceback on its "wrote ..." line, exit 1, after the output was written."""
+    from test_arm_intake_edges import _arm_file, _chain, _write
+
+    out = tmp_path / "ünï" / "out"
+    _write(tmp_path / "named.urdf", _chain(names=("jä1", "jö2", "jü3")))
+    arm = _arm_file(tmp_path, urdf="named.urdf") if command == "arm" else None
+    args = ["arm", "--arm", arm] if arm else ["simulate", "--controller", "pid", "--duration",
+                                                                "0.05", "--no-figures", "--out", out]
+    env = {**os.environ, "PYTHONPATH": str(REPO), "LC_ALL": "POSIX", "PYTHONIOENCODING": "ascii"}
+    r = subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", *map(str, args)], capture_output=True, text=True,
+                       encoding="ascii", env=env, timeout=300)
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+    if arm:
+        assert "j\\xe41" in r.stdout + r.stderr
+    else:
+        assert f"wrote {tmp_path}/\\xfcn\\xef/out/report.md" in r.stdout and (out / "report.md").is_file()
