@@ -5,6 +5,7 @@ import json
 import re
 import subprocess
 import sys
+import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -17,7 +18,7 @@ from cli_runner import run_cli
 from script_module import load_script
 from pa10_dnbs.arm import ArmError, load_arm
 from pa10_dnbs.arm.arm_file import _load
-from pa10_dnbs.arm.plant_urdf import principal_moments
+from pa10_dnbs.arm.plant_urdf import plant_urdf, principal_moments
 from pa10_dnbs.arm.summary import arm_line
 from pa10_dnbs.plant.dynamics_check import compare_with_mujoco
 from pa10_dnbs.plant.from_config import arm_plant_params, open_client
@@ -138,6 +139,60 @@ def test_package_meshes_that_do_not_resolve_neither_fail_nor_warn(capfd):
         client.disconnect()
     out = capfd.readouterr()
     assert "mesh" not in (out.out + out.err) and "b3Warning" not in (out.out + out.err)
+
+
+def _cleaned(monkeypatch, cache: Path) -> Path:
+    """The cleaned copy of the no_inertial_link fixture with the cache ``cache``."""
+    monkeypatch.setenv("PA10_DNBS_URDF_CACHE", str(cache))
+    return plant_urdf(_fixture("no_inertial_link"))[0]
+
+
+def test_a_damaged_cached_copy_is_written_anew(tmp_path, monkeypatch):
+    """A truncated copy was trusted by its name for ever (PyBullet then could not load it)."""
+    copy = _cleaned(monkeypatch, tmp_path / "cache")
+    whole = copy.read_bytes()
+    copy.write_bytes(whole[:300])
+    assert _cleaned(monkeypatch, tmp_path / "cache") == copy and copy.read_bytes() == whole
+    assert sorted(p.name for p in copy.parent.iterdir()) == [copy.name]   # no temporary left beside it
+    assert copy.stat().st_mode & 0o777 == 0o644   # other users sharing the cache can read it
+
+
+@pytest.mark.parametrize("blocked", ["a file", "read-only", "unreadable copy"])
+def test_a_cache_that_cannot_be_used_gives_way_to_a_private_folder(tmp_path, monkeypatch, blocked):
+    """The cache path a file ([Errno 17] File exists), a read-only cache ([Errno 13] on its temporary file),
+    another user's unreadable copy (PyBullet cannot load this URDF): the copy goes to a private folder instead.
+    (Permissions are imitated: the tests may run as root.)"""
+    whole = _cleaned(monkeypatch, tmp_path / "normal").read_bytes()
+    cache = tmp_path / "cache"
+    if blocked == "a file":
+        cache.write_text("")
+    else:
+        cache.mkdir()
+        mkstemp, read_bytes = tempfile.mkstemp, Path.read_bytes
+
+        def no_write(*args, dir=None, **kw):
+            if Path(dir) == cache:
+                raise PermissionError(13, "Permission denied", str(dir))
+            return mkstemp(*args, dir=dir, **kw)
+
+        def no_read(self):
+            if self.parent == cache:
+                raise PermissionError(13, "Permission denied", str(self))
+            return read_bytes(self)
+
+        monkeypatch.setattr(tempfile, "mkstemp", no_write)
+        if blocked == "unreadable copy":
+            (cache / _cleaned(monkeypatch, tmp_path / "normal").name).write_bytes(b"")
+            monkeypatch.setattr(Path, "read_bytes", no_read)
+    copy = _cleaned(monkeypatch, cache)
+    assert copy.parent != cache and copy.parent.name.startswith("pa10_dnbs_urdf-")
+    assert _bytes(copy) == whole and _cleaned(monkeypatch, cache) == copy
+
+
+def _bytes(path: Path) -> bytes:
+    """The file's bytes, past a patched Path.read_bytes."""
+    with open(path, "rb") as f:
+        return f.read()
 
 
 def test_presets_load_their_urdf_as_written():

@@ -15,11 +15,17 @@ its inertias from the file and needs no geometry). Repair of a tensor with princ
 I3 > I1 + I2: the least thin rod along the I3 axis that makes it consistent, i.e. d = (I3 (1 + 1e-6) - I1 -
 I2) / 2 added to I1 and I2 (nothing removed, the centre of mass and I3 kept). A tensor with a negative or
 non-finite principal moment cannot be repaired: ValueError naming the link.
+
+A cached copy is read back before use (a damaged one is written anew, atomically); a cache that cannot be used
+(a file, read-only, another user's unreadable copy) gives way to a temporary directory of the process.
 """
 from __future__ import annotations
 
+import atexit
+import contextlib
 import hashlib
 import os
+import shutil
 import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -64,16 +70,46 @@ def plant_urdf(urdf: Path) -> tuple[Path | None, list[str]]:
             for el in link.findall(tag):
                 if el.find("geometry/mesh") is not None:
                     link.remove(el)
-    text = ET.tostring(root, encoding="unicode")
-    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
-    path = cache_dir() / f"{urdf.stem}-{digest}.urdf"
-    if not path.is_file():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
+    data = ET.tostring(root, encoding="unicode").encode()
+    name = f"{urdf.stem}-{hashlib.sha256(data).hexdigest()[:16]}.urdf"
+    try:
+        return _cached(cache_dir(), name, data), notes
+    except OSError:   # the cache is a file, read-only, or holds another user's unreadable copy
+        return _cached(_private_dir(), name, data), notes
+
+
+def _cached(folder: Path, name: str, data: bytes) -> Path:
+    """``folder/name`` holding ``data``: the copy there when it holds exactly that (read back: a truncated or
+    damaged copy is not trusted by its name), else written anew. OSError when the folder cannot be used."""
+    path = folder / name
+    try:
+        if path.read_bytes() == data:
+            return path
+    except FileNotFoundError:
+        pass
+    folder.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{name}.", dir=folder)
+    try:
+        os.fchmod(fd, 0o644)   # other users sharing the cache read it (mkstemp makes it 0600)
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
         os.replace(tmp, path)  # atomic: concurrent runs write the same bytes
-    return path, notes
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+_private: list[Path] = []   # this process's own cache, made when the shared one cannot be used
+
+
+def _private_dir() -> Path:
+    """A temporary directory of this process alone, removed at its exit."""
+    if not _private:
+        _private.append(Path(tempfile.mkdtemp(prefix=f"{CACHE_DIR_NAME}-")))
+        atexit.register(shutil.rmtree, _private[0], ignore_errors=True)
+    return _private[0]
 
 
 def principal_moments(inertial: ET.Element) -> tuple[np.ndarray, np.ndarray]:
