@@ -340,6 +340,29 @@ def test_a_urdf_pybullet_still_cannot_load_is_one_line_naming_the_file(tmp_path)
     _refused_in_one_line(r, urdf, "PyBullet cannot load this URDF", out)
 
 
+def test_a_urdf_on_one_long_line_loads_as_with_line_breaks(tmp_path):
+    """A 30-joint chain written on one line (9 KB) was refused, "PyBullet cannot load this URDF" with PyBullet's
+    b3Error run into that line: PyBullet reads a URDF in lines of at most 8191 bytes and joins the pieces of a
+    longer one with a newline, inside a tag. Such a URDF is loaded from a copy written one tag a line."""
+    from test_arm_intake_edges import _chain
+
+    text = _chain(names=tuple(f"j{i}" for i in range(1, 31)))
+    (tmp_path / "lines.urdf").write_text(text)
+    (tmp_path / "one.urdf").write_text(text.replace("\n", ""))
+    assert len((tmp_path / "one.urdf").read_bytes()) > 8191
+    arm = load_arm(tmp_path / "one.urdf")
+    assert arm.plant_urdf is not None and load_arm(tmp_path / "lines.urdf").plant_urdf is None
+    assert max(len(line) for line in arm.plant_urdf.read_bytes().split(b"\n")) <= 8191
+    metrics = []
+    for name in ("one", "lines"):
+        out = tmp_path / f"out_{name}"
+        r = run_cli("simulate", "--arm", tmp_path / f"{name}.urdf", "--controller", "pid", "--duration", "0.02",
+                    "--no-figures", "--out", out)
+        assert r.returncode == 0, r.stderr
+        metrics.append(json.loads((out / "metrics.json").read_text())["worst_rms_error_rad"])
+    assert metrics[0] == metrics[1]
+
+
 def test_a_binary_arm_file_or_urdf_is_refused_in_one_line(tmp_path):
     for name in ("binary.yaml", "binary.urdf"):
         path = tmp_path / name

@@ -1,20 +1,23 @@
 """The copy of a URDF that PyBullet loads, where the URDF as written would make PyBullet change its physics.
 
-PyBullet's importer departs from the URDF spec in three ways the plant must not inherit:
+PyBullet's importer departs from the URDF spec in four ways the plant must not inherit:
 
 - a link without ``<inertial>`` gets mass 1 kg and inertia diag(1, 1, 1) kg m^2 (the spec: massless);
 - an inertia tensor whose principal moments break the triangle inequality (one larger than the sum of the
   other two, which no mass distribution has) is set to zero ("Bad inertia tensor properties");
-- a mesh it cannot find (a ``package://`` URI outside a ROS workspace) stops the load.
+- a mesh it cannot find (a ``package://`` URI outside a ROS workspace) stops the load;
+- a line longer than LINE_MAX bytes is read in pieces joined by a newline, which breaks (or silently changes)
+  the tag it falls in (a URDF written on one line: "PyBullet cannot load this URDF").
 
 :func:`plant_urdf` returns None when a URDF has none of these (it is loaded exactly as written: the presets),
 else the path of a cleaned copy, written once to a cache directory named by the copy's content hash, in which
 every link without ``<inertial>`` gets an explicit zero mass and inertia, every tensor breaking the triangle
-inequality is repaired, and every ``<visual>`` or ``<collision>`` holding a mesh is dropped (the plant takes
-its inertias from the file and needs no geometry). Repair of a tensor with principal moments I1 <= I2 < I3,
-I3 > I1 + I2: the least thin rod along the I3 axis that makes it consistent, i.e. d = (I3 (1 + 1e-6) - I1 -
-I2) / 2 added to I1 and I2 (nothing removed, the centre of mass and I3 kept). A tensor with a negative or
-non-finite principal moment cannot be repaired: ValueError naming the link.
+inequality is repaired, every ``<visual>`` or ``<collision>`` holding a mesh is dropped (the plant takes its
+inertias from the file and needs no geometry), and a line too long is broken, one tag a line. Repair of a tensor
+with principal moments I1 <= I2 < I3, I3 > I1 + I2: the least thin rod along the I3 axis that makes it
+consistent, i.e. d = (I3 (1 + 1e-6) - I1 - I2) / 2 added to I1 and I2 (nothing removed, the centre of mass and
+I3 kept). A tensor with a negative or non-finite principal moment cannot be repaired: ValueError naming the
+link.
 
 A cached copy is read back before use (a damaged one is written anew, atomically); a cache that cannot be used
 (a file, read-only, another user's unreadable copy) gives way to a temporary directory of the process.
@@ -35,6 +38,7 @@ import numpy as np
 CACHE_DIR_NAME = "pa10_dnbs_urdf"  # under the system's temporary directory
 MARGIN = 1e-6                      # relative margin a repaired tensor keeps from the triangle inequality's edge
 EDGE = 1e-9                        # off-diagonal tensors: I1 + I2 - I3 down to -EDGE I3 counts as on the edge
+LINE_MAX = 8191   # PyBullet reads a URDF with fgets into 8192 bytes and joins the pieces with a newline
 _KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 
 
@@ -61,7 +65,7 @@ def plant_urdf(urdf: Path) -> tuple[Path | None, list[str]]:
         if note:
             notes.append(note)
             changed = True
-    if _has_unusable_mesh(root, urdf.parent):
+    if _has_unusable_mesh(root, urdf.parent) or _longest_line(urdf.read_bytes()) > LINE_MAX:
         changed = True
     if not changed:
         return None, []
@@ -70,7 +74,7 @@ def plant_urdf(urdf: Path) -> tuple[Path | None, list[str]]:
             for el in link.findall(tag):
                 if el.find("geometry/mesh") is not None:
                     link.remove(el)
-    data = ET.tostring(root, encoding="unicode").encode()
+    data = _broken_into_lines(root)
     name = f"{urdf.stem}-{hashlib.sha256(data).hexdigest()[:16]}.urdf"
     try:
         return _cached(cache_dir(), name, data), notes
@@ -110,6 +114,24 @@ def _private_dir() -> Path:
         _private.append(Path(tempfile.mkdtemp(prefix=f"{CACHE_DIR_NAME}-")))
         atexit.register(shutil.rmtree, _private[0], ignore_errors=True)
     return _private[0]
+
+
+def _longest_line(data: bytes) -> int:
+    return max(len(line) for line in data.split(b"\n"))
+
+
+def _broken_into_lines(root: ET.Element) -> bytes:
+    """The URDF ``root`` as UTF-8, as written, or indented one tag a line where a line would be longer than
+    LINE_MAX bytes (PyBullet would split it inside a tag); ValueError when a single tag is that long."""
+    data = ET.tostring(root, encoding="unicode").encode()
+    if _longest_line(data) <= LINE_MAX:
+        return data
+    ET.indent(root)
+    data = ET.tostring(root, encoding="unicode").encode()
+    if _longest_line(data) > LINE_MAX:
+        raise ValueError(f"a tag longer than {LINE_MAX} bytes (PyBullet reads a URDF in lines of at most "
+                         f"{LINE_MAX} bytes and splits a longer one)")
+    return data
 
 
 def principal_moments(inertial: ET.Element) -> tuple[np.ndarray, np.ndarray]:
