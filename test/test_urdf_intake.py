@@ -337,7 +337,8 @@ def test_a_urdf_pybullet_still_cannot_load_is_one_line_naming_the_file(tmp_path)
     finally:
         client.disconnect()
     r = run_cli("simulate", "--arm", urdf, "--duration", "0.2", "--no-figures", "--out", out)
-    _refused_in_one_line(r, urdf, "PyBullet cannot load this URDF", out)
+    _refused_in_one_line(r, urdf, "PyBullet cannot load this URDF: Cylinder shape must have both length and radius "
+                         "attributes", out)
 
 
 def test_a_urdf_on_one_long_line_loads_as_with_line_breaks(tmp_path):

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 
 import numpy as np
 import pybullet
@@ -20,6 +21,14 @@ import pybullet
 from ..arm import Arm, ArmError
 from .arm_plant_base import ArmPlantBase
 from .plant_params import PlantParams, as_joint_vector, checked_for_arm
+from .quiet_stdout import c_output_into
+
+
+def _pybullet_reason(printed: str) -> str:
+    """': <what PyBullet printed>' on one line, its b3Error[file,line] tags left out ('' when it printed nothing)."""
+    text = " ".join(re.sub(r"b3(Error|Warning)\[[^\]]*\]:?", " ", printed).split())
+    return f": {text[:300]}{'...' if len(text) > 300 else ''}" if text else ""
+
 
 def _coulomb_root(v_free: float, k: float, inv_eps: float) -> float:
     """The root v of g(v) = v - v_free + k tanh(v inv_eps) (k >= 0), to |g| <= 1e-13 (1 + |v_free|).
@@ -109,15 +118,20 @@ class PyBulletArmPlant(ArmPlantBase):
         self._client = client
         self._params = params
         self._arm = arm
+        said: list[str] = []   # what PyBullet prints while loading: its reason, when it fails
         try:
-            self._body = client.loadURDF(
-                urdf_path,
-                useFixedBase=True,
-                flags=pybullet.URDF_USE_INERTIA_FROM_FILE,
-            )
+            with c_output_into(said):
+                self._body = client.loadURDF(
+                    urdf_path,
+                    useFixedBase=True,
+                    flags=pybullet.URDF_USE_INERTIA_FROM_FILE,
+                )
         except pybullet.error:  # what the intake's checks (pa10_dnbs.kinematics.urdf_tree) did not foresee
             raise ArmError(f"{arm.urdf}: PyBullet cannot load this URDF"
-                           + (f" (its cleaned copy {urdf_path})" if arm.plant_urdf is not None else "")) from None
+                           + (f" (its cleaned copy {urdf_path})" if arm.plant_urdf is not None else "")
+                           + _pybullet_reason(said[0])) from None
+        if said[0]:
+            os.write(1, said[0].encode())   # its warnings on a load that worked: where they went before
         self._n_links = client.getNumJoints(self._body)
         index_of, dofs = {}, []
         for j in range(self._n_links):

@@ -10,6 +10,7 @@ from __future__ import annotations
 import ctypes
 import os
 import sys
+import tempfile
 from contextlib import contextmanager
 
 _libc = ctypes.CDLL(None)
@@ -51,3 +52,24 @@ def quiet_c_stdout():
         for fd, copy in saved.items():
             os.dup2(copy, fd)
             os.close(copy)
+
+
+@contextmanager
+def c_output_into(sink: list[str]):
+    """Send file descriptors 1 and 2 into a temporary file for the duration of the block; what was written there
+    (C-level prints: PyBullet's b3Error, whose text ends without a newline) is appended to ``sink`` at its end."""
+    flush_std_streams()
+    fill_closed_std_fds()
+    saved = {fd: os.dup(fd) for fd in (1, 2)}
+    with tempfile.TemporaryFile() as f:
+        try:
+            for fd in saved:
+                os.dup2(f.fileno(), fd)
+            yield
+        finally:
+            _libc.fflush(None)
+            for fd, copy in saved.items():
+                os.dup2(copy, fd)
+                os.close(copy)
+            f.seek(0)
+            sink.append(f.read().decode("utf-8", errors="replace"))
