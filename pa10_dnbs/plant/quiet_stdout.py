@@ -11,9 +11,11 @@ import ctypes
 import os
 import sys
 import tempfile
+import threading
 from contextlib import contextmanager
 
 _libc = ctypes.CDLL(None)
+_redirecting = threading.RLock()   # one redirection of descriptors 1 and 2 at a time: each restores what it saved
 
 
 def flush_std_streams() -> None:
@@ -39,37 +41,37 @@ def fill_closed_std_fds() -> None:
 @contextmanager
 def quiet_c_stdout():
     """Send file descriptors 1 and 2 to /dev/null for the duration of the block."""
-    flush_std_streams()
-    fill_closed_std_fds()
-    saved = {fd: os.dup(fd) for fd in (1, 2)}
-    try:
-        with open(os.devnull, "wb") as null:
-            for fd in saved:
-                os.dup2(null.fileno(), fd)
+    fill_closed_std_fds()   # before the target is opened: it would take a closed descriptor's number
+    with open(os.devnull, "wb") as null, _redirected(null.fileno()):
         yield
-    finally:
-        _libc.fflush(None)
-        for fd, copy in saved.items():
-            os.dup2(copy, fd)
-            os.close(copy)
 
 
 @contextmanager
-def c_output_into(sink: list[str]):
-    """Send file descriptors 1 and 2 into a temporary file for the duration of the block; what was written there
-    (C-level prints: PyBullet's b3Error, whose text ends without a newline) is appended to ``sink`` at its end."""
-    flush_std_streams()
-    fill_closed_std_fds()
-    saved = {fd: os.dup(fd) for fd in (1, 2)}
-    with tempfile.TemporaryFile() as f:
+def _redirected(target: int):
+    """File descriptors 1 and 2 on ``target`` for the duration of the block, C stdio flushed before they return."""
+    with _redirecting:
+        flush_std_streams()
+        saved = {fd: os.dup(fd) for fd in (1, 2)}
         try:
             for fd in saved:
-                os.dup2(f.fileno(), fd)
+                os.dup2(target, fd)
             yield
         finally:
             _libc.fflush(None)
             for fd, copy in saved.items():
                 os.dup2(copy, fd)
                 os.close(copy)
+
+
+@contextmanager
+def c_output_into(sink: list[str]):
+    """Send file descriptors 1 and 2 into a temporary file for the duration of the block; what was written there
+    (C-level prints: PyBullet's b3Error, whose text ends without a newline) is appended to ``sink`` at its end."""
+    fill_closed_std_fds()
+    with tempfile.TemporaryFile() as f:
+        try:
+            with _redirected(f.fileno()):
+                yield
+        finally:
             f.seek(0)
             sink.append(f.read().decode("utf-8", errors="replace"))
