@@ -225,3 +225,20 @@ def test_equal_budget_table_refuses_unfinished_and_unequal_comparisons(tmp_path)
     (tmp_path / "a" / "comparison.md").unlink()
     rc, out, err = _script("equal_budget_table", tmp_path / "a")
     assert rc == 2 and err.startswith(f"equal_budget_table: error: {tmp_path}/a is an unfinished comparison"), err
+
+
+def test_a_folder_named_tune_db_in_out_is_named_as_such_not_as_a_storage(tmp_path):
+    """DIR/tune.db a folder, no --storage given: the line blamed "--storage: cannot open sqlite:////.../tune.db"."""
+    from pa10_dnbs.config import ConfigError
+    from pa10_dnbs.tune.tuner import open_storage
+
+    out = tmp_path / "t"
+    (out / "tune.db").mkdir(parents=True)
+    r = run_cli("tune", *SHORT, "--trials", 1, "--out", out)
+    assert r.returncode == 2 and r.stderr == (f"pa10-dnbs: error: --out: {out}/tune.db is not a file (a folder or "
+                                              "another kind of file): a tune keeps its trials in DIR/tune.db; move "
+                                              "it or give another --out\n"), r.stderr
+    assert [p.name for p in out.iterdir()] == ["tune.db"] and not any((out / "tune.db").iterdir())
+    with pytest.raises(ConfigError) as e:   # the tune's own storage that does not open: --out and the file
+        open_storage(f"sqlite:///{out / 'tune.db'}", default_file=out / "tune.db")
+    assert str(e.value).startswith(f"--out: cannot open {out}/tune.db (the tune's storage): ") and not e.value.setting

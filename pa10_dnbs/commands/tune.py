@@ -214,7 +214,7 @@ def _tune(state, spec, base, trials, out, storage, pool_batch, scheduler, train,
         if storage is None:
             out.mkdir(parents=True, exist_ok=True)
             storage = _default_storage(out)
-            storage_obj = open_storage(storage)
+            storage_obj = open_storage(storage, default_file=out / "tune.db")
         if scheduler is not None:
             batch = max(1, ex.jobs // (len(train) * seeds))   # the cluster's workers
         study = open_study(storage_obj, spec, batch)

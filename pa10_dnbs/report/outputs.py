@@ -240,6 +240,9 @@ def check_tune_dir(out: Path, study_name: str, identity: dict, refusal) -> None:
                                 if done.get("study") == study_name else
                                 f"--out: {out} holds the tune {done.get('study')!r}, not {study_name!r}: "
                                 "give another --out for this tune")
+    if (out / "tune.db").exists() and not (out / "tune.db").is_file():
+        raise OutputExistsError(f"--out: {out}/tune.db is not a file (a folder or another kind of file): a tune keeps "
+                                "its trials in DIR/tune.db; move it or give another --out")
     if (out / "tune.db").is_file():
         why = _not_optuna(out / "tune.db")
         if why:   # a file of the user's, which the tune would write its tables into

@@ -139,22 +139,26 @@ def check_persistent(url: str) -> None:
                           "out (DIR/tune.db)", setting="storage")
 
 
-def open_storage(url: str):
+def open_storage(url: str, default_file=None):
     """An Optuna RDB storage at ``url`` (sqlite:///file.db, postgresql://..., ...); ConfigError if it does not
-    open. Two tunes opening one new storage at once would both create its tables (sqlite: "table studies already
-    exists", 4 of 10 tries): one opens it at a time, the other waits (a lock named by the URL as given)."""
+    open, naming --storage, or ``--out`` and the file for a tune's own ``default_file`` (DIR/tune.db: no --storage
+    given). Two tunes opening one new storage at once would both create its tables (sqlite: "table studies
+    already exists", 4 of 10 tries): one opens it at a time, the other waits (a lock named by the URL as given)."""
     import optuna
 
     quiet_optuna()
+    where = f"--storage: {url}" if default_file is None else f"--out: {default_file} (the tune's storage)"
     try:
         with waiting_for(f"optuna storage {storage_key(url)}",
-                         f"--storage: {url} is being opened by another run (pid {{pid}}) "
+                         f"{where} is being opened by another run (pid {{pid}}) "
                          f"for over {STORAGE_OPEN_WAIT_S:g} s", STORAGE_OPEN_WAIT_S, between=check):
             return optuna.storages.RDBStorage(url)
     except OutputInUseError:
         raise
     except Exception as exc:  # sqlalchemy's errors for bad URLs, missing drivers, unreachable servers
         text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        if default_file is not None:
+            raise ConfigError(f"--out: cannot open {default_file} (the tune's storage): {text}") from None
         raise ConfigError(f"storage: cannot open {url}: {text}", setting="storage") from None
 
 
