@@ -88,6 +88,15 @@ def test_a_joint_name_that_cannot_be_a_file_name_is_refused_at_intake(tmp_path, 
                     f"(<joint>.npz checkpoints); rename it in the URDF"), line
 
 
+@pytest.mark.parametrize("written, name", [("a&#10;b", "a\nb"), ("a&#9;b", "a\tb")], ids=["newline", "tab"])
+def test_a_joint_name_holding_a_control_character_is_refused_at_intake(tmp_path, written, name):
+    """Was accepted (a newline as ``&#10;`` in the URDF): a checkpoint's file name and every line naming the
+    joint were split in two."""
+    urdf = _write(tmp_path / "named.urdf", _chain(names=(written, "j2", "j3")))
+    line = _refused(urdf)
+    assert line.startswith(f"{urdf}: joint {name!r}: it holds a control character ({name[1]!r})"), line
+
+
 @pytest.mark.parametrize("command", ["simulate", "launch"])
 def test_simulate_and_launch_refuse_it_before_the_run(tmp_path, command):
     """The review's command: ``simulate`` ran the whole run, then failed writing ``checkpoints/arm/j1.npz``."""

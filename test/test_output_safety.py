@@ -299,6 +299,11 @@ def test_a_tune_never_writes_into_a_tune_db_that_is_not_its_storage(tmp_path, ki
                 "--held-out-seeds", 0, "--duration", 0.05, "--jobs", 1, "--no-progress", "--out", out)
     _refused(r, f"--out: {db} is not a tune's storage")
     assert db.read_bytes() == before and sorted(p.name for p in out.iterdir()) == ["tune.db"]
+    r = run_cli("tune", "--controller", "pid", "--trials", 1, "--scenarios", "nominal", "--seeds", 1,
+                "--held-out-seeds", 0, "--duration", 0.05, "--jobs", 1, "--no-progress", "--out", tmp_path / "t2",
+                "--storage", f"sqlite:///{db}")   # the same file given as --storage: Optuna's tables were added
+    _refused(r, f"--storage: {db} is not a tune's storage")
+    assert db.read_bytes() == before and not (tmp_path / "t2").exists()
 
 
 def test_an_output_given_up_removes_the_folders_above_it_that_it_made(tmp_path):

@@ -12,6 +12,7 @@ import copyreg
 import functools
 import math
 import sys
+import unicodedata
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -207,6 +208,8 @@ def _unfit_file_name(name: str) -> str | None:
     for char, called in (("/", "'/'"), ("\0", "a NUL character")):
         if char in name:
             return f"it holds {called}"
+    if control := next((c for c in name if unicodedata.category(c) == "Cc"), None):   # a newline, a tab, ...
+        return f"it holds a control character ({control!r}), which would split a file's name and a message's line"
     if name in (".", ".."):
         return f"{name!r} names a folder"
     size = len(name.encode("utf-8", "surrogatepass"))

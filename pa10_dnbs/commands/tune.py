@@ -33,9 +33,9 @@ from ..tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 from ..tune.space import select, start_values
 from ..run_settings import build_settings
 from ..run_steps import run_steps
-from ..tune.tuner import (TrialProgress, TuneSpec, arm_digest, check_persistent, completed, held_out, open_storage,
-                          open_study, optimize, refusal, settings_digest, storage_key, stored_identity,
-                          study_lock_key)
+from ..tune.tuner import (TrialProgress, TuneSpec, arm_digest, check_persistent, check_storage_file, completed,
+                          held_out, open_storage, open_study, optimize, refusal, settings_digest, storage_key,
+                          stored_identity, study_lock_key)
 
 HELD_OUT_SEED0 = 100   # held-out seeds are 100, 101, ...: never a training seed (0 .. --seeds - 1)
 
@@ -107,6 +107,7 @@ def _checks(o: TuneOptions, say) -> dict:
     check_creatable(out, "--out")
     if o.storage is not None:
         check_persistent(o.storage)   # an in-memory database keeps nothing: refused before any run
+        check_storage_file(o.storage)   # nor a database of the user's own, which would get the tune's tables
     config_path = Path(o.config_path) if o.config_path else default_config_path()
     base = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
     the_arm = base.arm

@@ -244,7 +244,7 @@ def check_tune_dir(out: Path, study_name: str, identity: dict, refusal) -> None:
         raise OutputExistsError(f"--out: {out}/tune.db is not a file (a folder or another kind of file): a tune keeps "
                                 "its trials in DIR/tune.db; move it or give another --out")
     if (out / "tune.db").is_file():
-        why = _not_optuna(out / "tune.db")
+        why = not_optuna_storage(out / "tune.db")
         if why:   # a file of the user's, which the tune would write its tables into
             raise OutputExistsError(f"--out: {out}/tune.db is not a tune's storage ({why}): a tune keeps its trials "
                                     "in DIR/tune.db; move the file or give another --out")
@@ -259,7 +259,7 @@ def _read_only(db: Path):
     return contextlib.closing(sqlite3.connect(f"{Path(db).resolve().as_uri()}?mode=ro", uri=True))
 
 
-def _not_optuna(db: Path) -> str | None:
+def not_optuna_storage(db: Path) -> str | None:
     """Why the file ``db`` is no Optuna SQLite storage (not SQLite; tables of its own), or None: an Optuna storage,
     or an empty file or database (a storage not yet made, which the tune makes)."""
     try:

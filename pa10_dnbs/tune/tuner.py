@@ -139,6 +139,28 @@ def check_persistent(url: str) -> None:
                           "out (DIR/tune.db)", setting="storage")
 
 
+def check_storage_file(url: str) -> None:
+    """ConfigError naming --storage for an SQLite file that exists and is no Optuna storage (not SQLite, or a
+    database with tables of its own): the tune would add its tables to a file of the user's."""
+    from pathlib import Path
+
+    from sqlalchemy.engine import make_url
+
+    from ..report.outputs import not_optuna_storage
+
+    try:
+        u = make_url(url)
+    except Exception:   # noqa: BLE001 - not a URL: open_storage says so
+        return
+    db = u.database or ""
+    if u.get_backend_name() != "sqlite" or db in ("", ":memory:") or db.startswith("file:"):
+        return
+    path = Path(db).expanduser()
+    if path.is_file() and (why := not_optuna_storage(path)):
+        raise ConfigError(f"storage: {path} is not a tune's storage ({why}): a tune would add its tables to it; give "
+                          "a new file or the storage of a tune", setting="storage")
+
+
 def open_storage(url: str, default_file=None):
     """An Optuna RDB storage at ``url`` (sqlite:///file.db, postgresql://..., ...); ConfigError if it does not
     open, naming --storage, or ``--out`` and the file for a tune's own ``default_file`` (DIR/tune.db: no --storage
