@@ -16,7 +16,7 @@ from .supervisor.fault_flags import add_fault_arguments
 from .loop.scheduling import DEFAULT_RT_PRIORITY
 from .cli_values import (EFFORT_TIMEOUT_MAX_S, MAX_REPLAY_CLOCK_HZ, REPLAY_RATE_MAX, REPLAY_RATE_MIN, RTF_MAX,
                          RTF_MIN, WAIT_FOR_SUBSCRIBERS_MAX_S, OneLineParser, nonnegative,
-                         number_in, path_arg, positive, seconds, utf8_text, whole_in)
+                         number_in, path_arg, plain_int, positive, seconds, utf8_text, whole_in)
 from .output_lock import held, release_all
 from .refused import Refused
 from .tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
@@ -223,7 +223,7 @@ def _add_run_args(p: argparse.ArgumentParser, controllers: tuple[str, ...], help
 
 
 def _add_live_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--live", type=int, nargs="?", const=LIVE_PORT, default=None, metavar="PORT",
+    p.add_argument("--live", type=plain_int, nargs="?", const=LIVE_PORT, default=None, metavar="PORT",
                    help=f"serve a live view for Foxglove (WebSocket) on PORT (default {LIVE_PORT}; 0: any free port); "
                         "in Foxglove: Open connection, Foxglove WebSocket, ws://127.0.0.1:PORT (docs/live_view.md)")
     p.add_argument("--live-host", default=None, metavar="ADDRESS",

@@ -75,6 +75,19 @@ def _integer(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected a whole number, got {len(text)} digits") from None
 
 
+def plain_float(text: str) -> float:
+    """A number spelled plainly (no ``1_0``, no digits of other scripts); its range, and whether it may be inf or
+    nan, is checked where it is used."""
+    if not _PLAIN_NUMBER.fullmatch(text):
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}")
+    return float(text)
+
+
+def plain_int(text: str) -> int:
+    """A whole number spelled plainly; its range is checked where it is used."""
+    return _integer(text)
+
+
 def seconds(text: str) -> float:
     """A duration in seconds: finite and > 0 (the size of the run is checked against memory later)."""
     v = _number(text)

@@ -573,6 +573,17 @@ def test_a_number_in_an_odd_spelling_is_refused(tmp_path, words, said):
     _untouched(tmp_path, before)
 
 
+@pytest.mark.parametrize("words,said", [
+    (["launch", "--drop-states", "0_1"], "--drop-states: expected a number, got '0_1'"),     # read as 1.0
+    (["launch", "--delay-efforts", "\u0665"], "--delay-efforts: expected a number, got '\u0665'"),
+    (["launch", "--fault-seed", "1_2"], "--fault-seed: expected a whole number, got '1_2'"),
+    (["launch", "--live", "8_765"], "--live: expected a whole number, got '8_765'")], ids=lambda v: str(v)[:30])
+def test_launchs_fault_and_live_flags_take_plain_numbers_too(words, said):
+    """They were type=float/int: ``--drop-states 0_1`` dropped every state message (float('0_1') is 1.0)."""
+    r = run_cli(*words)
+    _assert_one_line(r.returncode, r.stdout, r.stderr, said)
+
+
 @pytest.mark.parametrize("text", ["10", "+10", "0.5", ".5", "5.", "1e-3", "2.5E+3"])
 def test_a_plainly_written_number_is_read(text):
     from pa10_dnbs.cli_values import seconds, whole_in

@@ -32,6 +32,7 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
+from ..cli_values import plain_float
 from ..core.joint_trajectory import JointTrajectory as Trajectory
 from ..core.joint_trajectory import TrajectoryError
 from ..interrupt import EXIT_INTERRUPTED
@@ -94,15 +95,15 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="trajectory_sender", description=__doc__.splitlines()[0])
     ap.add_argument("files", nargs="+", type=Path, metavar="FILE")
     ap.add_argument("--namespace", default=DEFAULT_NS, help="the arm's namespace (default /pa10)")
-    ap.add_argument("--after-clock", type=float, default=0.0, metavar="S",
+    ap.add_argument("--after-clock", type=plain_float, default=0.0, metavar="S",
                     help="send once /clock has reached S seconds of simulated time (default 0: at once)")
     gaps = ap.add_mutually_exclusive_group()
-    gaps.add_argument("--gap", type=float, default=0.0, metavar="S",
+    gaps.add_argument("--gap", type=plain_float, default=0.0, metavar="S",
                       help="wall time between two files [s] (default 0)")
-    gaps.add_argument("--clock-gap", type=float, default=0.0, metavar="S",
+    gaps.add_argument("--clock-gap", type=plain_float, default=0.0, metavar="S",
                       help="simulated time between two files [s], on /clock (default 0)")
-    ap.add_argument("--stamp", type=float, default=0.0, metavar="S", help="header.stamp [s] (default 0)")
-    ap.add_argument("--wait", type=float, default=60.0, metavar="S",
+    ap.add_argument("--stamp", type=plain_float, default=0.0, metavar="S", help="header.stamp [s] (default 0)")
+    ap.add_argument("--wait", type=plain_float, default=60.0, metavar="S",
                     help="wall time to wait for the subscriber, /clock and each acknowledgement (default 60)")
     args = ap.parse_args(argv)
     try:

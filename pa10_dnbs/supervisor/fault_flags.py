@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 from dataclasses import dataclass, fields
 
+from ..cli_values import plain_float, plain_int
 from ..config import LINK_DELAY_MAX_MS, ConfigError
 from ..faults.link_faults import CORRUPT_KINDS
 from ..settings import FaultSettings, Settings, replace_in
@@ -46,19 +47,19 @@ class FaultFlags:
 def add_fault_arguments(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("fault injection (override the config's faults section)")
     g.add_argument("--fault-joints", default=None, metavar="J,J", help="joints the flags below apply to (default all)")
-    g.add_argument("--drop-states", type=float, metavar="FRACTION", help="drop this fraction of state messages")
-    g.add_argument("--drop-efforts", type=float, metavar="FRACTION", help="drop this fraction of effort messages")
-    g.add_argument("--delay-states", type=float, metavar="MS", help="delay every state message by MS (0-1000)")
-    g.add_argument("--delay-efforts", type=float, metavar="MS", help="delay every effort message by MS (0-1000)")
-    g.add_argument("--jitter-states", type=float, metavar="MS", help="plus a uniform random 0..MS (MS 0-1000)")
-    g.add_argument("--jitter-efforts", type=float, metavar="MS", help="plus a uniform random 0..MS (MS 0-1000)")
+    g.add_argument("--drop-states", type=plain_float, metavar="FRACTION", help="drop this fraction of state messages")
+    g.add_argument("--drop-efforts", type=plain_float, metavar="FRACTION", help="drop this fraction of effort messages")
+    g.add_argument("--delay-states", type=plain_float, metavar="MS", help="delay every state message by MS (0-1000)")
+    g.add_argument("--delay-efforts", type=plain_float, metavar="MS", help="delay every effort message by MS (0-1000)")
+    g.add_argument("--jitter-states", type=plain_float, metavar="MS", help="plus a uniform random 0..MS (MS 0-1000)")
+    g.add_argument("--jitter-efforts", type=plain_float, metavar="MS", help="plus a uniform random 0..MS (MS 0-1000)")
     g.add_argument("--corrupt-states", metavar="KIND:FRACTION",
                    help=f"replace the position in this fraction of states by KIND ({', '.join(CORRUPT_KINDS)})")
     g.add_argument("--corrupt-efforts", metavar="KIND:FRACTION", help="replace the torque in this fraction of efforts")
     g.add_argument("--kill", action="append", default=[], metavar="JOINT@SECONDS",
                    help="the joint's controller process dies (SIGKILL) at this simulated time (0 <= SECONDS < "
                         "duration); repeatable, once per joint")
-    g.add_argument("--fault-seed", type=int, default=None, metavar="N", help="seed of the injected faults")
+    g.add_argument("--fault-seed", type=plain_int, default=None, metavar="N", help="seed of the injected faults")
 
 
 def _fraction(flag: str, text: str, below_one: bool = False) -> float:
