@@ -1,7 +1,7 @@
 """A second publisher where the graph expects one (rev_e 5): another node on a joint's effort topic beside its
 joint controller. The plant would apply whichever answer came first, so the run's numbers would not be its
 controller's alone (nor, in lockstep, the in-process run's); the plant counts the publishers and warns, the
-launcher's report and stderr say so and it exits 1 (docs/graph.md). One short lockstep run."""
+launcher's report and stderr say so and it exits 1 (docs/graph.md). One short lockstep run (3 s)."""
 import json
 import sys
 from pathlib import Path
@@ -21,7 +21,8 @@ def test_a_second_publisher_on_an_effort_topic_is_reported_and_fails_the_run(tmp
     out = tmp_path / "run"
     rival = Proc([sys.executable, HERE / "rival_publisher.py", domain, "/pa10/s1/effort"], domain)
     rival.wait_for("RIVAL READY", 60)
-    rc, la, pids, _ = Launcher.beside(rival, "--mode", "lockstep", "--duration", 1.0, "--out", out, domain_id=domain)
+    # 3 s: the plant must match the rival's publisher while it runs (a 1 s run once ended first in a loaded CI)
+    rc, la, pids, _ = Launcher.beside(rival, "--mode", "lockstep", "--duration", 3.0, "--out", out, domain_id=domain)
     assert rc == 1, la.output
     stats = json.loads((out / "plant_stats.json").read_text())
     assert [j["effort_publishers"] for j in stats["joints"]] == [2, 1, 1, 1, 1, 1, 1], stats["joints"]

@@ -315,6 +315,8 @@ class PlantNode(Node):
             run_lockstep(self, executor, stop)
         else:
             run_realtime(self, executor, stop)
+        if self.finished:   # once more at the end: the timer may have been starved, or a match come late
+            self.count_effort_publishers()
         if self.finished and not stop.done() and not self.endpoints.flush(FINAL_FLUSH_S, stop) and not stop.done():
             # the observer lags on a loaded machine: give it the run's last states before the writers go
             self.get_logger().warning(f"not every subscriber acknowledged the last states within {FINAL_FLUSH_S:g} s")
