@@ -22,6 +22,7 @@ import time
 from contextlib import contextmanager
 from pathlib import Path
 
+from .file_path import absolute
 from .refused import Refused
 
 
@@ -61,10 +62,7 @@ def _sweep_stale(directory: Path) -> None:
 def path_key(path: Path) -> str:
     """The lock's name for ``path``: its resolved form; made absolute only, where links loop or the path is too
     long to resolve (nothing can be read or written there: the command's own check says so)."""
-    try:
-        return str(Path(path).resolve())
-    except (OSError, RuntimeError):   # RuntimeError: Path.resolve's "Symlink loop from ..."
-        return os.path.abspath(path)
+    return str(absolute(Path(path)))
 
 
 def lock_output(path: Path, what: str = "output directory") -> None:

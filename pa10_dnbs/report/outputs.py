@@ -26,6 +26,7 @@ from pathlib import Path
 import yaml
 
 from ..interrupt import deferred, on_second_sigint, outputs_written
+from ..file_path import shown
 from ..json_text import json_text
 from ..kinematics.urdf_chain import UrdfChain
 from ..output_lock import holds_output, lock_output, path_key, release_output
@@ -91,20 +92,14 @@ def _one_line(out: Path, flag: str):
     except OutputExistsError:
         raise
     except RuntimeError:   # Path.resolve's "Symlink loop from ..."
-        raise OutputExistsError(f"{flag}: {shown_path(out)}: a loop of symbolic links in the path") from None
+        raise OutputExistsError(f"{flag}: {shown(out)}: a loop of symbolic links in the path") from None
     except OSError as exc:
-        where = f" ({shown_path(exc.filename)})" if exc.filename and str(exc.filename) != str(out) else ""
-        raise OutputExistsError(f"{flag}: {shown_path(out)}: {exc.strerror or exc}{where}") from None
+        where = f" ({shown(exc.filename)})" if exc.filename and str(exc.filename) != str(out) else ""
+        raise OutputExistsError(f"{flag}: {shown(out)}: {exc.strerror or exc}{where}") from None
 
 
 #: abspath -> what was there ((device, inode) or None) when the run holding its lock first checked that folder
 _checked: dict[str, tuple[int, int] | None] = {}
-
-
-def shown_path(path, room: int = 120) -> str:
-    """``path`` as a message shows it: whole up to ``room`` characters, else its start and end around '...'."""
-    text = str(path)
-    return text if len(text) <= room else f"{text[:room // 2]}...{text[-(room // 2 - 3):]}"
 
 
 def _check_output_dir(out: Path, force: bool, flag: str, inputs: dict | None,
@@ -293,7 +288,7 @@ def _check_creatable(path: Path, flag: str) -> None:
         if os.path.lexists(above):
             if above.is_symlink() and not above.exists():   # a link to nothing: the run's end could not make it
                 raise OutputExistsError(f"{flag}: {above} is a symbolic link to {os.readlink(above)}, which does "
-                                        f"not exist (output {shown_path(path)})")
+                                        f"not exist (output {shown(path)})")
             break
     parent = Path(path).resolve().parent
     while not parent.exists():

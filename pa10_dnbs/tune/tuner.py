@@ -95,20 +95,27 @@ def quiet_optuna() -> None:
 def storage_key(url: str) -> str:
     """What names the storage at ``url``: an SQLite file as ``sqlite:///`` and its resolved path (a relative
     path, ``//`` in it, or a tune's default ``DIR/tune.db`` name the same file alike); any other URL as given."""
+    from ..output_lock import path_key
+
+    file = _sqlite_file(url)
+    return url if file is None else f"sqlite:///{path_key(file)}"
+
+
+def _sqlite_file(url: str):
+    """The file (a Path, ``~`` expanded) of an SQLite URL, or None: another database, in memory, a ``file:`` URI,
+    or not a URL (open_storage says so)."""
+    from pathlib import Path
+
     from sqlalchemy.engine import make_url
 
     try:
         u = make_url(url)
-    except Exception:   # noqa: BLE001 - not a URL: open_storage says so
-        return url
+    except Exception:   # noqa: BLE001 - not a URL
+        return None
     db = u.database or ""
     if u.get_backend_name() != "sqlite" or db in ("", ":memory:") or db.startswith("file:"):
-        return url
-    from pathlib import Path
-
-    from ..output_lock import path_key
-
-    return f"sqlite:///{path_key(Path(db).expanduser())}"
+        return None
+    return Path(db).expanduser()
 
 
 def study_lock_key(url: str, study_name: str) -> str:
@@ -142,21 +149,10 @@ def check_persistent(url: str) -> None:
 def check_storage_file(url: str) -> None:
     """ConfigError naming --storage for an SQLite file that exists and is no Optuna storage (not SQLite, or a
     database with tables of its own): the tune would add its tables to a file of the user's."""
-    from pathlib import Path
-
-    from sqlalchemy.engine import make_url
-
     from ..report.outputs import not_optuna_storage
 
-    try:
-        u = make_url(url)
-    except Exception:   # noqa: BLE001 - not a URL: open_storage says so
-        return
-    db = u.database or ""
-    if u.get_backend_name() != "sqlite" or db in ("", ":memory:") or db.startswith("file:"):
-        return
-    path = Path(db).expanduser()
-    if path.is_file() and (why := not_optuna_storage(path)):
+    path = _sqlite_file(url)
+    if path is not None and path.is_file() and (why := not_optuna_storage(path)):
         raise ConfigError(f"storage: {path} is not a tune's storage ({why}): a tune would add its tables to it; give "
                           "a new file or the storage of a tune", setting="storage")
 
