@@ -16,8 +16,9 @@ def chain_joints(chain: UrdfChain, tip_link: str | None = None) -> list[UrdfJoin
     """Joints from the root link to ``tip_link``, in order. With no tip, the chain of movable joints from the
     root: at each link, child branches that hold only fixed joints (base, tool, flange and sensor frames) are
     skipped and the branch with the most movable joints on its longest path is followed; where several tie
-    (a gripper's fingers) the chain ends before them. Raises ValueError if ``tip_link`` is not a link of the
-    URDF."""
+    and one of them is a gripper's (:func:`_gripper_fork`: fingers) the chain ends before them. Raises
+    ValueError if ``tip_link`` is not a link of the URDF, or if the tree forks into equal branches that are
+    not a gripper's (two arms, legs, wheels, a hand's fingers): which one is the arm only ``tip_link`` says."""
     by_parent: dict[str, list[UrdfJoint]] = {}
     by_child: dict[str, UrdfJoint] = {}
     for j in chain.joints:
@@ -37,10 +38,40 @@ def chain_joints(chain: UrdfChain, tip_link: str | None = None) -> list[UrdfJoin
         scores = [(j, (j.kind != "fixed") + depth[j.child]) for j in by_parent.get(link, ())]
         best = max((s for _, s in scores), default=0)
         top = [j for j, s in scores if s == best]
-        if best == 0 or len(top) > 1:
+        if best == 0:
             return path
+        if len(top) > 1:
+            after = sum(j.kind != "fixed" for j in path)
+            names = ", ".join(j.name for j in top)
+            if _gripper_fork(top, by_parent):
+                if after:
+                    return path   # the arm ends at its gripper
+                raise ValueError(f"the chain from {chain.root_link} forks at link {link!r} into a gripper's "
+                                 f"fingers ({names}) before any arm joint: not an arm (tip_link in an arm file "
+                                 f"drives one finger's joints as one)")
+            raise ValueError(f"the chain from {chain.root_link} forks at link {link!r}"
+                             f"{f' after {_joints(after)}' if after else ''} into {len(top)} branches of "
+                             f"{_joints(best)} each (first joints: {names}): name the arm's last link with "
+                             f"tip_link in an arm file (docs/arms.md)")
         path.append(top[0])
         link = top[0].child
+
+
+def _joints(n: int) -> str:
+    return f"{n} movable joint{'s' if n != 1 else ''}"
+
+
+def _gripper_fork(branches: list[UrdfJoint], by_parent: dict[str, list[UrdfJoint]]) -> bool:
+    """Whether tied ``branches`` are a gripper's: one of them starts (its joint, or the first movable joint
+    below a fixed one) with a prismatic joint or a joint named *grip*, *finger*, *jaw* or *claw*."""
+    for j in branches:
+        while j.kind == "fixed" and len(by_parent.get(j.child, ())) == 1:
+            if GRIPPER_NAME.search(j.name):
+                return True
+            j = by_parent[j.child][0]
+        if j.kind == "prismatic" or GRIPPER_NAME.search(j.name):
+            return True
+    return False
 
 
 def _movable_depth(chain: UrdfChain, by_parent: dict[str, list[UrdfJoint]]) -> dict[str, int]:
