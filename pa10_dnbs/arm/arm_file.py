@@ -22,6 +22,7 @@ from ..config_error import first_unknown, short, too_large
 from ..config_yaml import read_yaml
 from ..kinematics.urdf_chain import UrdfChain
 from ..kinematics.urdf_tree import UrdfError
+from ..kinematics.urdf_xml import urdf_root
 from .arm import Arm
 from .arm_path import ArmError, arm_file_path, existing_file, is_urdf, preset_names  # noqa: F401 (the API)
 from .chain_select import actuated_joints
@@ -237,7 +238,7 @@ def _vector(path: Path, key: str, value, n: int, strict: bool) -> np.ndarray:
 
 def _links(xml: str) -> dict[str, ET.Element | None]:
     """Link name -> its <inertial> element (None when it has none)."""
-    return {el.get("name"): el.find("inertial") for el in ET.fromstring(xml).findall("link")}
+    return {el.get("name"): el.find("inertial") for el in urdf_root(xml).findall("link")}
 
 
 def _check_inertia(urdf: Path, inertial, link: str, joint: str) -> None:

@@ -35,6 +35,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..kinematics.urdf_xml import urdf_root
+
 CACHE_DIR_NAME = "pa10_dnbs_urdf"  # under the system's temporary directory
 MARGIN = 1e-6                      # relative margin a repaired tensor keeps from the triangle inequality's edge
 EDGE = 1e-9                        # off-diagonal tensors: I1 + I2 - I3 down to -EDGE I3 counts as on the edge
@@ -52,7 +54,7 @@ def plant_urdf(urdf: Path) -> tuple[Path | None, list[str]]:
 
     Raises ValueError naming the link for an inertia that cannot be repaired, ET.ParseError for bad XML.
     """
-    root = ET.parse(urdf).getroot()
+    root = urdf_root(urdf.read_bytes())
     root_link = _root_link(root)
     changed, notes = False, []
     for link in root.findall("link"):

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .urdf_xml import urdf_root
 from .urdf_tree import (JOINT_TYPES, MAX_AXIS, MAX_OFFSET_M, UrdfError, check_link, check_name, number, tree_root,
                         vector3)
 
@@ -120,7 +121,7 @@ class UrdfChain:
     uniquely named links and joints with well-formed vectors and limits (:mod:`.urdf_tree`)."""
 
     def __init__(self, urdf_xml: str):
-        root = ET.fromstring(urdf_xml)
+        root = urdf_root(urdf_xml)
         if root.tag != "robot":
             raise ValueError(f"not a URDF: root element is <{root.tag}>, expected <robot>")
         self.robot_name = root.get("name", "")
