@@ -27,6 +27,7 @@ from .arm import Arm
 from .arm_path import ArmError, arm_file_path, existing_file, is_urdf, preset_names  # noqa: F401 (the API)
 from .chain_select import actuated_joints
 from .package_uri import is_package_uri, resolve_package_uri
+from .placeholder_inertia import placeholder_inertias
 from .plant_urdf import plant_urdf
 
 DEFAULT_ARM = "pa10"
@@ -93,6 +94,8 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
                            f"(<joint>.npz checkpoints); rename it in the URDF")
     for j in actuated:
         _check_inertia(urdf, links.get(j.child), j.child, j.name)
+    for line in placeholder_inertias(chain, links, actuated[0].child):
+        print(f"warning: {urdf}: {line}", file=sys.stderr)
     lower = np.array([j.lower for j in actuated], dtype=float)
     upper = np.array([j.upper for j in actuated], dtype=float)
     bad = [j.name for j in actuated if j.kind == "revolute" and not (math.isfinite(j.lower)
