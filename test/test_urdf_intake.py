@@ -14,6 +14,7 @@ import pybullet
 import pytest
 import yaml
 
+from chain_urdf import chain_urdf
 from cli_runner import run_cli
 from script_module import load_script
 from pa10_dnbs.arm import ArmError, load_arm
@@ -371,3 +372,15 @@ def test_a_binary_arm_file_or_urdf_is_refused_in_one_line(tmp_path):
         r = run_cli("arm", "--arm", path)
         assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
         assert f"{path}: not " in r.stderr and "not UTF-8" in r.stderr, r.stderr
+
+
+def test_a_robot_without_a_name_loads_named_after_its_file(tmp_path):
+    """xacro output without ``<robot name>`` (ROBOTIS' open_manipulator.urdf): PyBullet refuses it ("Expected a name
+    for robot"); the cleaned copy is named after the file, and the plant is the URDF's."""
+    named = chain_urdf(3)
+    (tmp_path / "named.urdf").write_text(named)
+    (tmp_path / "nameless.urdf").write_text(named.replace('<robot name="chain">', "<robot>"))
+    arm = load_arm(tmp_path / "nameless.urdf")
+    assert ET.parse(arm.plant_urdf).getroot().get("name") == "nameless"
+    d = compare_with_mujoco(arm, states=5, urdf=tmp_path / "named.urdf")
+    assert d.worst < MUJOCO_RTOL, d

@@ -1,13 +1,14 @@
 """The copy of a URDF that PyBullet loads, where the URDF as written would make PyBullet change its physics.
 
-PyBullet's importer departs from the URDF spec in four ways the plant must not inherit:
+PyBullet's importer departs from the URDF spec in five ways the plant must not inherit:
 
 - a link without ``<inertial>`` gets mass 1 kg and inertia diag(1, 1, 1) kg m^2 (the spec: massless);
 - an inertia tensor whose principal moments break the triangle inequality (one larger than the sum of the
   other two, which no mass distribution has) is set to zero ("Bad inertia tensor properties");
 - a mesh it cannot find (a ``package://`` URI outside a ROS workspace) stops the load;
 - a line longer than LINE_MAX bytes is read in pieces joined by a newline, which breaks (or silently changes)
-  the tag it falls in (a URDF written on one line: "PyBullet cannot load this URDF").
+  the tag it falls in (a URDF written on one line: "PyBullet cannot load this URDF");
+- a ``<robot>`` without a name is refused ("Expected a name for robot"): the copy is named after the file.
 
 :func:`plant_urdf` returns None when a URDF has none of these (it is loaded exactly as written: the presets),
 else the path of a cleaned copy, written once to a cache directory named by the copy's content hash, in which
@@ -68,6 +69,9 @@ def plant_urdf(urdf: Path) -> tuple[Path | None, list[str]]:
             notes.append(note)
             changed = True
     if _has_unusable_mesh(root, urdf.parent) or _longest_line(urdf.read_bytes()) > LINE_MAX:
+        changed = True
+    if not root.get("name", "").strip():   # PyBullet: "Expected a name for robot" (xacro output without one)
+        root.set("name", urdf.stem)
         changed = True
     if not changed:
         return None, []
