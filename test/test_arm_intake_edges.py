@@ -7,8 +7,9 @@ from pathlib import Path
 import pytest
 import yaml
 
+from chain_urdf import chain_urdf
 from cli_runner import run_cli
-from pa10_dnbs.arm import load_arm
+from pa10_dnbs.arm import ArmError, load_arm
 
 
 def _chain(names=("j1", "j2", "j3"), kind="revolute", axis="0 0 1", root="robot") -> str:
@@ -265,3 +266,15 @@ def test_a_flange_link_no_actuated_joint_moves_is_refused(tmp_path, flange):
     assert _refused(path) == (f"{path}: flange_link: {flange!r} is {where}: the flange must be a link the "
                               "actuated joints carry (the tip is 'l3')")
     assert load_arm(_arm_file(tmp_path, name="l1.yaml", urdf="camera.urdf", flange_link="l1")).flange_link == "l1"
+
+
+def test_a_joint_to_an_undefined_world_link_says_how_to_define_it(tmp_path):
+    """Drake's and Gazebo's URDFs fix the base to 'world' without a <link name="world"/> (Drake's pr2_simplified)."""
+    text = chain_urdf(2).replace('<joint name="j1"', '<joint name="fix" type="fixed"><parent link="world"/>'
+                                                      '<child link="l0"/></joint><joint name="j1"', 1)
+    (tmp_path / "w.urdf").write_text(text)
+    with pytest.raises(ArmError, match=r"joint 'fix': its parent link 'world' is not defined \(no <link name='world'>\); "
+                                       r"Gazebo and Drake read 'world' as the world frame.*add <link name=\"world\"/>$"):
+        load_arm(tmp_path / "w.urdf")
+    (tmp_path / "w.urdf").write_text(text.replace('<link name="l0">', '<link name="world"/><link name="l0">', 1))
+    assert load_arm(tmp_path / "w.urdf").joint_names == ("j1", "j2")

@@ -121,7 +121,10 @@ def tree_root(links: list[str], joints: list[tuple[str, str, str]]) -> str:
         names.add(name)
         for role, link in (("parent", parent), ("child", child)):
             if link not in seen:
-                raise UrdfError(f"joint {name!r}: its {role} link {link!r} is not defined (no <link name={link!r}>)")
+                world = ("; Gazebo and Drake read 'world' as the world frame, the URDF spec (and urdfdom) as a link it "
+                         "must define: add <link name=\"world\"/>" if (role, link) == ("parent", "world") else "")
+                raise UrdfError(f"joint {name!r}: its {role} link {link!r} is not defined (no <link name={link!r}>)"
+                                f"{world}")
         if child in parent_joint:
             raise UrdfError(f"link {child!r} is the child of two joints, {parent_joint[child][0]!r} and {name!r} "
                             f"(a URDF is a tree: one parent joint per link)")
