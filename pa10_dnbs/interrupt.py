@@ -34,6 +34,7 @@ import time
 EXIT_INTERRUPTED = 130   # 128 + SIGINT, as a shell reports a command ended by Ctrl-C
 POLL_S = 0.1            # how often a waiting executor looks at a deferred Ctrl-C
 PR_SET_PDEATHSIG = 1    # prctl(2): the signal a process gets when its parent dies (linux/prctl.h)
+LAUNCHER_PID_ENV = "PA10_DNBS_LAUNCHER_PID"   # a node's launcher: the node stops when it dies (ros/runtime.py)
 #: what stops a command: Ctrl-C, and SIGTERM (``kill``, ``timeout``, a batch scheduler's cancel), taken alike
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 #: the same signal again this soon [s] after the first is the same stop, not a second Ctrl-C: GNU timeout sends
@@ -55,15 +56,23 @@ def pool_worker_start(parent_pid: int) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, set(STOP_SIGNALS))   # held back while it was forked
+    if not signal_on_parent_death(signal.SIGKILL, parent_pid):
+        os._exit(0)
+
+
+def signal_on_parent_death(sig: int, parent_pid: int) -> bool:
+    """Have Linux send ``sig`` to this process once its parent dies, by any signal, SIGKILL and the OOM killer
+    too (PR_SET_PDEATHSIG; the parent is the thread that forked it: every command forks from its main thread);
+    False when the parent, ``parent_pid``, is gone already (it died before the request). True where the
+    request is not available (not Linux)."""
     try:
         import ctypes
 
         libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+        libc.prctl(PR_SET_PDEATHSIG, int(sig), 0, 0, 0)
     except (OSError, AttributeError):  # pragma: no cover - not Linux
-        return
-    if os.getppid() != parent_pid:
-        os._exit(0)
+        return True
+    return os.getppid() == parent_pid
 
 
 @contextlib.contextmanager

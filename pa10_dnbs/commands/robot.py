@@ -10,12 +10,14 @@ imports rclpy.
 """
 from __future__ import annotations
 
+import os
 import signal
 import subprocess
 import sys
 from pathlib import Path
 
 from ..config import ConfigError, default_config_path
+from ..interrupt import LAUNCHER_PID_ENV
 from .options import RobotCommandOptions
 from ..run_settings import build_settings
 from ..run_steps import run_steps
@@ -63,7 +65,7 @@ def run_robot(options: RobotCommandOptions) -> int:
     for stream in (sys.stdout, sys.stderr):   # None when closed at start (>&-)
         if stream is not None:
             stream.flush()
-    child = subprocess.Popen(argv)
+    child = subprocess.Popen(argv, env={**os.environ, LAUNCHER_PID_ENV: str(os.getpid())})   # dies with this one
     passed_on = {sig: signal.signal(sig, lambda signum, _f: child.send_signal(signum))
                  for sig in (signal.SIGINT, signal.SIGTERM)}
     try:

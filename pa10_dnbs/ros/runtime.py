@@ -44,6 +44,7 @@ from rclpy.experimental import EventsExecutor
 from rclpy.task import Future
 
 from . import exit_deadline
+from ..interrupt import LAUNCHER_PID_ENV, signal_on_parent_death
 from ..wire.robot_interface import RobotFault
 from .param_overrides import bad_param_override
 from .params import ParameterError
@@ -124,6 +125,15 @@ def spin_until(executor, future: Future, stop: Future) -> None:
         executor.spin_until_future_complete(future, timeout_sec=SLICE_S)
 
 
+def _stop_with_launcher(stop: SignalStop) -> None:
+    """A node a launcher started (its pid in LAUNCHER_PID_ENV) stops as on Ctrl-C once that launcher dies, also
+    by SIGKILL (interrupt.signal_on_parent_death: SIGINT); one whose launcher is gone already stops at once. A
+    node started by hand (commands.sh) has no such variable and runs on its own."""
+    launcher = os.environ.get(LAUNCHER_PID_ENV, "")
+    if launcher.isdigit() and not signal_on_parent_death(signal.SIGINT, int(launcher)):
+        stop.request(signal.SIGINT.name)
+
+
 def announce_ready(name: str) -> None:
     """The line launchers and tests wait for."""
     print(f"READY {name}", flush=True)
@@ -147,6 +157,7 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
     on_signal = stop_on_signal(stop)
     signal.signal(signal.SIGINT, on_signal)
     signal.signal(signal.SIGTERM, on_signal)
+    _stop_with_launcher(stop)
     faulthandler.register(signal.SIGUSR1, file=sys.stderr, all_threads=True)  # where a stuck node is stuck
     node = None
     executor = EventsExecutor()

@@ -4,14 +4,16 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from ..interrupt import LAUNCHER_PID_ENV
 from .graph_options import GraphOptions
 from .node_specs import NODE_GROUPS, node_group
 
 
 def node_env(domain_id: int, discovery_range: str = "LOCALHOST") -> dict:
-    """Children's environment: ``discovery_range`` LOCALHOST on one host, SUBNET across (network namespaces)."""
+    """Children's environment: ``discovery_range`` LOCALHOST on one host, SUBNET across (network namespaces);
+    this process as their launcher (they stop when it dies: ros/runtime.py)."""
     env = {**os.environ, "ROS_DOMAIN_ID": str(domain_id), "ROS_AUTOMATIC_DISCOVERY_RANGE": discovery_range,
-           "PYTHONUNBUFFERED": "1"}
+           "PYTHONUNBUFFERED": "1", LAUNCHER_PID_ENV: str(os.getpid())}
     env.pop("ROS_LOCALHOST_ONLY", None)  # deprecated in Jazzy; conflicts with the discovery range
     return env
 
