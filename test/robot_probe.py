@@ -10,7 +10,8 @@ until its command comes. From step STEP on it injects FAULT: ``stop`` (publishes
 ``missing`` (leaves joint index 2 of the arm out of the names), ``nan`` (position of the arm's second joint is
 NaN), ``dup`` (names the arm's first joint a second time, last, at 5 rad), ``beyond`` (the arm's first joint
 0.2 rad beyond its upper limit: past the joint controllers' guard margin), ``rival`` (a second publisher on the
-command topic from the start: another commander; it sends nothing), ``frozen`` (every state from STEP on stamped
+command topic from the start: another commander; it sends nothing), ``twin`` (a second publisher on the state
+topic from the start: another robot; it sends nothing), ``frozen`` (every state from STEP on stamped
 as state STEP), ``back`` (the stamps restart from the first one's at STEP: a restarted simulation), ``skip`` (the
 stamps from STEP on one step later: 2 steps after the previous one), ``nowait`` (from STEP on, states without
 waiting for commands: STEP + 1's right behind STEP's, then every 1 ms of wall time), ``none`` (no fault). Prints
@@ -46,6 +47,8 @@ def main() -> int:
     node.create_subscription(JointState, "/robot_joint_command", commands.append, qos)
     if fault == "rival":
         rival = node.create_publisher(JointState, "/robot_joint_command", qos)  # noqa: F841 - kept for the run
+    if fault == "twin":
+        twin = node.create_publisher(JointState, "/robot_joint_states", qos)  # noqa: F841 - kept for the run
     stop = []
     signal.signal(signal.SIGINT, lambda *_: stop.append(1))
     signal.signal(signal.SIGTERM, lambda *_: stop.append(1))

@@ -197,6 +197,26 @@ def test_a_second_commander_of_the_robot_is_a_robot_fault(tmp_path, domain):
     _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)
 
 
+def test_a_second_robot_on_the_state_topic_is_a_robot_fault(tmp_path, domain):
+    """Two robots publishing on one state topic: the bus would take both's states as one robot's and drive both
+    (the run ended 0 with 20x the error before, its counters alone showing duplicate and old states). One more
+    publisher on the state topic (the probe's own, silent) is a ROBOT FAULT naming them, after the safe command."""
+    shm_before = shm_files()
+    robot = Proc([sys.executable, HERE / "robot_probe.py", domain, "twin", 0], domain)
+    robot.wait_for("PROBE READY", 60)
+    rc, la, pids, _ = Launcher.beside(robot, "--robot", "external", "--duration", 3.0, "--out", tmp_path / "run",
+                                      domain_id=domain)
+    assert rc == 1, la.output
+    lines = [x for x in la.output.splitlines() if "ROBOT FAULT:" in x]
+    assert len(lines) == 1, la.output
+    assert re.search(r"more than one publisher on the robot's state topic /robot_joint_states \(publishers: "
+                     r"(/robot_probe|a node not known by name yet), (/robot_probe|a node not known by name yet)\)",
+                     lines[0]), lines
+    commands = [json.loads(x.split(" ", 3)[3]) for x in robot.output.splitlines() if x.startswith("COMMAND ")]
+    assert commands and commands[-1] == [0.0] * 7, commands[-3:]  # the safe command last
+    _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)
+
+
 def test_the_last_command_to_a_paced_robot_is_zero_effort(tmp_path, domain):
     """rev_e 18: a paced robot (the probe, not waiting for commands) goes on applying the last command it got once
     the run is over; the bus's last act is the zero-effort command, as on a fault."""

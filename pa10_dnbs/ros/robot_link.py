@@ -10,7 +10,8 @@ Faults (``RobotFault``, one line): a joint missing or named twice, a non-finite 
 state within ``timeout_s`` of wall time, another publisher on the command topic (a second commander: another
 graph or controller driving the same robot, which would take whichever command came first; checked once the
 first state is in, then every ``COMMANDERS_CHECK_S`` of wall time, as ros2_control refuses a second
-controller claiming a joint); before raising, one command of zero effort on every joint goes out
+controller claiming a joint) or on the state topic (a second robot, whose states would be taken as this one's,
+checked alike); before raising, one command of zero effort on every joint goes out
 (``send_safe``). Joints are matched by name (``wire/robot_interface.py``).
 """
 from __future__ import annotations
@@ -164,20 +165,28 @@ class RemoteRobot:
         return True
 
     def check_commanders(self, force: bool = False) -> None:
-        """RobotFault (after the safe command) when the command topic has a publisher besides this bus: another
-        commander of the robot. Looks at most every COMMANDERS_CHECK_S of wall time unless ``force``."""
+        """RobotFault (after the safe command) when the command topic has a publisher besides this bus (another
+        commander of the robot) or the state topic has more than one (another robot). Looks at most every
+        COMMANDERS_CHECK_S of wall time unless ``force``."""
         now = time.monotonic()
         if not force and now < self._next_commanders_check:
             return
         self._next_commanders_check = now + COMMANDERS_CHECK_S
         topic = self._pub.topic_name
-        if self._node.count_publishers(topic) <= 1:
-            return
-        who = sorted(f"{i.node_namespace.rstrip('/')}/{i.node_name}" if "_UNKNOWN_" not in i.node_name
-                     else "a node not known by name yet" for i in self._node.get_publishers_info_by_topic(topic))
-        self.fault(f"another publisher on the robot's command topic {topic} besides this bus (publishers: "
-                   f"{', '.join(who)}): a robot takes commands from one controller, and this one would get "
-                   "whichever came first (another graph or controller driving it? stop it)")
+        if self._node.count_publishers(topic) > 1:
+            self.fault(f"another publisher on the robot's command topic {topic} besides this bus (publishers: "
+                       f"{self._publishers(topic)}): a robot takes commands from one controller, and this one "
+                       "would get whichever came first (another graph or controller driving it? stop it)")
+        if self._node.count_publishers(self.state_topic) > 1:
+            self.fault(f"more than one publisher on the robot's state topic {self.state_topic} (publishers: "
+                       f"{self._publishers(self.state_topic)}): this bus would take the states of two robots "
+                       "as one, and command both (a second robot, or a bag replayed on it? stop it)")
+
+    def _publishers(self, topic: str) -> str:
+        """The publishers of ``topic``, by node name (one that discovery has not named yet, as such)."""
+        return ", ".join(sorted(f"{i.node_namespace.rstrip('/')}/{i.node_name}" if "_UNKNOWN_" not in i.node_name
+                                else "a node not known by name yet"
+                                for i in self._node.get_publishers_info_by_topic(topic)))
 
     def take_state(self) -> bool:
         """Paced: take what is queued; True when a new state became the current one (a newer one that came
