@@ -9,8 +9,8 @@ from builtin_interfaces.msg import Time
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from ..wire import steps
-from ..wire.topics import (CLOCK, JOINT_STATES, ROBOT_DESCRIPTION, TF, TF_STATIC,  # noqa: F401 (re-exported)
-                          effort_topic, reference_topic, state_topic)
+from ..wire.topics import (CLOCK, JOINT_STATES, REFERENCE_DEPTH, ROBOT_DESCRIPTION, TF,  # noqa: F401 (re-exported)
+                          TF_STATIC, effort_topic, reference_topic, state_topic)
 
 
 def loop_qos(reliability: str, depth: int = 10) -> QoSProfile:
@@ -20,7 +20,7 @@ def loop_qos(reliability: str, depth: int = 10) -> QoSProfile:
                       durability=DurabilityPolicy.VOLATILE)
 
 
-def reference_qos(depth: int = 20) -> QoSProfile:
+def reference_qos(depth: int = REFERENCE_DEPTH) -> QoSProfile:
     """Reference batches: reliable and transient-local, so a late subscriber gets the recent ones."""
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL)

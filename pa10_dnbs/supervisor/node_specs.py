@@ -15,7 +15,7 @@ import math
 import sys
 from pathlib import Path
 
-from ..wire.topics import CLOCK, DEFAULT_NS, DIAGNOSTICS, ArmTopics
+from ..wire.topics import CLOCK, DEFAULT_NS, DIAGNOSTICS, REFERENCE_DEPTH, ArmTopics
 from .graph_options import GraphOptions, loop_reliability
 
 NODE_GROUPS = ("observer", "reference", "controllers", "plant")
@@ -61,6 +61,15 @@ def reference_lookahead(opt: GraphOptions) -> int:
     often than every 100 steps (the plant must never need a reference past the next /clock)."""
     every = math.ceil(1.0 / (opt.clock_hz * opt.dt_s) - 1e-9)
     return max(150, every + 50)
+
+
+def reference_batch(opt: GraphOptions) -> int:
+    """Reference points per message: REALTIME_REFERENCE_BATCH in realtime, 100 in lockstep, or more where the
+    lookahead would take more than REFERENCE_DEPTH - 2 messages (a /clock below ~0.5 Hz in lockstep, ~3 Hz in
+    realtime): the reference endpoints keep REFERENCE_DEPTH, and the first batch, published with the whole
+    lookahead at the start, must still be there when a controller matches."""
+    batch = REALTIME_REFERENCE_BATCH if opt.mode == "realtime" else 100
+    return max(batch, math.ceil(reference_lookahead(opt) / (REFERENCE_DEPTH - 2)))
 
 
 def _yaml_list(items: list[str]) -> str:
@@ -117,7 +126,7 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
             "config_file": config_file, "host": opt.live_host, "port": opt.live_port, "display_hz": opt.live_hz})))
     # realtime: smaller reference batches, so that decoding one (in each controller) never costs a tick its
     # deadline; lockstep keeps 100 points per message (fewer messages, and timing does not matter there)
-    batch = REALTIME_REFERENCE_BATCH if opt.mode == "realtime" else 100
+    batch = reference_batch(opt)
     cmds.append(("reference", py + ["pa10_dnbs.ros.reference_node"] + ros(
         "reference", {"config_file": config_file, "duration_s": opt.duration_s, "batch_steps": batch,
                       "lookahead_steps": reference_lookahead(opt),

@@ -21,6 +21,9 @@ JOINT_STATES = "joint_states"
 ROBOT_DESCRIPTION = "robot_description"
 TRACKING = "tracking"  # the live view's JSON channel (Foxglove only, not a ROS topic)
 TRAJECTORY = "trajectory"  # trajectory_msgs/JointTrajectory of every joint, taken by the reference node
+#: reference batches each <joint>/reference endpoint keeps (KEEP_LAST, transient-local: ros/endpoints.py); the
+#: launcher sizes the batches so that the reference node's lookahead fits in fewer (supervisor/node_specs.py)
+REFERENCE_DEPTH = 20
 
 # global
 CLOCK = "/clock"
