@@ -178,3 +178,22 @@ def test_a_failed_rebuild_falls_back_to_numpy_under_auto_and_fails_in_one_line_u
                        capture_output=True, text=True, env=env, cwd=REPO)
     assert c.returncode == 2 and "Traceback" not in c.stderr, c.stderr
     assert "compiling" in c.stderr and not (tmp_path / "c").exists()
+
+
+def test_a_failed_launch_says_whose_bag_lies_at_record(tmp_path):
+    """``--record BAG --force`` over an earlier run's bag, the run failing before its recorder opened BAG: the
+    bag there is the earlier run's, and a user told "the bag recorded so far" would analyse it as this run's."""
+    from pa10_dnbs.commands.launch_record import bag_stamp, failed_run_bag_note
+
+    bag = tmp_path / "bag"
+    assert failed_run_bag_note(bag, bag_stamp(bag)) is None   # no bag there at all
+    bag.mkdir()
+    (bag / "metadata.yaml").write_text("rosbag2_bagfile_information: {}\n")
+    before = bag_stamp(bag)
+    assert failed_run_bag_note(bag, before) == f"this run recorded nothing: {bag} is still the earlier run's bag, untouched"
+    (bag / "metadata.yaml").unlink()   # the recorder replaced it, then finished what it had
+    (bag / "metadata.yaml").write_text("rosbag2_bagfile_information: {}\n")
+    later = before[1] + 10**9   # written a second later (the inode number may be the same one again)
+    os.utime(bag / "metadata.yaml", ns=(later, later))
+    assert failed_run_bag_note(bag, before) == f"the bag recorded so far is closed and readable: {bag}"
+    assert failed_run_bag_note(tmp_path / "new", None) is None

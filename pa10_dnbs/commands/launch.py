@@ -21,7 +21,7 @@ from ..supervisor.realtime_advice import ON_TIME_TARGET, injected_misses, realti
 from ..wire.topics import ArmTopics
 from ..wire.wire_record import load_wire_run
 from .launch_plan import plan_launch
-from .launch_record import bag_run
+from .launch_record import bag_run, bag_stamp, failed_run_bag_note
 from .launch_report import report_notes, second_effort_publishers, timing_summary
 from .options import LaunchOptions
 
@@ -41,6 +41,7 @@ def run_launch(options: LaunchOptions) -> int:
     settings, opt, config_path, dt, n_steps = plan.settings, plan.opt, plan.config_path, plan.dt_s, plan.n_steps
     the_arm, namespace, controller, mode, out = settings.arm, opt.namespace, o.controller, o.mode, o.out
     joint_names, record, init_from = the_arm.joint_names, plan.record, plan.init_from
+    bag_before = bag_stamp(record)   # an earlier run's bag that --force is to replace, if any
 
     try:
         with atomic_output_dir(out, o.force) as tmp:
@@ -81,8 +82,9 @@ def run_launch(options: LaunchOptions) -> int:
                 raise _keep_logs(exc, tmp, Path(out)) from None
     except GraphFailure as exc:
         print(f"pa10-dnbs launch: FAILED: {exc}", file=sys.stderr, flush=True)
-        if record is not None and (record / "metadata.yaml").is_file():
-            print(f"pa10-dnbs launch: the bag recorded so far is closed and readable: {record}", file=sys.stderr)
+        note = failed_run_bag_note(record, bag_before)
+        if note is not None:
+            print(f"pa10-dnbs launch: {note}", file=sys.stderr)
         return 130 if exc.interrupted else 1
     outputs_written(f"pa10-dnbs: interrupted as it finished: {out} is written whole ({out}/report.md)")
     m = metrics

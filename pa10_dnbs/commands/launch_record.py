@@ -51,3 +51,26 @@ def bag_run(bag_path: Path, dt: float, n_steps: int, controller: str, torque_lim
             problems.append(f"{topic} lacks {len(lost)} steps (first {min(lost)})")
     run = rec.run_data(controller, joint_names, torque_limit_nm, wall_time_s)
     return run, "; ".join(problems) or None
+
+
+def bag_stamp(bag_path: Path | None) -> tuple[int, int] | None:
+    """What identifies the bag at ``bag_path`` now: its metadata.yaml's (inode, modification time [ns]), None
+    when it has none (a bag is finished by writing it)."""
+    try:
+        st = (Path(bag_path) / "metadata.yaml").stat()
+    except (OSError, TypeError):
+        return None
+    return st.st_ino, st.st_mtime_ns
+
+
+def failed_run_bag_note(bag_path: Path | None, before: tuple[int, int] | None) -> str | None:
+    """The line a failed launch says of its ``--record`` bag (``before``: :func:`bag_stamp` at the start): the
+    part recorded is readable, or nothing was recorded and what lies there is an earlier run's bag (``--force``
+    replaces it only once this run's recorder opens it), or nothing (no bag there)."""
+    now = bag_stamp(bag_path)
+    if now is None:
+        return None
+    if now != before:
+        return f"the bag recorded so far is closed and readable: {bag_path}"
+    return f"this run recorded nothing: {bag_path} is still the earlier run's bag, untouched"
+
