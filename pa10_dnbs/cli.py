@@ -281,8 +281,8 @@ def build_parser() -> argparse.ArgumentParser:
                          "the sensor-data convention; in lockstep best_effort too, reliable when --record or "
                          "--netns is given; docs/timing.md)")
     la.add_argument("--effort-timeout", type=number_in(0, EFFORT_TIMEOUT_MAX_S), default=None, metavar="SECONDS",
-                    help="lockstep only: wall time to wait for a joint's effort before holding/zeroing it "
-                         "(default 1)")
+                    help="wall time to wait for a joint's effort before holding/zeroing it: every step in "
+                         "lockstep; in realtime, the handshake steps before the tick schedule starts (default 1)")
     la.add_argument("--on-missing-effort", choices=("hold", "zero"), default="hold",
                     help="what replaces a missing effort: the joint's last applied torque (hold) or zero")
     la.add_argument("--record", type=path_arg, default=None, metavar="BAG_DIR",

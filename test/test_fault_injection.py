@@ -1,4 +1,5 @@
 """Fault injection: seeded, at the configured rates, delays delivered late, flags validated."""
+import re
 import argparse
 import math
 import threading
@@ -81,3 +82,20 @@ def test_flags_override_the_chosen_joints(cfg):
 def test_bad_flags_name_themselves(cfg, argv, flag):
     with pytest.raises(ConfigError, match=flag):
         apply_fault_flags(cfg, _args(*argv))
+
+
+@pytest.mark.parametrize("argv, said", [
+    (("--fault-joints", "s2"), "--fault-joints: it picks the joints of --drop-*, --delay-*, --jitter-* and "
+                               "--corrupt-*, and none of them is given"),
+    (("--fault-joints", "s2", "--kill", "s1@1"), "--fault-joints: it picks the joints of"),   # --kill names its own
+    (("--fault-seed", "3"), "--fault-seed: no fault is injected")])
+def test_a_flag_that_would_do_nothing_is_refused(cfg, argv, said):
+    """Before, each was accepted and did nothing: a run the user believed faulty, or seeded, was neither."""
+    with pytest.raises(ConfigError, match=re.escape(said)):
+        apply_fault_flags(cfg, _args(*argv))
+
+
+def test_the_seed_alone_applies_to_the_configs_faults(cfg):
+    faulty = apply_fault_flags(cfg, _args("--drop-states", "0.1"))
+    assert apply_fault_flags(faulty, _args("--fault-seed", "3")).faults.seed == 3
+    assert apply_fault_flags(cfg, _args("--fault-seed", "3", "--kill", "s1@1")).faults.seed == 3

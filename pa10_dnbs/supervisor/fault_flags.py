@@ -133,11 +133,18 @@ def apply_fault_flags(settings: Settings, args: FaultFlags) -> Settings:
                               f"got {spec!r}")
         killed.add(joint)
         _set(faults, "kill_controller_at_s", [joint_names.index(joint)], t_s)
+    if args.fault_joints and all(getattr(args, d) is None for d in (*LINK_FLAGS, "corrupt_states", "corrupt_efforts")):
+        raise ConfigError("--fault-joints: it picks the joints of --drop-*, --delay-*, --jitter-* and --corrupt-*, "
+                          "and none of them is given")
     if args.fault_seed is not None:
         if args.fault_seed < 0:
             raise ConfigError(f"--fault-seed: expected an integer >= 0, got {args.fault_seed}")
         faults["seed"] = args.fault_seed
-    return replace_in(settings, "faults", FaultSettings.of(faults))
+    checked = FaultSettings.of(faults)
+    if args.fault_seed is not None and not faults_active(checked):
+        raise ConfigError("--fault-seed: no fault is injected (no fault flag, and the config's faults section "
+                          "injects none): the seed would draw nothing")
+    return replace_in(settings, "faults", checked)
 
 
 def check_kill_times(faults: FaultSettings, joint_names, duration_s: float, kill: tuple[str, ...] = ()) -> None:
