@@ -197,3 +197,12 @@ def test_a_failed_launch_says_whose_bag_lies_at_record(tmp_path):
     os.utime(bag / "metadata.yaml", ns=(later, later))
     assert failed_run_bag_note(bag, before) == f"the bag recorded so far is closed and readable: {bag}"
     assert failed_run_bag_note(tmp_path / "new", None) is None
+
+
+@pytest.mark.parametrize("value", ["-5", "300", "x"])
+def test_robot_refuses_a_domain_ros_2_does_not_accept(monkeypatch, value):
+    """``robot`` joins this shell's ROS_DOMAIN_ID: a negative one ran silently on some domain, 300 ended in the
+    DDS's colored "Calculated port number is too high" and exit 1."""
+    monkeypatch.setenv("ROS_DOMAIN_ID", value)
+    r = run_cli("robot", "--duration", "0.1")
+    assert r.returncode == 2 and r.stderr.startswith("pa10-dnbs: error: ROS_DOMAIN_ID: ") and r.stderr.count("\n") == 1, r
