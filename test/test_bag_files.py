@@ -205,6 +205,15 @@ def test_missing_path_and_not_a_bag(tmp_path):
     _assert_clear_error(_analyse(tmp_path / "plain" / "x.txt", tmp_path), "not a rosbag2 bag")
 
 
+def test_a_bag_cut_off_before_its_metadata_is_named_unfinished(tmp_path):
+    """A second Ctrl-C (or a kill) while recording leaves the .mcap without metadata.yaml: said so, with the way
+    back, not only "not a rosbag2 bag directory"."""
+    bag = _write_bag(tmp_path / "b")
+    (bag / "metadata.yaml").unlink()
+    _assert_clear_error(_analyse(bag, tmp_path), f"{bag}: an unfinished bag: b.mcap but no metadata.yaml",
+                        "ros2 bag reindex")
+
+
 def test_truncated_bag(tmp_path):
     bag = _write_bag(tmp_path / "b")
     mcap = bag / "b.mcap"

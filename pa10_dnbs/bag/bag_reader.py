@@ -110,6 +110,11 @@ def _bag_dir(path: Path) -> Path:
             return path.parent
         raise BagError(f"{path}: not a rosbag2 bag (expected a bag directory holding metadata.yaml)")
     if not (path / "metadata.yaml").is_file():
+        mcaps = sorted(path.glob("*.mcap")) if path.is_dir() else []
+        if mcaps:   # what a recording cut off before it was closed leaves (a second Ctrl-C, a kill)
+            raise BagError(f"{path}: an unfinished bag: {mcaps[0].name} but no metadata.yaml (its recording was cut "
+                           "off before it was closed: a second Ctrl-C, a kill); rosbag2's `ros2 bag reindex` "
+                           "rebuilds metadata.yaml from the .mcap")
         raise BagError(f"{path}: not a rosbag2 bag directory (no metadata.yaml)")
     return path
 
