@@ -55,7 +55,8 @@ def plant_urdf(urdf: Path) -> tuple[Path | None, list[str]]:
 
     Raises ValueError naming the link for an inertia that cannot be repaired, ET.ParseError for bad XML.
     """
-    root = urdf_root(urdf.read_bytes())
+    written = urdf.read_bytes()
+    root = urdf_root(written)
     root_link = _root_link(root)
     changed, notes = False, []
     for link in root.findall("link"):
@@ -68,7 +69,7 @@ def plant_urdf(urdf: Path) -> tuple[Path | None, list[str]]:
         if note:
             notes.append(note)
             changed = True
-    if _has_unusable_mesh(root, urdf.parent) or _longest_line(urdf.read_bytes()) > LINE_MAX:
+    if _has_unusable_mesh(root, urdf.parent) or _longest_line(written) > LINE_MAX:
         changed = True
     if not root.get("name", "").strip():   # PyBullet: "Expected a name for robot" (xacro output without one)
         root.set("name", urdf.stem)

@@ -73,4 +73,3 @@ def failed_run_bag_note(bag_path: Path | None, before: tuple[int, int] | None) -
     if now != before:
         return f"the bag recorded so far is closed and readable: {bag_path}"
     return f"this run recorded nothing: {bag_path} is still the earlier run's bag, untouched"
-

@@ -61,7 +61,7 @@ def robot_argv(options: RobotCommandOptions) -> list[str]:
 
 def run_robot(options: RobotCommandOptions) -> int:
     """Check the arguments, run the robot node until it ends (its exit code; 0 after Ctrl-C)."""
-    robot_domain("the robot's domain")   # the node joins this shell's: a bad one is one line, not the DDS's
+    robot_domain()   # the node joins this shell's domain: a bad one is one line here, not the DDS's error
     argv = robot_argv(options)
     before = shm_files()
     for stream in (sys.stdout, sys.stderr):   # None when closed at start (>&-)
