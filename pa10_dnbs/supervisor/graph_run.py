@@ -22,7 +22,7 @@ from pathlib import Path
 from ..interrupt import EXIT_INTERRUPTED
 from .domain_ids import lease_domain
 from .graph_options import GraphFailure, GraphOptions, GraphResult, loop_reliability
-from .netns import in_netns, node_env, parse_netns
+from .netns import in_netns, netns_hint, node_env, parse_netns
 from .node_specs import LIVE_VIEW, REFERENCE_STATS, graph_topics, node_commands
 from .processes import ManagedProcess, kill_now, stop_all
 from ..ros.shm_cleanup import remove_stale, shm_files
@@ -102,6 +102,7 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print, on_hard_stop=None) ->
             if p.name in bad:
                 failure += f"\n--- last lines of {p.name}'s log ---\n{p.tail(40)}"  # room for a stack dump
     if failure is not None:
+        failure += netns_hint(failure, opt.netns)
         raise GraphFailure(failure, interrupted=failure.startswith("interrupted"))
     stats = json.loads(stats_file.read_text())
     controllers = {}

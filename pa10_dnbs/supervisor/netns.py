@@ -37,3 +37,14 @@ def parse_netns(specs: list[str]) -> dict[str, str]:
 def in_netns(opt: GraphOptions, name: str, argv: list[str]) -> list[str]:
     ns = opt.netns.get(node_group(name))
     return ["ip", "netns", "exec", ns] + argv if ns else argv
+
+
+def netns_hint(failure: str, netns: dict[str, str]) -> str:
+    """What to add to a failed launch's ``failure`` when node groups ran in network namespaces (``netns``: group ->
+    namespace) and the graph never matched: a namespace without a link to the others is the usual cause."""
+    if not netns or "graph not ready" not in failure:
+        return ""
+    return (f"\n(with --netns, the nodes in {', '.join(sorted(set(netns.values())))} meet the others only through a "
+            "link between the namespaces, as scripts/netns_hosts.sh makes one: docs/graph.md, \"Several hosts on one "
+            "machine\")")
+
