@@ -33,10 +33,11 @@ def _write_bag(path, n=200, topic="/joint_states"):
     return path
 
 
-def _write_run_bag(path, n=300, compression="zstd", ns=None, custom_data=None):
+def _write_run_bag(path, n=300, compression="zstd", ns=None, custom_data=None, ref_positions=(0.0,)):
     """A complete little run: joint_states (7 joints) and one reference batch per joint, as the graph sends them.
 
     ``ns`` None: the old layout (/joint_states at the root, /pa10/<joint>/reference); else every topic in ``ns``.
+    ``ref_positions``: each reference point's positions [rad] (the graph sends one).
     """
     from rosbags.typesys import Stores, get_typestore
 
@@ -51,7 +52,7 @@ def _write_run_bag(path, n=300, compression="zstd", ns=None, custom_data=None):
             0, k * 1_000_000, list(JOINT_NAMES), [0.001 * k] * 7, [1.0] * 7, [2.0] * 7))
     for j in JOINT_NAMES:
         pts = [T["trajectory_msgs/msg/JointTrajectoryPoint"](
-            positions=np.array([0.0]), velocities=np.array([0.0]), accelerations=np.array([], dtype=float),
+            positions=np.array(ref_positions, dtype=float), velocities=np.array([0.0]), accelerations=np.array([], dtype=float),
             effort=np.array([], dtype=float), time_from_start=T["builtin_interfaces/msg/Duration"](sec=0, nanosec=i * 1_000_000))
             for i in range(n + 10)]
         msg = T["trajectory_msgs/msg/JointTrajectory"](

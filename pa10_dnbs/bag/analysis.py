@@ -92,12 +92,16 @@ def wire_record_from_bag(bag: Bag, dt_s: float, n_steps: int | None, progress=No
     batches = []  # (joint, first step, offsets, positions), in the bag's order per joint
     ref_malformed = 0
     for j, name in enumerate(joints):
-        for _, msgtype, _, data in bag.messages([arm.reference(name)]):
+        topic = arm.reference(name)
+        for _, msgtype, _, data in bag.messages([topic]):
             try:
                 msg = store.deserialize_cdr(data, msgtype)
             except Exception:
                 ref_malformed += 1
                 continue
+            if any(len(p.positions) == 0 for p in msg.points):  # x_d [rad] is each point's positions[0]
+                raise BagError(f"{bag.path}: {topic}: a reference point holds no position (empty positions); "
+                               "each point needs the joint's position [rad]")
             k0 = clock.step_of_sec_nanosec(msg.header.stamp.sec, msg.header.stamp.nanosec)
             offsets = [clock.step_of_ns(to_ns(p.time_from_start.sec, p.time_from_start.nanosec)) for p in msg.points]
             batches.append((j, k0, offsets, [float(p.positions[0]) for p in msg.points]))
