@@ -1,8 +1,14 @@
 """Bags other programs wrote, or a hand-damaged run description: one line on stderr naming the topic, key or
 flag, exit 2, nothing written, never a traceback."""
-from test_bag_files import _assert_clear_error, _write_run_bag
+import os
+import subprocess
+import sys
 
 from cli_runner import run_cli
+from rosbags.typesys import Stores, get_typestore
+from test_bag_files import QOS, REPO, _assert_clear_error, _write_run_bag
+
+from pa10_dnbs.bag.bag_writer import BagWriter
 
 
 def test_a_reference_point_without_a_position_is_named(tmp_path):
@@ -11,3 +17,30 @@ def test_a_reference_point_without_a_position_is_named(tmp_path):
     r = run_cli("analyse", bag, "--out", tmp_path / "out")
     _assert_clear_error(r, f"{bag}: /pa10/s1/reference: a reference point holds no position")
     assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "out").exists(), r.stderr
+
+
+def _replay(domain, *args, timeout=60):
+    """``pa10-dnbs replay ARGS`` in its own process, on the test's ROS domain."""
+    return subprocess.run([sys.executable, "-m", "pa10_dnbs.cli", "replay", *map(str, args)], cwd=REPO,
+                          capture_output=True, text=True, timeout=timeout,
+                          env={**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"})
+
+
+def _string_bag(path, topic):
+    """A bag another program could write: five std_msgs/String messages on ``topic``, 10 ms apart."""
+    store = get_typestore(Stores.ROS2_JAZZY)
+    data = bytes(store.serialize_cdr(store.types["std_msgs/msg/String"](data="x"), "std_msgs/msg/String"))
+    w = BagWriter(path)
+    w.add_topic(topic, "std_msgs/msg/String", [QOS])
+    for k in range(5):
+        w.write(topic, k * 10_000_000, data)
+    w.close()
+    return path
+
+
+def test_replay_of_a_topic_name_ros_refuses_is_refused_before_playing(tmp_path, domain):
+    """A topic named /9bad-name gave rclpy's InvalidTopicNameException traceback from the player."""
+    bag = _string_bag(tmp_path / "b", "/9bad-name")
+    r = _replay(domain, bag)
+    _assert_clear_error(r, f"{bag}: cannot play topic '/9bad-name': expected a ROS topic name")
+    assert r.stdout == "" and len(r.stderr.strip().splitlines()) == 1, r.stdout + r.stderr

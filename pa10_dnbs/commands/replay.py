@@ -15,7 +15,7 @@ from ..live.schemas import live_channels
 from ..live.server import LiveServer, LiveServerError
 from ..live.view import LiveView
 from ..run_settings import build_settings
-from ..wire.topics import ArmTopics, check_namespace, find_arm
+from ..wire.topics import ArmTopics, check_namespace, check_topic_name, find_arm
 
 
 def run_replay(options: ReplayOptions) -> int:
@@ -50,6 +50,7 @@ def run_replay(options: ReplayOptions) -> int:
                 why = "; ".join(f"{t} ({why})" for t, why in unplayable.items())
                 raise ConfigError(f"--topics: nothing to play: {why}; the player publishes only the topics whose "
                                   "Python message package is installed")
+        _check_topic_names(bag, o.topics or bag.topics)
         duration_s = (bag.end_ns - bag.start_ns) / 1e9
         if o.start_offset_s > duration_s:
             raise ConfigError(f"--start-offset: {o.start_offset_s} s is past the bag's end ({duration_s:.3f} s)")
@@ -91,6 +92,16 @@ def unplayable_topics(bag: Bag, topics) -> dict[str, str]:
         except LookupError as exc:
             out[t] = str(exc)
     return out
+
+
+def _check_topic_names(bag: Bag, topics) -> None:
+    """BagError naming the first of ``topics`` (the ones to play) whose name ROS 2 refuses (``/9bad-name``, from a
+    bag another program wrote): rclpy would raise on its publisher."""
+    for t in topics:
+        try:
+            check_topic_name(t)
+        except ValueError as exc:
+            raise BagError(f"{bag.path}: cannot play topic {t!r}: {exc}; --topics without it plays the others") from None
 
 
 def _live_config(bag: Bag, config_path: Path | None) -> dict:
