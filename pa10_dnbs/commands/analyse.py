@@ -3,59 +3,18 @@ from __future__ import annotations
 
 import math
 import sys
-from pathlib import Path
 
 from ..bag.analysis import bag_arm, bag_joint_names, robot_chain, run_info, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
-from ..config import ConfigError, default_config_path
+from ..bag.run_config import run_config
 from .options import AnalyseOptions
 from ..number_text import interval
 from ..output_lock import lock_input
 from ..report.metrics_file import DEFAULT_METRICS, diverged_text, metrics_dict, run_ok, window_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..report.progress import ProgressBar
-from ..run_settings import build_settings
 
 MIN_STEPS = 2   # a run of fewer steps has no sample in its metrics window (the second half of the run)
-
-
-def _given_config(config_path: Path, joints: tuple[str, ...], bag_dt_s: float | None) -> tuple[dict, str]:
-    """The run's config from ``--config``: ConfigError naming it when its arm's joints are not the bag's
-    ``joints`` (another arm's config would report the bag against that arm's torque limits) or its step is not
-    the bag's ``bag_dt_s`` [s] (its stored config's; None: unknown), which would misread the run's steps."""
-    settings = build_settings(config_path)
-    if tuple(settings.arm.joint_names) != tuple(joints):
-        raise ConfigError(f"--config {config_path}: its arm {settings.arm.name} (joints "
-                          f"{', '.join(settings.arm.joint_names)}) is not the bag's (joints {', '.join(joints)}): pass "
-                          "the run's config, or leave --config out for the one stored in the bag")
-    if bag_dt_s is not None and settings.simulation.dt_s != bag_dt_s:
-        raise ConfigError(f"--config {config_path}: its simulation.dt_s {settings.simulation.dt_s:g} s is not the "
-                          f"bag's step {bag_dt_s:g} s: pass the run's config, or leave --config out for the one "
-                          "stored in the bag")
-    return settings.to_config(), str(Path(config_path).resolve())
-
-
-def _stored_dt_s(info: dict) -> float | None:
-    """The step [s] of the config stored in the bag, or None."""
-    try:
-        return float(info["config"]["simulation"]["dt_s"])
-    except (KeyError, TypeError, ValueError):
-        return None
-
-
-def _run_config(info: dict, config_path: Path | None, bag: Bag) -> tuple[dict, str]:
-    if config_path is not None:
-        return _given_config(config_path, bag_joint_names(bag), _stored_dt_s(info))
-    cfg = info.get("config")
-    if cfg is None:
-        path = default_config_path()
-        return build_settings(path).to_config(), f"{path} (the bag carries no config)"
-    try:
-        float(cfg["simulation"]["dt_s"]), list(cfg["simulation"]["window_s"]), list(cfg["plant"]["torque_limit_nm"])
-    except (KeyError, TypeError, ValueError):
-        raise BagError(f"{bag.path}: the config stored in the bag lacks simulation.dt_s, simulation.window_s or "
-                       "plant.torque_limit_nm; pass --config") from None
-    return cfg, f"stored in the bag (recorded from {info.get('config_file', '?')})"
 
 
 def _recorded_prefix_end(rec) -> int | None:
@@ -79,7 +38,8 @@ def run_analyse(options: AnalyseOptions) -> int:
     lock_input(o.bag_path, "bag")  # a bag another run is still recording (or replacing) is refused, not misread
     with Bag(o.bag_path) as bag:
         info = run_info(bag)
-        cfg, cfg_note = _run_config(info, o.config_path, bag)
+        joints = bag_joint_names(bag)
+        cfg, cfg_note = run_config(bag, info, o.config_path, joints)
         dt = float(cfg["simulation"]["dt_s"])
         n_steps = None
         if "duration_s" in info:
@@ -115,10 +75,6 @@ def run_analyse(options: AnalyseOptions) -> int:
                            f"step{'s' * (rec.n != 1)}; at least {MIN_STEPS + 1} joint states ({MIN_STEPS} steps of "
                            f"{dt:g} s) are needed for the metrics")
         controller = info.get("controller", "unknown")
-        joints = bag_joint_names(bag)
-        if len(cfg["plant"]["torque_limit_nm"]) != len(joints):
-            raise BagError(f"{bag.path}: the bag's arm has {len(joints)} joints ({', '.join(joints)}), the config's "
-                           f"{len(cfg['plant']['torque_limit_nm'])}: pass the run's --config")
         run = rec.run_data(controller, joints, cfg["plant"]["torque_limit_nm"], math.nan)
         stored = cfg.get("metrics") or DEFAULT_METRICS
         measured = window_settings(cfg["simulation"]["window_s"], stored["settle_band_rad"], stored["startup_s"], rec.n * dt)

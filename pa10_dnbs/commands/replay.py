@@ -3,18 +3,17 @@ in Foxglove (``--live``: the same view as ``launch --live``, at the bag's record
 from __future__ import annotations
 
 import functools
-from pathlib import Path
 
 from ..bag.analysis import bag_joint_names, run_info
 from ..bag.bag_reader import Bag, BagError
-from ..config import ConfigError, default_config_path
+from ..bag.run_config import run_config
+from ..config import ConfigError
 from ..output_lock import lock_input, release_output
 from .options import ReplayOptions
 from ..live.options import check_live_options
 from ..live.schemas import live_channels
 from ..live.server import LiveServer, LiveServerError
 from ..live.view import LiveView
-from ..run_settings import build_settings
 from ..wire.topics import ArmTopics, check_namespace, check_topic_name, find_arm
 
 
@@ -61,9 +60,9 @@ def run_replay(options: ReplayOptions) -> int:
             code = run_node(functools.partial(PlayerNode, bag, opt), args=[])
             release_output(o.bag_path)
             exit_process(code)
-        cfg = _live_config(bag, o.config_path)
         arm = find_arm(bag.topics) or ArmTopics()
         joints = bag_joint_names(bag, arm)
+        cfg = run_config(bag, run_info(bag), o.config_path, joints)[0]  # analyse's, checked for the bag's arm
         arm = ArmTopics(namespace) if namespace else arm
         try:
             server = LiveServer(live_channels(arm), host=o.live_host, port=o.live_port)
@@ -102,15 +101,3 @@ def _check_topic_names(bag: Bag, topics) -> None:
             check_topic_name(t)
         except ValueError as exc:
             raise BagError(f"{bag.path}: cannot play topic {t!r}: {exc}; --topics without it plays the others") from None
-
-
-def _live_config(bag: Bag, config_path: Path | None) -> dict:
-    """The config for the live view: ``config_path``, else the one stored in the bag, else the default."""
-    if config_path is not None:
-        return build_settings(config_path).to_config()
-    stored = run_info(bag).get("config")
-    try:
-        float(stored["simulation"]["dt_s"]), list(stored["plant"]["torque_limit_nm"])
-        return stored
-    except (KeyError, TypeError, ValueError):
-        return build_settings(default_config_path()).to_config()

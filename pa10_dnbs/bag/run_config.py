@@ -1,0 +1,82 @@
+"""The config a bag's run is read with (``analyse``, ``replay --live``): ``--config``, else the one stored in the bag
+(custom_data ``pa10_dnbs.config``), else the shipped default; checked once, here, against the arm the bag holds.
+
+A stored config is checked by the config schema (config.py) for the keys the readers use, so a hand-damaged one
+gives one line naming the bag and the key, never a traceback from deep inside a reader. Other keys are left as
+stored: a bag of an earlier version may lack a newer section (``metrics``: DEFAULT_METRICS stands in).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..config import SCHEMA, ConfigError, check_value, default_config_path
+from ..run_settings import build_settings
+from .bag_reader import Bag, BagError
+from .custom_data import CUSTOM_CONFIG
+
+#: the stored config's keys the readers use: simulation.dt_s [s], simulation.window_s [s, s], the torque limits [N m]
+USED_KEYS = ("simulation.dt_s", "simulation.window_s", "plant.torque_limit_nm")
+
+
+def _given_config(config_path: Path, joints: tuple[str, ...], bag_dt_s: float | None) -> tuple[dict, str]:
+    """The run's config from ``--config``: ConfigError naming it when its arm's joints are not the bag's
+    ``joints`` (another arm's config would report the bag against that arm's torque limits) or its step is not
+    the bag's ``bag_dt_s`` [s] (its stored config's; None: unknown), which would misread the run's steps."""
+    settings = build_settings(config_path)
+    if tuple(settings.arm.joint_names) != tuple(joints):
+        raise ConfigError(f"--config {config_path}: its arm {settings.arm.name} (joints "
+                          f"{', '.join(settings.arm.joint_names)}) is not the bag's (joints {', '.join(joints)}): pass "
+                          "the run's config, or leave --config out for the one stored in the bag")
+    if bag_dt_s is not None and settings.simulation.dt_s != bag_dt_s:
+        raise ConfigError(f"--config {config_path}: its simulation.dt_s {settings.simulation.dt_s:g} s is not the "
+                          f"bag's step {bag_dt_s:g} s: pass the run's config, or leave --config out for the one "
+                          "stored in the bag")
+    return settings.to_config(), str(Path(config_path).resolve())
+
+
+def _stored_dt_s(info: dict) -> float | None:
+    """The step [s] of the config stored in the bag, or None."""
+    try:
+        return float(info["config"]["simulation"]["dt_s"])
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
+def _checked_stored(bag: Bag, cfg) -> dict:
+    """The stored config ``cfg`` with USED_KEYS checked by the schema and normalised (numbers as float, lists as
+    tuples); BagError naming the bag and the key."""
+    where = f"{bag.path}: the config stored in the bag ({CUSTOM_CONFIG})"
+    if not isinstance(cfg, dict):
+        raise BagError(f"{where} is not a mapping; pass --config")
+    out = dict(cfg)
+    for dotted in USED_KEYS:
+        section, key = dotted.split(".")
+        values = out.get(section)
+        if not isinstance(values, dict) or key not in values:
+            raise BagError(f"{where} lacks {dotted}; pass --config")
+        try:
+            out[section] = {**values, key: check_value(dotted, values[key], SCHEMA[section][key], None)}
+        except ConfigError as exc:
+            raise BagError(f"{where}: {exc}; pass --config") from None
+    return out
+
+
+def run_config(bag: Bag, info: dict, config_path: Path | None, joints: tuple[str, ...]) -> tuple[dict, str]:
+    """(the config to read the bag's run with, where it came from). ``info``: ``analysis.run_info(bag)``;
+    ``joints``: the bag's arm's joints (``analysis.bag_joint_names``), whose count the torque limits must match.
+    ConfigError naming ``--config``, BagError naming the bag (and the stored key)."""
+    if config_path is not None:
+        return _given_config(config_path, joints, _stored_dt_s(info))
+    if info.get("config") is None:
+        path = default_config_path()
+        cfg, note = build_settings(path).to_config(), f"{path} (the bag carries no config)"
+        whose = f"the shipped default config's ({path}; the bag carries none)"
+    else:
+        cfg = _checked_stored(bag, info["config"])
+        note = f"stored in the bag (recorded from {info.get('config_file', '?')})"
+        whose = "the config stored in the bag has torque limits for"
+    limits = cfg["plant"]["torque_limit_nm"]
+    if len(limits) != len(joints):
+        raise BagError(f"{bag.path}: the bag's arm has {len(joints)} joints ({', '.join(joints)}), {whose} "
+                       f"{len(limits)}: pass the run's --config")
+    return cfg, note
