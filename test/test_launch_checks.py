@@ -78,6 +78,11 @@ def test_the_name_rules():
     (("--command-topic", "/a//b"), ["--command-topic"]),
     (("--state-topic", "/x", "--command-topic", "/x"), ["--command-topic", "--state-topic", "'/x'"]),
     (("--state-topic", "x", "--command-topic", "/pa10/x"), ["--command-topic", "--state-topic", "/pa10/x in /pa10"]),
+    # the graph's /clock (rosgraph_msgs): an RCLError traceback from the robot node ('incompatible type', 'invalid
+    # allocator'); every node's /rosout too
+    (("--state-topic", "/clock"), ["--state-topic: '/clock' is /clock, which carries rosgraph_msgs/msg/Clock"]),
+    (("--command-topic", "/clock"), ["--command-topic: '/clock' is /clock"]),
+    (("--state-topic", "/rosout"), ["--state-topic: '/rosout' is /rosout, which carries rcl_interfaces/msg/Log"]),
 ])
 def test_robot_topics_are_checked(args, words):
     _refused(run_cli("robot", "--duration", "0.1", *args), words)
@@ -93,6 +98,9 @@ def test_robot_topics_are_checked(args, words):
     (("--robot-state-topic", "x", "--robot-command-topic", "/pa10/x"), ["--robot-state-topic", "'x'", "/pa10/x"]),
     (("--namespace", "/arm2", "--robot-state-topic", "/arm2/y", "--robot-command-topic", "y"),
      ["--robot-state-topic", "both /arm2/y in the namespace /arm2"]),
+    # accepted, then the joint bus waited 30 s for joint states on the graph's /clock
+    (("--robot-state-topic", "/clock"), ["--robot-state-topic: '/clock' is /clock, which carries rosgraph_msgs"]),
+    (("--robot-command-topic", "/clock"), ["--robot-command-topic: '/clock' is /clock"]),
 ])
 def test_launch_robot_external_topics_are_checked(tmp_path, args, words):
     out = tmp_path / "out"

@@ -24,7 +24,7 @@ from ..supervisor.robot_options import robot_domain
 from ..run_steps import run_steps
 from ..ros.shm_cleanup import remove_stale, shm_files
 from ..wire.clock_schedule import check_clock_hz
-from ..wire.topics import check_topic_name, default_namespace, resolve
+from ..wire.topics import check_free_topic, check_topic_name, default_namespace, resolve
 
 
 def robot_argv(options: RobotCommandOptions) -> list[str]:
@@ -39,12 +39,12 @@ def robot_argv(options: RobotCommandOptions) -> list[str]:
         check_clock_hz(o.clock_hz, settings.simulation.dt_s)
     except ValueError as exc:
         raise ConfigError(f"--clock-hz: {exc}") from None
+    namespace = default_namespace(settings.arm.name)  # the bus's (launch's default): relative names meet there
     for flag, topic in (("--state-topic", o.state_topic), ("--command-topic", o.command_topic)):
         try:
-            check_topic_name(topic)
+            check_free_topic(check_topic_name(topic), namespace)
         except ValueError as exc:
             raise ConfigError(f"{flag}: {exc}") from None
-    namespace = default_namespace(settings.arm.name)  # the bus's (launch's default): relative names meet there
     if resolve(o.state_topic, namespace) == resolve(o.command_topic, namespace):
         same = "" if o.state_topic == o.command_topic else (f", {o.state_topic!r} is "
                                                               f"{resolve(o.state_topic, namespace)} in {namespace}")

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 from ..config import ConfigError
 from ..wire.robot_interface import default_state_topic, parse_robot_command
-from ..wire.topics import DEFAULT_NS, check_topic_name, resolve
+from ..wire.topics import DEFAULT_NS, check_free_topic, check_topic_name, resolve
 
 ROBOTS = ("external",)
 
@@ -26,10 +26,11 @@ class RobotOptions:
     timeout_s: float = 1.0              # --robot-timeout [s of wall time]
 
 
-def _check_topic(flag: str, topic: str) -> None:
-    """A topic flag: an absolute ROS name (/a/b) or a relative one (resolved in the arm's namespace)."""
+def _check_topic(flag: str, topic: str, namespace: str) -> None:
+    """A topic flag: an absolute ROS name (/a/b) or a relative one (resolved in the arm's ``namespace``), not one
+    the graph holds with another type (/clock: the joint bus would wait for states that never come)."""
     try:
-        check_topic_name(topic)
+        check_free_topic(check_topic_name(topic), namespace)
     except ValueError as exc:
         raise ConfigError(f"{flag}: {exc}", setting=flag) from None
 
@@ -42,7 +43,7 @@ def check_robot_options(opt: RobotOptions, mode: str, namespace: str = DEFAULT_N
         raise ConfigError(f"robot: expected {' or '.join(ROBOTS)}, got {opt.robot!r}", setting="robot")
     for flag, topic in (("robot_state_topic", opt.state_topic), ("robot_command_topic", opt.command_topic)):
         if topic is not None:
-            _check_topic(flag, topic)
+            _check_topic(flag, topic, namespace)
     try:
         command = parse_robot_command(opt.command, opt.command_topic)
     except ValueError as exc:

@@ -78,6 +78,23 @@ def check_topic_name(topic: str) -> str:
     return topic
 
 
+#: global topics every graph holds with a type of its own (the graph's /clock, /tf, /tf_static, /diagnostics; every
+#: ROS 2 node's /rosout and /parameter_events): rcl refuses a second type on them ('incompatible type')
+TAKEN_TOPICS = {CLOCK: "rosgraph_msgs/msg/Clock", TF: "tf2_msgs/msg/TFMessage", TF_STATIC: "tf2_msgs/msg/TFMessage",
+                DIAGNOSTICS: "diagnostic_msgs/msg/DiagnosticArray", "/rosout": "rcl_interfaces/msg/Log",
+                "/parameter_events": "rcl_interfaces/msg/ParameterEvent"}
+
+
+def check_free_topic(topic: str, ns: str = DEFAULT_NS) -> str:
+    """``topic`` (a valid name; a relative one resolved in ``ns``) unless it is one of TAKEN_TOPICS: ValueError
+    naming the topic and the type it carries there (a robot's joint states or commands need a topic of their own)."""
+    name = resolve(topic, ns)
+    if name in TAKEN_TOPICS:
+        raise ValueError(f"{topic!r} is {name}, which carries {TAKEN_TOPICS[name]} in every ROS 2 graph: the "
+                         "robot's joint states and commands need topics of their own")
+    return topic
+
+
 def resolve(name: str, ns: str = DEFAULT_NS) -> str:
     """The absolute name of ``name`` in namespace ``ns`` (absolute names stay as they are)."""
     return name if name.startswith("/") else f"{ns}/{name}"
