@@ -5,6 +5,7 @@ import os
 import subprocess
 import sys
 
+import pytest
 from cli_runner import run_cli
 from rosbags.typesys import Stores, get_typestore
 from test_bag_files import QOS, REPO, _assert_clear_error, _write_run_bag
@@ -75,7 +76,7 @@ def test_replay_live_of_a_bag_whose_arm_is_not_the_configs_is_refused(tmp_path, 
     per joint'): now analyse's joint-count check (bag/run_config.py), one line, before the live view starts."""
     bag = _two_joint_bag(tmp_path / "b")
     r = _replay(domain, bag, "--live", 0)
-    _assert_clear_error(r, f"{bag}: the bag's arm has 2 joints (a, b), the shipped default config's")
+    _assert_clear_error(r, f"{bag}: the bag's arm has 2 joints (a, b), the shipped default config (")
     assert "LIVE" not in r.stdout and len(r.stderr.strip().splitlines()) == 1, r.stdout + r.stderr
 
 
@@ -85,3 +86,39 @@ def test_replay_live_of_a_damaged_stored_config_is_refused(tmp_path, domain):
     r = _replay(domain, bag, "--live", 0)
     _assert_clear_error(r, f"{bag}: the config stored in the bag (pa10_dnbs.config): simulation.dt_s: must be >= ")
     assert "LIVE" not in r.stdout and len(r.stderr.strip().splitlines()) == 1, r.stdout + r.stderr
+
+
+@pytest.mark.parametrize("custom,words", [
+    # the duration the launcher stored: OverflowError, or a negative step count blamed on the stamps
+    ({"duration_s": "inf"}, "custom_data pa10_dnbs.duration_s: must be finite, got inf"),
+    ({"duration_s": "-1"}, "custom_data pa10_dnbs.duration_s: must be > 0, got -1"),
+    ({"duration_s": "x"}, "custom_data pa10_dnbs.duration_s: not a number: 'x'"),
+    # the stored config: ZeroDivisionError, ValueError from wire/steps.py, IndexError, TypeError, ValueError, KeyError
+    ({"simulation.dt_s": 0}, "the config stored in the bag (pa10_dnbs.config): simulation.dt_s: must be >= 1e-05, got 0"),
+    ({"simulation.dt_s": -0.001}, "simulation.dt_s: must be >= 1e-05, got -0.001"),
+    ({"simulation.window_s": [5]}, "simulation.window_s: expected [t0, t1], got [5]"),
+    ({"simulation.window_s": "ab"}, "simulation.window_s: expected [t0, t1], got 'ab'"),
+    ({"plant.torque_limit_nm": ["a"] * 7}, "plant.torque_limit_nm[0]: expected a number, got str 'a'"),
+    ({"metrics.x": 1}, "metrics.x: unknown key (allowed: settle_band_rad, startup_s)"),
+])
+def test_analyse_of_a_hand_damaged_run_description_names_the_key(tmp_path, custom, words):
+    """Each of these gave a traceback (the brief's list in the commit); now one line naming the bag and the stored
+    key, checked by the config schema where the description is read (bag/run_config.py), nothing written."""
+    duration = custom.pop("duration_s", "0.02")
+    cfg = json.loads(_stored(**{k: v for k, v in custom.items() if k != "metrics.x"}))
+    if "metrics.x" in custom:
+        cfg["metrics"] = {"x": 1}
+    bag = _write_run_bag(tmp_path / "b", n=20, ns="/pa10",
+                         custom_data={"pa10_dnbs.config": json.dumps(cfg), "pa10_dnbs.duration_s": duration})
+    r = run_cli("analyse", bag, "--out", tmp_path / "out")
+    _assert_clear_error(r, f"{bag}: ", words)
+    assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "out").exists(), r.stderr
+
+
+def test_analyse_of_an_intact_run_description_still_reads(tmp_path):
+    """The checks pass a run's own description: 20 steps of 1 ms, exit 0."""
+    bag = _write_run_bag(tmp_path / "b", n=20, ns="/pa10",
+                         custom_data={"pa10_dnbs.config": _stored(), "pa10_dnbs.duration_s": "0.02"})
+    r = run_cli("analyse", bag, "--out", tmp_path / "out", "--no-figures")
+    assert r.returncode == 0, r.stderr
+    assert "(20 steps from" in r.stdout, r.stdout

@@ -10,9 +10,11 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..config import SCHEMA, ConfigError, check_value, default_config_path
+from ..config_error import short
 from ..run_settings import build_settings
+from ..run_steps import countable_steps
 from .bag_reader import Bag, BagError
-from .custom_data import CUSTOM_CONFIG
+from .custom_data import CUSTOM_CONFIG, CUSTOM_PREFIX
 
 #: the stored config's keys the readers use: simulation.dt_s [s], simulation.window_s [s, s], the torque limits [N m]
 USED_KEYS = ("simulation.dt_s", "simulation.window_s", "plant.torque_limit_nm")
@@ -58,7 +60,27 @@ def _checked_stored(bag: Bag, cfg) -> dict:
             out[section] = {**values, key: check_value(dotted, values[key], SCHEMA[section][key], None)}
         except ConfigError as exc:
             raise BagError(f"{where}: {exc}; pass --config") from None
+    if out.get("metrics"):   # absent in bags of runs before the section: DEFAULT_METRICS (report/metrics_file.py)
+        try:
+            out["metrics"] = check_value("metrics", out["metrics"], SCHEMA["metrics"], None)
+        except ConfigError as exc:
+            raise BagError(f"{where}: {exc}; pass --config") from None
     return out
+
+
+def stored_steps(bag: Bag, info: dict, dt_s: float) -> int | None:
+    """The run's steps by the duration the launcher stored (custom_data ``pa10_dnbs.duration_s`` [s], as text) at
+    the step ``dt_s`` [s]; None when the bag has none. BagError naming the bag and the key unless it is a positive,
+    finite number of seconds and a countable number of steps."""
+    if "duration_s" not in info:
+        return None
+    raw = info["duration_s"]
+    try:
+        duration_s = check_value("duration_s", float(raw), SCHEMA["simulation"]["duration_s"], None)
+        return countable_steps(duration_s, dt_s)
+    except (TypeError, ValueError) as exc:   # ConfigError is a ValueError
+        why = exc if isinstance(exc, ConfigError) else f"duration_s: not a number: {short(raw)}"
+        raise BagError(f"{bag.path}: custom_data {CUSTOM_PREFIX}{why}") from None
 
 
 def run_config(bag: Bag, info: dict, config_path: Path | None, joints: tuple[str, ...]) -> tuple[dict, str]:
@@ -70,7 +92,7 @@ def run_config(bag: Bag, info: dict, config_path: Path | None, joints: tuple[str
     if info.get("config") is None:
         path = default_config_path()
         cfg, note = build_settings(path).to_config(), f"{path} (the bag carries no config)"
-        whose = f"the shipped default config's ({path}; the bag carries none)"
+        whose = f"the shipped default config ({path}; the bag carries none) has torque limits for"
     else:
         cfg = _checked_stored(bag, info["config"])
         note = f"stored in the bag (recorded from {info.get('config_file', '?')})"

@@ -6,7 +6,7 @@ import sys
 
 from ..bag.analysis import bag_arm, bag_joint_names, robot_chain, run_info, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
-from ..bag.run_config import run_config
+from ..bag.run_config import run_config, stored_steps
 from .options import AnalyseOptions
 from ..number_text import interval
 from ..output_lock import lock_input
@@ -41,12 +41,7 @@ def run_analyse(options: AnalyseOptions) -> int:
         joints = bag_joint_names(bag)
         cfg, cfg_note = run_config(bag, info, o.config_path, joints)
         dt = float(cfg["simulation"]["dt_s"])
-        n_steps = None
-        if "duration_s" in info:
-            try:
-                n_steps = int(round(float(info["duration_s"]) / dt))
-            except ValueError:
-                raise BagError(f"{bag.path}: custom_data duration_s is not a number: {info['duration_s']!r}") from None
+        n_steps = stored_steps(bag, info, dt)
         bar = None
         if o.progress:
             js = bag_arm(bag).joint_states
