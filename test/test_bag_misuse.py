@@ -122,3 +122,35 @@ def test_analyse_of_an_intact_run_description_still_reads(tmp_path):
     r = run_cli("analyse", bag, "--out", tmp_path / "out", "--no-figures")
     assert r.returncode == 0, r.stderr
     assert "(20 steps from" in r.stdout, r.stdout
+
+
+def test_replay_of_a_bag_without_messages_says_so(tmp_path, domain):
+    """It said '--start-offset: 0.0 s is past the bag's end (-9223372036.855 s)' though no --start-offset was given."""
+    w = BagWriter(tmp_path / "b")
+    w.add_topic("/pa10/joint_states", "sensor_msgs/msg/JointState", [QOS])
+    w.close()
+    r = _replay(domain, tmp_path / "b")
+    _assert_clear_error(r, f"{tmp_path / 'b'}: the bag holds no messages: nothing to play")
+    assert "--start-offset" not in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+
+
+def test_replay_of_a_bag_with_nothing_playable_is_refused_as_with_topics(tmp_path, domain):
+    """A bag of /tf only (no Python package for tf2_msgs here) printed 'PLAYING 0 topics' and exited 0; with
+    --topics /tf the same was refused: now both, one line, before ROS."""
+    from pa10_dnbs.ros.msg_types import message_class
+
+    try:
+        message_class("tf2_msgs/msg/TFMessage")
+        pytest.skip("tf2_msgs is installed here: /tf is playable")
+    except LookupError:
+        pass
+    store = get_typestore(Stores.ROS2_JAZZY)
+    tf = bytes(store.serialize_cdr(store.types["tf2_msgs/msg/TFMessage"](transforms=[]), "tf2_msgs/msg/TFMessage"))
+    w = BagWriter(tmp_path / "b")
+    w.add_topic("/tf", "tf2_msgs/msg/TFMessage", [QOS])
+    for k in range(3):
+        w.write("/tf", k * 1_000_000, tf)
+    w.close()
+    r = _replay(domain, tmp_path / "b")
+    _assert_clear_error(r, f"{tmp_path / 'b'}: nothing to play: /tf (tf2_msgs/msg/TFMessage: ")
+    assert r.stdout == "" and len(r.stderr.strip().splitlines()) == 1, r.stdout + r.stderr

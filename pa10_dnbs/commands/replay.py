@@ -39,16 +39,20 @@ def run_replay(options: ReplayOptions) -> int:
 
     lock_input(o.bag_path, "bag")  # a bag another run still records (or replaces) is refused; readers share it
     with Bag(o.bag_path) as bag:
+        if bag.message_count == 0:   # its start and end are unset: a --start-offset would be 'past -9.2e9 s'
+            raise BagError(f"{bag.path}: the bag holds no messages: nothing to play")
         if o.topics:
             unknown = [t for t in o.topics if t not in bag.topics]
             if unknown:
                 raise BagError(f"{bag.path}: no such topic in the bag: {', '.join(unknown)} "
                                f"(it has {', '.join(sorted(bag.topics))})")
-            unplayable = unplayable_topics(bag, o.topics)
-            if len(unplayable) == len(set(o.topics)):
-                why = "; ".join(f"{t} ({why})" for t, why in unplayable.items())
-                raise ConfigError(f"--topics: nothing to play: {why}; the player publishes only the topics whose "
-                                  "Python message package is installed")
+        unplayable = unplayable_topics(bag, o.topics or bag.topics)
+        if len(unplayable) == len(set(o.topics or bag.topics)):
+            why = "; ".join(f"{t} ({why})" for t, why in unplayable.items())
+            text = f"nothing to play: {why}; the player publishes only the topics whose Python message package is installed"
+            if o.topics:
+                raise ConfigError(f"--topics: {text}")
+            raise BagError(f"{bag.path}: {text}")
         _check_topic_names(bag, o.topics or bag.topics)
         duration_s = (bag.end_ns - bag.start_ns) / 1e9
         if o.start_offset_s > duration_s:
