@@ -154,3 +154,21 @@ def test_replay_of_a_bag_with_nothing_playable_is_refused_as_with_topics(tmp_pat
     r = _replay(domain, tmp_path / "b")
     _assert_clear_error(r, f"{tmp_path / 'b'}: nothing to play: /tf (tf2_msgs/msg/TFMessage: ")
     assert r.stdout == "" and len(r.stderr.strip().splitlines()) == 1, r.stdout + r.stderr
+
+
+@pytest.mark.graph  # plays on a ROS domain
+@pytest.mark.parametrize("case", ["played", "refused"])
+def test_replay_leaves_nothing_in_dev_shm(tmp_path, domain, case):
+    """No launcher sweeps after a replay: its Fast DDS files (a played bag: 39 were left) and LTTng's wait file
+    (even a refusal, made once rclpy loaded) are its own to remove as it ends (commands/replay.py)."""
+    from pa10_dnbs.ros.shm_cleanup import shm_files, unused
+
+    before = shm_files()
+    if case == "played":
+        r = _replay(domain, _string_bag(tmp_path / "b", "/chatter"))
+        assert r.returncode == 0 and "PLAYED 5 messages" in r.stdout, r.stdout + r.stderr
+    else:
+        r = _replay(domain, _string_bag(tmp_path / "b", "/9bad-name"))
+        assert r.returncode == 2, r.stderr
+    # this test's process may map LTTng's file too (rclpy loaded by another test): its mapping does not count
+    assert unused(shm_files() - before, frozenset({os.getpid()})) == set()

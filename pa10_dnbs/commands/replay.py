@@ -3,12 +3,15 @@ in Foxglove (``--live``: the same view as ``launch --live``, at the bag's record
 from __future__ import annotations
 
 import functools
+import os
+from typing import NoReturn
 
 from ..bag.analysis import bag_joint_names, run_info
 from ..bag.bag_reader import Bag, BagError
 from ..bag.run_config import run_config
 from ..config import ConfigError
 from ..output_lock import lock_input, release_output
+from ..ros.shm_cleanup import remove_stale, shm_files
 from .options import ReplayOptions
 from ..live.options import check_live_options
 from ..live.schemas import live_channels
@@ -34,9 +37,26 @@ def run_replay(options: ReplayOptions) -> int:
             raise ConfigError(f"--namespace: {exc}") from None
     if o.live_port is not None:
         check_live_options(o.live_host, o.live_port, o.live_hz)
+    before = shm_files()
+    try:
+        _play(o, before)
+    finally:   # refused after rclpy loaded (its LTTng file is made then): nothing of this process stays behind
+        _remove_own_files(before)
+
+
+def _remove_own_files(before: set[str]) -> None:
+    """Remove the /dev/shm files (Fast DDS's, LTTng's) made since ``before`` whose owner is gone or is this
+    process, about to end: no launcher sweeps after a replay, as one does after its nodes (ros/shm_cleanup.py)."""
+    remove_stale(shm_files() - before, ignore_pids=frozenset({os.getpid()}))
+
+
+def _play(o: ReplayOptions, before: set[str]) -> NoReturn:
+    """Check the bag against ``o`` (a bad one: the error, raised), play it and end the process with the player
+    node's exit code, first removing this process's /dev/shm files."""
     from ..ros.player_node import PlayerNode, PlayOptions
     from ..ros.runtime import exit_process, run_node  # the player leaves as a node does: no rclpy teardown
 
+    namespace = o.namespace
     lock_input(o.bag_path, "bag")  # a bag another run still records (or replaces) is refused; readers share it
     with Bag(o.bag_path) as bag:
         if bag.message_count == 0:   # its start and end are unset: a --start-offset would be 'past -9.2e9 s'
@@ -63,6 +83,7 @@ def run_replay(options: ReplayOptions) -> int:
         if o.live_port is None:
             code = run_node(functools.partial(PlayerNode, bag, opt), args=[])
             release_output(o.bag_path)
+            _remove_own_files(before)
             exit_process(code)
         arm = find_arm(bag.topics) or ArmTopics()
         joints = bag_joint_names(bag, arm)
@@ -80,6 +101,7 @@ def run_replay(options: ReplayOptions) -> int:
         finally:
             server.stop()
         release_output(o.bag_path)
+        _remove_own_files(before)
         exit_process(code)
 
 
