@@ -4,6 +4,7 @@ import math
 
 import pytest
 
+from cli_runner import run_cli
 from pa10_dnbs.config import ConfigError
 from pa10_dnbs.supervisor.robot_options import RobotOptions, check_robot_options, robot_domain
 from pa10_dnbs.wire import joint_state_cdr
@@ -23,8 +24,17 @@ def test_command_forms_and_their_default_topics():
     for bad in ("position", "forward:", "forward:1abc", "forward:a b", "JointState"):
         with pytest.raises(ValueError):
             parse_robot_command(bad)
-    with pytest.raises(ValueError, match="robot_command_topic"):
+    with pytest.raises(ValueError, match="only the JointState form takes a command topic"):
         parse_robot_command("forward:effort_controller", "/x")
+
+
+def test_a_command_topic_beside_the_forward_form_is_said_of_its_own_flag():
+    """It was '--robot-command: robot_command_topic is the JointState form's': a parameter's name, under the
+    other flag."""
+    r = run_cli("launch", "--out", "unused", "--robot", "external", "--robot-command", "forward:ctl",
+                "--robot-command-topic", "/cmd")
+    assert r.returncode == 2 and r.stderr == ("pa10-dnbs: error: --robot-command-topic: only the JointState form takes "
+                                              "a command topic; the forward form publishes on /ctl/commands\n"), r.stderr
 
 
 def test_joints_are_matched_by_name_not_order():

@@ -11,7 +11,7 @@ import os
 from dataclasses import dataclass
 
 from ..config import ConfigError
-from ..wire.robot_interface import default_state_topic, parse_robot_command
+from ..wire.robot_interface import CommandTopicError, default_state_topic, parse_robot_command
 from ..wire.topics import DEFAULT_NS, check_free_topic, check_topic_name, resolve
 
 ROBOTS = ("external",)
@@ -47,7 +47,8 @@ def check_robot_options(opt: RobotOptions, mode: str, namespace: str = DEFAULT_N
     try:
         command = parse_robot_command(opt.command, opt.command_topic)
     except ValueError as exc:
-        raise ConfigError(f"robot_command: {exc}", setting="robot_command") from None
+        setting = "robot_command_topic" if isinstance(exc, CommandTopicError) else "robot_command"
+        raise ConfigError(f"{setting}: {exc}", setting=setting) from None
     state = opt.state_topic or default_state_topic(command)
     if resolve(state, namespace) == resolve(command.topic, namespace):  # it would read its own commands as states
         same = "" if state == command.topic else f" (both {resolve(state, namespace)} in the namespace {namespace})"

@@ -32,6 +32,10 @@ class RobotCommand:
     topic: str
 
 
+class CommandTopicError(ValueError):
+    """A command topic given with a form that has its own (the forward form): the topic's setting is at fault."""
+
+
 def parse_robot_command(spec: str, command_topic: str | None = None) -> RobotCommand:
     """``--robot-command`` (``joint_state`` or ``forward:<controller name>``) and ``--robot-command-topic``
     (the JointState form's topic; None: /robot_joint_command) as a RobotCommand; ValueError saying why."""
@@ -44,8 +48,8 @@ def parse_robot_command(spec: str, command_topic: str | None = None) -> RobotCom
             raise ValueError(f"expected forward:<controller name> (a ROS name, e.g. forward:effort_controller), "
                              f"got {spec!r}")
         if command_topic is not None:
-            raise ValueError("robot_command_topic is the JointState form's; the forward form publishes on "
-                             f"/{name}/commands")
+            raise CommandTopicError(f"only the JointState form takes a command topic; the forward form publishes on "
+                                    f"/{name}/commands")
         return RobotCommand("forward", f"/{name}/commands")
     raise ValueError(f"expected joint_state or forward:<controller name>, got {spec!r}")
 
