@@ -96,6 +96,16 @@ class Launcher(Proc):
                           *extra, *args], domain_id)
 
     @classmethod
+    def to_end(cls, *args, domain_id: int, timeout: float = 300) -> tuple[int, "Launcher"]:
+        """``launch ARGS`` run to its end (stopped whatever happens): (its exit code, the launcher)."""
+        la = cls(*args, domain_id=domain_id)
+        try:
+            rc = la.wait(timeout=timeout)
+        finally:
+            la.kill()
+        return rc, la
+
+    @classmethod
     def beside(cls, other: Proc, *args, domain_id: int, then=None) -> tuple[int, "Launcher", dict, int]:
         """``launch ARGS`` run to its end beside ``other`` (a robot or a rival publisher, started and ready);
         ``then()`` after the launch ended; both stopped whatever happens (``other`` by SIGINT). Returns (the

@@ -509,13 +509,11 @@ def test_the_unheard_warning_names_the_topics_as_published():
     assert "/arm2" not in err.getvalue()
 
 
-def test_replay_of_only_unplayable_topics_is_refused_before_ros(tmp_path):
-    """--topics /tf (tf2_msgs has no Python package here) played nothing and exited 0: now one line naming
-    --topics and why, exit 2, before ROS; a mix of playable and unplayable topics is played as before (the player
-    skips and names the others)."""
+def tf_message_or_skip() -> bytes:
+    """An empty tf2_msgs/TFMessage (CDR) for a bag; the test is skipped where tf2_msgs has a Python package (/tf is
+    then playable)."""
     from rosbags.typesys import Stores, get_typestore
 
-    from pa10_dnbs.commands.replay import unplayable_topics
     from pa10_dnbs.ros.msg_types import message_class
 
     try:
@@ -524,7 +522,16 @@ def test_replay_of_only_unplayable_topics_is_refused_before_ros(tmp_path):
     except LookupError:
         pass
     store = get_typestore(Stores.ROS2_JAZZY)
-    tf = bytes(store.serialize_cdr(store.types["tf2_msgs/msg/TFMessage"](transforms=[]), "tf2_msgs/msg/TFMessage"))
+    return bytes(store.serialize_cdr(store.types["tf2_msgs/msg/TFMessage"](transforms=[]), "tf2_msgs/msg/TFMessage"))
+
+
+def test_replay_of_only_unplayable_topics_is_refused_before_ros(tmp_path):
+    """--topics /tf (tf2_msgs has no Python package here) played nothing and exited 0: now one line naming
+    --topics and why, exit 2, before ROS; a mix of playable and unplayable topics is played as before (the player
+    skips and names the others)."""
+    from pa10_dnbs.commands.replay import unplayable_topics
+
+    tf = tf_message_or_skip()
     w = BagWriter(tmp_path / "b")
     w.add_topic("/tf", "tf2_msgs/msg/TFMessage", [QOS])
     w.add_topic("/tf_static", "tf2_msgs/msg/TFMessage", [QOS])

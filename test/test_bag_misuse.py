@@ -8,7 +8,7 @@ import sys
 import pytest
 from cli_runner import run_cli
 from rosbags.typesys import Stores, get_typestore
-from test_bag_files import QOS, REPO, _assert_clear_error, _write_run_bag
+from test_bag_files import QOS, REPO, _assert_clear_error, _write_run_bag, tf_message_or_skip
 
 from pa10_dnbs.bag.bag_writer import BagWriter
 from pa10_dnbs.config import default_config_path
@@ -137,15 +137,7 @@ def test_replay_of_a_bag_without_messages_says_so(tmp_path, domain):
 def test_replay_of_a_bag_with_nothing_playable_is_refused_as_with_topics(tmp_path, domain):
     """A bag of /tf only (no Python package for tf2_msgs here) printed 'PLAYING 0 topics' and exited 0; with
     --topics /tf the same was refused: now both, one line, before ROS."""
-    from pa10_dnbs.ros.msg_types import message_class
-
-    try:
-        message_class("tf2_msgs/msg/TFMessage")
-        pytest.skip("tf2_msgs is installed here: /tf is playable")
-    except LookupError:
-        pass
-    store = get_typestore(Stores.ROS2_JAZZY)
-    tf = bytes(store.serialize_cdr(store.types["tf2_msgs/msg/TFMessage"](transforms=[]), "tf2_msgs/msg/TFMessage"))
+    tf = tf_message_or_skip()
     w = BagWriter(tmp_path / "b")
     w.add_topic("/tf", "tf2_msgs/msg/TFMessage", [QOS])
     for k in range(3):

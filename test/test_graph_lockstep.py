@@ -114,12 +114,8 @@ def test_the_nodes_on_the_compiled_kernel_give_the_numpy_bits(_default_cfg, tmp_
     from pa10_dnbs.paths import share_path
 
     out = tmp_path / "c"
-    la = Launcher("--config", share_path("config", "compiled.yaml"), "--duration", 1.0, "--out", out,
-                  domain_id=domain)
-    try:
-        rc = la.wait(timeout=300)
-    finally:
-        la.kill()
+    rc, la = Launcher.to_end("--config", share_path("config", "compiled.yaml"), "--duration", 1.0, "--out", out,
+                             domain_id=domain)
     assert rc == 0, la.output
     m = json.loads((out / "metrics.json").read_text())
     assert all(j["effort_timeouts"] == 0 for j in m["timing"]["joints"]), m["timing"]["joints"]

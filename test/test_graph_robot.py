@@ -180,41 +180,38 @@ def test_a_second_commander_of_the_robot_is_a_robot_fault(tmp_path, domain):
     """rev_e 2: another publisher on the robot's command topic (the probe's own, silent: as a forgotten second
     graph would be) is a second commander; the robot would take whichever command came first. The bus sees it
     (``get_publishers_info_by_topic``), sends the safe command and exits 1 with one ROBOT FAULT line naming it."""
+    line, la = _one_robot_fault(tmp_path, domain, "rival")
+    # the rival named once discovery has its node's name (under load it may not yet)
+    assert re.search(r"another publisher on the robot's command topic /robot_joint_command besides this bus "
+                     r"\(publishers: /pa10/joint_bus, (/robot_probe|a node not known by name yet)\)", line), line
+    assert exit_codes(la.output)["joint_bus"] == 1
+
+
+def _one_robot_fault(tmp_path, domain, fault: str):
+    """``launch --robot external`` (3 s) beside a probe injecting ``fault`` from the start: exit 1 with one
+    ROBOT FAULT line, the safe command the last the robot took, nothing left behind. (that line, the launcher)"""
     shm_before = shm_files()
-    robot = Proc([sys.executable, HERE / "robot_probe.py", domain, "rival", 0], domain)
+    robot = Proc([sys.executable, HERE / "robot_probe.py", domain, fault, 0], domain)
     robot.wait_for("PROBE READY", 60)
     rc, la, pids, _ = Launcher.beside(robot, "--robot", "external", "--duration", 3.0, "--out", tmp_path / "run",
                                       domain_id=domain)
     assert rc == 1, la.output
     lines = [x for x in la.output.splitlines() if "ROBOT FAULT:" in x]
     assert len(lines) == 1, la.output
-    # the rival named once discovery has its node's name (under load it may not yet)
-    assert re.search(r"another publisher on the robot's command topic /robot_joint_command besides this bus "
-                     r"\(publishers: /pa10/joint_bus, (/robot_probe|a node not known by name yet)\)", lines[0]), lines
     commands = [json.loads(x.split(" ", 3)[3]) for x in robot.output.splitlines() if x.startswith("COMMAND ")]
     assert commands and commands[-1] == [0.0] * 7, commands[-3:]  # the safe command last
-    assert exit_codes(la.output)["joint_bus"] == 1
     _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)
+    return lines[0], la
 
 
 def test_a_second_robot_on_the_state_topic_is_a_robot_fault(tmp_path, domain):
     """Two robots publishing on one state topic: the bus would take both's states as one robot's and drive both
     (the run ended 0 with 20x the error before, its counters alone showing duplicate and old states). One more
     publisher on the state topic (the probe's own, silent) is a ROBOT FAULT naming them, after the safe command."""
-    shm_before = shm_files()
-    robot = Proc([sys.executable, HERE / "robot_probe.py", domain, "twin", 0], domain)
-    robot.wait_for("PROBE READY", 60)
-    rc, la, pids, _ = Launcher.beside(robot, "--robot", "external", "--duration", 3.0, "--out", tmp_path / "run",
-                                      domain_id=domain)
-    assert rc == 1, la.output
-    lines = [x for x in la.output.splitlines() if "ROBOT FAULT:" in x]
-    assert len(lines) == 1, la.output
+    line, _ = _one_robot_fault(tmp_path, domain, "twin")
     assert re.search(r"more than one publisher on the robot's state topic /robot_joint_states \(publishers: "
                      r"(/robot_probe|a node not known by name yet), (/robot_probe|a node not known by name yet)\)",
-                     lines[0]), lines
-    commands = [json.loads(x.split(" ", 3)[3]) for x in robot.output.splitlines() if x.startswith("COMMAND ")]
-    assert commands and commands[-1] == [0.0] * 7, commands[-3:]  # the safe command last
-    _no_leftovers(list(pids.values()) + [robot.proc.pid], shm_before)
+                     line), line
 
 
 def test_the_last_command_to_a_paced_robot_is_zero_effort(tmp_path, domain):

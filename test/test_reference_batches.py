@@ -30,10 +30,6 @@ def test_the_lookahead_fits_in_the_kept_batches_and_the_defaults_stay(mode, cloc
 
 @pytest.mark.graph
 def test_a_half_hertz_clock_runs(tmp_path, domain):
-    la = Launcher("--mode", "lockstep", "--duration", 0.5, "--clock-hz", 0.5, "--out", tmp_path / "run",
-                  domain_id=domain)
-    try:
-        rc = la.wait(timeout=120)
-    finally:
-        la.kill()
+    rc, la = Launcher.to_end("--mode", "lockstep", "--duration", 0.5, "--clock-hz", 0.5, "--out", tmp_path / "run",
+                             domain_id=domain, timeout=120)
     assert rc == 0, la.output
