@@ -82,6 +82,19 @@ def test_fingers_on_fixed_mounts_end_the_arm_before_them(tmp_path):
     assert arm.locked_joints == ("left_finger_joint", "right_finger_joint")
 
 
+def test_a_robotiq_like_gripper_whose_fingers_sit_below_its_knuckles_ends_the_arm(tmp_path):
+    """Robotiq's 2F-85 (and the xArm gripper): each branch starts with a knuckle, the finger below; the knuckles
+    are one motor's linkage (``<mimic>``). Short branches holding a finger-like joint are a gripper's."""
+    parts = _branch("arm", "base", 3)
+    for side in ("left", "right"):
+        parts += [_link(f"{side}_knuckle"), _joint(f"{side}_knuckle_joint", "arm_link3", f"{side}_knuckle"),
+                  _link(f"{side}_tip"), _joint(f"{side}_finger_tip_joint", f"{side}_knuckle", f"{side}_tip")]
+    text = "\n".join(parts).replace('<joint name="right_knuckle_joint" type="revolute">',
+                                    '<joint name="right_knuckle_joint" type="revolute"><mimic joint="left_knuckle_joint"/>')
+    arm = load_arm(_urdf(tmp_path, "robotiq", [text]))
+    assert arm.joint_names == ("arm_j1", "arm_j2", "arm_j3")
+
+
 def test_a_gripper_alone_is_refused_as_not_an_arm(tmp_path):
     urdf = _urdf(tmp_path, "gripper", _branch("finger_a", "base", 2) + _branch("finger_b", "base", 2))
     with pytest.raises(ArmError, match=r"forks at link 'base' into a gripper's fingers \(finger_a_j1, finger_b_j1\) "

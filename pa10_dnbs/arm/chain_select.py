@@ -10,6 +10,7 @@ from ..kinematics.urdf_chain import UrdfChain, UrdfJoint
 
 ACTUATABLE = ("revolute", "continuous")
 GRIPPER_NAME = re.compile(r"grip|finger|jaw|claw", re.IGNORECASE)
+FINGER_DEPTH_MAX = 4   # movable joints on a finger's longest path (Robotiq's 3-finger gripper: 4); an arm has more
 
 
 def chain_joints(chain: UrdfChain, tip_link: str | None = None) -> list[UrdfJoint]:
@@ -43,7 +44,7 @@ def chain_joints(chain: UrdfChain, tip_link: str | None = None) -> list[UrdfJoin
         if len(top) > 1:
             after = sum(j.kind != "fixed" for j in path)
             names = ", ".join(j.name for j in top)
-            if _gripper_fork(top, by_parent):
+            if _gripper_fork(top, by_parent, best):
                 if after:
                     return path   # the arm ends at its gripper
                 raise ValueError(f"the chain from {chain.root_link} forks at link {link!r} into a gripper's "
@@ -61,17 +62,34 @@ def _joints(n: int) -> str:
     return f"{n} movable joint{'s' if n != 1 else ''}"
 
 
-def _gripper_fork(branches: list[UrdfJoint], by_parent: dict[str, list[UrdfJoint]]) -> bool:
-    """Whether tied ``branches`` are a gripper's: one of them starts (its joint, or the first movable joint
-    below a fixed one) with a prismatic joint or a joint named *grip*, *finger*, *jaw* or *claw*."""
+def _gripper_fork(branches: list[UrdfJoint], by_parent: dict[str, list[UrdfJoint]], depth: int) -> bool:
+    """Whether tied ``branches`` (``depth`` movable joints each on their longest path) are a gripper's: one of
+    them starts (its joint, or the first movable joint below a fixed one) with a finger-like joint; or they are
+    short (at most FINGER_DEPTH_MAX) and hold one anywhere (Robotiq's 2F-85: knuckles first, fingers below).
+    Finger-like: prismatic, a ``<mimic>`` (a linkage driven by one motor), or named *grip*, *finger*, *jaw* or
+    *claw*. Two arms are neither: longer, and their first joints are shoulders."""
     for j in branches:
         while j.kind == "fixed" and len(by_parent.get(j.child, ())) == 1:
             if GRIPPER_NAME.search(j.name):
                 return True
             j = by_parent[j.child][0]
-        if j.kind == "prismatic" or GRIPPER_NAME.search(j.name):
+        if _finger_like(j):
             return True
-    return False
+    return depth <= FINGER_DEPTH_MAX and any(_finger_like(k) for j in branches for k in _below(j, by_parent))
+
+
+def _finger_like(j: UrdfJoint) -> bool:
+    return j.kind == "prismatic" or j.mimics is not None or bool(GRIPPER_NAME.search(j.name))
+
+
+def _below(joint: UrdfJoint, by_parent: dict[str, list[UrdfJoint]]) -> list[UrdfJoint]:
+    """``joint`` and every joint below it."""
+    out, todo = [], [joint]
+    while todo:
+        j = todo.pop()
+        out.append(j)
+        todo += by_parent.get(j.child, ())
+    return out
 
 
 def _movable_depth(chain: UrdfChain, by_parent: dict[str, list[UrdfJoint]]) -> dict[str, int]:
