@@ -42,6 +42,14 @@ def test_the_prefix_is_declared_on_the_robot_line_so_later_errors_keep_their_lin
         load_arm(tmp_path / "bad.urdf")
 
 
+def test_a_tag_that_only_starts_like_robot_is_not_taken_for_the_root():
+    """A <robot:x> before the root (in xacro's comment) or inside: the declarations go on the root <robot>, not
+    on it (review finding)."""
+    root = urdf_root('<!-- made from <robot:macro> -->\n<robot name="r"><robot:x/><a:b c:d="1"/></robot>')
+    assert root.tag == "robot" and [el.tag for el in root] == ["{urn:pa10-dnbs:undeclared:robot}x",
+                                                               "{urn:pa10-dnbs:undeclared:a}b"]
+
+
 def test_a_declared_prefix_is_left_as_written():
     root = urdf_root('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><xacro:property name="a"/>'
                      '<sensor:camera/></robot>')

@@ -15,7 +15,7 @@ UNDECLARED = "urn:pa10-dnbs:undeclared:"
 _NAME = r"[A-Za-z_][\w.-]*"
 _USED = re.compile(rf"</?({_NAME}):{_NAME}|\s({_NAME}):{_NAME}\s*=")   # prefixed tags and attributes
 _DECLARED = re.compile(rf"xmlns:({_NAME})\s*=")
-_ROBOT = re.compile(r"<robot\b")
+_ROBOT = re.compile(r"<robot(?=[\s/>])")   # the root's tag, not <robot:x> or <robot-x>
 
 
 def urdf_root(data: str | bytes) -> ET.Element:
