@@ -55,3 +55,15 @@ def test_settings_travel_to_a_worker_as_the_arm_file(cfg):
     data = pickle.dumps(cfg)
     assert len(data) < 20_000  # no URDF chain in it
     assert pickle.loads(data).arm is cfg.arm  # one Arm per file per process
+
+
+def test_the_arm_stays_one_object_however_many_arms_the_process_read(cfg, tmp_path):
+    """The cache held 16 files: a process that had read 16 others (the test suite did) got a second PA10 Arm
+    from a pickle, and `is` failed in test_settings_travel_to_a_worker_as_the_arm_file."""
+    from chain_urdf import chain_urdf
+    from pa10_dnbs.arm import load_arm
+
+    for k in range(20):
+        (tmp_path / f"a{k}.urdf").write_text(chain_urdf(2, name=f"a{k}"))
+        load_arm(tmp_path / f"a{k}.urdf")
+    assert pickle.loads(pickle.dumps(cfg)).arm is cfg.arm

@@ -41,8 +41,8 @@ def load_arm(spec: str | Path = DEFAULT_ARM) -> Arm:
     return _load(str(arm_file_path(spec)))
 
 
-@functools.lru_cache(maxsize=16)
-def _load(path_text: str) -> Arm:
+@functools.lru_cache(maxsize=None)   # one Arm per file per process, however many files (a few kB each): a worker
+def _load(path_text: str) -> Arm:  # unpickling settings gets the Arm the process holds (copyreg, below)
     path = Path(path_text)
     if is_urdf(path):   # a bare URDF: named *.urdf, or an XML document whose root is <robot>
         return _build(path, {"name": path.stem, "urdf": path.name,
