@@ -34,6 +34,7 @@ from ..config_error import ConfigError
 from ..interrupt import POLL_S, check, deferred, immediate, pool_worker_start, sigint_blocked
 from .cluster import CLOSE_TIMEOUT_S, ClusterWatch, connect
 from .lost_runs import ClusterLost, PoolBroken
+from .pool_race import quiet_cancelled_future_race
 
 STOP_GRACE_S = 2.0         # interrupted: SIGTERM to the workers, SIGKILL after this
 
@@ -55,6 +56,7 @@ class Executor:
                 self._client = connect(self.scheduler)   # also inside a tune's deferred() (interrupt.py)
             self.jobs = max(1, len(self._client.scheduler_info(n_workers=-1)["workers"]))
         elif self.jobs > 1:
+            quiet_cancelled_future_race()   # CPython 3.11's manager thread, a stop cancelling as a worker dies
             self._pool = ProcessPoolExecutor(max_workers=self.jobs, initializer=pool_worker_start,
                                              initargs=(os.getpid(),))
         return self
