@@ -119,6 +119,9 @@ def test_killed_controller_without_restart_stops_the_run_and_keeps_the_bag(tmp_p
         assert 1000 <= n < 10001
 
 
+STALLED_ANSWERS = 2   # resends a loaded 2-core machine may add to a 1 s run: an answer held back past resend_s
+
+
 def test_lost_and_late_messages_in_lockstep_change_nothing(tmp_path, _default_cfg, domain):
     """Dropped and delayed states and efforts on two joints: every loss is recovered by a resend, so the
     lockstep trajectory is the in-process one bit for bit."""
@@ -131,19 +134,22 @@ def test_lost_and_late_messages_in_lockstep_change_nothing(tmp_path, _default_cf
         plant, ctrl = joints[name]["plant"], joints[name]["controller"]
         assert plant["effort_timeouts"] == 0, (name, plant)
         if name not in ("s2", "w1"):
-            assert plant["resent_states"] == 0 and plant["injected_state_faults"] is None, (name, plant)
+            # no fault here; a resend only where the machine held an answer back past resend_s (0.25 s of wall
+            # time: once in a fresh-clone CI run, e2, while a lost message on s2 or w1 had the plant resending)
+            assert plant["resent_states"] <= STALLED_ANSWERS and plant["injected_state_faults"] is None, (name, plant)
             continue
         sent = plant["injected_state_faults"]
         assert sent["dropped"] > 0 and ctrl["injected_effort_dropped"] > 0, (name, plant, ctrl)
         assert sent["delayed"] == sent["messages"] - sent["dropped"]  # every state that went out was late
         assert ctrl["injected_effort_delayed"] > 0
-        # one resend per lost message, whichever way it was going
-        assert plant["resent_states"] == sent["dropped"] + ctrl["injected_effort_dropped"], (name, plant, ctrl)
+        # one resend per lost message, whichever way it was going (and as above, a stalled answer's)
+        lost = sent["dropped"] + ctrl["injected_effort_dropped"]
+        assert lost <= plant["resent_states"] <= lost + STALLED_ANSWERS, (name, plant, ctrl)
     # the plant's stats say which states were re-sent (a state re-sent twice counts once there)
     stats = {j["name"]: j for j in json.loads((out / "plant_stats.json").read_text())["joints"]}
     for name, j in stats.items():
         steps = sum(b - a + 1 for a, b in j["resent_step_ranges"])
-        assert (0 < steps <= j["resent_states"]) if name in ("s2", "w1") else steps == 0, (name, j)
+        assert (0 < steps if name in ("s2", "w1") else 0 <= steps) and steps <= j["resent_states"], (name, j)
     wire = RunData.load_npz(out / "timeseries.npz")
     local = simulate(_default_cfg, "dnbs", 1.0)
     for field in ("position_rad", "velocity_rad_s", "reference_rad", "torque_nm"):
