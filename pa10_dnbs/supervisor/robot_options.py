@@ -64,17 +64,16 @@ def check_robot_options(opt: RobotOptions, mode: str, namespace: str = DEFAULT_N
 MAX_DOMAIN_ID = 232  # the largest ROS_DOMAIN_ID ROS 2 accepts (its DDS ports must stay below 65536)
 
 
-def robot_domain(whose: str = "the robot's domain") -> int:
-    """The ROS domain of this shell, ``whose`` (the robot's for ``launch --robot external``; ``robot`` and
-    ``replay`` join it too): ROS_DOMAIN_ID, 0 when unset; ConfigError when it is not a whole number in
-    0..MAX_DOMAIN_ID (rcl reads a negative one as 0, the DDS refuses one above: the nodes would start and fail,
-    or join another domain)."""
+def robot_domain() -> int:
+    """The robot's ROS domain (``launch --robot external`` and ``robot`` join it): this shell's ROS_DOMAIN_ID (0
+    when unset); ConfigError when it is not a whole number in 0..MAX_DOMAIN_ID (rcl reads a negative one as 0, the
+    DDS refuses one above: the nodes would start and fail, or join another domain)."""
     raw = os.environ.get("ROS_DOMAIN_ID", "").strip() or "0"
     try:
         domain = int(raw)
     except ValueError:
-        raise ConfigError(f"ROS_DOMAIN_ID: expected a number for {whose}, got {raw!r}") from None
+        raise ConfigError(f"ROS_DOMAIN_ID: expected a number for the robot's domain, got {raw!r}") from None
     if not 0 <= domain <= MAX_DOMAIN_ID:
-        raise ConfigError(f"ROS_DOMAIN_ID: {whose} must be in 0..{MAX_DOMAIN_ID} (what ROS 2 accepts), "
+        raise ConfigError(f"ROS_DOMAIN_ID: the robot's domain must be in 0..{MAX_DOMAIN_ID} (what ROS 2 accepts), "
                           f"got {raw!r}")
     return domain
