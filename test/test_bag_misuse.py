@@ -148,6 +148,19 @@ def test_replay_of_a_bag_with_nothing_playable_is_refused_as_with_topics(tmp_pat
     assert r.stdout == "" and len(r.stderr.strip().splitlines()) == 1, r.stdout + r.stderr
 
 
+
+@pytest.mark.parametrize("bad", ["999", "233", "-1", "x"])
+def test_replay_on_a_domain_ros_refuses_is_refused_before_joining(tmp_path, bad):
+    """ROS_DOMAIN_ID=999 gave Fast DDS's 'Calculated port number is too high' twice, exit 1 and a file left in
+    /dev/shm; -1 played on domain 0: now one line naming ROS_DOMAIN_ID, exit 2, before ROS is loaded."""
+    from pa10_dnbs.ros.shm_cleanup import shm_files, unused
+
+    before = shm_files()
+    r = _replay(bad, _string_bag(tmp_path / "b", "/chatter"))
+    _assert_clear_error(r, "ROS_DOMAIN_ID: ")
+    assert "the domain the bag is played on" in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert r.stdout == "" and unused(shm_files() - before, frozenset({os.getpid()})) == set()
+
 @pytest.mark.graph  # plays on a ROS domain
 @pytest.mark.parametrize("case", ["played", "refused"])
 def test_replay_leaves_nothing_in_dev_shm(tmp_path, domain, case):

@@ -6,7 +6,8 @@ import pytest
 
 from cli_runner import run_cli
 from pa10_dnbs.config import ConfigError
-from pa10_dnbs.supervisor.robot_options import RobotOptions, check_robot_options, robot_domain
+from pa10_dnbs.supervisor.domain_ids import shell_domain
+from pa10_dnbs.supervisor.robot_options import RobotOptions, check_robot_options
 from pa10_dnbs.wire import joint_state_cdr
 from pa10_dnbs.wire.robot_interface import (JointMatcher, RobotCommand, RobotFault, RobotTimeline,
                                             default_state_topic, parse_robot_command)
@@ -96,15 +97,15 @@ def test_launch_flags_are_checked_with_one_line_naming_the_flag(monkeypatch):
         flag = "--" + setting.replace("_", "-")
         assert err.value.setting == setting and err.value.named(flag).startswith(f"{flag}: ")
     monkeypatch.setenv("ROS_DOMAIN_ID", "42")
-    assert robot_domain() == 42
+    assert shell_domain("the robot's domain") == 42
     monkeypatch.delenv("ROS_DOMAIN_ID")
-    assert robot_domain() == 0
+    assert shell_domain("the robot's domain") == 0
     monkeypatch.setenv("ROS_DOMAIN_ID", "232")
-    assert robot_domain() == 232
+    assert shell_domain("the robot's domain") == 232
     for bad in ("x", "300", "233", "-1"):  # rev_e 11: 300 started every node to fail, -1 ran on domain 0
         monkeypatch.setenv("ROS_DOMAIN_ID", bad)
         with pytest.raises(ConfigError, match="^ROS_DOMAIN_ID"):
-            robot_domain()
+            shell_domain("the robot's domain")
 
 
 def test_the_launcher_starts_the_joint_bus_in_the_plants_place(tmp_path):

@@ -20,10 +20,11 @@ from ..run_settings import build_settings
 from ..run_size import check_run_size, say_note
 from ..run_steps import run_steps
 from ..settings import Settings
+from ..supervisor.domain_ids import shell_domain
 from ..supervisor.fault_flags import apply_fault_flags, check_kill_times
 from ..supervisor.graph_run import GraphOptions, loop_reliability, parse_netns
 from ..supervisor.plant_engine import plant_robot_options
-from ..supervisor.robot_options import check_robot_options, robot_domain
+from ..supervisor.robot_options import check_robot_options
 from ..wire.clock_schedule import check_clock_hz
 from ..wire.topics import check_joint_name, check_namespace, default_namespace
 from .options import LaunchOptions
@@ -78,7 +79,7 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
         robot_fields["plant_engine"] = "mujoco"
     domain_id = o.domain_id
     if robot is not None and domain_id is None and not own_robot:  # the robot is running: the graph joins its domain
-        domain_id = robot_domain()
+        domain_id = shell_domain("the robot's domain")
     dt = settings.simulation.dt_s
     try:
         check_clock_hz(o.clock_hz, dt, off_allowed=False)

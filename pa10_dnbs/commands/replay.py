@@ -12,6 +12,7 @@ from ..bag.run_config import run_config
 from ..config import ConfigError
 from ..output_lock import lock_input, release_output
 from ..ros.shm_cleanup import remove_stale, shm_files
+from ..supervisor.domain_ids import shell_domain
 from .options import ReplayOptions
 from ..live.options import check_live_options
 from ..live.schemas import live_channels
@@ -37,6 +38,7 @@ def run_replay(options: ReplayOptions) -> int:
             raise ConfigError(f"--namespace: {exc}") from None
     if o.live_port is not None:
         check_live_options(o.live_host, o.live_port, o.live_hz)
+    shell_domain("the domain the bag is played on")   # one line here, not the DDS's error and a file in /dev/shm
     before = shm_files()
     try:
         _play(o, before)

@@ -20,7 +20,7 @@ from ..config import ConfigError, default_config_path
 from ..interrupt import LAUNCHER_PID_ENV
 from .options import RobotCommandOptions
 from ..run_settings import build_settings
-from ..supervisor.robot_options import robot_domain
+from ..supervisor.domain_ids import shell_domain
 from ..run_steps import run_steps
 from ..ros.shm_cleanup import remove_stale, shm_files
 from ..wire.clock_schedule import check_clock_hz
@@ -61,7 +61,7 @@ def robot_argv(options: RobotCommandOptions) -> list[str]:
 
 def run_robot(options: RobotCommandOptions) -> int:
     """Check the arguments, run the robot node until it ends (its exit code; 0 after Ctrl-C)."""
-    robot_domain()   # the node joins this shell's domain: a bad one is one line here, not the DDS's error
+    shell_domain("the robot's domain")   # the node joins this shell's domain: a bad one is one line here, not the DDS's error
     argv = robot_argv(options)
     before = shm_files()
     for stream in (sys.stdout, sys.stderr):   # None when closed at start (>&-)

@@ -20,7 +20,10 @@ import os
 import tempfile
 from pathlib import Path
 
+from ..config_error import ConfigError
+
 DOMAIN_IDS = range(1, 102)
+MAX_DOMAIN_ID = 232  # the largest ROS_DOMAIN_ID ROS 2 accepts (its DDS ports must stay below 65536)
 LOCK_DIR = Path(tempfile.gettempdir()) / "pa10_dnbs_domains"
 
 
@@ -109,3 +112,17 @@ def lease_domain() -> DomainLease:
             os.utime(LOCK_DIR / f"{domain_id}.lock")
             return lease
     raise NoFreeDomain(f"all {n} ROS domain ids are in use by other runs on this host ({LOCK_DIR})")
+
+
+def shell_domain(whose: str) -> int:
+    """This shell's ROS_DOMAIN_ID (0 when unset), for a process that joins it (``whose``: what the domain is for,
+    e.g. "the robot's domain"); ConfigError when it is not a whole number in 0..MAX_DOMAIN_ID (rcl reads a
+    negative one as 0, the DDS refuses one above: the node would start and fail, or join another domain)."""
+    raw = os.environ.get("ROS_DOMAIN_ID", "").strip() or "0"
+    try:
+        domain = int(raw)
+    except ValueError:
+        raise ConfigError(f"ROS_DOMAIN_ID: expected a number for {whose}, got {raw!r}") from None
+    if not 0 <= domain <= MAX_DOMAIN_ID:
+        raise ConfigError(f"ROS_DOMAIN_ID: {whose} must be in 0..{MAX_DOMAIN_ID} (what ROS 2 accepts), got {raw!r}")
+    return domain

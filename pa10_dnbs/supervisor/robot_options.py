@@ -7,7 +7,6 @@ unset) instead of leasing a private one. docs/your_robot.md has the interface.
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass
 
 from ..config import ConfigError
@@ -59,21 +58,3 @@ def check_robot_options(opt: RobotOptions, mode: str, namespace: str = DEFAULT_N
                           setting="robot_timeout")
     return {"robot": opt.robot, "robot_command": opt.command, "robot_state_topic": opt.state_topic or "",
             "robot_command_topic": opt.command_topic or "", "robot_timeout_s": opt.timeout_s}
-
-
-MAX_DOMAIN_ID = 232  # the largest ROS_DOMAIN_ID ROS 2 accepts (its DDS ports must stay below 65536)
-
-
-def robot_domain() -> int:
-    """The robot's ROS domain (``launch --robot external`` and ``robot`` join it): this shell's ROS_DOMAIN_ID (0
-    when unset); ConfigError when it is not a whole number in 0..MAX_DOMAIN_ID (rcl reads a negative one as 0, the
-    DDS refuses one above: the nodes would start and fail, or join another domain)."""
-    raw = os.environ.get("ROS_DOMAIN_ID", "").strip() or "0"
-    try:
-        domain = int(raw)
-    except ValueError:
-        raise ConfigError(f"ROS_DOMAIN_ID: expected a number for the robot's domain, got {raw!r}") from None
-    if not 0 <= domain <= MAX_DOMAIN_ID:
-        raise ConfigError(f"ROS_DOMAIN_ID: the robot's domain must be in 0..{MAX_DOMAIN_ID} (what ROS 2 accepts), "
-                          f"got {raw!r}")
-    return domain
