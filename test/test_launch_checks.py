@@ -83,6 +83,10 @@ def test_the_name_rules():
     (("--state-topic", "/clock"), ["--state-topic: '/clock' is /clock, which carries rosgraph_msgs/msg/Clock"]),
     (("--command-topic", "/clock"), ["--command-topic: '/clock' is /clock"]),
     (("--state-topic", "/rosout"), ["--state-topic: '/rosout' is /rosout, which carries rcl_interfaces/msg/Log"]),
+    # the arm's graph's own topics: the joint bus publishes /pa10/joint_states itself
+    (("--state-topic", "joint_states"), ["--state-topic: 'joint_states' is the graph's own joint states "
+                                         "(/pa10/joint_states in the namespace /pa10)"]),
+    (("--command-topic", "/pa10/s1/effort"), ["--command-topic: '/pa10/s1/effort' is joint s1's effort topic"]),
 ])
 def test_robot_topics_are_checked(args, words):
     _refused(run_cli("robot", "--duration", "0.1", *args), words)
@@ -101,6 +105,12 @@ def test_robot_topics_are_checked(args, words):
     # accepted, then the joint bus waited 30 s for joint states on the graph's /clock
     (("--robot-state-topic", "/clock"), ["--robot-state-topic: '/clock' is /clock, which carries rosgraph_msgs"]),
     (("--robot-command-topic", "/clock"), ["--robot-command-topic: '/clock' is /clock"]),
+    # the graph's own joint states: accepted, then reported at run time as "a second robot" on the state topic
+    (("--robot-state-topic", "/pa10/joint_states"), ["--robot-state-topic: '/pa10/joint_states' is the graph's "
+                                                     "own joint states: the robot's joint states and commands"]),
+    (("--robot-state-topic", "w2/reference"), ["--robot-state-topic: 'w2/reference' is joint w2's reference topic"]),
+    (("--namespace", "/arm2", "--robot-command-topic", "trajectory"), ["--robot-command-topic", "/arm2/trajectory",
+                                                                       "the graph's trajectory input"]),
 ])
 def test_launch_robot_external_topics_are_checked(tmp_path, args, words):
     out = tmp_path / "out"
@@ -117,6 +127,11 @@ def test_robot_topics_are_compared_as_resolved_in_the_arms_namespace():
         assert (fields["robot_state_topic"], fields["robot_command_topic"]) == ("x", "/x")
     with pytest.raises(ValueError, match="both /lab/arm2/x in the namespace /lab/arm2"):
         check_robot_options(RobotOptions(state_topic="/lab/arm2/x", command_topic="x"), "lockstep", "/lab/arm2")
+    # another arm's graph topics are a robot's like any other: only the arm's own namespace is the graph's
+    assert check_robot_options(RobotOptions(state_topic="/pa10/joint_states"), "lockstep", "/arm2")[
+        "robot_state_topic"] == "/pa10/joint_states"
+    with pytest.raises(ValueError, match="'joint_states' is the graph's own joint states"):
+        check_robot_options(RobotOptions(state_topic="joint_states"), "lockstep", "/arm2")
 
 
 @pytest.mark.parametrize("args,words", [

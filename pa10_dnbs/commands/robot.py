@@ -24,7 +24,7 @@ from ..supervisor.domain_ids import shell_domain
 from ..run_steps import run_steps
 from ..ros.shm_cleanup import remove_stale, shm_files
 from ..wire.clock_schedule import check_clock_hz
-from ..wire.topics import check_free_topic, check_topic_name, default_namespace, resolve
+from ..wire.topics import check_free_topic, check_not_the_graphs, check_topic_name, default_namespace, resolve
 
 
 def robot_argv(options: RobotCommandOptions) -> list[str]:
@@ -42,7 +42,7 @@ def robot_argv(options: RobotCommandOptions) -> list[str]:
     namespace = default_namespace(settings.arm.name)  # the bus's (launch's default): relative names meet there
     for flag, topic in (("--state-topic", o.state_topic), ("--command-topic", o.command_topic)):
         try:
-            check_free_topic(check_topic_name(topic), namespace)
+            check_not_the_graphs(check_free_topic(check_topic_name(topic), namespace), namespace)
         except ValueError as exc:
             raise ConfigError(f"{flag}: {exc}") from None
     if resolve(o.state_topic, namespace) == resolve(o.command_topic, namespace):

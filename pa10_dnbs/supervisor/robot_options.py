@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 from ..config import ConfigError
 from ..wire.robot_interface import CommandTopicError, default_state_topic, parse_robot_command
-from ..wire.topics import DEFAULT_NS, check_free_topic, check_topic_name, resolve
+from ..wire.topics import DEFAULT_NS, check_free_topic, check_not_the_graphs, check_topic_name, resolve
 
 ROBOTS = ("external",)
 
@@ -27,9 +27,10 @@ class RobotOptions:
 
 def _check_topic(flag: str, topic: str, namespace: str) -> None:
     """A topic flag: an absolute ROS name (/a/b) or a relative one (resolved in the arm's ``namespace``), not one
-    the graph holds with another type (/clock: the joint bus would wait for states that never come)."""
+    the graph holds with another type (/clock: the joint bus would wait for states that never come), nor one of
+    the arm's graph's own (its joint_states: the joint bus would take its own states for a second robot's)."""
     try:
-        check_free_topic(check_topic_name(topic), namespace)
+        check_not_the_graphs(check_free_topic(check_topic_name(topic), namespace), namespace)
     except ValueError as exc:
         raise ConfigError(f"{flag}: {exc}", setting=flag) from None
 

@@ -95,6 +95,25 @@ def check_free_topic(topic: str, ns: str = DEFAULT_NS) -> str:
     return topic
 
 
+def check_not_the_graphs(topic: str, ns: str = DEFAULT_NS) -> str:
+    """``topic`` unless it is one the arm's own graph in ``ns`` carries (its joint states, description, trajectory
+    input, or a joint's state, effort or reference): ValueError naming it (a robot's topics would meet the graph's
+    own publishers: the joint bus reads its own states as a second robot's)."""
+    name = resolve(topic, ns)
+    arm = ArmTopics(ns)
+    own = {arm.joint_states: "the graph's own joint states", arm.robot_description: "the graph's robot description",
+           resolve(TRAJECTORY, ns): "the graph's trajectory input"}
+    what = own.get(name)
+    rest = name[len(ns) + 1:].split("/") if name.startswith(ns + "/") else []
+    if what is None and len(rest) == 2 and rest[1] in ("state", "effort", "reference"):
+        what = f"joint {rest[0]}'s {rest[1]} topic in the graph"
+    if what is not None:
+        where = "" if name == topic else f" ({name} in the namespace {ns})"
+        raise ValueError(f"{topic!r} is {what}{where}: the robot's joint states and commands need topics of "
+                         "their own")
+    return topic
+
+
 def resolve(name: str, ns: str = DEFAULT_NS) -> str:
     """The absolute name of ``name`` in namespace ``ns`` (absolute names stay as they are)."""
     return name if name.startswith("/") else f"{ns}/{name}"
