@@ -93,6 +93,8 @@ def test_replay_live_of_a_damaged_stored_config_is_refused(tmp_path, domain):
     ({"duration_s": "inf"}, "custom_data pa10_dnbs.duration_s: must be finite, got inf"),
     ({"duration_s": "-1"}, "custom_data pa10_dnbs.duration_s: must be > 0, got -1"),
     ({"duration_s": "x"}, "custom_data pa10_dnbs.duration_s: not a number: 'x'"),
+    # a duration no memory holds: blamed on the stamps ('stamped by a wall clock instead of the sim clock?')
+    ({"duration_s": "1e9"}, "custom_data pa10_dnbs.duration_s: 1e+09 s is 1,000,000,000,000 steps of 0.001 s"),
     # the stored config: ZeroDivisionError, ValueError from wire/steps.py, IndexError, TypeError, ValueError, KeyError
     ({"simulation.dt_s": 0}, "the config stored in the bag (pa10_dnbs.config): simulation.dt_s: must be >= 1e-05, got 0"),
     ({"simulation.dt_s": -0.001}, "simulation.dt_s: must be >= 1e-05, got -0.001"),

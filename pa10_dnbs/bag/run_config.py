@@ -12,6 +12,7 @@ from pathlib import Path
 from ..config import SCHEMA, ConfigError, check_value, default_config_path
 from ..config_error import short
 from ..run_settings import build_settings
+from ..run_size import check_run_size, run_bytes
 from ..run_steps import countable_steps
 from .bag_reader import Bag, BagError
 from .custom_data import CUSTOM_CONFIG, CUSTOM_PREFIX
@@ -68,19 +69,26 @@ def _checked_stored(bag: Bag, cfg) -> dict:
     return out
 
 
-def stored_steps(bag: Bag, info: dict, dt_s: float) -> int | None:
+def stored_steps(bag: Bag, info: dict, dt_s: float, n_joints: int) -> int | None:
     """The run's steps by the duration the launcher stored (custom_data ``pa10_dnbs.duration_s`` [s], as text) at
     the step ``dt_s`` [s]; None when the bag has none. BagError naming the bag and the key unless it is a positive,
-    finite number of seconds and a countable number of steps."""
+    finite number of seconds and a countable number of steps whose record of ``n_joints`` joints fits in memory."""
     if "duration_s" not in info:
         return None
     raw = info["duration_s"]
     try:
         duration_s = check_value("duration_s", float(raw), SCHEMA["simulation"]["duration_s"], None)
-        return countable_steps(duration_s, dt_s)
+        n = countable_steps(duration_s, dt_s)
     except (TypeError, ValueError) as exc:   # ConfigError is a ValueError
         why = exc if isinstance(exc, ConfigError) else f"duration_s: not a number: {short(raw)}"
         raise BagError(f"{bag.path}: custom_data {CUSTOM_PREFIX}{why}") from None
+    try:
+        check_run_size(duration_s, n, n_joints, graph=True)
+    except ConfigError:   # its words name the command's --duration: here the stored key is to blame
+        raise BagError(f"{bag.path}: custom_data {CUSTOM_PREFIX}duration_s: {duration_s:g} s is {n:,} steps of "
+                       f"{dt_s:g} s, about {run_bytes(n, n_joints, graph=True) / 2**30:,.0f} GiB to hold, more than "
+                       "is available here") from None
+    return n
 
 
 def run_config(bag: Bag, info: dict, config_path: Path | None, joints: tuple[str, ...]) -> tuple[dict, str]:

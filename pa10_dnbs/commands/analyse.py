@@ -41,7 +41,7 @@ def run_analyse(options: AnalyseOptions) -> int:
         joints = bag_joint_names(bag)
         cfg, cfg_note = run_config(bag, info, o.config_path, joints)
         dt = float(cfg["simulation"]["dt_s"])
-        n_steps = stored_steps(bag, info, dt)
+        n_steps = stored_steps(bag, info, dt, len(joints))
         bar = None
         if o.progress:
             js = bag_arm(bag).joint_states
