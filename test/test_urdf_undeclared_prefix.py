@@ -55,3 +55,11 @@ def test_a_declared_prefix_is_left_as_written():
                      '<sensor:camera/></robot>')
     assert [el.tag for el in root] == ["{http://www.ros.org/wiki/xacro}property",
                                        "{urn:pa10-dnbs:undeclared:sensor}camera"]
+
+
+def test_a_prefix_declared_only_inside_one_element_is_declared_for_the_rest():
+    """xmlns:sensor on one <gazebo> and <sensor:ray> in another: 'unbound prefix' before (the declaration was
+    found in the text and taken for the file's); the inner declaration keeps its own namespace inside."""
+    root = urdf_root('<robot name="r"><gazebo xmlns:sensor="http://x"><sensor:camera/></gazebo>'
+                     '<gazebo><sensor:ray/></gazebo></robot>')
+    assert [el[0].tag for el in root] == ["{http://x}camera", "{urn:pa10-dnbs:undeclared:sensor}ray"]
