@@ -278,3 +278,18 @@ def test_a_joint_to_an_undefined_world_link_says_how_to_define_it(tmp_path):
         load_arm(tmp_path / "w.urdf")
     (tmp_path / "w.urdf").write_text(text.replace('<link name="l0">', '<link name="world"/><link name="l0">', 1))
     assert load_arm(tmp_path / "w.urdf").joint_names == ("j1", "j2")
+
+
+@pytest.mark.parametrize("encoding,said", [
+    ("utf-16", "the file is UTF-16 text (save it as UTF-8)"),
+    ("latin-1", "byte 27 (0xe9) is not UTF-8 (a binary file, or text in another encoding: save it as UTF-8)"),
+])
+def test_a_urdf_that_is_not_utf8_says_what_it_is(tmp_path, encoding, said):
+    """A URDF saved as UTF-16 was 'not a text file (not UTF-8)': it is text, in the encoding no URDF reader takes."""
+    text = _chain().replace('<?xml version="1.0"?>\n', '<?xml version="1.0"?>\n<!-- é -->\n')
+    (tmp_path / "t.urdf").write_text(text, encoding=encoding)
+    with pytest.raises(ArmError) as err:
+        load_arm(tmp_path / "t.urdf")
+    assert str(err.value) == f"{tmp_path / 't.urdf'}: not a URDF as URDF readers take it: {said}"
+    (tmp_path / "u.urdf").write_text(text, encoding="utf-8-sig")   # a UTF-8 byte-order mark is UTF-8: read
+    assert load_arm(tmp_path / "u.urdf").joint_names == ("j1", "j2", "j3")

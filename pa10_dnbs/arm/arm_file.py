@@ -53,6 +53,16 @@ def _load(path_text: str) -> Arm:  # unpickling settings gets the Arm the proces
     return _build(path, raw, bare=False)
 
 
+def _not_utf8(exc: UnicodeDecodeError) -> str:
+    """Why a URDF's bytes are refused: URDF readers (urdfdom, PyBullet) read UTF-8; a UTF-16 file (a BOM) is named
+    as such, any other by its first byte that is not UTF-8."""
+    head = exc.object[:2]
+    if head in (b"\xff\xfe", b"\xfe\xff"):
+        return "not a URDF as URDF readers take it: the file is UTF-16 text (save it as UTF-8)"
+    return (f"not a URDF as URDF readers take it: byte {exc.start} (0x{exc.object[exc.start]:02x}) is not UTF-8 "
+            "(a binary file, or text in another encoding: save it as UTF-8)")
+
+
 def _build(path: Path, raw: dict, bare: bool) -> Arm:
     unknown = first_unknown(raw, KEYS)
     if unknown is not None:
@@ -67,8 +77,8 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
         links = _links(xml)
     except UrdfError as exc:  # not one tree, or a malformed joint: the message names the joint or link
         raise ArmError(f"{urdf}: {exc}") from None
-    except UnicodeDecodeError:
-        raise ArmError(f"{urdf}: not a URDF: not a text file (not UTF-8)") from None
+    except UnicodeDecodeError as exc:
+        raise ArmError(f"{urdf}: {_not_utf8(exc)}") from None
     except OSError as exc:
         raise ArmError(f"{urdf}: cannot read: {exc.strerror or exc}") from None
     except (ET.ParseError, ValueError, AttributeError, TypeError) as exc:
