@@ -68,6 +68,8 @@ CASES = [
     ("encoder_noise_filters", ["--duration", "nan"], "--duration"),
     ("encoder_noise_filters", ["--cutoffs", "abc"], "--cutoffs"),
     ("encoder_noise_filters", ["--arm", "zz"], "--arm"),
+    ("cascade_modes", ["--arm", "zz"], "--arm"),
+    ("cascade_modes", ["--ekf-gain", "-1"], "--ekf-gain"),
     ("result_fingerprint", ["--compare", "{missing}"], "--compare"),
     ("result_fingerprint", ["--compare", "{dir}"], "--compare"),
     ("result_fingerprint", ["--compare", "{binary}"], "--compare"),
