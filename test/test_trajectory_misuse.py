@@ -72,6 +72,26 @@ def test_a_whole_number_too_large_for_a_float_is_one_line(tmp_path, kind, field)
     assert not out.exists()
 
 
+@pytest.mark.parametrize("field", ["velocities", "accelerations"])
+def test_a_finite_value_whose_quintic_overflows_is_one_line(tmp_path, field):
+    """velocities or accelerations of 1e308 (finite, read) made the quintic's coefficients inf: numpy's
+    LinAlgError traceback from the limit check, exit 1 (review rev_f, finding 1); 1e300 was refused already."""
+    zeros = [0.0] * 7
+    first = {"time_from_start": 0.1, "positions": [0.2, 0.1, 0.0, 0.2, 0.0, 0.0, 0.0], "velocities": zeros,
+             "accelerations": zeros}
+    first[field] = [1.0e308] + zeros[1:]
+    doc = {"joint_names": ["s1", "s2", "s3", "e1", "e2", "w1", "w2"],
+           "points": [first, {**first, "time_from_start": 0.2, field: zeros}]}
+    f = tmp_path / "t.yaml"
+    f.write_text(yaml.safe_dump(doc))
+    out = tmp_path / "o"
+    r = run_cli("simulate", "--trajectory", f, "--controller", "pid", "--duration", "0.3", "--no-figures",
+                "--out", out)
+    _one_line(r.returncode, r.stderr, "trajectory", f, "points[0]: the quintic from t = 0 s to this point at 0.1 s "
+              "overflows a float")
+    assert "Warning" not in r.stderr and not out.exists()
+
+
 @pytest.mark.parametrize("change, words", [
     (lambda d: d["points"][2].update(time_from_start={}), "points[2].time_from_start: {} gives no time"),
     (lambda d: d.update(header="garbage"), "header: expected a mapping"),

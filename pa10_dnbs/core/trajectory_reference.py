@@ -141,8 +141,15 @@ class TrajectoryReference:
         t = np.concatenate([[t_start], times[later]])
         p = np.vstack([p0, traj.positions_rad[later]])
         pick = lambda a: None if a is None else np.vstack([np.zeros(self.n_joints), a[later]])  # noqa: E731
-        v, a = knot_derivatives(t, p, pick(given_v), pick(given_a), v0=v0, a0=a0)
-        spline = QuinticSpline(t, p, v, a)
+        with np.errstate(over="ignore", invalid="ignore"):   # an overflow is refused just below, in one line
+            v, a = knot_derivatives(t, p, pick(given_v), pick(given_a), v0=v0, a0=a0)
+            spline = QuinticSpline(t, p, v, a)
+        finite = np.isfinite(spline.c).all(axis=(0, 2)) & np.isfinite(v[1:] + a[1:]).all(axis=1)   # per segment
+        if not finite.all():
+            seg = int(np.argmin(finite))
+            raise TrajectoryError(f"points[{int(later[seg])}]: the quintic from t = {t[seg]:g} s to this point at "
+                                  f"{t[seg + 1]:g} s overflows a float (its velocities, accelerations or positions "
+                                  "are beyond any arm's)")
         end_step = int(np.ceil(spline.end_s / dt - 1e-9))
         end_step += int(end_step * dt < spline.end_s)  # the first step held, as evaluate() decides it
         self._check_limits(spline, start_step, end_step)
