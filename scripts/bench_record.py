@@ -139,10 +139,13 @@ def record_path(text: str) -> Path:
     """``--save-record``'s argparse type: a file to write in an existing, writable directory.
 
     Checked when the flag is parsed, before the benchmark runs: a directory, a missing or unwritable parent,
-    or a path through a file is refused in one line (argparse: exit 2), not after minutes of measuring."""
+    a path through a file, or one that is not a regular file (a device, a pipe: the write replaces the path, so
+    /dev/null would become a file) is refused in one line (argparse: exit 2), not after minutes of measuring."""
     path = Path(text)
     if not text or text.endswith("/") or path.is_dir():
         raise argparse.ArgumentTypeError(f"{text!r} is a directory, not a file to write")
+    if path.exists() and not path.is_file():
+        raise argparse.ArgumentTypeError(f"{text!r} is not a regular file (a device, pipe or socket): not replaced")
     parent = path.parent
     if not parent.is_dir():
         raise argparse.ArgumentTypeError(f"{text!r}: its directory {str(parent)!r} does not exist")
