@@ -345,7 +345,8 @@ def build_parser() -> argparse.ArgumentParser:
                          "delay_1_tick, coulomb, fast_reference")
     st.add_argument("--controllers", default="dnbs,pid", metavar="LIST", help="comma-separated: dnbs, pid, ctc")
     st.add_argument("--seeds", type=whole_in(1, 100000), default=1, help="seeds 0..N-1 of the DNBS initial weights and the noise")
-    st.add_argument("--duration", type=seconds, default=20.0, metavar="SECONDS", help="simulated time per run")
+    st.add_argument("--duration", type=seconds, default=None, metavar="SECONDS",
+                    help="simulated time per run (default: simulation.duration_s of the config, 20 s)")
     st.add_argument("--out", type=path_arg, required=True, metavar="DIR", help="output directory")
     st.add_argument("--config", type=path_arg, default=None, help="YAML config the scenarios start from")
     add_arm_argument(st)
@@ -380,7 +381,8 @@ def build_parser() -> argparse.ArgumentParser:
     tu.add_argument("--held-out-seeds", type=whole_in(0, 100000), default=3, metavar="N",
                     help="held-out seeds 100..100+N-1 on every scenario, for the best and the start (default 3; "
                          "0: none)")
-    tu.add_argument("--duration", type=seconds, default=20.0, metavar="SECONDS", help="simulated time per run")
+    tu.add_argument("--duration", type=seconds, default=None, metavar="SECONDS",
+                    help="simulated time per run (default: simulation.duration_s of the config, 20 s)")
     add_parallel_arguments(tu, "runs of the trials")
     tu.add_argument("--no-progress", action="store_true", help="no progress line")
     tu.set_defaults(func=_run, func_name="tune")

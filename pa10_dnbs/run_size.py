@@ -72,9 +72,10 @@ def _duration(s: float) -> str:
 
 def check_run_size(duration_s: float, n_steps: int, n_joints: int, kept_runs: int = 1,
                    at_once: int = 1, total_runs: int = 1, graph: bool = False, wall_s: float | None = None,
-                   say=None) -> None:
-    """Raise ConfigError naming the setting ``duration_s`` (or ``jobs`` when one run would fit but ``at_once`` do
-    not) when the runs need more memory than is available; ``say`` (a print function) announces a run whose
+                   say=None, setting: str = "duration_s") -> None:
+    """Raise ConfigError naming ``setting`` (the duration's: ``duration_s``, the command line's --duration, or the
+    config's simulation.duration_s; or ``jobs`` when one run would fit but ``at_once`` do not) when the runs need
+    more memory than is available; ``say`` (a print function) announces a run whose
     estimated wall time (``wall_s``, else from the step rates) exceeds an hour."""
     need = run_bytes(n_steps, n_joints, kept_runs, at_once, graph) + WORKER_BYTES * (at_once if at_once > 1 else 0)
     rate = STEPS_PER_S_GRAPH if graph else STEPS_PER_S_IN_PROCESS * at_once
@@ -84,9 +85,9 @@ def check_run_size(duration_s: float, n_steps: int, n_joints: int, kept_runs: in
         if at_once > 1 and run_bytes(n_steps, n_joints, kept_runs, 1, graph) + WORKER_BYTES <= have:
             raise ConfigError(f"jobs: {at_once} runs at once of {num(n_steps)} steps need about {_size(need)} of "
                               f"memory, more than the {_size(have)} available here; use fewer", setting="jobs")
-        raise ConfigError(f"duration_s: {num(duration_s)} s is {num(n_steps)} steps: about {_size(need)} of memory "
+        raise ConfigError(f"{setting}: {num(duration_s)} s is {num(n_steps)} steps: about {_size(need)} of memory "
                           f"for the time series (and about {_duration(wall)} of wall time), more than the "
-                          f"{_size(have)} available here; shorten it", setting="duration_s")
+                          f"{_size(have)} available here; shorten it", setting=setting)
     if say is not None and wall > SAY_LONGER_THAN_S:
         say(f"a run of {num(duration_s)} s: {num(n_steps * total_runs)} steps take about {_duration(wall)} of wall "
             f"time and {_size(need)} of memory")

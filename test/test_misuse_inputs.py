@@ -106,6 +106,28 @@ def test_a_bad_value_is_one_line_naming_the_flag_and_exit_2_before_any_work(tmp_
     _untouched(tmp_path, before)
 
 
+@pytest.mark.parametrize("command", [["simulate"], ["study"], ["tune", "--controller", "pid"], ["launch"]])
+def test_a_config_duration_no_memory_holds_names_the_configs_key(tmp_path, command):
+    """simulation.duration_s: 1e9 in a config was blamed on --duration, a flag the user never typed (review
+    rev_f, finding 7)."""
+    cfg = tmp_path / "long.yaml"
+    cfg.write_text(f"extends: {REPO / 'config' / 'default.yaml'}\nsimulation: {{duration_s: 1.0e9, window_s: [0, 1.0e9]}}\n")
+    r = run_cli(*command, "--config", cfg, "--out", tmp_path / "run", "--no-progress")
+    _assert_one_line(r.returncode, r.stdout, r.stderr, "simulation.duration_s: 1e9 s is 1e12 steps")
+    assert "--duration" not in r.stderr and not (tmp_path / "run").exists()
+
+
+def test_study_runs_the_configs_duration_as_simulate_does(tmp_path):
+    """study and tune ran 20 s whatever the config's simulation.duration_s (and measured its window_s on them):
+    now their --duration defaults to the config's, as simulate's and launch's do (review rev_f, finding 8)."""
+    cfg = tmp_path / "short.yaml"
+    cfg.write_text(f"extends: {REPO / 'config' / 'default.yaml'}\nsimulation: {{duration_s: 0.3, window_s: [0.15, 0.3]}}\n")
+    r = run_cli("study", "--config", cfg, "--scenarios", "nominal", "--controllers", "pid", "--jobs", "1",
+                "--out", tmp_path / "st")
+    assert r.returncode == 0, r.stderr
+    assert "1 runs of 0.3 s" in (tmp_path / "st" / "study.md").read_text()
+
+
 def _bag(tmp_path: Path) -> Path:
     """A directory that is not a bag: enough for replay's and analyse's argument checks, which come first."""
     bag = tmp_path / "bag"

@@ -85,9 +85,10 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
         check_clock_hz(o.clock_hz, dt, off_allowed=False)
     except ValueError as exc:
         raise ConfigError(f"--clock-hz: {exc}") from None
-    n_steps = run_steps(duration_s, dt, "simulation.duration_s" if o.duration_s is None else "--duration")
+    given = "simulation.duration_s" if o.duration_s is None else "--duration"   # the config's, or the flag
+    n_steps = run_steps(duration_s, dt, given)
     check_kill_times(settings.faults, joint_names, n_steps * dt, o.faults.kill)  # before any node starts
-    check_run_size(duration_s, n_steps, len(joint_names), graph=True, say=say_note,
+    check_run_size(duration_s, n_steps, len(joint_names), graph=True, say=say_note, setting=given,
                    wall_s=n_steps * dt / o.real_time_factor if o.mode == "realtime" else None)
     trajectory = None
     if o.trajectory is not None:  # the file read and checked as the reference node will: one line, exit 2

@@ -95,7 +95,7 @@ class StudyOptions:
     scenarios: str = "nominal"
     controllers: str = "dnbs,pid"
     seeds: int = 1
-    duration_s: float = 20.0
+    duration_s: float | None = None      # None: the config's simulation.duration_s
     force: bool = False
     config_path: Path | None = None
     jobs: int | None = None
@@ -122,7 +122,7 @@ class TuneOptions:
     scenarios: str = TRAINING_SCENARIOS
     seeds: int = TRAINING_SEEDS
     held_out_seeds: int = 3
-    duration_s: float = 20.0
+    duration_s: float | None = None      # None: the config's simulation.duration_s
     params: str | None = None
     progress: bool = False
 

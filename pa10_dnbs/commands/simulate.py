@@ -37,13 +37,13 @@ def run_simulate(options: SimulateOptions) -> int:
     settings = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
     the_arm = settings.arm
     duration_s = settings.simulation.duration_s if o.duration_s is None else o.duration_s
-    n_steps = run_steps(duration_s, settings.simulation.dt_s,
-                        "simulation.duration_s" if o.duration_s is None else "duration_s")
+    given = "simulation.duration_s" if o.duration_s is None else "duration_s"   # the config's, or --duration
+    n_steps = run_steps(duration_s, settings.simulation.dt_s, given)
     duration_s = n_steps * settings.simulation.dt_s
     kinds = CHOICES[o.controller]
     traj = load_trajectory_file(Path(o.trajectory), the_arm) if o.trajectory is not None else None  # its quintics: the run's
     check_run_size(duration_s, n_steps, len(the_arm.joint_names), kept_runs=len(kinds),
-                   total_runs=len(kinds), say=say_note)
+                   total_runs=len(kinds), say=say_note, setting=given)
     if faults_active(settings.faults):
         say_note(IN_PROCESS_FAULTS_NOTE)
     init_states = None

@@ -36,16 +36,18 @@ def run_study_command(options: StudyOptions) -> int:
     ctrl = name_list("--controllers", o.controllers, CONTROLLERS)
     config_path = Path(o.config_path) if o.config_path else default_config_path()
     settings = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
-    n_runs, n_steps = len(scen) * len(ctrl) * o.seeds, run_steps(o.duration_s, settings.simulation.dt_s)
+    duration_s = settings.simulation.duration_s if o.duration_s is None else o.duration_s
+    given = "simulation.duration_s" if o.duration_s is None else "duration_s"   # the config's, or --duration
+    n_runs, n_steps = len(scen) * len(ctrl) * o.seeds, run_steps(duration_s, settings.simulation.dt_s, given)
     at_once = 1 if o.scheduler is not None else min(n_runs, o.jobs or os.cpu_count() or 1)
-    check_run_size(o.duration_s, n_steps, settings.n_joints, at_once=at_once,
-                   total_runs=n_runs, say=say_note)
+    check_run_size(duration_s, n_steps, settings.n_joints, at_once=at_once,
+                   total_runs=n_runs, say=say_note, setting=given)
     if faults_active(settings.faults):
         say_note(IN_PROCESS_FAULTS_NOTE)
     check_output_dir(o.out, o.force, "--out", inputs={"--config": config_path, "--arm": settings.arm.file,
                                                       "arm URDF": settings.arm.urdf})
     check_scenario_references(settings, scen)   # a reference past the Nyquist rate: one line, nothing runs
-    infeasible = infeasible_scenarios(settings, scen, o.duration_s)   # before any run: one line each, not run
+    infeasible = infeasible_scenarios(settings, scen, duration_s)   # before any run: one line each, not run
     for line in infeasible.values():
         print(f"study: {line}")
     if len(infeasible) == len(scen):
@@ -66,13 +68,13 @@ def run_study_command(options: StudyOptions) -> int:
         bar.update(len(done) * steps_per_run, row["worst_max_abs_error_run_rad"])
 
     command = (f"pa10-dnbs study --scenarios {','.join(asked)} --controllers {','.join(ctrl)} --seeds {o.seeds} "
-               f"--duration {o.duration_s:g} --out {shlex.quote(str(o.out))}"
+               f"--duration {duration_s:g} --out {shlex.quote(str(o.out))}"
                + (f" --config {shlex.quote(str(config_path))}" if config_path != default_config_path() else "")
                + (f" --arm {shlex.quote(str(o.arm))}" if o.arm is not None else ""))
-    head = {"config_file": str(config_path.resolve()), "arm": str(settings.arm.file), "duration_s": o.duration_s,
+    head = {"config_file": str(config_path.resolve()), "arm": str(settings.arm.file), "duration_s": duration_s,
             **({"infeasible": infeasible} if infeasible else {})}
     try:
-        rows = run_study(settings, scen, ctrl, o.seeds, o.duration_s, o.jobs, on_done=finished, scheduler=o.scheduler)
+        rows = run_study(settings, scen, ctrl, o.seeds, duration_s, o.jobs, on_done=finished, scheduler=o.scheduler)
     except KeyboardInterrupt:   # the workers are stopped (study/executor.py); the completed runs are kept
         bar.close()
         return _keep_partial(o.out, o.force, done, list(product(scen, ctrl, range(o.seeds))), command, head)
@@ -83,7 +85,7 @@ def run_study_command(options: StudyOptions) -> int:
     bar.close()
     with finished_output_dir(o.out, o.force, "study.md") as tmp:   # a Ctrl-C now: finished first, then said
         (tmp / "study.json").write_text(json_text({**head, "rows": rows}))
-        (tmp / "study.md").write_text(study_markdown(rows, command, o.duration_s,
+        (tmp / "study.md").write_text(study_markdown(rows, command, duration_s,
                                                      {k: v.description for k, v in SCENARIOS.items()}, infeasible))
         study_figure(rows, tmp / "study.png")
     diverged = sum(r["diverged"] for r in rows)

@@ -118,21 +118,23 @@ def _checks(o: TuneOptions, say) -> dict:
         except ConfigError as exc:
             raise ConfigError(f"{exc} (the held-out runs take every scenario; --held-out-seeds 0 leaves them out)") \
                 from None
-    n_steps = run_steps(o.duration_s, base.simulation.dt_s)
+    duration_s = base.simulation.duration_s if o.duration_s is None else o.duration_s
+    given = "simulation.duration_s" if o.duration_s is None else "duration_s"   # the config's, or --duration
+    n_steps = run_steps(duration_s, base.simulation.dt_s, given)
     runs_per_trial = len(train) * o.seeds
     jobs = o.jobs or os.cpu_count() or 1
     batch = max(1, jobs // runs_per_trial)   # trials asked at once with `jobs` workers (tune/tuner.py optimize)
     n_held = 2 * len(SCENARIOS) * o.held_out_seeds   # the start and the best settings on every scenario
     pool = min(jobs, max(runs_per_trial * min(batch, o.trials), n_held))   # the runs that ever step at once
-    check_run_size(o.duration_s, n_steps, len(the_arm.joint_names), at_once=1 if o.scheduler is not None else pool,
-                   total_runs=runs_per_trial * o.trials + n_held, say=say)
+    check_run_size(duration_s, n_steps, len(the_arm.joint_names), at_once=1 if o.scheduler is not None else pool,
+                   total_runs=runs_per_trial * o.trials + n_held, say=say, setting=given)
     if faults_active(base.faults) and say is not None:
         say(IN_PROCESS_FAULTS_NOTE)
-    spec = TuneSpec(the_arm.name, o.controller, param_list, train, list(range(o.seeds)), o.duration_s,
+    spec = TuneSpec(the_arm.name, o.controller, param_list, train, list(range(o.seeds)), duration_s,
                     str(config_path.resolve()), o.seed, start_values(o.controller, base),
                     arm_digest(the_arm), settings_digest(base))
     command = _command(o.controller, o.trials, out, o.arm, config_path, o.storage, o.seed, o.scenarios, o.seeds, o.held_out_seeds,
-                       o.duration_s, o.params)
+                       duration_s, o.params, base.simulation.duration_s)
     check_output_dir(out, False, "--out", inputs={"--config": config_path, "--arm": the_arm.file,
                                                    "arm URDF": the_arm.urdf},
                      resume=tune_files(out, o.storage))
@@ -262,7 +264,7 @@ def _tune(state, spec, base, trials, out, storage, pool_batch, scheduler, train,
 
 
 def _command(controller, trials, out, arm, config_path, storage, seed, scenarios, seeds, held_out_seeds, duration_s,
-             params) -> str:
+             params, config_duration_s) -> str:
     parts = ["pa10-dnbs tune", f"--controller {controller}", f"--trials {trials}", f"--out {shlex.quote(str(out))}"]
     if arm is not None:
         parts.append(f"--arm {shlex.quote(str(arm))}")
@@ -272,7 +274,7 @@ def _command(controller, trials, out, arm, config_path, storage, seed, scenarios
         parts.append(f"--storage {shlex.quote(storage)}")
     for flag, v, default in (("--seed", seed, 0), ("--scenarios", scenarios, TRAINING_SCENARIOS),
                              ("--seeds", seeds, TRAINING_SEEDS), ("--held-out-seeds", held_out_seeds, 3),
-                             ("--duration", duration_s, 20.0),
+                             ("--duration", duration_s, config_duration_s),
                              ("--params", params, None)):
         if v != default:
             parts.append(f"{flag} {v:g}" if isinstance(v, float) else f"{flag} {v}")
