@@ -265,11 +265,16 @@ def _config_file(path: Path) -> Path:
     return resolved
 
 
+MAX_EXTENDS = 100   # files a config's extends chain may hold above it (a real one holds 1-3)
+
+
 def _read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict:
     """The document at ``path``, merged over the file its ``extends`` key names (relative to it), recursively."""
     path = _config_file(path)
     if path in seen:
         raise ConfigError(f"{path}: extends: circular ({' -> '.join(str(p) for p in seen + (path,))})")
+    if len(seen) >= MAX_EXTENDS:   # else Python's recursion limit, blamed on whichever file it hit
+        raise ConfigError(f"{seen[0]}: extends: a chain of more than {MAX_EXTENDS} files (at {path})")
     raw = read_config_yaml(path)  # one line for a file that is not text, not YAML, or gives a key twice
     if not isinstance(raw, dict):
         return raw

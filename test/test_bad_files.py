@@ -146,6 +146,20 @@ def test_extends_missing_file(tmp_path):
     _one_line_error(_simulate_with(tmp_path, cfg), cfg, "extends: nosuch.yaml", "config file not found")
 
 
+def test_a_chain_of_extends_too_long_names_the_chain_not_a_file_in_it(tmp_path):
+    """1200 files each extending the one before: 'c227.yaml: not valid YAML: nested too deeply' (Python's recursion
+    limit, blamed on a valid file; review rev_f, finding 9). 100 files read; more: one line naming the chain."""
+    from pa10_dnbs.config import MAX_EXTENDS, default_config_path
+    (tmp_path / "c0.yaml").write_text(f"extends: {default_config_path()}\n")
+    for i in range(1, 1200):
+        (tmp_path / f"c{i}.yaml").write_text(f"extends: c{i - 1}.yaml\n")
+    top = tmp_path / "c1199.yaml"
+    _one_line_error(_simulate_with(tmp_path, top), f"{top}: extends: a chain of more than {MAX_EXTENDS} files")
+    ok = tmp_path / f"c{MAX_EXTENDS - 2}.yaml"   # itself, c0 and the default: MAX_EXTENDS files
+    r = run_cli("arm", "--config", ok)
+    assert r.returncode == 0, r.stderr
+
+
 def test_a_config_that_does_not_extend_the_default_names_its_file(tmp_path):
     """It said ``checkpoint: missing key`` without the file: now the file, the key and what to add."""
     cfg = tmp_path / "alone.yaml"
