@@ -293,3 +293,26 @@ def test_a_urdf_that_is_not_utf8_says_what_it_is(tmp_path, encoding, said):
     assert str(err.value) == f"{tmp_path / 't.urdf'}: not a URDF as URDF readers take it: {said}"
     (tmp_path / "u.urdf").write_text(text, encoding="utf-8-sig")   # a UTF-8 byte-order mark is UTF-8: read
     assert load_arm(tmp_path / "u.urdf").joint_names == ("j1", "j2", "j3")
+
+
+@pytest.mark.parametrize("change, said", [
+    ({"name": "x\nnew\ttab"}, "name: holds a control character ('\\n'), which would split the lines it is printed in"),
+    ({"description": "two\nlines"}, "description: holds a control character ('\\n')"),
+    ({"description": ["a", "b"]}, "description: expected a text, got ['a', 'b']"),
+    ({"settings": []}, "settings: expected a mapping"),
+    ({"sources": []}, "sources: expected a mapping"),
+])
+def test_a_name_description_settings_or_sources_of_the_wrong_kind_is_named(tmp_path, change, said):
+    """A name holding a newline was printed across lines of every table and report; a description list was
+    printed as Python's repr; settings: [] and sources: [] read as empty (review rev_f, finding 11)."""
+    _write(tmp_path / "chain.urdf", _chain())
+    path = _write(tmp_path / "arm.yaml", yaml.safe_dump({"name": "t", "urdf": "chain.urdf",
+                                                         "sources": {"urdf": "test"}, **change}))
+    assert _refused(path).startswith(f"{path}: {said}")
+
+
+def test_a_folded_description_and_empty_settings_still_read(tmp_path):
+    """YAML's folded ``>`` ends a description in a newline: kept, stripped; ``settings:`` with no value is none."""
+    arm = load_arm(_arm_file(tmp_path, description="A long\ndescription folded\n".replace("\n", " ") + "\n",
+                             settings=None))
+    assert arm.description == "A long description folded" and arm.settings == {}

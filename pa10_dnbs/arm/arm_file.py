@@ -70,6 +70,14 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
     for key in ("name", "urdf"):
         if not isinstance(raw.get(key), str) or not raw[key]:
             raise ArmError(f"{path}: {key}: expected a non-empty string")
+    for key in ("name", "description"):   # printed in every table and report line: one line each
+        value = raw.get(key, "")
+        if not isinstance(value, str):
+            raise ArmError(f"{path}: {key}: expected a text, got {short(value)}")
+        # (around it, whitespace is dropped: YAML's folded > ends in a newline)
+        if control := next((c for c in value.strip() if unicodedata.category(c) == "Cc"), None):
+            raise ArmError(f"{path}: {key}: holds a control character ({control!r}), which would split the lines "
+                           "it is printed in")
     urdf = path if bare else existing_file(_urdf_path(path, raw), f"{path}: urdf")
     try:
         xml = urdf.read_text()
@@ -113,7 +121,7 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
     if bad:
         raise ArmError(f"{urdf}: joint {bad[0]!r}: a revolute joint needs <limit lower upper> with lower < upper")
 
-    sources = raw.get("sources") or {}
+    sources = {} if raw.get("sources") is None else raw["sources"]   # an empty list is not an empty mapping
     if not isinstance(sources, dict):
         raise ArmError(f"{path}: sources: expected a mapping of fact -> where its numbers came from")
     if not bare:
@@ -140,7 +148,7 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
     if flange not in links:
         raise ArmError(f"{path}: flange_link: no link {flange!r} in the URDF")
     _check_flange_moves(path, chain, flange, actuated)
-    settings = raw.get("settings") or {}
+    settings = {} if raw.get("settings") is None else raw["settings"]
     if not isinstance(settings, dict):
         raise ArmError(f"{path}: settings: expected a mapping (config keys of this arm)")
     try:
@@ -151,7 +159,7 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
         print(note, file=sys.stderr)
     locked_at = tuple(float(min(max(0.0, j.lower), j.upper)) for j in locked)
     name = raw["name"] if not bare else path.stem
-    return Arm(name=name, description=str(raw.get("description", name)), file=path, urdf=urdf,
+    return Arm(name=name, description=raw.get("description", name).strip() or name, file=path, urdf=urdf,
                joint_names=joint_names, locked_joints=tuple(j.name for j in locked), locked_position_rad=locked_at,
                lower_rad=lower, upper_rad=upper, torque_limit_nm=torque, flange_link=flange,
                rotor_inertia_kgm2=facts["rotor_inertia_kgm2"], viscous_nms_per_rad=facts["viscous_nms_per_rad"],
