@@ -24,6 +24,7 @@ from ..supervisor.domain_ids import shell_domain
 from ..supervisor.fault_flags import apply_fault_flags, check_kill_times
 from ..supervisor.graph_run import GraphOptions, loop_reliability, parse_netns
 from ..supervisor.plant_engine import plant_robot_options
+from ..supervisor.rmw_check import check_rmw
 from ..supervisor.robot_options import check_robot_options
 from ..wire.clock_schedule import check_clock_hz
 from ..wire.topics import check_joint_name, check_namespace, default_namespace
@@ -55,6 +56,7 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
     the flag): the duration against the step, the clock rate against dt, the trajectory file (read as the
     reference node will), the checkpoints of a warm start, the robot's topics, the output and the bag's path."""
     o = options
+    check_rmw()   # every node would exit 102 (rcl) on an RMW this environment does not hold
     config_path = Path(o.config_path).resolve() if o.config_path else default_config_path()
     settings = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
     the_arm = settings.arm

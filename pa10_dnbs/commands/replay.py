@@ -13,6 +13,7 @@ from ..config import ConfigError
 from ..output_lock import lock_input, release_output
 from ..ros.shm_cleanup import remove_stale, shm_files
 from ..supervisor.domain_ids import shell_domain
+from ..supervisor.rmw_check import check_rmw
 from .options import ReplayOptions
 from ..live.options import check_live_options
 from ..live.schemas import live_channels
@@ -39,6 +40,7 @@ def run_replay(options: ReplayOptions) -> int:
     if o.live_port is not None:
         check_live_options(o.live_host, o.live_port, o.live_hz)
     shell_domain("the domain the bag is played on")   # one line here, not the DDS's error and a file in /dev/shm
+    check_rmw()
     before = shm_files()
     try:
         _play(o, before)

@@ -21,6 +21,7 @@ from ..interrupt import LAUNCHER_PID_ENV
 from .options import RobotCommandOptions
 from ..run_settings import build_settings
 from ..supervisor.domain_ids import shell_domain
+from ..supervisor.rmw_check import check_rmw
 from ..run_steps import run_steps
 from ..ros.shm_cleanup import remove_stale, shm_files
 from ..wire.clock_schedule import check_clock_hz
@@ -61,7 +62,9 @@ def robot_argv(options: RobotCommandOptions) -> list[str]:
 
 def run_robot(options: RobotCommandOptions) -> int:
     """Check the arguments, run the robot node until it ends (its exit code; 0 after Ctrl-C)."""
-    shell_domain("the robot's domain")   # the node joins this shell's domain: a bad one is one line here, not the DDS's error
+    # the node joins this shell's domain with its RMW: a bad one is one line here, not the DDS's error or rcl's 102
+    shell_domain("the robot's domain")
+    check_rmw()
     argv = robot_argv(options)
     before = shm_files()
     for stream in (sys.stdout, sys.stderr):   # None when closed at start (>&-)
