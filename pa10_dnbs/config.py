@@ -253,7 +253,7 @@ def validate(raw: Any, n_joints: int) -> dict:
     return checked
 
 
-def _config_file(path: Path) -> Path:
+def config_file(path: Path) -> Path:
     """``path`` resolved, a regular file: ConfigError naming it otherwise (missing, a folder, a pipe or a device, a
     name the OS refuses: file_path.file_or_folder)."""
     try:
@@ -270,7 +270,7 @@ MAX_EXTENDS = 100   # files a config's extends chain may hold above it (a real o
 
 def _read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict:
     """The document at ``path``, merged over the file its ``extends`` key names (relative to it), recursively."""
-    path = _config_file(path)
+    path = config_file(path)
     if path in seen:
         raise ConfigError(f"{path}: extends: circular ({' -> '.join(str(p) for p in seen + (path,))})")
     if len(seen) >= MAX_EXTENDS:   # else Python's recursion limit, blamed on whichever file it hit
@@ -290,7 +290,7 @@ def _read_yaml(path: Path, seen: tuple[Path, ...] = ()) -> dict:
     if not isinstance(base, str) or not base:
         raise ConfigError(f"{path}: extends: expected the path of a config file, got {short(base)}")
     try:
-        _config_file(path.parent / base)
+        config_file(path.parent / base)
     except ConfigError as exc:
         raise ConfigError(f"{path}: extends: {base}: {exc}") from None
     parent = _read_yaml(path.parent / base, seen + (path,))

@@ -154,6 +154,10 @@ def test_arm_and_analyse_name_what_is_wrong(tmp_path):
     r = run_cli("analyse", tmp_path / "missing_bag", "--out", tmp_path / "again")
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
     assert not (tmp_path / "again").exists()
+    # a folder as --config, holding --out: it said "--out ... lies inside this run's --config" (rev_f, 10)
+    bag = _bag(tmp_path)
+    r = run_cli("analyse", bag, "--config", tmp_path, "--out", tmp_path / "again")
+    _assert_one_line(r.returncode, r.stdout, r.stderr, f"config file {tmp_path}: a folder, not a file")
 
 
 # ------------------------------------------------------------------ output paths, checked before any work

@@ -3,10 +3,12 @@ from __future__ import annotations
 
 import math
 import sys
+from pathlib import Path
 
 from ..bag.analysis import bag_arm, bag_joint_names, robot_chain, run_info, wire_record_from_bag
 from ..bag.bag_reader import Bag, BagError
 from ..bag.run_config import run_config, stored_steps
+from ..config import config_file
 from .options import AnalyseOptions
 from ..number_text import interval
 from ..output_lock import lock_input
@@ -34,6 +36,8 @@ def run_analyse(options: AnalyseOptions) -> int:
     ``options.progress``: a progress bar on stderr while the bag is read (report/progress.py; drawn on a terminal only).
     """
     o = options
+    if o.config_path is not None:   # a folder given as --config is said so, not "--out lies inside --config"
+        config_file(Path(o.config_path))
     check_output_dir(o.out, o.force, "--out", inputs={"BAG": o.bag_path, "--config": o.config_path})
     lock_input(o.bag_path, "bag")  # a bag another run is still recording (or replacing) is refused, not misread
     with Bag(o.bag_path) as bag:
