@@ -69,6 +69,14 @@ def test_truncated_checkpoint(tmp_path, checkpoints):
         _one_line_error(r, "--init-from", f, "not a readable checkpoint")
 
 
+def test_one_joints_checkpoint_file_as_init_from_says_to_give_its_folder(tmp_path, checkpoints):
+    """--init-from CK/s1.npz (an existing file) said 'no such checkpoint directory' (review rev_f, 12)."""
+    out = tmp_path / "out"
+    r = run_cli("simulate", "--controller", "dnbs", *TINY, "--init-from", checkpoints / "s1.npz", "--out", out)
+    _one_line_error(r, "--init-from", f"{checkpoints / 's1.npz'}: a file; give the folder", f"({checkpoints} here)")
+    assert not out.exists()
+
+
 def test_a_npy_file_named_npz_is_not_a_checkpoint(tmp_path, checkpoints):
     """np.save's output renamed <joint>.npz: a TypeError traceback (np.load returned an array); now one line."""
     ck = _copy(checkpoints, tmp_path / "ck")

@@ -147,6 +147,9 @@ def load_joint_checkpoints(path: Path, joint_names, degrees: tuple[int, int] | N
     except OSError as exc:   # a name too long for the OS
         raise ValueError(f"{path}: {exc.strerror or exc}") from None
     if not there:
+        if d.is_file():   # one joint's file, say: the folder holds the arm's
+            raise ValueError(f"{path}: a file; give the folder that holds every joint's <joint>.npz "
+                             f"({d.parent} here), or the run's output folder")
         raise ValueError(f"{path}: no such checkpoint directory")
     states = []
     for name in joint_names:
