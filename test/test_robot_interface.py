@@ -128,3 +128,20 @@ def test_the_launcher_starts_the_joint_bus_in_the_plants_place(tmp_path):
     plain = node_commands(GraphOptions(config_path=tmp_path / "c.yaml", joint_names=PA10), tmp_path / "s.json",
                           tmp_path / "w.npz")
     assert plain[-1][0] == "plant" and not any("robot_" in a for a in plain[-1][1])
+
+
+def test_the_bus_looks_for_the_robots_clock_until_discovery_has_had_its_time():
+    """The bus took a robot for one without /clock when discovery had not yet matched its /clock publisher at
+    the first state (1 launch in 13 of a second graph on a robot past time 0 drove it; review rev_g, 2)."""
+    from pa10_dnbs.ros.joint_bus_node import CLOCK_DISCOVERY_S, publisher_seen
+
+    t = [0.0]
+    def later(answers):   # noqa: E306 - count() answers in turn; each sleep advances the fake wall clock
+        it = iter(answers)
+        return lambda: next(it, answers[-1])
+    tick = dict(now=lambda: t[0], sleep=lambda s: t.__setitem__(0, t[0] + s))
+    assert publisher_seen(later([0, 0, 0, 1]), CLOCK_DISCOVERY_S, **tick)   # matched 60 ms after the state
+    t[0] = 0.0
+    assert not publisher_seen(later([0]), CLOCK_DISCOVERY_S, **tick) and t[0] >= CLOCK_DISCOVERY_S   # hardware
+    t[0] = 0.0
+    assert publisher_seen(later([1]), CLOCK_DISCOVERY_S, **tick) and t[0] == 0.0   # seen at once: no wait

@@ -12,7 +12,9 @@ the bus waits for the robot's next state (the plant's lockstep loop, ``ros/plant
 
 Time: a robot that publishes /clock gives the graph its time (the bus publishes none; its first state must
 be at time 0). Otherwise the bus publishes the graph's /clock (``clock_hz``), the robot's states counted from
-the first.
+the first. Whether the robot publishes /clock is asked of discovery once its first state is in, which may
+not have matched its /clock publisher yet: the bus looks for one up to CLOCK_DISCOVERY_S before taking the
+robot for one without.
 
 Faults (one line ``ROBOT FAULT: ...``, the safe command of zero effort on every joint, exit 1): a joint of
 the arm missing from the robot's state or named twice, a non-finite position or velocity, no state within
@@ -37,6 +39,19 @@ from .joint_bus_paced import run_paced
 from .robot_link import RemoteRobot
 from .runtime import stop_requested
 from .endpoints import CLOCK
+
+CLOCK_DISCOVERY_S = 0.5   # wall time [s] the bus looks for the robot's /clock publisher after its first state
+
+
+def publisher_seen(count, within_s: float, poll_s: float = 0.02, now=time.monotonic, sleep=time.sleep) -> bool:
+    """Whether ``count()`` (a topic's publishers, as discovery knows them) is > 0 within ``within_s`` [s] of wall
+    time, asked every ``poll_s`` [s] (discovery matches a participant's endpoints one by one)."""
+    end = now() + within_s
+    while count() == 0:
+        if now() >= end:
+            return False
+        sleep(poll_s)
+    return True
 
 PARAMS = {k: v for k, v in PLANT_PARAMS.items() if k != "interface"} | {
     "robot_timeout_s": Param(1.0, "wall time without a new state from the robot that makes it stale [s]", 0.0),
@@ -64,7 +79,9 @@ class JointBusNode(PlantNode):
               f"{', '.join(robot.joint_names)}", flush=True)
         if not robot.wait_first(p["start_timeout_s"]):
             raise KeyboardInterrupt  # stopped before the robot's first state: a clean stop (run_node: exit 0)
-        robot_clock = self.count_publishers(CLOCK) > 0
+        # a second graph on a robot already past time 0 was taken for hardware once (1 in 13) when its /clock
+        # publisher was not yet discovered: then it drove the robot beside the first graph's clock
+        robot_clock = publisher_seen(lambda: self.count_publishers(CLOCK), CLOCK_DISCOVERY_S)
         sec, nanosec = robot.stamp
         if robot_clock:
             if sec or nanosec:
