@@ -17,6 +17,7 @@ joint, the torque it needs and its limit; not run: study/feasibility.py).
 """
 from __future__ import annotations
 
+import argparse
 import subprocess
 import sys
 import time
@@ -24,7 +25,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "scripts"))
 
+from flag_values import file_to_write  # noqa: E402
 from pa10_dnbs.atomic_file import atomic_path, write_json  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser  # noqa: E402
 from pa10_dnbs.interrupt import EXIT_INTERRUPTED  # noqa: E402
@@ -34,13 +37,25 @@ from pa10_dnbs.study.collection import (ARMS, COLLECTION_VERSION, MODES, arm_fil
 REQUIREMENTS = ROOT / "requirements-collection.txt"
 
 
+def out_path(text: str) -> Path:
+    """``--out``'s argparse type: the JSON table's file and its markdown sibling (.md), each a file to write
+    (flag_values.file_to_write), checked before any run; a .md path would be its own sibling."""
+    path = file_to_write(text)
+    if path.suffix == ".md":
+        raise argparse.ArgumentTypeError(f"{text!r} ends in .md: give the JSON's path (the table goes beside it "
+                                         "as .md)")
+    file_to_write(str(path.with_suffix(".md")))
+    return path
+
+
 def _args(argv):
     ap = OneLineParser(description=__doc__.splitlines()[0])
     ap.add_argument("--arms", default=",".join(ARMS), help=f"comma-separated, of: {', '.join(ARMS)}")
     ap.add_argument("--modes", default=",".join(MODES), help="comma-separated, of: bare, arm_file (default: both)")
     ap.add_argument("--duration", type=float, default=20.0, help="s per run (the window is [10, 20) s at 20 s)")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
-    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "collection" / "arm_collection.json")
+    ap.add_argument("--out", type=out_path, default=ROOT / "benchmarks" / "collection" / "arm_collection.json",
+                    help="the JSON table; the markdown goes beside it as .md (its folder is made)")
     ap.add_argument("--study", action="store_true", help="also the study (8 scenarios x DNBS, PID x 3 seeds) of "
                     "every accepted arm file")
     ap.add_argument("--install", action="store_true", help="pip install requirements-collection.txt, then exit")

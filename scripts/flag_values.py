@@ -9,6 +9,7 @@ flag and exit 2, before any work.
 from __future__ import annotations
 
 import argparse
+import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -45,4 +46,21 @@ def folder(text: str) -> Path:
     path = Path(text)
     if path.exists() and not path.is_dir():
         raise argparse.ArgumentTypeError(f"{text!r} is a file, not a directory")
+    return path
+
+
+def file_to_write(text: str) -> Path:
+    """A file to write, its missing folders made when it is written. Refused (before any work): a directory, an
+    existing file that is not a regular one (a device, a pipe: the atomic write would replace it), a path through a
+    file, a place this process cannot write."""
+    path = Path(text)
+    if not text or text.endswith("/") or path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is a directory, not a file to write")
+    if path.exists() and not path.is_file():
+        raise argparse.ArgumentTypeError(f"{text!r} is not a regular file (a device, pipe or socket): not replaced")
+    present = next((p for p in path.parents if os.path.lexists(p)), Path("/"))  # the folder the missing ones go in
+    if not present.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r}: {str(present)!r} is a file, not a folder")
+    if not os.access(present, os.W_OK | os.X_OK) or (path.exists() and not os.access(path, os.W_OK)):
+        raise argparse.ArgumentTypeError(f"{text!r}: not writable")
     return path

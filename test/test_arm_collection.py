@@ -53,14 +53,45 @@ def test_every_arm_has_its_arm_file_with_sources():
         assert set(raw["sources"]) >= {"urdf", "rotor_inertia_kgm2"}
 
 
+def _exit_code(script, argv) -> int:
+    """main's return, or argparse's exit (a flag refused as it is parsed)."""
+    try:
+        return script.main(argv)
+    except SystemExit as exc:
+        return exc.code
+
+
 @pytest.mark.parametrize("argv, needle", [(["--arms", "nope"], "unknown 'nope'"),
                                           (["--duration", "-1"], "--duration"), (["--jobs", "0"], "--jobs")])
 def test_the_script_refuses_bad_flags_with_one_line(argv, needle, capsys, tmp_path):
     script = load_script("arm_collection")
-    assert script.main(argv + ["--out", str(tmp_path / "t.json")]) == 2
+    assert _exit_code(script, argv + ["--out", str(tmp_path / "t.json")]) == 2
     err = capsys.readouterr().err
     assert needle in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "t.json").exists()
+
+
+@pytest.mark.parametrize("sibling", ["folder", "pipe"])
+def test_out_is_refused_before_any_run_when_its_markdown_sibling_cannot_be_written(sibling, capsys, tmp_path):
+    """The table's .md beside --out: a folder there was an IsADirectoryError traceback after every run, a pipe (or
+    a device) was replaced by a file."""
+    import os
+
+    md = tmp_path / "t.md"
+    md.mkdir() if sibling == "folder" else os.mkfifo(md)
+    script = load_script("arm_collection")
+    argv = ["--arms", "twodof", "--modes", "bare", "--duration", "0.2", "--jobs", "1",
+            "--out", str(tmp_path / "t.json")]
+    assert _exit_code(script, argv) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and "argument --out: " in err and str(md) in err and len(err.strip().splitlines()) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.md"] and (md.is_dir() or md.is_fifo())
+
+
+def test_out_in_folders_still_to_make_passes_and_makes_nothing(tmp_path):
+    script = load_script("arm_collection")
+    out = tmp_path / "new" / "deeper" / "t.json"
+    assert script.out_path(str(out)) == out and list(tmp_path.iterdir()) == []
 
 
 def test_the_readme_table_has_one_line_per_arm_with_both_modes():

@@ -6,6 +6,7 @@ started one would take far longer than its timeout.
 """
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -16,7 +17,9 @@ ROOT = Path(__file__).resolve().parent.parent
 
 # (script, arguments, the flag the one line must name); {dir}: an existing folder, {missing}: a path in a
 # folder that does not exist, {binary}: a file of non-UTF-8 bytes, {garbage}: a text file that is not the
-# expected JSON/YAML, {out}: a writable file path (so a wrongly accepted case could not touch the checkout)
+# expected JSON/YAML, {fifo}: a named pipe, {out}: a writable file path (so a wrongly accepted case could not touch
+# the checkout)
+ONE_ROW = ["--arms", "twodof", "--modes", "bare", "--duration", "0.2", "--jobs", "1"]   # arm_collection: 1 s if run
 CASES = [
     ("bench_sim", ["--save-record", "{dir}"], "--save-record"),
     ("bench_sim", ["--save-record", "{missing}"], "--save-record"),
@@ -59,6 +62,10 @@ CASES = [
     ("dynamics_check", ["--tolerance", "nan"], "--tolerance"),
     ("engine_comparison", ["--duration", "inf"], "--duration"),
     ("arm_collection", ["--jobs", "abc", "--out", "{out}"], "--jobs"),
+    ("arm_collection", [*ONE_ROW, "--out", "{dir}"], "--out"),
+    ("arm_collection", [*ONE_ROW, "--out", "{binary}/table.json"], "--out"),
+    ("arm_collection", [*ONE_ROW, "--out", "{fifo}"], "--out"),
+    ("arm_collection", [*ONE_ROW, "--out", "{dir}/table.md"], "--out"),
     ("readme_figures", ["--records", "{missing}", "--check"], "--records"),
     ("compare_bags", ["{dir}", "{dir}", "--topics"], "--topics"),
     ("intake_timing", ["--joints", "abc"], "--joints"),
@@ -92,9 +99,11 @@ def test_bad_flag_is_one_line_exit_2(tmp_path, script, args, flag):
     (work / "a_folder").mkdir(parents=True)
     (work / "binary.json").write_bytes(bytes(range(256)))
     (work / "garbage.json").write_text("this is neither JSON nor a config: [\n")
+    os.mkfifo(work / "a_pipe")
     before = sorted(p.relative_to(work) for p in work.rglob("*"))
     paths = {"dir": work / "a_folder", "missing": work / "no_such_folder" / "x.json",
-             "binary": work / "binary.json", "garbage": work / "garbage.json", "out": work / "layout.json"}
+             "binary": work / "binary.json", "garbage": work / "garbage.json", "fifo": work / "a_pipe",
+             "out": work / "layout.json"}
     argv = [a.format(**paths) for a in args]
     done = subprocess.run([sys.executable, str(ROOT / "scripts" / f"{script}.py"), *argv], cwd=work,
                           capture_output=True, text=True, timeout=60)
@@ -104,6 +113,7 @@ def test_bad_flag_is_one_line_exit_2(tmp_path, script, args, flag):
     assert "Traceback" not in done.stderr + done.stdout
     assert f"argument {flag}" in lines[0], lines[0]
     assert sorted(p.relative_to(work) for p in work.rglob("*")) == before  # nothing written, no DIR.tmp
+    assert (work / "a_pipe").is_fifo()   # not replaced by a file
 
 
 def test_a_good_record_path_passes(tmp_path):
