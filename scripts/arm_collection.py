@@ -27,7 +27,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "scripts"))
 
-from flag_values import file_to_write  # noqa: E402
+from flag_values import file_to_write, names_in  # noqa: E402
 from pa10_dnbs.atomic_file import atomic_path, write_json  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser  # noqa: E402
 from pa10_dnbs.interrupt import EXIT_INTERRUPTED  # noqa: E402
@@ -50,8 +50,10 @@ def out_path(text: str) -> Path:
 
 def _args(argv):
     ap = OneLineParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--arms", default=",".join(ARMS), help=f"comma-separated, of: {', '.join(ARMS)}")
-    ap.add_argument("--modes", default=",".join(MODES), help="comma-separated, of: bare, arm_file (default: both)")
+    ap.add_argument("--arms", type=names_in(tuple(ARMS)), default=",".join(ARMS),
+                    help=f"comma-separated, of: {', '.join(ARMS)}")
+    ap.add_argument("--modes", type=names_in(MODES), default=",".join(MODES),
+                    help="comma-separated, of: bare, arm_file (default: both)")
     ap.add_argument("--duration", type=float, default=20.0, help="s per run (the window is [10, 20) s at 20 s)")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
     ap.add_argument("--out", type=out_path, default=ROOT / "benchmarks" / "collection" / "arm_collection.json",
@@ -71,11 +73,7 @@ def main(argv=None) -> int:
     a = _args(argv)
     if a.install:
         return subprocess.call([sys.executable, "-m", "pip", "install", "--quiet", "-r", str(REQUIREMENTS)])
-    arms = [k for k in a.arms.split(",") if k]
-    modes = [m for m in a.modes.split(",") if m]
-    bad = [k for k in arms if k not in ARMS] + [m for m in modes if m not in MODES]
-    if bad:
-        return _fail(f"--arms/--modes: unknown {bad[0]!r} (arms: {', '.join(ARMS)}; modes: {', '.join(MODES)})")
+    arms, modes = a.arms, a.modes
     if not (a.duration > 0 and a.duration < 1e4):
         return _fail(f"--duration: must be a positive number of seconds, got {a.duration}")
     if a.jobs < 1:

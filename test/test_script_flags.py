@@ -66,6 +66,8 @@ CASES = [
     ("arm_collection", [*ONE_ROW, "--out", "{binary}/table.json"], "--out"),
     ("arm_collection", [*ONE_ROW, "--out", "{fifo}"], "--out"),
     ("arm_collection", [*ONE_ROW, "--out", "{dir}/table.md"], "--out"),
+    ("arm_collection", [*ONE_ROW, "--arms", "", "--out", "{out}"], "--arms"),
+    ("arm_collection", [*ONE_ROW, "--modes", ",", "--out", "{out}"], "--modes"),
     ("readme_figures", ["--records", "{missing}", "--check"], "--records"),
     ("compare_bags", ["{dir}", "{dir}", "--topics"], "--topics"),
     ("intake_timing", ["--joints", "abc"], "--joints"),
