@@ -29,12 +29,30 @@ sys.path.insert(0, str(ROOT / "scripts"))
 
 from flag_values import file_to_write, names_in  # noqa: E402
 from pa10_dnbs.atomic_file import atomic_path, write_json  # noqa: E402
-from pa10_dnbs.cli_values import OneLineParser  # noqa: E402
+from pa10_dnbs.cli_values import OneLineParser, seconds  # noqa: E402
+from pa10_dnbs.config import ConfigError, default_config_path, load_config  # noqa: E402
 from pa10_dnbs.interrupt import EXIT_INTERRUPTED  # noqa: E402
+from pa10_dnbs.run_steps import run_steps  # noqa: E402
 from pa10_dnbs.study.collection import (ARMS, COLLECTION_VERSION, MODES, arm_file, collection_root,  # noqa: E402
                                         compact_table, markdown_table, run_row, study_summary, study_table)
 
 REQUIREMENTS = ROOT / "requirements-collection.txt"
+MAX_DURATION_S = 1e4  # [s] per run: the table of every arm would take days
+
+
+def duration(text: str) -> float:
+    """``--duration``'s argparse type: at least two steps of the config's simulation.dt_s (a shorter run is an
+    error in every cell), below MAX_DURATION_S."""
+    value = seconds(text)
+    dt = load_config(default_config_path())["simulation"]["dt_s"]
+    try:
+        run_steps(value, dt)
+    except ConfigError:
+        raise argparse.ArgumentTypeError(f"{text} s is shorter than two steps of the default config's "
+                                         f"simulation.dt_s ({dt:g} s)") from None
+    if value >= MAX_DURATION_S:
+        raise argparse.ArgumentTypeError(f"must be below {MAX_DURATION_S:g} s, got {text!r}")
+    return value
 
 
 def out_path(text: str) -> Path:
@@ -54,7 +72,7 @@ def _args(argv):
                     help=f"comma-separated, of: {', '.join(ARMS)}")
     ap.add_argument("--modes", type=names_in(MODES), default=",".join(MODES),
                     help="comma-separated, of: bare, arm_file (default: both)")
-    ap.add_argument("--duration", type=float, default=20.0, help="s per run (the window is [10, 20) s at 20 s)")
+    ap.add_argument("--duration", type=duration, default=20.0, help="s per run (the window is [10, 20) s at 20 s)")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
     ap.add_argument("--out", type=out_path, default=ROOT / "benchmarks" / "collection" / "arm_collection.json",
                     help="the JSON table; the markdown goes beside it as .md (its folder is made)")
@@ -74,8 +92,6 @@ def main(argv=None) -> int:
     if a.install:
         return subprocess.call([sys.executable, "-m", "pip", "install", "--quiet", "-r", str(REQUIREMENTS)])
     arms, modes = a.arms, a.modes
-    if not (a.duration > 0 and a.duration < 1e4):
-        return _fail(f"--duration: must be a positive number of seconds, got {a.duration}")
     if a.jobs < 1:
         return _fail(f"--jobs: must be >= 1, got {a.jobs}")
     root = collection_root()

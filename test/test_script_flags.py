@@ -68,6 +68,8 @@ CASES = [
     ("arm_collection", [*ONE_ROW, "--out", "{dir}/table.md"], "--out"),
     ("arm_collection", [*ONE_ROW, "--arms", "", "--out", "{out}"], "--arms"),
     ("arm_collection", [*ONE_ROW, "--modes", ",", "--out", "{out}"], "--modes"),
+    ("arm_collection", [*ONE_ROW, "--duration", "0.0001", "--out", "{out}"], "--duration"),
+    ("arm_collection", [*ONE_ROW, "--duration", "1e4", "--out", "{out}"], "--duration"),
     ("readme_figures", ["--records", "{missing}", "--check"], "--records"),
     ("compare_bags", ["{dir}", "{dir}", "--topics"], "--topics"),
     ("intake_timing", ["--joints", "abc"], "--joints"),
