@@ -124,9 +124,13 @@ def fingerprints(kernel: str = "auto") -> dict[str, str]:
 
 
 def saved_prints(text: str) -> dict[str, str]:
-    """``--compare``'s argparse type: the {scenario: digest} a --save wrote, read before the runs start."""
+    """``--compare``'s argparse type: the {scenario: digest} a --save wrote, read before the runs start (not from a
+    pipe or a device: a pipe no one writes is read forever)."""
+    path = Path(text)
+    if path.exists() and not (path.is_file() or path.is_dir()):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a regular file (a pipe, device or socket): not read")
     try:
-        before = json.loads(Path(text).read_text())
+        before = json.loads(path.read_text())
     except IsADirectoryError:
         raise argparse.ArgumentTypeError(f"{text!r} is a directory, not a file written by --save") from None
     except OSError as exc:

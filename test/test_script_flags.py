@@ -85,6 +85,7 @@ CASES = [
     ("result_fingerprint", ["--compare", "{dir}"], "--compare"),
     ("result_fingerprint", ["--compare", "{binary}"], "--compare"),
     ("result_fingerprint", ["--compare", "{garbage}"], "--compare"),
+    ("result_fingerprint", ["--compare", "{fifo}"], "--compare"),
     ("result_fingerprint", ["--save", "{dir}"], "--save"),
     ("make_foxglove_layout", ["--arm", "zz", "--out", "{out}"], "--arm"),
     ("make_foxglove_layout", ["--namespace", "bad ns", "--out", "{out}"], "--namespace"),
