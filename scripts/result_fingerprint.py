@@ -40,6 +40,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_record import record_path  # noqa: E402
 from pa10_dnbs.accel.choice import KERNELS, auto_kernel  # noqa: E402
+from pa10_dnbs.atomic_file import atomic_path  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser  # noqa: E402
 from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.settings import replace_in  # noqa: E402
@@ -159,7 +160,13 @@ def main() -> int:
     for name, h in prints.items():
         print(f"{name:10s} {h}")
     if args.save:
-        args.save.write_text(json.dumps(dict(prints, platform=platform), indent=1) + "\n")
+        try:
+            with atomic_path(args.save) as tmp:   # a failed write (a full disk) leaves the file as it was
+                tmp.write_text(json.dumps(dict(prints, platform=platform), indent=1) + "\n")
+        except OSError as exc:
+            print(f"result_fingerprint: error: --save {args.save}: cannot write it: {exc.strerror or exc}; nothing "
+                  "written", file=sys.stderr)
+            return 1
     if args.compare:
         before = dict(args.compare)
         saved_on = before.pop("platform", None)

@@ -74,3 +74,29 @@ def test_save_keeps_the_platform_and_compare_says_when_it_differs(tmp_path, monk
     out = capsys.readouterr().out
     assert "note: saved on another numeric platform (OpenBLAS 0.3.31, Haswell kernels" in out
     assert out.rstrip().endswith("2 scenarios, 1 differ: bare")
+
+
+def test_a_save_whose_write_fails_is_one_line_and_keeps_the_old_file(tmp_path, monkeypatch, capsys):
+    """A --save whose write fails (a full disk: ENOSPC after part of the file) was an OSError traceback that left
+    the file cut short; now one line, exit 1, and the file as it was."""
+    import errno
+    import os
+    import sys
+    from pathlib import Path
+
+    monkeypatch.setattr(fp, "fingerprints", lambda kernel: {"default": "ab", "bare": "cd"})
+    saved = tmp_path / "before.json"
+    saved.write_text("the fingerprints of before\n")
+    write_text = Path.write_text
+
+    def full_disk(self, data, *args, **kwargs):
+        write_text(self, data[:5])
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(self))
+
+    monkeypatch.setattr(Path, "write_text", full_disk)
+    monkeypatch.setattr(sys, "argv", ["result_fingerprint.py", "--kernel", "numpy", "--save", str(saved)])
+    assert fp.main() == 1
+    monkeypatch.undo()
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--save" in err and os.strerror(errno.ENOSPC) in err, err
+    assert saved.read_text() == "the fingerprints of before\n" and list(tmp_path.iterdir()) == [saved]

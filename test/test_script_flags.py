@@ -87,6 +87,8 @@ CASES = [
     ("result_fingerprint", ["--compare", "{garbage}"], "--compare"),
     ("result_fingerprint", ["--compare", "{fifo}"], "--compare"),
     ("result_fingerprint", ["--save", "{dir}"], "--save"),
+    ("result_fingerprint", ["--save", "{fifo}"], "--save"),
+    ("result_fingerprint", ["--save", "/dev/full"], "--save"),
     ("make_foxglove_layout", ["--arm", "zz", "--out", "{out}"], "--arm"),
     ("make_foxglove_layout", ["--namespace", "bad ns", "--out", "{out}"], "--namespace"),
     ("make_foxglove_layout", ["--out", "{dir}"], "--out"),
