@@ -10,7 +10,8 @@ produced, in a fixed order):
   reset included), with the paper's printed sign of e2, and with no remedy; torques, virtual controls,
   final weights, covariances and reset counts.
 ``--save FILE`` writes the fingerprints (JSON); ``--compare FILE`` exits 1 naming each scenario whose
-fingerprint differs from the file's. Typical use around a change that must not move a bit:
+fingerprint differs from the file's; Ctrl-C is one line, exit 130, nothing saved. Typical use around a change
+that must not move a bit:
 
     .venv/bin/python scripts/result_fingerprint.py --save /tmp/before.json     # on the old commit
     .venv/bin/python scripts/result_fingerprint.py --compare /tmp/before.json  # on the new one
@@ -26,17 +27,35 @@ or set ``OPENBLAS_CORETYPE`` (and ``NPY_DISABLE_CPU_FEATURES``) to the other run
 """
 from __future__ import annotations
 
-import argparse
-import dataclasses
-import hashlib
-import json
+import os
+import signal
 import sys
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from pa10_dnbs.interrupt import EXIT_INTERRUPTED, STOP_SIGNALS, on_second_sigint, say, two_stage_sigint  # noqa: E402
+
+INTERRUPTED = "result_fingerprint: interrupted before the fingerprints were done: nothing saved or compared"
+
+
+def _interrupted_while_loading(signum, frame) -> None:
+    """A stop before main runs: the one line and exit 130 at once (a traceback from an import otherwise)."""
+    os.write(2, (INTERRUPTED + "\n").encode())
+    os._exit(EXIT_INTERRUPTED)
+
+
+if __name__ == "__main__":   # Ctrl-C while numpy and the simulator load: the one line, not an import traceback
+    for _sig in STOP_SIGNALS:
+        signal.signal(_sig, _interrupted_while_loading)
+
+import argparse  # noqa: E402
+import dataclasses  # noqa: E402
+import hashlib  # noqa: E402
+import json  # noqa: E402
+
+import numpy as np  # noqa: E402
 
 from bench_record import record_path  # noqa: E402
 from pa10_dnbs.accel.choice import KERNELS, auto_kernel  # noqa: E402
@@ -179,5 +198,20 @@ def main() -> int:
     return 0
 
 
+def interruptible_main() -> int:
+    """``main`` with Ctrl-C (or SIGTERM) done right: one line, exit 130, nothing saved; a second one ends at once
+    (pa10_dnbs/interrupt.py). Outside it the stop signals are ignored: the modules are loaded, and once it has
+    returned its exit code stands."""
+    for sig in STOP_SIGNALS:
+        signal.signal(sig, signal.SIG_IGN)
+    try:
+        with two_stage_sigint():
+            on_second_sigint("result_fingerprint: interrupted again: stopped at once; nothing saved")
+            return main()
+    except KeyboardInterrupt:
+        say(INTERRUPTED)
+        return EXIT_INTERRUPTED
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(interruptible_main())

@@ -5,6 +5,7 @@ from pa10_dnbs.run_settings import build_settings
 import dataclasses
 
 import numpy as np
+import pytest
 from script_module import load_script
 
 fp = load_script("result_fingerprint")
@@ -100,3 +101,37 @@ def test_a_save_whose_write_fails_is_one_line_and_keeps_the_old_file(tmp_path, m
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--save" in err and os.strerror(errno.ENOSPC) in err, err
     assert saved.read_text() == "the fingerprints of before\n" and list(tmp_path.iterdir()) == [saved]
+
+
+@pytest.mark.parametrize("when", ["loading", "running"])
+def test_ctrl_c_is_one_line_exit_130_and_nothing_saved(when, tmp_path):
+    """A Ctrl-C (SIGINT to the process group, as a terminal sends it) while numpy and the simulator load or while
+    the scenarios run: one line, exit 130, no file; it was a KeyboardInterrupt traceback."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    saved = tmp_path / "x.json"
+    proc = subprocess.Popen([sys.executable, str(Path(fp.__file__)), "--save", str(saved)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            env=dict(os.environ, PYTHONUNBUFFERED="1"))
+    try:
+        if when == "loading":   # numpy mapped: the script runs, the simulator is still to load
+            t0 = time.monotonic()
+            while "numpy" not in Path(f"/proc/{proc.pid}/maps").read_text():
+                assert proc.poll() is None and time.monotonic() - t0 < 30, proc.communicate()
+                time.sleep(0.002)
+        else:
+            assert proc.stdout.readline().startswith("numeric platform:")
+        os.killpg(proc.pid, signal.SIGINT)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+    assert proc.returncode == 130 and err == ("result_fingerprint: interrupted before the fingerprints were done: "
+                                              "nothing saved or compared\n"), (proc.returncode, err)
+    assert list(tmp_path.iterdir()) == []
