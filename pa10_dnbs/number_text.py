@@ -15,3 +15,9 @@ def interval(pair) -> str:
     """A window ``(a, b)`` as ``[a, b]`` with :func:`num`."""
     a, b = pair
     return f"[{num(a)}, {num(b)}]"
+
+
+def fixed(x: float, spec: str) -> str:
+    """``x`` in the fixed-point format ``spec`` (``'+.2f'``, ``'>9.1f'``), or in 3 significant digits from 1e7 on,
+    where fixed point would print every digit (a limit of 1e300: 300 of them)."""
+    return format(x, spec) if not abs(x) >= 1e7 else format(x, spec.rsplit(".", 1)[0] + ".3g")

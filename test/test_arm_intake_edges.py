@@ -316,3 +316,16 @@ def test_a_folded_description_and_empty_settings_still_read(tmp_path):
     arm = load_arm(_arm_file(tmp_path, description="A long\ndescription folded\n".replace("\n", " ") + "\n",
                              settings=None))
     assert arm.description == "A long description folded" and arm.settings == {}
+
+
+def test_huge_but_finite_facts_print_in_a_few_digits_without_overflow_warnings(tmp_path):
+    """Limits of +/-1.7e308 and a torque limit of 1e300 were printed as 300-digit fixed-point numbers in the
+    rule's table, and numpy's 'overflow encountered in scalar subtract' leaked from the reference rule (rev_f, 14)."""
+    _write(tmp_path / "huge.urdf", _chain().replace('lower="-2" upper="2"', 'lower="-1.7e308" upper="1.7e308"', 1))
+    path = _arm_file(tmp_path, urdf="huge.urdf", torque_limit_nm=1.0e300,
+                     sources={"urdf": "test", "torque_limit_nm": "test"})
+    r = run_cli("arm", "--arm", path)
+    assert r.returncode == 0, r.stderr
+    text = r.stdout + r.stderr
+    assert "[-1.7e+308, +1.7e+308]" in text and "1e+300" in text
+    assert "Warning" not in text and max(map(len, text.splitlines())) < 400, text

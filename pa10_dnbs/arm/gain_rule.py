@@ -39,6 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..number_text import fixed
 from .arm import Arm
 
 RHO = 0.4               # T k_u / J_light: the velocity loop's discrete-time figure at the lightest pose (< 2)
@@ -115,8 +116,8 @@ def rule_warnings(arm: Arm, sweep: InertiaSweep, k_u: np.ndarray, dt_s: float) -
                        f"inertia N^2 Jm (rotor_inertia_kgm2, >= {rotor_inertia_for_ratio(lo, hi):.3g} kg m^2 "
                        f"brings the range to {INERTIA_RATIO_WARN:g}x)")
         if dt_s * arm.viscous_nms_per_rad[j] / sweep.light_kgm2[j] > 1.0:
-            out.append(f"arm {arm.name}: joint {name}: T Fv / J = "
-                       f"{dt_s * arm.viscous_nms_per_rad[j] / sweep.light_kgm2[j]:.2f} > 1: the plant's explicit "
+            figure = fixed(dt_s * arm.viscous_nms_per_rad[j] / sweep.light_kgm2[j], ".2f")
+            out.append(f"arm {arm.name}: joint {name}: T Fv / J = {figure} > 1: the plant's explicit "
                        f"viscous friction is near its stability limit (2)")
     figure = coupled_figure(sweep, k_u, dt_s)
     if figure > COUPLED_WARN:
@@ -137,7 +138,8 @@ def report_rule(arm: Arm, sweep: InertiaSweep, fragment: dict, dt_s: float, stre
     print(f"  {'joint':<{w}} limits [rad]       torque [N m]  rotor [kg m^2]  J light-heavy [kg m^2]   k_u     k_a",
           file=stream)
     for j, name in enumerate(arm.joint_names):
-        print(f"  {name:<{w}} [{arm.lower_rad[j]:+.2f}, {arm.upper_rad[j]:+.2f}]  {arm.torque_limit_nm[j]:>9.1f}  "
+        print(f"  {name:<{w}} [{fixed(arm.lower_rad[j], '+.2f')}, {fixed(arm.upper_rad[j], '+.2f')}]  "
+              f"{fixed(arm.torque_limit_nm[j], '>9.1f')}  "
               f"{arm.rotor_inertia_kgm2[j]:>13.4g}  {sweep.light_kgm2[j]:>9.4g} - {sweep.heavy_kgm2[j]:<9.4g}  "
               f"{k_u[j]:>7.4g} {rt['alpha_gain_per_s'][j]:>6.3g}", file=stream)
     for line in rule_warnings(arm, sweep, k_u, dt_s):

@@ -39,8 +39,9 @@ def reference_rule(lower_rad: np.ndarray, upper_rad: np.ndarray) -> dict:
     for i, (lo, hi) in enumerate(zip(np.asarray(lower_rad, float), np.asarray(upper_rad, float))):
         c = TABLE1_AMPLITUDE_RAD[rows[i]]
         if math.isfinite(lo) and math.isfinite(hi):
-            centre.append(0.5 * (lo + hi))
-            c = min(c, RANGE_FRACTION * 0.5 * (hi - lo))
+            with np.errstate(over="ignore"):   # limits of +/-1.7e308: a range of inf, the table's amplitude kept
+                centre.append(0.5 * (lo + hi))
+                c = min(c, RANGE_FRACTION * 0.5 * (hi - lo))
         else:
             centre.append(0.0)
         amplitude.append(c)
