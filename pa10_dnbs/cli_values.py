@@ -10,6 +10,7 @@ import argparse
 import math
 import re
 import sys
+import unicodedata
 from pathlib import Path
 
 #: replay --clock's bound [Hz of wall time]: a /clock at most every millisecond (the plant's step on every preset),
@@ -40,7 +41,12 @@ def utf8_text(text: str) -> str:
 
 
 def path_arg(text: str) -> Path:
-    """A path flag's value (:func:`utf8_text`)."""
+    """A path flag's value (:func:`utf8_text`): not empty (an unset shell variable: Path('') is the current
+    folder), no control character (a newline would split every line that names the path)."""
+    if not text:
+        raise argparse.ArgumentTypeError("empty: a path is needed (an unset shell variable?)")
+    if control := next((c for c in text if unicodedata.category(c) == "Cc"), None):
+        raise argparse.ArgumentTypeError(f"{text!r} holds a control character ({control!r}): rename it")
     return Path(utf8_text(text))
 
 

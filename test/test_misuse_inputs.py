@@ -52,6 +52,8 @@ VALUE_CASES = [
     (["simulate", "--duration", "1e9"], "--duration"),             # was a 50.9 TiB MemoryError traceback
     (["simulate", "--controller", "all", "--duration", "1e300"], "--duration"),
     (["simulate", "--duration", "ten"], "--duration"),
+    (["simulate", "--config", ""], "--config: empty: a path is needed"),    # was "config file .: a folder"
+    (["simulate", "--trajectory", "a\nb"], "--trajectory: 'a\\nb' holds a control character"),
     (["simulate", "--controller", "pid", "--init-from", "/nonexistent"], "--init-from"),
     (["simulate", "--init-from", "/nonexistent"], "--init-from"),
     (["simulate", "--config", "/nonexistent.yaml"], "/nonexistent.yaml"),
@@ -166,6 +168,8 @@ PATH_CASES = [
     (["study", "--duration", "0.1"], "/proc/nope/x", "--out"),
     (["tune", "--controller", "pid", "--duration", "0.1"], "/proc/nope/x", "--out"),
     (["launch", "--duration", "0.1"], "/proc/nope/x", "--out"),
+    (["simulate", "--duration", "0.1"], "", "--out: empty: a path is needed"),   # was ". is the current directory"
+    (["simulate", "--duration", "0.1"], "FILE\nb", "holds a control character ('\\n')"),   # printed on 2 lines
     (["analyse", "BAG"], "/proc/nope/x", "--out"),
     (["simulate", "--duration", "0.1"], "FILE/x", "--out"),          # under a file
     (["simulate", "--duration", "0.1"], "FILE", "--out"),            # a file
