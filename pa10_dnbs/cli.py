@@ -11,7 +11,7 @@ from . import interrupt
 _startup_sigint = interrupt.quiet_start()   # Ctrl-C while the modules load: one line, exit 130
 
 from .config import ConfigError, default_config_path
-from .console_stream import forgive_stdout
+from .console_stream import forgive_stderr, forgive_stdout
 from .supervisor.fault_flags import add_fault_arguments
 from .loop.scheduling import DEFAULT_RT_PRIORITY
 from .cli_values import (EFFORT_TIMEOUT_MAX_S, MAX_REPLAY_CLOCK_HZ, REPLAY_RATE_MAX, REPLAY_RATE_MIN, RTF_MAX,
@@ -436,8 +436,9 @@ def _lossless_streams() -> None:
 
 def main(argv: list[str] | None = None) -> int:
     _lossless_streams()   # before the wrap below: it reconfigures the streams themselves
-    if argv is None:   # this process is the command: a reader gone from its stdout does not end its run
-        forgive_stdout()
+    if argv is None:   # this process is the command: a reader gone from its stdout does not end its run, nor a
+        forgive_stdout()   # hung-up terminal its stop (a line that cannot be written does not change the exit code)
+        forgive_stderr()
     args = build_parser().parse_args(argv)
     locked_before = held()   # a command run inside another (scripts/equal_budget.py) keeps its caller's locks
     try:

@@ -68,3 +68,11 @@ def forgive_stdout() -> None:
     """Make ``sys.stdout`` a :class:`ForgivingStream` (a closed stdout, None, stays as it is)."""
     if sys.stdout is not None and not isinstance(sys.stdout, ForgivingStream):
         sys.stdout = ForgivingStream(sys.stdout)
+
+
+def forgive_stderr() -> None:
+    """Make ``sys.stderr`` a :class:`ForgivingStream` too: once the terminal has hung up (SIGHUP: the terminal
+    closed, the ssh session dropped; every write then fails with EIO) the stop's line cannot be written, and the
+    error of writing it must not replace the command's exit code (an interrupted launch then exited 1, not 130)."""
+    if sys.stderr is not None and not isinstance(sys.stderr, ForgivingStream):
+        sys.stderr = ForgivingStream(sys.stderr, "standard error")

@@ -10,8 +10,8 @@ A terminal's Ctrl-C sends SIGINT to every process of the foreground group: the c
   says where, exits 130); from then on a second SIGINT ends at once (:func:`two_stage_sigint`): every child is
   killed and reaped, one line (:func:`on_second_sigint` sets it), exit 130, no clean-up that could wait. The same
   signal again within ``SAME_STOP_S`` is the same stop (``timeout`` signals the command, then its group).
-  SIGTERM (``kill``, ``timeout``, a batch scheduler's cancel) is taken as a Ctrl-C (STOP_SIGNALS): no half-written
-  output folder is left behind by it.
+  SIGTERM (``kill``, ``timeout``, a batch scheduler's cancel) and SIGHUP (the terminal closed, an ssh session
+  dropped) are taken as a Ctrl-C (STOP_SIGNALS): no half-written output folder is left behind by them.
 - Code that talks to a database (the tune's Optuna storage) or waits on a pool's or a cluster's futures runs
   :func:`deferred`: there the first SIGINT is only noted, and :func:`check` raises KeyboardInterrupt at the next
   safe point (the executor checks every ``POLL_S``), never inside a SQL statement (an interrupted cursor prints
@@ -35,8 +35,9 @@ EXIT_INTERRUPTED = 130   # 128 + SIGINT, as a shell reports a command ended by C
 POLL_S = 0.1            # how often a waiting executor looks at a deferred Ctrl-C
 PR_SET_PDEATHSIG = 1    # prctl(2): the signal a process gets when its parent dies (linux/prctl.h)
 LAUNCHER_PID_ENV = "PA10_DNBS_LAUNCHER_PID"   # a node's launcher: the node stops when it dies (ros/runtime.py)
-#: what stops a command: Ctrl-C, and SIGTERM (``kill``, ``timeout``, a batch scheduler's cancel), taken alike
-STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+#: what stops a command: Ctrl-C, SIGTERM (``kill``, ``timeout``, a batch scheduler's cancel) and SIGHUP (its
+#: terminal closed, its ssh session dropped: the shell hangs up its jobs, the command and its children), taken alike
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 #: the same signal again this soon [s] after the first is the same stop, not a second Ctrl-C: GNU timeout sends
 #: its signal (SIGTERM, or SIGINT with ``-s INT``) to the command and then to the command's whole group, two
 #: system calls in a row (the handlers' calls 0.015 ms apart at most in 160 tries here, 2 cores loaded; most
@@ -44,16 +45,25 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 #: first is a second Ctrl-C.
 SAME_STOP_S = 0.1
 
+
+def stop_signals() -> tuple[int, ...]:
+    """The STOP_SIGNALS to catch now: SIGHUP not where it is ignored (``nohup``: the command is to outlive its
+    terminal; a launcher leaves it ignored, so its nodes inherit that)."""
+    return tuple(sig for sig in STOP_SIGNALS
+                 if not (sig == signal.SIGHUP and signal.getsignal(sig) == signal.SIG_IGN))
+
 _second_line = "pa10-dnbs: interrupted again: stopped at once"
 _state = {"deferred": 0, "requested": False, "raised": False, "cleanup": None}
 
 
 def pool_worker_start(parent_pid: int) -> None:
-    """A pool worker's initializer: it ignores Ctrl-C (the parent stops the workers itself), ends on SIGTERM (how
-    the parent stops one; not the handler it inherited) and dies with its parent (Linux's PR_SET_PDEATHSIG: SIGKILL
+    """A pool worker's initializer: it ignores Ctrl-C and SIGHUP (the group's, as the terminal hangs up: the parent
+    stops the workers itself), ends on SIGTERM (how the parent stops one; not the handler it inherited) and dies
+    with its parent (Linux's PR_SET_PDEATHSIG: SIGKILL
     once the parent is gone), so a command ended by any signal leaves no worker behind; ``parent_pid``: the
     parent's, to catch a parent that died before the request."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGHUP, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, set(STOP_SIGNALS))   # held back while it was forked
     if not signal_on_parent_death(signal.SIGKILL, parent_pid):
@@ -77,8 +87,8 @@ def signal_on_parent_death(sig: int, parent_pid: int) -> bool:
 
 @contextlib.contextmanager
 def sigint_blocked():
-    """SIGINT and SIGTERM held back in this thread while workers are forked (they inherit the mask, then set
-    their own dispositions); one that came meanwhile is delivered on exit."""
+    """The stop signals (SIGINT, SIGTERM, SIGHUP) held back in this thread while workers are forked (they inherit
+    the mask, then set their own dispositions); one that came meanwhile is delivered on exit."""
     try:
         old = signal.pthread_sigmask(signal.SIG_BLOCK, set(STOP_SIGNALS))
     except (AttributeError, OSError, ValueError):  # pragma: no cover - not POSIX
@@ -135,7 +145,7 @@ def kill_children(wait_s: float = 2.0) -> None:
 
 def _on_stop(handler) -> None:
     """``handler`` for every stop signal (main thread only: ValueError elsewhere)."""
-    for sig in STOP_SIGNALS:
+    for sig in stop_signals():
         signal.signal(sig, handler)
 
 
@@ -205,7 +215,7 @@ def two_stage_sigint():
     Outside the main thread: nothing changes."""
     global _second_line
     try:
-        previous = {sig: signal.signal(sig, _first) for sig in STOP_SIGNALS}
+        previous = {sig: signal.signal(sig, _first) for sig in stop_signals()}
     except ValueError:   # not the main thread
         yield
         return
@@ -248,7 +258,7 @@ def _hold_sigint_to_the_end() -> None:
     lines said."""
     if _state.get("ended"):
         with contextlib.suppress(ValueError):
-            for sig in STOP_SIGNALS:   # SIGTERM as SIGINT
+            for sig in STOP_SIGNALS:   # SIGTERM and SIGHUP as SIGINT
                 signal.signal(sig, signal.SIG_IGN)
 
 
@@ -291,7 +301,7 @@ def quiet_end() -> None:
     the exit functions it is ignored (:func:`_hold_sigint_to_the_end`) and the command's exit code stands."""
     _state["ended"] = True
     with contextlib.suppress(ValueError):
-        for sig in STOP_SIGNALS:   # SIGTERM too, taken as a Ctrl-C (its default action: death by the signal)
+        for sig in stop_signals():   # SIGTERM, SIGHUP too, as a Ctrl-C (their default action: death by the signal)
             signal.signal(sig, _after_output)
 
 

@@ -3,10 +3,10 @@
 namespace (/pa10 for the PA10), where ``launch --robot external``'s joint bus runs: a relative topic name resolves
 the same for both.
 
-The arguments and the config are checked here (one line, exit 2), then the node runs as a child process: SIGINT
-and SIGTERM are passed on to it, and once it has ended the shared-memory files its DDS participant left in
-/dev/shm are removed (nodes leave without tearing DDS down, ``ros/runtime.py``), as the launcher does. Never
-imports rclpy.
+The arguments and the config are checked here (one line, exit 2), then the node runs as a child process: SIGINT,
+SIGTERM and SIGHUP (interrupt.stop_signals) are passed on to it, and once it has ended the shared-memory files its
+DDS participant left in /dev/shm are removed (nodes leave without tearing DDS down, ``ros/runtime.py``), as the
+launcher does. Never imports rclpy.
 """
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 
 from ..config import ConfigError, default_config_path
-from ..interrupt import LAUNCHER_PID_ENV
+from ..interrupt import LAUNCHER_PID_ENV, stop_signals
 from .options import RobotCommandOptions
 from ..run_settings import build_settings
 from ..supervisor.domain_ids import shell_domain
@@ -72,7 +72,7 @@ def run_robot(options: RobotCommandOptions) -> int:
             stream.flush()
     child = subprocess.Popen(argv, env={**os.environ, LAUNCHER_PID_ENV: str(os.getpid())})   # dies with this one
     passed_on = {sig: signal.signal(sig, lambda signum, _f: child.send_signal(signum))
-                 for sig in (signal.SIGINT, signal.SIGTERM)}
+                 for sig in stop_signals()}
     try:
         code = child.wait()
     finally:

@@ -16,8 +16,9 @@ longer existed; docs/architecture.md). ``close()`` runs under an ``exit_deadline
 the node's code, or 3 when it was 0: a hung close() is a failure), ``faulthandler`` writing the stacks just
 before; the launcher names such a node.
 rclpy's own signal handling is off (it raises KeyboardInterrupt wherever the
-interpreter is, including inside callbacks run by the C++ executor): SIGINT
-and SIGTERM mark a ``stop`` future (``SignalStop``) that every spin loop checks;
+interpreter is, including inside callbacks run by the C++ executor): SIGINT,
+SIGTERM and SIGHUP (a hung-up terminal, unless ``nohup`` ignores it:
+interrupt.stop_signals) mark a ``stop`` future (``SignalStop``) that every spin loop checks;
 the node then closes and exits 0. The handler only sets an attribute: it runs
 between two bytecodes of the main thread, which may hold the future's lock
 (``spin_until_future_complete`` adds and removes a done callback), and
@@ -44,7 +45,7 @@ from rclpy.experimental import EventsExecutor
 from rclpy.task import Future
 
 from . import exit_deadline
-from ..interrupt import LAUNCHER_PID_ENV, signal_on_parent_death
+from ..interrupt import LAUNCHER_PID_ENV, signal_on_parent_death, stop_signals
 from ..wire.robot_interface import RobotFault
 from .param_overrides import bad_param_override
 from .params import ParameterError
@@ -102,7 +103,7 @@ class SignalStop(Future):
 
 
 def stop_on_signal(stop: SignalStop) -> Callable:
-    """The SIGINT / SIGTERM handler of ``run_node``: marks ``stop`` with the signal's name, taking no lock."""
+    """The SIGINT / SIGTERM / SIGHUP handler of ``run_node``: marks ``stop`` with the signal's name, taking no lock."""
 
     def on_signal(signum, _frame):
         if not stop.done():
@@ -115,7 +116,7 @@ _STOP: list[Future] = []  # the stop future of run_node, for code that runs befo
 
 
 def stop_requested() -> bool:
-    """True once SIGINT or SIGTERM asked the process to stop (usable while a node is being built)."""
+    """True once SIGINT, SIGTERM or SIGHUP asked the process to stop (usable while a node is being built)."""
     return bool(_STOP) and _STOP[-1].done()
 
 
@@ -140,7 +141,7 @@ def announce_ready(name: str) -> None:
 
 
 def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
-    """Create the node and spin it until SIGINT or SIGTERM (or its own ``loop`` returns); return the exit code.
+    """Create the node and spin it until SIGINT, SIGTERM or SIGHUP (or its own ``loop`` returns); return the exit code.
 
     ``make_node`` builds the node after ``rclpy.init``; the node may define
     ``exit_code`` (int), ``loop(executor, stop)`` (its own spin loop, which
@@ -155,8 +156,8 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
     stop = SignalStop()
     _STOP.append(stop)
     on_signal = stop_on_signal(stop)
-    signal.signal(signal.SIGINT, on_signal)
-    signal.signal(signal.SIGTERM, on_signal)
+    for sig in stop_signals():   # SIGHUP too (the terminal's hang-up reaches every node), unless nohup ignores it
+        signal.signal(sig, on_signal)
     _stop_with_launcher(stop)
     faulthandler.register(signal.SIGUSR1, file=sys.stderr, all_threads=True)  # where a stuck node is stuck
     node = None

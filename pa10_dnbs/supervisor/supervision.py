@@ -10,7 +10,7 @@ import signal
 import time
 from pathlib import Path
 
-from ..interrupt import same_stop
+from ..interrupt import same_stop, stop_signals
 from .graph_options import GraphOptions
 from .netns import in_netns
 from .node_specs import LIVE_VIEW, controller_command
@@ -21,8 +21,8 @@ OBSERVER_CATCH_UP_S = 10.0  # wall time the observer has after the plant's end t
 
 
 class StopRequest:
-    """Set by SIGINT or SIGTERM; the launcher's loops check it (no exception at an arbitrary point,
-    so a signal can neither orphan a child being started nor interrupt the shutdown).
+    """Set by SIGINT, SIGTERM or SIGHUP (interrupt.stop_signals); the launcher's loops check it (no exception at an
+    arbitrary point, so a signal can neither orphan a child being started nor interrupt the shutdown).
 
     A second signal while the first is handled (a second Ctrl-C during the nodes' graces) calls ``hard_stop``
     (set by the launcher once its children exist: it kills them, cleans up and ends the process at once); the
@@ -43,9 +43,10 @@ class StopRequest:
 
 
 def catch_signals(stop: StopRequest) -> dict:
-    """Route SIGINT and SIGTERM to ``stop``, even where the parent shell left SIGINT ignored."""
+    """Route the stop signals (SIGINT, SIGTERM, SIGHUP unless ``nohup`` ignores it: interrupt.stop_signals) to
+    ``stop``, even where the parent shell left SIGINT ignored."""
     previous = {}
-    for signum in (signal.SIGINT, signal.SIGTERM):
+    for signum in stop_signals():
         previous[signum] = signal.getsignal(signum)
         signal.signal(signum, stop)
     return previous
