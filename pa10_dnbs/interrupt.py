@@ -187,6 +187,15 @@ def check() -> None:
         raise KeyboardInterrupt
 
 
+def take_noted() -> int | None:
+    """The signal of a stop noted in :func:`deferred` and not raised yet, taken (:func:`check` raises it no more):
+    for code that stops on it its own way (the launcher: its graph not started). None when there is none."""
+    if _state["requested"] and not _state["raised"]:
+        _state["raised"] = True
+        return (_state.get("first") or (signal.SIGINT, 0.0))[0]
+    return None
+
+
 @contextlib.contextmanager
 def deferred():
     """Within: the first SIGINT is noted, raised by the next :func:`check` (and at the end of the block)."""

@@ -1,6 +1,7 @@
 """``pa10-dnbs launch``: the ROS 2 node graph, with the same outputs as ``simulate``."""
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import shutil
 import tempfile
@@ -9,7 +10,7 @@ from pathlib import Path
 
 import yaml
 
-from ..interrupt import outputs_written
+from ..interrupt import deferred, on_second_sigint, outputs_written
 from ..number_text import interval
 from ..report.metrics_file import diverged_text, metrics_dict, run_ok
 from ..report.outputs import atomic_output_dir, write_report
@@ -44,7 +45,7 @@ def run_launch(options: LaunchOptions) -> int:
     bag_before = bag_stamp(record)   # an earlier run's bag that --force is to replace, if any
 
     try:
-        with atomic_output_dir(out, o.force) as tmp:
+        with _finished(out, record), atomic_output_dir(out, o.force) as tmp:
             try:
                 used = tmp / "config_used.yaml"
                 used.write_text(yaml.safe_dump(plain(settings.to_config()), sort_keys=False))
@@ -53,6 +54,7 @@ def run_launch(options: LaunchOptions) -> int:
                                                        recorded_config=str(Path(out).absolute() / used.name)), tmp,
                                    say=lambda s: print(s, flush=True),
                                    on_hard_stop=lambda: _hard_stop_cleanup(tmp, out))
+                on_second_sigint(_second_stop_line(out, record), cleanup=lambda: shutil.rmtree(tmp, ignore_errors=True))
                 stats = result.stats
                 if record is None:
                     run, missing = load_wire_run(result.wire_file, controller, joint_names,
@@ -86,7 +88,6 @@ def run_launch(options: LaunchOptions) -> int:
         if note is not None:
             print(f"pa10-dnbs launch: {note}", file=sys.stderr)
         return 130 if exc.interrupted else 1
-    outputs_written(f"pa10-dnbs: interrupted as it finished: {out} is written whole ({out}/report.md)")
     m = metrics
     print(f"{controller} ({mode}): worst-joint RMS error {m['worst_rms_error_rad']:.3e} rad over "
           f"{interval(m['window_s'])} s, "
@@ -109,6 +110,27 @@ def run_launch(options: LaunchOptions) -> int:
         print(f"DIVERGED: {diverged_text(m)}")
     rivals = second_effort_publishers(stats, result.restarts)  # the report and a warning said which (exit 1)
     return 0 if run_ok(m) and rivals is None else 1
+
+
+@contextlib.contextmanager
+def _finished(out: Path, record: Path | None):
+    """Around the run and its outputs: once the graph has stopped (run_graph's own handlers gone), a Ctrl-C is
+    noted, the outputs are finished and put in place, then it ends the command with the line that says so (130),
+    as ``simulate`` does (report/outputs.py, finished_output_dir). A ``--record`` bag is whole by then: the
+    outputs thrown away said "run the same command again", which the bag then refused (it exists; --force)."""
+    with deferred():   # a Ctrl-C before the graph's handlers are set: run_graph stops at once (interrupt.take_noted)
+        yield
+        outputs_written(f"pa10-dnbs: interrupted as it finished: {out} is written whole ({out}/report.md)"
+                        + (f"; the bag {record} is whole" if record is not None else ""))
+
+
+def _second_stop_line(out: Path, record: Path | None) -> str:
+    """The line of a second Ctrl-C while the outputs of a finished run are written (the first let them be)."""
+    line = f"pa10-dnbs launch: interrupted again: stopped at once; nothing written to {out}"
+    if record is not None:   # the recorder closed it before the graph stopped
+        line += (f"; the bag {record} is whole (`pa10-dnbs analyse {record} --out DIR` makes the report from it; "
+                 "a new run into it needs --force)")
+    return line
 
 
 def _hard_stop_cleanup(tmp: Path, out: Path) -> str:

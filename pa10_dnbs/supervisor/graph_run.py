@@ -19,7 +19,7 @@ import signal
 import time
 from pathlib import Path
 
-from ..interrupt import EXIT_INTERRUPTED
+from ..interrupt import EXIT_INTERRUPTED, take_noted
 from .domain_ids import lease_domain
 from .graph_options import GraphFailure, GraphOptions, GraphResult, loop_reliability
 from .netns import in_netns, netns_hint, node_env, parse_netns
@@ -41,7 +41,9 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print, on_hard_stop=None) ->
 
     The launcher itself never joins DDS: the observer is one of its child processes.
     A second Ctrl-C (or SIGTERM) while the first is handled ends at once (:func:`_hard_stop`); ``on_hard_stop()``
-    then runs last (the caller removes its half-written output) and returns what to add to the line.
+    then runs last (the caller removes its half-written output) and returns what to add to the line. A caller
+    may run it inside ``interrupt.deferred()`` (a Ctrl-C once the graph has stopped lets it finish its outputs):
+    one noted there before the run's handlers are set stops the run at once.
     """
     lease = lease_domain() if opt.domain_id is None else None  # held until the run is over
     domain = opt.domain_id if lease is None else lease.domain_id
@@ -58,6 +60,8 @@ def run_graph(opt: GraphOptions, workdir: Path, say=print, on_hard_stop=None) ->
     stop = StopRequest()
     stop.hard_stop = lambda: _hard_stop(procs, lease, opt, on_hard_stop)
     previous = catch_signals(stop)
+    if (noted := take_noted()) is not None:   # a Ctrl-C the caller noted (interrupt.deferred) before these handlers
+        stop(noted, None)
     try:
         for name, argv in node_commands(opt, stats_file, wire_file):
             if stop.signal_name:
