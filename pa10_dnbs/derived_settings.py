@@ -46,27 +46,29 @@ RULE_DEFAULTS = {"ctc": {"on_saturation": "scale_feedback"},
                  "dnbs": {"alpha_net": {"init_weight_std": 1e-6}}}
 
 
-def with_rule_values(arm: Arm, checked: dict, absent: tuple[str, ...], report: bool = True) -> dict:
+def with_rule_values(arm: Arm, checked: dict, absent: tuple[str, ...], report: bool = True, stream=None) -> dict:
     """The ``checked`` config (placeholders standing at the dotted keys ``absent``) with the rules' values for
-    ``arm`` at those keys; ``report``: the rules print their table and warnings on stderr."""
+    ``arm`` at those keys; ``report``: the rules print their table and warnings on ``stream`` (stderr when
+    None)."""
     check_reference(arm, checked, absent)
     if absent:
-        checked = _with_rules(arm, checked, absent, report)
+        checked = _with_rules(arm, checked, absent, report, stream)
     check_start(arm, checked)
     return checked
 
 
-def _with_rules(arm: Arm, checked: dict, absent: tuple[str, ...], report: bool) -> dict:
+def _with_rules(arm: Arm, checked: dict, absent: tuple[str, ...], report: bool, stream=None) -> dict:
     """``checked`` with the rules' values at the dotted keys ``absent``."""
     run = RunSettings.of(checked["simulation"])
     values: dict = {}
     reference = dict(checked["reference"])
     with opened_plant(arm, plant_params(PlantSettings.of(checked["plant"]), run.dt_s)) as plant:
         if any(key in absent for key in REFERENCE_KEYS):
-            values = derived_reference(plant, run, report=report)
+            values = derived_reference(plant, run, report=report, stream=stream)
             reference.update({k: v for k, v in values["reference"].items() if f"reference.{k}" in absent})
         if any(key in absent for key in GAIN_KEYS):
-            values = dict(values, **derived_gains(plant, ReferenceSettings.of(reference), run, report=report))
+            values = dict(values, **derived_gains(plant, ReferenceSettings.of(reference), run, report=report,
+                                                  stream=stream))
             if not checked["dnbs"]["remedies"]["robust_term"]["enabled"]:   # its bounds would all be 0
                 values["dnbs"]["remedies"]["slope_bound"]["enabled"] = False
     return _placed(checked, values, absent)
@@ -154,15 +156,15 @@ def inertia_sweep_along(plant: PyBulletArmPlant, reference: ReferenceSettings, r
 
 
 def derived_gains(plant: PyBulletArmPlant, reference: ReferenceSettings, run: RunSettings, report: bool = True,
-                  sweep=None) -> dict:
+                  sweep=None, stream=None) -> dict:
     """The gain rule's fragment (a config fragment) for the arm of ``plant`` along ``reference`` over ``run``
     (``sweep``: :func:`inertia_sweep_along`'s, computed when None). ``report``: print the derivation (one line
-    per joint) and any warning on stderr."""
+    per joint) and any warning on ``stream`` (stderr when None)."""
     dt, arm = run.dt_s, plant.arm
     sweep = inertia_sweep_along(plant, reference, run) if sweep is None else sweep
     fragment = gain_rule(arm, sweep, dt)
     if report:
-        report_rule(arm, sweep, fragment, dt)
+        report_rule(arm, sweep, fragment, dt, stream=stream)
     return fragment
 
 

@@ -7,6 +7,8 @@ params the launcher gives it (every value resolved, so the rules derive nothing 
 """
 from __future__ import annotations
 
+import io
+import sys
 from pathlib import Path
 
 from .arm import DEFAULT_ARM, ArmError, load_arm
@@ -15,12 +17,14 @@ from .derived_settings import DERIVED_KEYS, RULE_DEFAULTS, with_rule_values
 from .settings import Settings
 
 
-def build_settings(config_path: str | Path, arm: str | Path | None = None, report: bool = True) -> Settings:
+def build_settings(config_path: str | Path, arm: str | Path | None = None, report: bool = True,
+                   stream=None) -> Settings:
     """The settings of a run: the config file at ``config_path`` (and what it extends); the arm (``arm``: a
     preset's name, an arm file or a URDF; None: the config's ``arm`` key, else the default); the rules' fixed
     values and the arm's facts, its file's ``settings``, the config over them, checked once for the arm's joint
     count; then the rules' values (docs/arms.md) for the keys nobody gives (``report``: the rules print their
-    table and warnings on stderr). ConfigError naming the key or file, ArmError naming the arm file."""
+    table and warnings on ``stream``, stderr when None). ConfigError naming the key or file, ArmError naming the
+    arm file."""
     document = load_config(config_path)
     try:
         the_arm = load_arm(arm if arm is not None else document.get("arm", DEFAULT_ARM))
@@ -42,4 +46,19 @@ def build_settings(config_path: str | Path, arm: str | Path | None = None, repor
     except MissingKeyError as exc:   # the config file (and what it extends) is where the key belongs
         raise ConfigError(f"{config_path}: {exc} (neither it nor a file it extends gives it; a config usually "
                           f"starts with `extends: {default_config_path()}`)") from None
-    return Settings.of(with_rule_values(the_arm, checked, absent, report), the_arm)
+    return Settings.of(with_rule_values(the_arm, checked, absent, report, stream), the_arm)
+
+
+def built_settings_held(config_path: str | Path, arm: str | Path | None = None) -> tuple[Settings, str]:
+    """:func:`build_settings` with the rules' table and warnings held back: the settings and that text, for a
+    command to say (:func:`say_rules`) once every input is accepted, so that a refused input is its one line."""
+    held = io.StringIO()
+    settings = build_settings(config_path, arm, report=True, stream=held)
+    return settings, held.getvalue()
+
+
+def say_rules(text: str) -> None:
+    """The rules' table and warnings :func:`built_settings_held` held back, on stderr, as the rules print them."""
+    if text:
+        sys.stderr.write(text)
+        sys.stderr.flush()

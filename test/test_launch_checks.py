@@ -229,3 +229,30 @@ def test_robot_refuses_a_domain_ros_2_does_not_accept(monkeypatch, value):
     monkeypatch.setenv("ROS_DOMAIN_ID", value)
     r = run_cli("robot", "--duration", "0.1")
     assert r.returncode == 2 and r.stderr.startswith("pa10-dnbs: error: ROS_DOMAIN_ID: ") and r.stderr.count("\n") == 1, r
+
+
+@pytest.mark.parametrize("args", [
+    ("launch", "--arm", "iiwa", "--duration", "0.2", "--no-figures", "--kill", "s1@0.1"),   # a PA10 joint
+    ("launch", "--arm", "panda", "--duration", "0.2", "--no-figures", "--fault-joints", "zz"),
+    ("robot", "--arm", "iiwa", "--state-topic", "bad//t"),
+    ("simulate", "--arm", "iiwa", "--init-from", "/nonexistent"),
+    ("study", "--arm", "iiwa", "--scenarios", "nominal", "--duration", "0.1", "--out", "/"),
+    ("tune", "--arm", "iiwa", "--controller", "pid", "--trials", "1", "--duration", "0.1", "--out", "/"),
+])
+def test_a_refused_input_on_an_arm_the_rule_derives_is_one_line_without_its_table(tmp_path, args):
+    """The gain rule's table is said once the inputs are accepted: a refusal is its one line alone."""
+    out = () if "--out" in args or args[0] == "robot" else ("--out", tmp_path / "out")
+    r = run_cli(*args, *out)
+    assert r.returncode == 2, (r.returncode, r.stderr)
+    assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert r.stderr.startswith("pa10-dnbs: error: ") and "gains by the rule" not in r.stderr + r.stdout
+    assert not (tmp_path / "out").exists()
+    _no_pa10_children()
+
+
+def test_an_accepted_run_on_such_an_arm_still_says_the_rules_table(tmp_path):
+    r = run_cli("simulate", "--arm", "iiwa", "--controller", "pid", "--duration", "0.05", "--out", tmp_path / "o",
+                "--no-figures")
+    assert r.returncode == 0, r.stderr
+    assert "arm iiwa: 7 joints" in r.stderr and "gains by the rule of docs/arms.md" in r.stderr
+    assert len([line for line in r.stderr.splitlines() if line.startswith("  a")]) == 7, r.stderr

@@ -16,7 +16,7 @@ from ..loop.scheduling import granted_priority
 from ..output_lock import lock_output
 from ..report.metrics_file import metrics_settings
 from ..report.outputs import check_output_dir
-from ..run_settings import build_settings
+from ..run_settings import built_settings_held, say_rules
 from ..run_size import check_run_size, say_note
 from ..run_steps import run_steps
 from ..settings import Settings
@@ -58,7 +58,8 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
     o = options
     check_rmw()   # every node would exit 102 (rcl) on an RMW this environment does not hold
     config_path = Path(o.config_path).resolve() if o.config_path else default_config_path()
-    settings = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
+    # the settings, built once: config file(s), arm file, rules (their table said once the inputs are accepted)
+    settings, rules = built_settings_held(config_path, o.arm)
     the_arm = settings.arm
     joint_names = the_arm.joint_names
     for joint in joint_names:  # the graph names nodes and topics after the joints: checked before any node starts
@@ -130,6 +131,7 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
             check_bag_path(record, force)
         except BagExistsError as exc:
             raise ConfigError(f"--record: {exc}") from None
+    say_rules(rules)   # every input accepted: the rules' table, as a run without refusal always said it
     if controller == "dnbs":  # auto resolved (and c built) once here, before the joint controllers start; the
         # nodes read the resolved kernel from their params (ros_params.yaml) (KernelBuildError if c cannot be built)
         settings = resolve_kernel(settings, say=lambda line: print(f"launch: {line}", flush=True))

@@ -19,7 +19,7 @@ from pathlib import Path
 from ..config import ConfigError, default_config_path
 from ..interrupt import LAUNCHER_PID_ENV, stop_signals
 from .options import RobotCommandOptions
-from ..run_settings import build_settings
+from ..run_settings import built_settings_held, say_rules
 from ..supervisor.domain_ids import shell_domain
 from ..supervisor.rmw_check import check_rmw
 from ..run_steps import run_steps
@@ -32,7 +32,7 @@ def robot_argv(options: RobotCommandOptions) -> list[str]:
     """The node's argv after the checks that depend on the settings (ConfigError naming the flag or key)."""
     o = options
     config_path = Path(o.config_path) if o.config_path else default_config_path()
-    settings = build_settings(config_path, arm=o.arm)
+    settings, rules = built_settings_held(config_path, arm=o.arm)   # the rules' table said once all is accepted
     duration_s = 0.0 if o.duration_s is None else o.duration_s
     if o.duration_s is not None:
         run_steps(o.duration_s, settings.simulation.dt_s)  # > 0 (the flag), countable and two steps at least
@@ -51,6 +51,7 @@ def robot_argv(options: RobotCommandOptions) -> list[str]:
                                                               f"{resolve(o.state_topic, namespace)} in {namespace}")
         raise ConfigError(f"--command-topic: must differ from --state-topic (both {o.command_topic!r}{same}): the "
                           "robot would read its own states as commands")
+    say_rules(rules)
     params = {"config_file": config_path.resolve(), "arm": settings.arm.file, "mode": o.mode, "duration_s": duration_s,
               "state_topic": o.state_topic, "command_topic": o.command_topic, "clock_hz": float(o.clock_hz)}
     args = [sys.executable, "-m", "pa10_dnbs.ros.mujoco_robot_node", "--ros-args", "-r", "__node:=mujoco_robot",

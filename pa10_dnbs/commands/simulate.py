@@ -15,7 +15,7 @@ from ..report.markdown import report_markdown
 from ..report.metrics_file import diverged_text, guard_text, metrics_dict, metrics_settings, run_ok
 from ..report.outputs import atomic_output_dir, check_output_dir, finished_output_dir, write_report, write_run
 from ..report.partial import partial_banner, write_partial_mark
-from ..run_settings import build_settings
+from ..run_settings import built_settings_held, say_rules
 from ..run_size import check_run_size, say_note
 from ..run_steps import run_steps
 from ..sim.closed_loop import simulate
@@ -34,7 +34,8 @@ def run_simulate(options: SimulateOptions) -> int:
     """
     o = options
     config_path = Path(o.config_path) if o.config_path else default_config_path()
-    settings = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
+    # the settings, built once: config file(s), arm file, rules (their table said once the inputs are accepted)
+    settings, rules = built_settings_held(config_path, o.arm)
     the_arm = settings.arm
     duration_s = settings.simulation.duration_s if o.duration_s is None else o.duration_s
     given = "simulation.duration_s" if o.duration_s is None else "duration_s"   # the config's, or --duration
@@ -57,6 +58,7 @@ def run_simulate(options: SimulateOptions) -> int:
     check_output_dir(o.out, o.force, "--out", inputs={"--config": config_path, "--arm": the_arm.file,
                                                       "arm URDF": the_arm.urdf, "--trajectory": o.trajectory,
                                                       "--init-from": o.init_from})
+    say_rules(rules)
     if "dnbs" in kinds:
         settings = resolve_kernel(settings, say=print)  # dnbs.kernel: auto -> c or numpy, said in one line
     measured = metrics_settings(settings, duration_s)

@@ -14,7 +14,7 @@ from ..json_text import json_text
 from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, on_second_sigint, outputs_written, say
 from ..report.outputs import atomic_output_dir, check_output_dir, finished_output_dir
 from ..report.progress import ProgressBar
-from ..run_settings import build_settings
+from ..run_settings import built_settings_held, say_rules
 from ..run_steps import run_steps
 from ..run_size import check_run_size, say_note
 from ..supervisor.fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
@@ -35,7 +35,8 @@ def run_study_command(options: StudyOptions) -> int:
     scen = name_list("--scenarios", o.scenarios, list(SCENARIOS))
     ctrl = name_list("--controllers", o.controllers, CONTROLLERS)
     config_path = Path(o.config_path) if o.config_path else default_config_path()
-    settings = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
+    # the settings, built once: config file(s), arm file, rules (their table said once the inputs are accepted)
+    settings, rules = built_settings_held(config_path, o.arm)
     duration_s = settings.simulation.duration_s if o.duration_s is None else o.duration_s
     given = "simulation.duration_s" if o.duration_s is None else "duration_s"   # the config's, or --duration
     n_runs, n_steps = len(scen) * len(ctrl) * o.seeds, run_steps(duration_s, settings.simulation.dt_s, given)
@@ -48,6 +49,8 @@ def run_study_command(options: StudyOptions) -> int:
                                                       "arm URDF": settings.arm.urdf})
     check_scenario_references(settings, scen)   # a reference past the Nyquist rate: one line, nothing runs
     infeasible = infeasible_scenarios(settings, scen, duration_s)   # before any run: one line each, not run
+    if len(infeasible) < len(scen):
+        say_rules(rules)
     for line in infeasible.values():
         print(f"study: {line}")
     if len(infeasible) == len(scen):

@@ -31,7 +31,7 @@ from .name_list import name_list
 from ..tune.report import held_out_table, held_out_verdict, tune_figures, tune_markdown, tuned_yaml
 from ..tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 from ..tune.space import select, start_values
-from ..run_settings import build_settings
+from ..run_settings import built_settings_held, say_rules
 from ..run_steps import run_steps
 from ..tune.tuner import (TrialProgress, TuneSpec, arm_digest, check_persistent, check_storage_file, completed,
                           held_out, open_storage, open_study, optimize, refusal, settings_digest, storage_key,
@@ -84,6 +84,7 @@ def _checked_tune(o: TuneOptions, state: dict) -> int:
     lock_key(study_lock_key(url, spec.study_name),    # whichever storage, however its URL is spelled
              f"{'--storage' if o.storage is not None else '--out'}: study {spec.study_name} in {url} is being tuned "
              "by another run (pid {pid}); wait for it to end (the same command then resumes it)")
+    say_rules(c["rules"])   # every input accepted, the locks taken
     where_kept = o.storage if o.storage is not None else str(out / "tune.db")
     on_second_sigint(f"pa10-dnbs: interrupted again: stopped at once; the completed trials stay in {where_kept}; "
                      "run the same command to resume")
@@ -109,7 +110,8 @@ def _checks(o: TuneOptions, say) -> dict:
         check_persistent(o.storage)   # an in-memory database keeps nothing: refused before any run
         check_storage_file(o.storage)   # nor a database of the user's own, which would get the tune's tables
     config_path = Path(o.config_path) if o.config_path else default_config_path()
-    base = build_settings(config_path, o.arm)  # the settings, built once: config file(s), arm file, rules
+    # the settings, built once: config file(s), arm file, rules (their table said once the inputs are accepted)
+    base, rules = built_settings_held(config_path, o.arm)
     the_arm = base.arm
     check_scenario_references(base, train)   # a reference past the Nyquist rate: one line, nothing runs
     if o.held_out_seeds:
@@ -141,7 +143,7 @@ def _checks(o: TuneOptions, say) -> dict:
     check_tune_dir(out, spec.study_name, spec.identity(), refusal)  # only this tune's own files: it resumes
     _check_same_storage(out, o.storage)   # DIR's reports and tune.db are of this storage's study
     return {"out": out, "spec": spec, "base": base, "pool": pool, "batch": batch, "train": train,
-            "config_path": config_path, "command": command}
+            "config_path": config_path, "command": command, "rules": rules}
 
 
 def _default_storage(out: Path) -> str:
