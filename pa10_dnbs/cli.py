@@ -272,7 +272,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the arm's ROS namespace (default /<arm name>, /pa10 for the PA10): every node runs in it, its "
                          "topics are NS/<joint>/state, "
                          "NS/joint_states, ...; /clock, /tf, /tf_static, /diagnostics stay global")
-    la.add_argument("--clock-hz", type=positive, default=100.0, metavar="HZ",
+    la.add_argument("--clock-hz", type=positive, default=None, metavar="HZ",
                     help="/clock rate in Hz of simulated time (default 100, as `ros2 bag play --clock`); every node "
                          "but the plant runs with use_sim_time:=true")
     la.add_argument("--domain-id", type=whole_in(0, 232), default=None, help="ROS_DOMAIN_ID, 0..232 as ROS 2 accepts (default: a free one in 1..101, leased for the run so concurrent runs never share it; above 101 the DDS ports may meet Linux's ephemeral ones)")
@@ -335,7 +335,7 @@ def build_parser() -> argparse.ArgumentParser:
     rb.add_argument("--command-topic", default="/robot_joint_command", metavar="TOPIC",
                     help="its JointState effort command topic (default /robot_joint_command; relative: as "
                          "--state-topic)")
-    rb.add_argument("--clock-hz", type=nonnegative, default=100.0, metavar="HZ",
+    rb.add_argument("--clock-hz", type=nonnegative, default=None, metavar="HZ",
                     help="/clock rate in Hz of robot time (default 100; 0: none)")
     rb.set_defaults(func=_run, func_name="robot")
 

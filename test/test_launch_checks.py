@@ -256,3 +256,18 @@ def test_an_accepted_run_on_such_an_arm_still_says_the_rules_table(tmp_path):
     assert r.returncode == 0, r.stderr
     assert "arm iiwa: 7 joints" in r.stderr and "gains by the rule of docs/arms.md" in r.stderr
     assert len([line for line in r.stderr.splitlines() if line.startswith("  a")]) == 7, r.stderr
+
+
+@pytest.mark.parametrize("command", [("launch", "--duration", "1", "--no-figures"), ("robot", "--duration", "1")])
+def test_a_config_step_the_default_clock_rate_does_not_fit_names_the_step_not_the_flag(tmp_path, command):
+    """simulation.dt_s: 0.1 takes at most 10 /clock a second: without --clock-hz the config's step is the cause;
+    with it, the flag."""
+    config = tmp_path / "dt.yaml"
+    config.write_text(f"extends: {REPO / 'config' / 'default.yaml'}\nsimulation: {{dt_s: 0.1}}\n")
+    out = ("--out", tmp_path / "out") if command[0] == "launch" else ()
+    line = _refused(run_cli(*command, "--config", config, *out), ["default --clock-hz 100", "--clock-hz 10 or less"])
+    assert line.startswith("pa10-dnbs: error: simulation.dt_s: a step of 0.1 s"), line
+    line = _refused(run_cli(*command, "--config", config, *out, "--clock-hz", "100"), ["got 100.0"])
+    assert line.startswith("pa10-dnbs: error: --clock-hz: must be in"), line
+    assert not (tmp_path / "out").exists()
+    _no_pa10_children()

@@ -64,7 +64,7 @@ def run_launch(options: LaunchOptions) -> int:
                 else:
                     run, missing = bag_run(record, dt, n_steps, controller, settings.plant.torque_limit_nm,
                                            stats["wall_time_s"], lockstep_stats=stats if mode == "lockstep" else None,
-                                           clock_hz=o.clock_hz)
+                                           clock_hz=opt.clock_hz)
                     source = f"the bag's {ArmTopics(namespace).joint_states} and reference topics ({record})"
                 if missing:
                     raise GraphFailure(f"the record of the run is incomplete: {missing}")

@@ -26,7 +26,7 @@ from ..supervisor.graph_run import GraphOptions, loop_reliability, parse_netns
 from ..supervisor.plant_engine import plant_robot_options
 from ..supervisor.rmw_check import check_rmw
 from ..supervisor.robot_options import check_robot_options
-from ..wire.clock_schedule import check_clock_hz
+from ..wire.clock_schedule import checked_clock_hz
 from ..wire.topics import check_joint_name, check_namespace, default_namespace
 from .options import LaunchOptions
 
@@ -84,10 +84,7 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
     if robot is not None and domain_id is None and not own_robot:  # the robot is running: the graph joins its domain
         domain_id = shell_domain("the robot's domain")
     dt = settings.simulation.dt_s
-    try:
-        check_clock_hz(o.clock_hz, dt, off_allowed=False)
-    except ValueError as exc:
-        raise ConfigError(f"--clock-hz: {exc}") from None
+    clock_hz = checked_clock_hz(o.clock_hz, dt, off_allowed=False)   # None: the default, which dt may not fit
     given = "simulation.duration_s" if o.duration_s is None else "--duration"   # the config's, or the flag
     n_steps = run_steps(duration_s, dt, given)
     check_kill_times(settings.faults, joint_names, n_steps * dt, o.faults.kill)  # before any node starts
@@ -142,7 +139,7 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
                        bag_compression=o.bag_compression, live_port=o.live_port, live_host=o.live_host,
                        live_hz=o.live_hz, real_time_factor=o.real_time_factor, deadline_fraction=o.deadline_fraction,
                        rt_priority=rt_priority, sched_batch=o.sched_batch, namespace=namespace,
-                       clock_hz=o.clock_hz, joint_names=joint_names, trajectory_file=trajectory,
+                       clock_hz=clock_hz, joint_names=joint_names, trajectory_file=trajectory,
                        **robot_fields)
     reliability = loop_reliability(opt)
     measured = metrics_settings(settings, n_steps * dt)

@@ -49,9 +49,10 @@ class LaunchOptions:
     live_host:live_port (0: a free port; None: off), live_hz frames per second at most. rt_priority: SCHED_FIFO
     priority of every node where the OS grants it (0: off); sched_batch: every node but the plant under
     SCHED_BATCH. namespace: the arm's ROS namespace (None: /<the arm's name>). clock_hz: /clock rate [Hz of
-    simulated time]. robot: ``--robot external`` and its topics (None: the project's plant, docs/your_robot.md);
-    plant: pybullet (the plant node) or mujoco (the MuJoCo robot node behind the joint bus, docs/engines.md).
-    trajectory: a JointTrajectory file the reference node follows from step 0 instead of eq. 27."""
+    simulated time] (None: not given, DEFAULT_CLOCK_HZ). robot: ``--robot external`` and its topics (None: the
+    project's plant, docs/your_robot.md); plant: pybullet (the plant node) or mujoco (the MuJoCo robot node
+    behind the joint bus, docs/engines.md). trajectory: a JointTrajectory file the reference node follows from
+    step 0 instead of eq. 27."""
 
     out: Path
     config_path: Path | None = None
@@ -78,7 +79,7 @@ class LaunchOptions:
     rt_priority: int = DEFAULT_RT_PRIORITY
     sched_batch: bool = False
     namespace: str | None = None
-    clock_hz: float = DEFAULT_CLOCK_HZ
+    clock_hz: float | None = None
     figures: bool = True
     arm: str | None = None
     robot: RobotOptions | None = None
@@ -171,7 +172,8 @@ class ReplayOptions:
 @dataclass(frozen=True)
 class RobotCommandOptions:
     """``pa10-dnbs robot``: the arm in MuJoCo as an external robot; mode lockstep or paced; duration_s [s of
-    robot time] (None: until Ctrl-C); clock_hz [Hz of robot time] (0: no /clock)."""
+    robot time] (None: until Ctrl-C); clock_hz [Hz of robot time] (0: no /clock; None: not given,
+    DEFAULT_CLOCK_HZ)."""
 
     config_path: Path | None = None
     arm: str | None = None
@@ -179,4 +181,4 @@ class RobotCommandOptions:
     duration_s: float | None = None
     state_topic: str = "/robot_joint_states"
     command_topic: str = "/robot_joint_command"
-    clock_hz: float = 100.0
+    clock_hz: float | None = None

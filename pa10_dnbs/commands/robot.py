@@ -24,7 +24,7 @@ from ..supervisor.domain_ids import shell_domain
 from ..supervisor.rmw_check import check_rmw
 from ..run_steps import run_steps
 from ..ros.shm_cleanup import remove_stale, shm_files
-from ..wire.clock_schedule import check_clock_hz
+from ..wire.clock_schedule import checked_clock_hz
 from ..wire.topics import check_free_topic, check_not_the_graphs, check_topic_name, default_namespace, resolve
 
 
@@ -36,10 +36,7 @@ def robot_argv(options: RobotCommandOptions) -> list[str]:
     duration_s = 0.0 if o.duration_s is None else o.duration_s
     if o.duration_s is not None:
         run_steps(o.duration_s, settings.simulation.dt_s)  # > 0 (the flag), countable and two steps at least
-    try:
-        check_clock_hz(o.clock_hz, settings.simulation.dt_s)
-    except ValueError as exc:
-        raise ConfigError(f"--clock-hz: {exc}") from None
+    clock_hz = checked_clock_hz(o.clock_hz, settings.simulation.dt_s)   # None: the default, which dt may not fit
     namespace = default_namespace(settings.arm.name)  # the bus's (launch's default): relative names meet there
     for flag, topic in (("--state-topic", o.state_topic), ("--command-topic", o.command_topic)):
         try:
@@ -53,7 +50,7 @@ def robot_argv(options: RobotCommandOptions) -> list[str]:
                           "robot would read its own states as commands")
     say_rules(rules)
     params = {"config_file": config_path.resolve(), "arm": settings.arm.file, "mode": o.mode, "duration_s": duration_s,
-              "state_topic": o.state_topic, "command_topic": o.command_topic, "clock_hz": float(o.clock_hz)}
+              "state_topic": o.state_topic, "command_topic": o.command_topic, "clock_hz": float(clock_hz)}
     args = [sys.executable, "-m", "pa10_dnbs.ros.mujoco_robot_node", "--ros-args", "-r", "__node:=mujoco_robot",
             "-r", f"__ns:={namespace}"]
     for k, v in params.items():
