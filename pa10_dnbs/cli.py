@@ -403,8 +403,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help=f"playback speed factor in [{REPLAY_RATE_MIN:g}, {REPLAY_RATE_MAX:g}] (default 1)")
     rp.add_argument("--topics", nargs="+", default=None, metavar="TOPIC", help="only these topics (default: all)")
     rp.add_argument("--start-offset", type=nonnegative, default=0.0, metavar="SECONDS",
-                    help="skip the bag's first SECONDS (of its own timeline)")
-    rp.add_argument("--loop", action="store_true", help="play again and again until Ctrl-C")
+                    help="skip the bag's first SECONDS (of its own timeline; less than its length)")
+    rp.add_argument("--loop", action="store_true", help="play again and again until Ctrl-C (each pass lasts until "
+                    "the bag's end, whichever topics are played)")
     rp.add_argument("--clock", type=number_in(0.0, MAX_REPLAY_CLOCK_HZ, low_open=False), nargs="?", const=100.0,
                     default=0.0, metavar="HZ",
                     help=f"publish /clock from the bag's timeline at HZ of wall time, at most {MAX_REPLAY_CLOCK_HZ:g} "

@@ -179,3 +179,55 @@ def test_replay_leaves_nothing_in_dev_shm(tmp_path, domain, case):
         assert r.returncode == 2, r.stderr
     # this test's process may map LTTng's file too (rclpy loaded by another test): its mapping does not count
     assert unused(shm_files() - before, frozenset({os.getpid()})) == set()
+
+
+@pytest.mark.parametrize("offset, where", [("0.04", "at"), ("0.040000000001", "at"), ("0.05", "past")])
+def test_replay_from_the_bags_end_is_refused_not_looped_without_pause(tmp_path, domain, offset, where):
+    """--start-offset exactly the bag's length with --loop replayed its last instant in a tight loop (250k
+    messages in 20 s): an offset at or past the last message is one line naming --start-offset, before ROS."""
+    bag = _string_bag(tmp_path / "b", "/s")   # 0, 10, ..., 40 ms
+    r = _replay(domain, bag, "--start-offset", offset, "--loop", timeout=20)
+    _assert_clear_error(r, f"--start-offset: {float(offset):g} s is {where} the bag's end (its messages span 0.04 s)")
+    assert r.stdout == "" and len(r.stderr.strip().splitlines()) == 1, r.stdout + r.stderr
+
+
+def test_replay_loop_of_a_bag_at_one_instant_is_refused(tmp_path, domain):
+    store = get_typestore(Stores.ROS2_JAZZY)
+    w = BagWriter(tmp_path / "b")
+    w.add_topic("/s", "std_msgs/msg/String", [QOS])
+    w.write("/s", 0, bytes(store.serialize_cdr(store.types["std_msgs/msg/String"](data="x"), "std_msgs/msg/String")))
+    w.close()
+    r = _replay(domain, tmp_path / "b", "--loop", timeout=20)
+    _assert_clear_error(r, "--loop: the bag's messages are all at one instant")
+
+
+def test_replay_loop_of_topics_ending_early_waits_for_the_bags_end(tmp_path, domain):
+    """--topics of a message at t = 0 only, --loop: each pass lasts the bag's 40 ms (it started the next at once:
+    hundreds of thousands of messages a second)."""
+    import signal
+    import time
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    data = bytes(store.serialize_cdr(store.types["std_msgs/msg/String"](data="x"), "std_msgs/msg/String"))
+    w = BagWriter(tmp_path / "b")
+    for topic in ("/once", "/s"):
+        w.add_topic(topic, "std_msgs/msg/String", [QOS])
+    w.write("/once", 0, data)
+    for k in range(5):
+        w.write("/s", k * 10_000_000, data)
+    w.close()
+    p = subprocess.Popen([sys.executable, "-m", "pa10_dnbs.cli", "replay", str(tmp_path / "b"), "--topics", "/once",
+                          "--loop"], cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         env={**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"})
+    try:
+        assert "PLAYING" in p.stdout.readline() + p.stdout.readline(), "no PLAYING line"
+        time.sleep(2.0)
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=30)
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.wait()
+    assert p.returncode == 0, err
+    played = int(out.split("PLAYED ")[1].split()[0])
+    assert 10 <= played <= 2.0 / 0.04 * 2, out   # about 50 passes of one message

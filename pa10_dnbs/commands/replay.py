@@ -78,9 +78,7 @@ def _play(o: ReplayOptions, before: set[str]) -> NoReturn:
                 raise ConfigError(f"--topics: {text}")
             raise BagError(f"{bag.path}: {text}")
         _check_topic_names(bag, o.topics or bag.topics)
-        duration_s = (bag.end_ns - bag.start_ns) / 1e9
-        if o.start_offset_s > duration_s:
-            raise ConfigError(f"--start-offset: {o.start_offset_s} s is past the bag's end ({duration_s:.3f} s)")
+        check_start_offset(bag, o.start_offset_s, o.loop)
         opt = PlayOptions(rate=o.rate, topics=list(o.topics or []), start_offset_s=o.start_offset_s, loop=o.loop,
                           clock_hz=o.clock_hz, wait_for_subscribers_s=o.wait_for_subscribers_s, queue_depth=o.queue_depth,
                           namespace=namespace)
@@ -107,6 +105,23 @@ def _play(o: ReplayOptions, before: set[str]) -> NoReturn:
         release_output(o.bag_path)
         _remove_own_files(before)
         exit_process(code)
+
+
+def check_start_offset(bag: Bag, offset_s: float, loop: bool) -> None:
+    """ConfigError naming --start-offset when ``offset_s`` [s of the bag's timeline] is at or past its last message
+    (nothing left to play but that instant, which ``--loop`` would replay without pause); naming --loop when
+    the bag's messages are all at one instant (as the player counts: ``start_ns + round(offset * 1e9)``)."""
+    span_ns = bag.end_ns - 1 - bag.start_ns   # rosbags' end time is just after the latest message
+    span = f"{span_ns / 1e9:.9g} s"
+    offset_ns = offset_s * 1e9
+    if offset_ns >= span_ns + 0.5 or (span_ns > 0 and offset_ns >= span_ns - 0.5):
+        where = "past" if offset_ns >= span_ns + 0.5 else "at"
+        raise ConfigError(f"--start-offset: {offset_s:g} s is {where} the bag's end (its messages span {span}): "
+                          f"nothing is left to play{' but its last instant' if where == 'at' else ''}; give "
+                          f"less than {span}")
+    if loop and span_ns == 0:
+        raise ConfigError("--loop: the bag's messages are all at one instant (they span 0 s): a loop would "
+                          "replay them without pause")
 
 
 def unplayable_topics(bag: Bag, topics) -> dict[str, str]:

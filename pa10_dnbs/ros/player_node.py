@@ -116,28 +116,37 @@ class PlayerNode(Node):
         self._clock_pub.publish(msg)
 
     def _play_once(self, stop) -> bool:
-        """One pass over the bag; False when stopped."""
+        """One pass over the bag; False when stopped. With ``loop`` a pass lasts until the bag's last instant
+        (rosbags' end time - 1 ns), whichever topics are played: the next one never starts at once after topics
+        whose messages end earlier (a tight loop)."""
         t_first = self.bag.start_ns + int(round(self.opt.start_offset_s * 1e9))
         rate = self.opt.rate
         w0 = time.perf_counter()
         clock_period = 1.0 / self.opt.clock_hz if self._clock_pub else None
-        next_clock = w0
-        for topic, _, t_ns, data in self.bag.messages(list(self.pubs) + self._live_only, start_ns=t_first):
-            target = w0 + (t_ns - t_first) / 1e9 / rate
+        clock = [w0]   # when the next /clock is due [s, perf_counter]
+
+        def wait_until(target: float) -> float | None:
+            """Sleep until ``target`` [s, perf_counter], publishing /clock and ticking the live view meanwhile; the
+            time then, or None when stopped."""
             while True:
                 if stop.done():
-                    return False
+                    return None
                 now = time.perf_counter()
                 if self.live is not None:
                     self.live.tick(now)
-                if clock_period is not None and next_clock <= min(now, target):
-                    self._publish_clock(t_first + int((next_clock - w0) * rate * 1e9))
-                    next_clock += clock_period
+                if clock_period is not None and clock[0] <= min(now, target):
+                    self._publish_clock(t_first + int((clock[0] - w0) * rate * 1e9))
+                    clock[0] += clock_period
                     continue
                 if now >= target:
-                    break
-                wake = target if clock_period is None else min(target, next_clock)
+                    return now
+                wake = target if clock_period is None else min(target, clock[0])
                 time.sleep(min(max(wake - now, 0.0), WAIT_SLICE_S))
+
+        for topic, _, t_ns, data in self.bag.messages(list(self.pubs) + self._live_only, start_ns=t_first):
+            now = wait_until(w0 + (t_ns - t_first) / 1e9 / rate)
+            if now is None:
+                return False
             if topic in self.pubs:
                 self._count_unheard(topic, now)
                 self.pubs[topic].publish(bytes(data))
@@ -146,6 +155,8 @@ class PlayerNode(Node):
                 self.live.on_message(self.out_name[topic], bytes(data))
         if self.live is not None:  # the last state of the pass
             self.live.tick(time.perf_counter() + self.live.decimator.period_s)
+        if self.opt.loop:   # the pass ends at the bag's last instant, not at the last message played
+            return wait_until(w0 + (self.bag.end_ns - 1 - t_first) / 1e9 / rate) is not None
         return True
 
     def _count_unheard(self, topic: str, now: float) -> None:
