@@ -406,11 +406,11 @@ def build_parser() -> argparse.ArgumentParser:
                     help="skip the bag's first SECONDS (of its own timeline; less than its length)")
     rp.add_argument("--loop", action="store_true", help="play again and again until Ctrl-C (each pass lasts until "
                     "the bag's end, whichever topics are played)")
-    rp.add_argument("--clock", type=number_in(0.0, MAX_REPLAY_CLOCK_HZ, low_open=False), nargs="?", const=100.0,
+    rp.add_argument("--clock", type=number_in(0.0, MAX_REPLAY_CLOCK_HZ), nargs="?", const=100.0,   # (0, 1000]
                     default=0.0, metavar="HZ",
-                    help=f"publish /clock from the bag's timeline at HZ of wall time, at most {MAX_REPLAY_CLOCK_HZ:g} "
+                    help=f"publish /clock from the bag's timeline at HZ of wall time, in (0, {MAX_REPLAY_CLOCK_HZ:g}] "
                          "(default 100 when given); "
-                         "the recorded /clock is then not replayed")
+                         "the recorded /clock is then not replayed (without --clock it is)")
     rp.add_argument("--wait-for-subscribers", type=number_in(0, WAIT_FOR_SUBSCRIBERS_MAX_S, low_open=False),
                     default=0.0, metavar="SECONDS",
                     help=f"before playing, wait up to SECONDS (at most {WAIT_FOR_SUBSCRIBERS_MAX_S:g}; 0: no wait) "

@@ -140,6 +140,7 @@ def _bag(tmp_path: Path) -> Path:
 REPLAY_CASES = [(["--rate", "0"], "--rate"), (["--rate", "nan"], "--rate"), (["--start-offset", "-1"], "--start-offset"),
                 (["--queue-depth", "0"], "--queue-depth"), (["--wait-for-subscribers", "inf"], "--wait-for-subscribers"),
                 (["--live-hz", "5"], "--live-hz"), (["--clock", "-100"], "--clock"),
+                (["--clock", "0"], "--clock: must be in (0, 1000]"),   # was accepted: silently no /clock
                 (["--config", "garbage.bin"], "--config")]   # without --live: was silently ignored
 
 
