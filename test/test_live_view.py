@@ -244,6 +244,46 @@ def test_live_options_are_checked_before_anything_starts():
     check_live_options("127.0.0.1", 0)
 
 
+def _ipv6_loopback() -> bool:
+    try:
+        with socket.socket(socket.AF_INET6) as s:
+            s.bind(("::1", 0))
+        return True
+    except OSError:
+        return False
+
+
+@pytest.mark.skipif(not _ipv6_loopback(), reason="no IPv6 loopback here")
+def test_an_ipv6_host_is_bracketed_in_the_url_and_its_port_taken_named_so():
+    """--live-host ::1 printed 'LIVE ws://::1:PORT', which no client parses: now ws://[::1]:PORT."""
+    server = LiveServer(live_channels(), host="::1", port=0)
+    try:
+        assert server.url == f"ws://[::1]:{server.port}"
+    finally:
+        server.stop()
+    with socket.socket(socket.AF_INET6) as s:
+        s.bind(("::1", 0))
+        s.listen()
+        with pytest.raises(ConfigError, match=r"^live_port: cannot serve on \[::1\]:\d+ \(in use\)"):
+            check_live_options("::1", s.getsockname()[1])
+
+
+@pytest.mark.parametrize("host", ["fe80::1", "192.0.2.1"])   # link-local without its interface; not this machine's
+def test_a_host_that_cannot_be_bound_is_named_live_host_not_live(tmp_path, host):
+    """'--live: cannot serve on fe80::1:0 (Invalid argument)' named the port's flag for the address's fault."""
+    from cli_runner import run_cli
+
+    with pytest.raises(ConfigError, match=f"^live_host: cannot serve on {host} ") as err:
+        check_live_options(host, 0)
+    assert err.value.setting == "live_host"
+    (tmp_path / "bag").mkdir()
+    for command in (("replay", tmp_path / "bag"), ("launch", "--duration", "0.1", "--out", tmp_path / "out")):
+        r = run_cli(*command, "--live", "0", "--live-host", host)
+        assert r.returncode == 2 and r.stderr.startswith(f"pa10-dnbs: error: --live-host: cannot serve on {host} "), \
+            r.stderr
+        assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "out").exists(), r.stderr
+
+
 
 # ------------------------------------------------------------------ the layout file
 def _leaves(tree):

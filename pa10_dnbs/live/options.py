@@ -2,10 +2,16 @@
 (live_port, live_host, live_hz; the command line names its flag)."""
 from __future__ import annotations
 
+import errno
 import math
 import socket
 
 from ..config import ConfigError
+
+
+def host_port(host: str, port: int) -> str:
+    """``host:port`` as a URL writes it: an IPv6 address in brackets (``[::1]:8765``)."""
+    return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
 
 
 def check_live_options(host: str, port: int, display_hz: float = 50.0) -> None:
@@ -23,6 +29,12 @@ def check_live_options(host: str, port: int, display_hz: float = 50.0) -> None:
         s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
             s.bind(addr)
-        except OSError as exc:
-            what = "in use" if exc.errno == 98 else exc.strerror
-            raise ConfigError(f"live_port: cannot serve on {host}:{port} ({what})", setting="live_port") from None
+        except OSError as exc:   # the port taken or not ours to take: live_port; else the address: live_host
+            if exc.errno in (errno.EADDRINUSE, errno.EACCES):
+                what = "in use" if exc.errno == errno.EADDRINUSE else exc.strerror
+                raise ConfigError(f"live_port: cannot serve on {host_port(host, port)} ({what})",
+                                  setting="live_port") from None
+            raise ConfigError(f"live_host: cannot serve on {host} ({exc.strerror}): not an address this machine "
+                              "listens on" + (" (a link-local one needs its interface, e.g. fe80::1%eth0)"
+                                              if host.lower().startswith("fe80:") and "%" not in host else ""),
+                              setting="live_host") from None

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import threading
 
+from .options import host_port
 from .schemas import ChannelSpec
 
 SUBPROTOCOL = "foxglove.sdk.v1"
@@ -51,13 +52,13 @@ class LiveServer:
                                                  server_listener=_Listener(self), context=self._ctx,
                                                  message_backlog_size=backlog)
         except Exception as exc:  # the SDK raises its own error types for bind failures
-            raise LiveServerError(f"cannot serve the live view on {host}:{port}: {exc}") from None
+            raise LiveServerError(f"cannot serve the live view on {host_port(host, port)}: {exc}") from None
         self.host = host
         self.port = self._server.port
 
     @property
     def url(self) -> str:
-        return f"ws://{self.host}:{self.port}"
+        return f"ws://{host_port(self.host, self.port)}"
 
     def _on_subscribe(self, topic: str) -> None:  # called on the SDK's thread
         with self._lock:
