@@ -145,3 +145,21 @@ def test_the_bus_looks_for_the_robots_clock_until_discovery_has_had_its_time():
     assert not publisher_seen(later([0]), CLOCK_DISCOVERY_S, **tick) and t[0] >= CLOCK_DISCOVERY_S   # hardware
     t[0] = 0.0
     assert publisher_seen(later([1]), CLOCK_DISCOVERY_S, **tick) and t[0] == 0.0   # seen at once: no wait
+
+
+def test_the_robots_warning_of_a_command_lacking_joints_names_the_arms_and_the_commands():
+    """robot --arm iiwa fed PA10 commands said 'a command without every joint of the arm (s1, ..., w2)': the
+    command's joints, as if they were the arm's."""
+    from types import SimpleNamespace
+
+    from pa10_dnbs.ros.mujoco_robot_node import MuJoCoRobotNode
+
+    said = []
+    node = SimpleNamespace(_index_of={}, joint_names=("a1", "a2", "a3"),
+                           get_logger=lambda: SimpleNamespace(warning=said.append))
+    assert MuJoCoRobotNode._efforts(node, ["s1", "a2"], [0.0, 1.0]) is None
+    assert said == ["a command without every joint of the arm: the arm's joints are a1, a2, a3; the command names "
+                    "s1, a2 (missing a1, a3): ignored"]
+    assert MuJoCoRobotNode._efforts(node, ["a3", "a1", "a2"], [3.0, 1.0, 2.0]) == [1.0, 2.0, 3.0]
+    assert MuJoCoRobotNode._efforts(node, [], []) is None
+    assert said[-1].endswith("the command names none (missing a1, a2, a3): ignored")

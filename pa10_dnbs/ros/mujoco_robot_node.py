@@ -110,8 +110,7 @@ class MuJoCoRobotNode(Node):
             self._index_of[key] = [where[j] for j in self.joint_names] if all(j in where for j in self.joint_names) \
                 else None
             if self._index_of[key] is None:
-                self.get_logger().warning(f"a command without every joint of the arm ({', '.join(key) or 'none'}): "
-                                          "ignored")
+                self.get_logger().warning(missing_joints_text(self.joint_names, key))
         idx = self._index_of[key]
         if idx is None or len(effort) < len(key):
             return None
@@ -221,6 +220,13 @@ class MuJoCoRobotNode(Node):
         print(self.summary(), flush=True)
         self._wait_set.destroy()
         self._close_plant()
+
+
+def missing_joints_text(arm_joints, command_joints) -> str:
+    """The warning for a command lacking some of the arm's joints: the arm's, the command's, and which lack."""
+    missing = [j for j in arm_joints if j not in set(command_joints)]
+    return (f"a command without every joint of the arm: the arm's joints are {', '.join(arm_joints)}; the command "
+            f"names {', '.join(command_joints) or 'none'} (missing {', '.join(missing)}): ignored")
 
 
 def main(args=None) -> NoReturn:
