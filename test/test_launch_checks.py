@@ -271,3 +271,13 @@ def test_a_config_step_the_default_clock_rate_does_not_fit_names_the_step_not_th
     assert line.startswith("pa10-dnbs: error: --clock-hz: must be in"), line
     assert not (tmp_path / "out").exists()
     _no_pa10_children()
+
+
+@pytest.mark.parametrize("value", [",", "", " , "])
+def test_an_empty_fault_joints_list_is_said_to_be_empty(tmp_path, value):
+    """',' said "--fault-joints: unknown joint '(none)'"; '' silently meant every joint."""
+    line = _refused(run_cli("launch", "--duration", "0.1", "--out", tmp_path / "out", "--drop-states", "0.1",
+                            "--fault-joints", value), ["--fault-joints: the list names no joint", repr(value)])
+    assert "(none)" not in line
+    assert not (tmp_path / "out").exists()
+    _no_pa10_children()

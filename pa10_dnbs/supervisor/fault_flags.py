@@ -87,12 +87,14 @@ def apply_fault_flags(settings: Settings, args: FaultFlags) -> Settings:
     """``settings`` with the fault flags ``args`` applied (validated again)."""
     joint_names = settings.arm.joint_names
     faults = settings.to_config()["faults"]
-    if args.fault_joints:
+    if args.fault_joints is not None:
         names = [n.strip() for n in args.fault_joints.split(",") if n.strip()]
+        if not names:   # '', ',' or ' , ': not "all joints", nor an unknown joint named '(none)'
+            raise ConfigError(f"--fault-joints: the list names no joint, got {args.fault_joints!r} (give one or more "
+                              f"of {', '.join(joint_names)}, comma-separated; without the flag: every joint)")
         bad = [n for n in names if n not in joint_names]
-        if bad or not names:
-            raise ConfigError(f"--fault-joints: unknown joint {bad[0] if bad else '(none)'!r} "
-                              f"(joints: {', '.join(joint_names)})")
+        if bad:
+            raise ConfigError(f"--fault-joints: unknown joint {bad[0]!r} (joints: {', '.join(joint_names)})")
         joints = [joint_names.index(n) for n in names]
     else:
         joints = list(range(len(joint_names)))
