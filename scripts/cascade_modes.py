@@ -26,12 +26,12 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from flag_values import arm_settings  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser, positive  # noqa: E402
-from pa10_dnbs.config import ConfigError, default_config_path  # noqa: E402
 from pa10_dnbs.core.reference import Reference  # noqa: E402
 from pa10_dnbs.plant.from_config import opened_plant, plant_params  # noqa: E402
-from pa10_dnbs.run_settings import build_settings  # noqa: E402
 
 POSE_STEP_S = 0.05
 DIFF_STEP = 1e-4   # rad, rad/s: central differences of the bias torques
@@ -90,10 +90,7 @@ def main() -> int:
     ap.add_argument("--ekf-gain", type=positive, default=None,
                     help="K of the bias's EKF (default: the torque network's steady gain from its q and r)")
     a = ap.parse_args()
-    try:
-        settings = build_settings(default_config_path(), a.arm, report=False)
-    except ConfigError as exc:  # ArmError included: a missing or bad arm, in one line
-        ap.error(f"argument --arm: {exc}")
+    settings = arm_settings(ap, a.arm)
     arm, run, ref_s = settings.arm, settings.simulation, settings.reference
     rt, tn = settings.dnbs.remedies.robust_term, settings.dnbs.torque_net
     k_a, k_u = np.asarray(rt.alpha_gain_per_s, float), np.asarray(rt.torque_gain_nms_per_rad, float)

@@ -26,10 +26,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from flag_values import list_of  # noqa: E402
+from flag_values import arm_settings, list_of  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser, positive, seconds, whole_in  # noqa: E402
-from pa10_dnbs.config import ConfigError, default_config_path  # noqa: E402
-from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.sim import closed_loop  # noqa: E402
 from pa10_dnbs.study.scenarios import scenario_settings  # noqa: E402
 
@@ -87,10 +85,7 @@ def main() -> int:
     ap.add_argument("--cutoffs", type=list_of(positive, allow_empty=True), default="200,50",
                     help="velocity low-pass cut-offs to try [rad/s]")
     a = ap.parse_args()
-    try:
-        settings = build_settings(default_config_path(), a.arm, report=False)
-    except ConfigError as exc:  # ArmError included: a missing or bad arm, in one line
-        ap.error(f"argument --arm: {exc}")
+    settings = arm_settings(ap, a.arm)
     _, dist = scenario_settings(settings, "encoder_noise", 0)
     gain = kalman_gain(settings.simulation.dt_s, dist.position_noise_std_rad, dist.velocity_noise_std_rad_s)
     variants = [("none", None), (f"position (L = {gain:.4f})", (gain, None))]

@@ -41,6 +41,18 @@ def list_of(item: Callable[[str], object], allow_empty: bool = False):
     return check
 
 
+def arm_settings(ap: argparse.ArgumentParser, arm: str):
+    """The default config's settings on ``arm`` (a preset's name, an arm file or a URDF), the rules' table not
+    printed; a missing or bad arm is ``ap``'s one-line error naming --arm (exit 2)."""
+    from pa10_dnbs.config import ConfigError, default_config_path
+    from pa10_dnbs.run_settings import build_settings
+
+    try:
+        return build_settings(default_config_path(), arm, report=False)
+    except ConfigError as exc:  # ArmError included
+        ap.error(f"argument --arm: {exc}")
+
+
 def folder(text: str) -> Path:
     """A folder to keep output in: an existing directory, or a path to make one at (not an existing file)."""
     path = Path(text)
