@@ -30,3 +30,9 @@ def run_steps(duration_s: float, dt_s: float, setting: str = "duration_s") -> in
     if n_steps < 2:
         raise ConfigError(f"{setting}: {duration_s} s is shorter than two steps", setting=setting)
     return n_steps
+
+
+def run_duration(given_s: float | None, config_s: float, flag: str = "duration_s") -> tuple[float, str]:
+    """(the run's duration [s], the setting its errors name): the command's ``given_s`` (--duration, named
+    ``flag``) or, when None, the config's ``config_s`` (named simulation.duration_s)."""
+    return (config_s, "simulation.duration_s") if given_s is None else (given_s, flag)

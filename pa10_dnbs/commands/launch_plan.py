@@ -18,7 +18,7 @@ from ..report.metrics_file import metrics_settings
 from ..report.outputs import check_output_dir
 from ..run_settings import built_settings_held, say_rules
 from ..run_size import check_run_size, say_note
-from ..run_steps import run_steps
+from ..run_steps import run_duration, run_steps
 from ..settings import Settings
 from ..supervisor.domain_ids import shell_domain
 from ..supervisor.fault_flags import apply_fault_flags, check_kill_times
@@ -74,7 +74,7 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
     except ValueError as exc:
         raise ConfigError(f"--namespace: {exc}") from None
     namespaces = parse_netns(list(o.netns))
-    duration_s = settings.simulation.duration_s if o.duration_s is None else o.duration_s
+    duration_s, given = run_duration(o.duration_s, settings.simulation.duration_s, "--duration")
     own_robot = o.plant == "mujoco"
     robot = plant_robot_options(o.plant, o.robot, o.mode)
     robot_fields = check_robot_options(robot, o.mode, namespace) if robot is not None else {}
@@ -85,7 +85,6 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
         domain_id = shell_domain("the robot's domain")
     dt = settings.simulation.dt_s
     clock_hz = checked_clock_hz(o.clock_hz, dt, off_allowed=False)   # None: the default, which dt may not fit
-    given = "simulation.duration_s" if o.duration_s is None else "--duration"   # the config's, or the flag
     n_steps = run_steps(duration_s, dt, given)
     check_kill_times(settings.faults, joint_names, n_steps * dt, o.faults.kill)  # before any node starts
     check_run_size(duration_s, n_steps, len(joint_names), graph=True, say=say_note, setting=given,

@@ -17,7 +17,7 @@ from ..report.outputs import atomic_output_dir, check_output_dir, finished_outpu
 from ..report.partial import partial_banner, write_partial_mark
 from ..run_settings import built_settings_held, say_rules
 from ..run_size import check_run_size, say_note
-from ..run_steps import run_steps
+from ..run_steps import run_duration, run_steps
 from ..sim.closed_loop import simulate
 from ..supervisor.fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
 from ..trajectory_file import load_trajectory_file
@@ -37,8 +37,7 @@ def run_simulate(options: SimulateOptions) -> int:
     # the settings, built once: config file(s), arm file, rules (their table said once the inputs are accepted)
     settings, rules = built_settings_held(config_path, o.arm)
     the_arm = settings.arm
-    duration_s = settings.simulation.duration_s if o.duration_s is None else o.duration_s
-    given = "simulation.duration_s" if o.duration_s is None else "duration_s"   # the config's, or --duration
+    duration_s, given = run_duration(o.duration_s, settings.simulation.duration_s)   # --duration, or the config's
     n_steps = run_steps(duration_s, settings.simulation.dt_s, given)
     duration_s = n_steps * settings.simulation.dt_s
     kinds = CHOICES[o.controller]

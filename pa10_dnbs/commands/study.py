@@ -15,7 +15,7 @@ from ..interrupt import AFTER_LINE, EXIT_INTERRUPTED, on_second_sigint, outputs_
 from ..report.outputs import atomic_output_dir, check_output_dir, finished_output_dir
 from ..report.progress import ProgressBar
 from ..run_settings import built_settings_held, say_rules
-from ..run_steps import run_steps
+from ..run_steps import run_duration, run_steps
 from ..run_size import check_run_size, say_note
 from ..supervisor.fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
 from ..sim.closed_loop import CONTROLLERS
@@ -37,8 +37,7 @@ def run_study_command(options: StudyOptions) -> int:
     config_path = Path(o.config_path) if o.config_path else default_config_path()
     # the settings, built once: config file(s), arm file, rules (their table said once the inputs are accepted)
     settings, rules = built_settings_held(config_path, o.arm)
-    duration_s = settings.simulation.duration_s if o.duration_s is None else o.duration_s
-    given = "simulation.duration_s" if o.duration_s is None else "duration_s"   # the config's, or --duration
+    duration_s, given = run_duration(o.duration_s, settings.simulation.duration_s)   # --duration, or the config's
     n_runs, n_steps = len(scen) * len(ctrl) * o.seeds, run_steps(duration_s, settings.simulation.dt_s, given)
     at_once = 1 if o.scheduler is not None else min(n_runs, o.jobs or os.cpu_count() or 1)
     check_run_size(duration_s, n_steps, settings.n_joints, at_once=at_once,

@@ -32,7 +32,7 @@ from ..tune.report import held_out_table, held_out_verdict, tune_figures, tune_m
 from ..tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 from ..tune.space import select, start_values
 from ..run_settings import built_settings_held, say_rules
-from ..run_steps import run_steps
+from ..run_steps import run_duration, run_steps
 from ..tune.tuner import (TrialProgress, TuneSpec, arm_digest, check_persistent, check_storage_file, completed,
                           held_out, open_storage, open_study, optimize, refusal, settings_digest, storage_key,
                           stored_identity, study_lock_key)
@@ -120,8 +120,7 @@ def _checks(o: TuneOptions, say) -> dict:
         except ConfigError as exc:
             raise ConfigError(f"{exc} (the held-out runs take every scenario; --held-out-seeds 0 leaves them out)") \
                 from None
-    duration_s = base.simulation.duration_s if o.duration_s is None else o.duration_s
-    given = "simulation.duration_s" if o.duration_s is None else "duration_s"   # the config's, or --duration
+    duration_s, given = run_duration(o.duration_s, base.simulation.duration_s)   # --duration, or the config's
     n_steps = run_steps(duration_s, base.simulation.dt_s, given)
     runs_per_trial = len(train) * o.seeds
     jobs = o.jobs or os.cpu_count() or 1
