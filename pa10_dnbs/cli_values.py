@@ -10,8 +10,9 @@ import argparse
 import math
 import re
 import sys
-import unicodedata
 from pathlib import Path
+
+from .config_error import control_char
 
 #: replay --clock's bound [Hz of wall time]: a /clock at most every millisecond (the plant's step on every preset),
 #: a rate the player's publisher keeps; a faster one only delays the bag's messages
@@ -45,7 +46,7 @@ def path_arg(text: str) -> Path:
     folder), no control character (a newline would split every line that names the path)."""
     if not text:
         raise argparse.ArgumentTypeError("empty: a path is needed (an unset shell variable?)")
-    if control := next((c for c in text if unicodedata.category(c) == "Cc"), None):
+    if control := control_char(text):
         raise argparse.ArgumentTypeError(f"{text!r} holds a control character ({control!r}): rename it")
     return Path(utf8_text(text))
 

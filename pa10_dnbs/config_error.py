@@ -2,6 +2,8 @@
 setting."""
 from __future__ import annotations
 
+import unicodedata
+
 
 class ConfigError(ValueError):
     """A configuration value is missing, unknown, or invalid; the message names the key.
@@ -66,3 +68,9 @@ def too_large(value: int) -> str:
     bits = abs(value).bit_length()
     digits = len(str(abs(value))) if bits <= 14_000 else f"about {int(bits * 0.30103)}"
     return f"a whole number of {digits} digits is too large (at most ~1.8e308)"
+
+
+def control_char(text: str) -> str | None:
+    """The first control character of ``text`` (a newline, a tab, ...: it would split a line that prints it), or
+    None."""
+    return next((c for c in text if unicodedata.category(c) == "Cc"), None)

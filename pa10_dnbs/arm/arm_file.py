@@ -12,13 +12,12 @@ import copyreg
 import functools
 import math
 import sys
-import unicodedata
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 
-from ..config_error import first_unknown, short, too_large
+from ..config_error import control_char, first_unknown, short, too_large
 from ..config_yaml import read_yaml
 from ..kinematics.urdf_chain import UrdfChain
 from ..kinematics.urdf_tree import UrdfError
@@ -75,7 +74,7 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
         if not isinstance(value, str):
             raise ArmError(f"{path}: {key}: expected a text, got {short(value)}")
         # (around it, whitespace is dropped: YAML's folded > ends in a newline)
-        if control := next((c for c in value.strip() if unicodedata.category(c) == "Cc"), None):
+        if control := control_char(value.strip()):
             raise ArmError(f"{path}: {key}: holds a control character ({control!r}), which would split the lines "
                            "it is printed in")
     urdf = path if bare else existing_file(_urdf_path(path, raw), f"{path}: urdf")
@@ -230,7 +229,7 @@ def _unfit_file_name(name: str) -> str | None:
     for char, called in (("/", "'/'"), ("\0", "a NUL character")):
         if char in name:
             return f"it holds {called}"
-    if control := next((c for c in name if unicodedata.category(c) == "Cc"), None):   # a newline, a tab, ...
+    if control := control_char(name):
         return f"it holds a control character ({control!r}), which would split a file's name and a message's line"
     if name in (".", ".."):
         return f"{name!r} names a folder"
