@@ -32,6 +32,7 @@ from .polled import PolledSubscription, SubscriptionWaitSet
 
 SLICE_S = 0.05  # longest single wait for a robot state: the stop request is checked at least this often
 STATE_DEPTH = 100  # robot states kept between two takes
+SAFE_WAIT_S = 1.0   # wall time [s] a fault's safe command waits for a matched robot, then for its acknowledgement
 OFF_GRID_TOLERANCE_NS = 1000  # lockstep: a new state's stamp may differ from the last one + dt by this much [ns]
 COMMANDERS_CHECK_S = 0.2  # wall time between two looks for another publisher on the command topic
 
@@ -241,8 +242,15 @@ class RemoteRobot:
         return wait_acked([self._pub], timeout_s)
 
     def fault(self, message: str):
-        """Send the safe command, then raise RobotFault(``message``)."""
+        """Send the safe command, then raise RobotFault(``message``). A fault at the start (a rival seen with the
+        first state) can come before discovery has matched the robot's command subscriber, and the bus exits right
+        after: the command is sent once one is matched and waited on until acknowledged, SAFE_WAIT_S each at most
+        (once in 3 full test runs the robot never got it)."""
+        end = time.monotonic() + SAFE_WAIT_S
+        while self._pub.get_subscription_count() == 0 and time.monotonic() < end:
+            time.sleep(0.01)
         self.send_safe()
+        wait_acked([self._pub], SAFE_WAIT_S)
         raise RobotFault(message)
 
     def step(self, tau) -> None:
