@@ -188,7 +188,7 @@ def test_a_stamp_within_range_is_carried_exactly():
 def test_ctrl_c_while_the_sender_waits_is_one_line_and_130(domain):
     sender = Proc([sys.executable, "-m", "pa10_dnbs.ros.trajectory_sender", EXAMPLE, "--wait", "60"], domain)
     try:
-        sender.wait_for(r"waiting up to 60 s for a subscriber on /pa10/trajectory", timeout=60)
+        sender.wait_for(r"waiting for a graph that takes trajectories", timeout=60)
         started = time.monotonic()
         sender.interrupt()
         rc = sender.wait(timeout=30)
@@ -251,3 +251,43 @@ def test_a_pipe_or_a_device_is_refused_unread(tmp_path):
                                                                    f"regular file (a pipe or a device): give the path "
                                                                    f"of a file"), r.stderr[-500:]
         assert not (tmp_path / "o").exists()
+
+
+def _listener(domain, *namespaces):
+    listener = Proc([sys.executable, REPO / "test" / "trajectory_listener.py", domain, *namespaces], domain)
+    listener.wait_for("LISTENING", timeout=60)
+    return listener
+
+
+@pytest.mark.graph
+def test_without_namespace_the_sender_finds_the_graph_of_another_arm(domain):
+    """A graph of the Panda (/panda) takes the file with no --namespace given; the sender used to send to /pa10
+    whatever the arm, and waited there until --wait ran out (exit 1)."""
+    listener = _listener(domain, "/panda")
+    sender = Proc([sys.executable, "-m", "pa10_dnbs.ros.trajectory_sender", EXAMPLE, "--wait", "60"], domain)
+    try:
+        rc = sender.wait(timeout=90)
+        listener.wait_for("GOT /panda/trajectory", timeout=30)
+    finally:
+        sender.kill()
+        listener.interrupt()
+        listener.wait(timeout=30)
+    assert rc == 0, sender.output
+    assert sender.lines[-1] == f"sent {EXAMPLE} at /clock 0.000 s", sender.output
+
+
+@pytest.mark.graph
+def test_without_namespace_two_graphs_are_one_line_naming_both(domain):
+    listener = _listener(domain, "/panda", "/iiwa")
+    sender = Proc([sys.executable, "-m", "pa10_dnbs.ros.trajectory_sender", EXAMPLE, "--wait", "60"], domain)
+    try:
+        rc = sender.wait(timeout=90)
+    finally:
+        sender.kill()
+        listener.interrupt()
+        listener.wait(timeout=30)
+    assert rc == 2, sender.output
+    err = [x for x in sender.lines if "error" in x]
+    assert err == ["trajectory_sender: error: several graphs take trajectories (/iiwa/trajectory, "
+                   "/panda/trajectory): give --namespace"], sender.output
+    assert not any(x.startswith("sent ") for x in sender.lines) and "GOT" not in listener.output, listener.output

@@ -1,11 +1,13 @@
 """Send JointTrajectory files to a running graph's reference node, on <ns>/trajectory, one after another.
 
-    python -m pa10_dnbs.ros.trajectory_sender FILE [FILE ...] [--namespace /pa10] [--after-clock S]
+    python -m pa10_dnbs.ros.trajectory_sender FILE [FILE ...] [--namespace NS] [--after-clock S]
                                                 [--gap S | --clock-gap S] [--stamp S] [--wait S]
 
 Each file (YAML or JSON, docs/trajectories.md) goes out as a trajectory_msgs/JointTrajectory exactly as
 written: the sender reads its fields but does not check them against an arm, so the reference node is the one
-that accepts or refuses it (its log says which, in one line). It waits until the reference node's
+that accepts or refuses it (its log says which, in one line). Without ``--namespace`` it sends to the one graph
+on the wire that takes trajectories (a ``<ns>/trajectory`` topic of JointTrajectory with a subscriber; several:
+exit 2 naming them, --namespace picks one). It waits until the reference node's
 subscription has matched (``--wait`` s of wall time, else exit 1), and with ``--after-clock S`` until /clock
 has reached S s of simulated time; then it sends the files in order, ``--gap`` s of wall time apart, or
 ``--clock-gap`` s of simulated time apart (/clock: independent of how fast the graph runs), reliable, so none
@@ -37,7 +39,7 @@ from ..core.joint_trajectory import JointTrajectory as Trajectory
 from ..core.joint_trajectory import TrajectoryError
 from ..interrupt import EXIT_INTERRUPTED
 from ..trajectory_file import read_sendable
-from ..wire.topics import CLOCK, DEFAULT_NS, TRAJECTORY, check_topic_name, resolve
+from ..wire.topics import CLOCK, TRAJECTORY, check_topic_name, resolve
 from .reference_node import TRAJECTORY_QOS
 from .shm_cleanup import remove_stale, shm_files
 
@@ -45,6 +47,7 @@ from .shm_cleanup import remove_stale, shm_files
 INT32_MAX = 2**31 - 1   # builtin_interfaces Time/Duration sec is an int32: a larger one wraps on the wire
 MAX_WAIT_S = 3600.0     # the longest --wait [s]
 SAY_WAITING_S = 1.0     # a wait for the subscriber or /clock longer than this is said in one line (stderr)
+SETTLE_S = 0.5          # without --namespace: a graph found is taken once no second one has shown up for this [s]
 
 
 def _stamp_ns(stamp_s: float) -> int:
@@ -59,10 +62,11 @@ def _stamp_ns(stamp_s: float) -> int:
 
 def check_args(args) -> None:
     """ValueError (one line naming the flag) for a flag out of range; nothing of ROS has started yet."""
-    try:
-        check_topic_name(args.namespace)
-    except ValueError as exc:
-        raise ValueError(f"--namespace: {exc}") from None
+    if args.namespace is not None:
+        try:
+            check_topic_name(args.namespace)
+        except ValueError as exc:
+            raise ValueError(f"--namespace: {exc}") from None
     if not (math.isfinite(args.wait) and 0 < args.wait <= MAX_WAIT_S):
         raise ValueError(f"--wait: expected seconds in (0, {MAX_WAIT_S:g}], got {args.wait:g}")
     for flag in ("after_clock", "gap", "clock_gap"):
@@ -94,7 +98,9 @@ def message(traj: Trajectory, stamp_s: float) -> JointTrajectory:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="trajectory_sender", description=__doc__.splitlines()[0])
     ap.add_argument("files", nargs="+", type=Path, metavar="FILE")
-    ap.add_argument("--namespace", default=DEFAULT_NS, help="the arm's namespace (default /pa10)")
+    ap.add_argument("--namespace", default=None, metavar="NS",
+                    help="the arm's namespace, e.g. /panda (default: the one graph on the wire that takes "
+                         "trajectories)")
     ap.add_argument("--after-clock", type=plain_float, default=0.0, metavar="S",
                     help="send once /clock has reached S seconds of simulated time (default 0: at once)")
     gaps = ap.add_mutually_exclusive_group()
@@ -134,14 +140,65 @@ def main(argv=None) -> int:
         remove_stale(shm_files(), ignore_pids=frozenset({os.getpid()}))
 
 
+TRAJECTORY_TYPE = "trajectory_msgs/msg/JointTrajectory"
+
+
+def trajectory_topics(node) -> list[str]:
+    """The ``<ns>/trajectory`` topics of JointTrajectory that some node subscribes to (a graph's reference
+    node), sorted; what this node's discovery has seen so far."""
+    tail = "/" + TRAJECTORY
+    return sorted(name for name, types in node.get_topic_names_and_types()
+                  if name.endswith(tail) and len(name) > len(tail) and TRAJECTORY_TYPE in types
+                  and node.count_subscribers(name) > 0)
+
+
+class SeveralGraphs(Exception):
+    """More than one graph takes trajectories and no --namespace says which."""
+
+
+def _found_topic(node, deadline: float) -> str | None:
+    """The one graph's trajectory topic, found by discovery before ``deadline`` (time.monotonic()); None if
+    none was seen; SeveralGraphs if more than one was (all seen within a last SETTLE_S, so that a second graph
+    still being discovered is not missed for the first)."""
+    say_at = time.monotonic() + SAY_WAITING_S
+    first_seen = None
+    while time.monotonic() < deadline:
+        found = trajectory_topics(node)
+        if len(found) > 1:
+            raise SeveralGraphs(", ".join(found))
+        if found:
+            first_seen = first_seen or time.monotonic()
+            if time.monotonic() - first_seen >= SETTLE_S:
+                return found[0]
+        if say_at is not None and time.monotonic() > say_at:
+            print("trajectory_sender: waiting for a graph that takes trajectories (a <ns>/trajectory subscriber)",
+                  file=sys.stderr, flush=True)
+            say_at = None
+        rclpy.spin_once(node, timeout_sec=0.05)
+    found = trajectory_topics(node)
+    return found[0] if len(found) == 1 else None
+
+
 def _send(node, msgs, args) -> int:
-    topic = resolve(TRAJECTORY, args.namespace)
+    deadline = time.monotonic() + args.wait
+    if args.namespace is None:
+        try:
+            topic = _found_topic(node, deadline)
+        except SeveralGraphs as exc:
+            print(f"trajectory_sender: error: several graphs take trajectories ({exc}): give --namespace",
+                  file=sys.stderr, flush=True)
+            return 2
+        if topic is None:
+            print(f"trajectory_sender: no graph that takes trajectories (a <ns>/trajectory subscriber) after "
+                  f"{args.wait:g} s", file=sys.stderr, flush=True)
+            return 1
+    else:
+        topic = resolve(TRAJECTORY, args.namespace)
     pub = node.create_publisher(JointTrajectory, topic, TRAJECTORY_QOS)
     clock = [-1.0]
     node.create_subscription(Clock, CLOCK, lambda m: clock.__setitem__(0, m.clock.sec + m.clock.nanosec * 1e-9),
                              QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
                                         reliability=ReliabilityPolicy.BEST_EFFORT))
-    deadline = time.monotonic() + args.wait
     say_at = time.monotonic() + SAY_WAITING_S
     while pub.get_subscription_count() < 1 or clock[0] < args.after_clock:
         if say_at is not None and time.monotonic() > say_at:
