@@ -108,3 +108,30 @@ def test_the_readme_table_has_one_line_per_arm_with_both_modes():
     assert len(lines) == 4
     assert lines[2] == "| a | 3.0e-03 / 2.0e+00! / 1.0e-05 | 1.0e-05 / 1.0e-03 / 1.0e-05 | never / 0.12 |"
     assert lines[3] == "| b | refused | - | - / - |"
+
+
+def test_steps_at_a_limit_after_startup_are_the_steps_the_metrics_count(_default_cfg):
+    """The collection's count of steps at a limit after startup is the metrics' own (core/metrics.at_limit from
+    first_step(startup_s)): a torque at its limit at step 200 (t = 0.2 s = startup_s, 0.2 / 0.001 rounding up
+    to 200.00000000000003) and one 1e-10 of the limit short of it both count, as saturated_fraction_after_s
+    counts them (it used to skip step 200 and ask 1 - 1e-12 of the limit)."""
+    import numpy as np
+
+    from pa10_dnbs.report.metrics_file import metrics_dict, metrics_settings
+    from pa10_dnbs.run_data import RunData
+    from pa10_dnbs.study.collection import _controller_figures
+
+    s = _default_cfg
+    n, nj = 1000, s.n_joints
+    lim = np.asarray(s.plant.torque_limit_nm, float)
+    tau = np.zeros((n, nj))
+    start = int(round(s.metrics.startup_s / s.simulation.dt_s))
+    tau[start, 0] = lim[0]
+    tau[start + 10, 1] = -lim[1] * (1 - 1e-10)
+    zeros = np.zeros((n, nj))
+    run = RunData("dnbs", s.simulation.dt_s, tuple(s.arm.joint_names), lim, zeros, zeros, zeros, tau)
+    figures = _controller_figures(run, s, n * s.simulation.dt_s)
+    m = metrics_dict(run, metrics_settings(s, n * s.simulation.dt_s))
+    after = n - start
+    counted = round(sum(j["saturated_fraction_after_s"] for j in m["joints"]) * after)
+    assert figures["steps_at_limit_after_startup"] == counted == 2, (figures, counted)

@@ -9,6 +9,20 @@ from __future__ import annotations
 import numpy as np
 
 DIVERGED_RAD = 1.0   # a tracking error |e| above this [rad], or a non-finite sample: the run diverged
+AT_LIMIT_FRACTION = 1.0 - 1e-9   # |tau| at or above this fraction of its limit: the step is at the limit
+
+
+def first_step(t_s: float, dt_s: float) -> int:
+    """The first sample k with k dt_s >= t_s [s], a t_s on the grid up to rounding included (0.2 / 0.001 is
+    200.00000000000003: step 200)."""
+    return int(np.ceil(t_s / dt_s - 1e-9))
+
+
+def at_limit(torque_nm: np.ndarray, torque_limit_nm) -> np.ndarray:
+    """Bool, the shape of ``torque_nm`` (n_steps, n_joints) [N m]: the torque at its joint's limit (n_joints,)
+    [N m] (AT_LIMIT_FRACTION); a NaN torque is not."""
+    with np.errstate(invalid="ignore"):
+        return np.abs(torque_nm) >= np.asarray(torque_limit_nm, dtype=float) * AT_LIMIT_FRACTION
 
 
 def window_slice(n_steps: int, dt_s: float, window_s: tuple[float, float]) -> slice:
@@ -16,8 +30,8 @@ def window_slice(n_steps: int, dt_s: float, window_s: tuple[float, float]) -> sl
     t0, t1 = window_s
     if not (0.0 <= t0 < t1):
         raise ValueError(f"window must satisfy 0 <= t0 < t1, got {window_s}")
-    k0 = int(np.ceil(t0 / dt_s - 1e-9))
-    k1 = min(n_steps, int(np.ceil(t1 / dt_s - 1e-9)))
+    k0 = first_step(t0, dt_s)
+    k1 = min(n_steps, first_step(t1, dt_s))
     if k1 <= k0:
         raise ValueError(f"window {window_s} s holds no sample of a {n_steps * dt_s:g} s run")
     return slice(k0, k1)
@@ -27,7 +41,7 @@ def joint_metrics(error_rad: np.ndarray, torque_nm: np.ndarray, torque_limit_nm,
                   dt_s: float, window_s: tuple[float, float]) -> list[dict]:
     """Per joint: RMS and max |error| in the window, max |torque| and saturated fraction over the run.
 
-    A step counts as saturated when |torque| >= limit * (1 - 1e-9).
+    A step counts as saturated when |torque| >= limit * AT_LIMIT_FRACTION (:func:`at_limit`).
     """
     error_rad = np.asarray(error_rad, dtype=float)
     torque_nm = np.asarray(torque_nm, dtype=float)
@@ -38,7 +52,7 @@ def joint_metrics(error_rad: np.ndarray, torque_nm: np.ndarray, torque_limit_nm,
         rms = np.sqrt(np.mean(ew**2, axis=0))
     emax = np.max(np.abs(ew), axis=0)
     tmax = np.max(np.abs(torque_nm), axis=0)
-    sat = np.mean(np.abs(torque_nm) >= limit * (1.0 - 1e-9), axis=0)
+    sat = np.mean(at_limit(torque_nm, limit), axis=0)
     return [
         {
             "rms_error_rad": float(rms[j]),
@@ -60,15 +74,15 @@ def run_metrics(error_rad: np.ndarray, torque_nm: np.ndarray, torque_limit_nm, d
     - max_abs_error_run_rad: max |e| over the whole run [rad];
     - torque_variation: sum over k of |tau(k) - tau(k-1)| divided by the joint's limit (dimensionless: 2 is
       one swing from zero to the limit and back);
-    - saturated_fraction_after_s: fraction of the steps with t >= startup_s at which |tau| >= limit (1 - 1e-9).
+    - saturated_fraction_after_s: fraction of the steps with t >= startup_s at which |tau| is at its limit (:func:`at_limit`).
     """
     error_rad = np.asarray(error_rad, dtype=float)
     torque_nm = np.asarray(torque_nm, dtype=float)
     limit = np.asarray(torque_limit_nm, dtype=float)
     n = error_rad.shape[0]
     outside = ~(np.abs(error_rad) <= settle_band_rad)  # NaN counts as outside
-    k0 = min(n, int(np.ceil(startup_s / dt_s - 1e-9)))
-    after = np.abs(torque_nm[k0:]) >= limit * (1.0 - 1e-9)
+    k0 = min(n, first_step(startup_s, dt_s))
+    after = at_limit(torque_nm[k0:], limit)
     sat_after = after.mean(axis=0) if after.shape[0] else np.zeros(limit.shape)
     tv = np.abs(np.diff(torque_nm, axis=0)).sum(axis=0) / limit
     out = []

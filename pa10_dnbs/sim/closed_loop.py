@@ -16,6 +16,7 @@ from ..core.reference import ReferenceSample
 from ..plant.engines import DEFAULT_ENGINE, open_plant
 from ..report.progress import ProgressBar
 from ..run_data import RunData
+from ..run_steps import run_steps
 from ..settings import Settings
 from .computed_torque import ComputedTorqueController
 
@@ -51,7 +52,7 @@ def simulate(settings: Settings, controller: str, duration_s: float, progress: b
     reference node builds the same reference (controller_factory.py), so the lockstep graph gives the same bits.
     """
     dt = settings.simulation.dt_s
-    n = int(round(duration_s / dt))
+    n = run_steps(duration_s, dt)
     s = settings
     plant, close_plant = open_plant(s, engine)
     try:
