@@ -2,8 +2,8 @@
 
 Two rules, run in this order by :func:`with_rule_values` (``run_settings.build_settings`` calls it once, after the
 config is checked): the reference (reference_rule.py, from the URDF limits alone) and the gains (gain_rule.py,
-from the arm's mass matrix along that reference). Only the keys nobody gave are taken from them; the PA10's arm
-file gives all, so nothing is derived for it. Both rules read one plant, the settings' own (its ``plant``
+from the arm's mass matrix along that reference). Only the keys nobody gave are taken from them (an arm file that
+gives all, as the PA10's does, has nothing derived). Both rules read one plant, the settings' own (its ``plant``
 section, the arm's facts resolved into it), opened once for them: they look nothing up.
 
 Around them, what the config alone cannot bound is checked against the arm and the step (ConfigError, one line

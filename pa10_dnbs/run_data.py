@@ -1,6 +1,6 @@
 """Time series of one closed-loop run, and its npz form.
 
-Arrays of shape (n_steps, 7), sampled at t_k = k dt: position_rad and
+Arrays of shape (n_steps, n_joints), sampled at t_k = k dt: position_rad and
 velocity_rad_s are the plant state x(k) the controllers saw; reference_rad is
 x_d(k); torque_nm is the torque applied during [t_k, t_k+1) (after the
 torque-limit saturation).

@@ -329,10 +329,6 @@ class Settings:
         """The config mapping these settings are (``arm``: the arm file's path), as config_used.yaml holds it."""
         return {"arm": str(self.arm.file), **{k: _plain(getattr(self, k)) for k in SECTIONS}}
 
-    def with_changes(self, **changes) -> "Settings":
-        """A copy with whole sections replaced (``dataclasses.replace``; validated again)."""
-        return dataclasses.replace(self, **changes)
-
     @property
     def n_joints(self) -> int:
         return self.arm.n_joints

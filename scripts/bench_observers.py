@@ -35,6 +35,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from pa10_dnbs.cli_values import OneLineParser, seconds, whole_in  # noqa: E402
 from pa10_dnbs.config import default_config_path  # noqa: E402
+from pa10_dnbs.live.server import LEGACY_SUBPROTOCOL, SUBPROTOCOL  # noqa: E402
 from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.supervisor.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
 
@@ -59,7 +60,7 @@ class LiveClient:
         from websockets.exceptions import ConnectionClosed
         from websockets.sync.client import connect
 
-        with connect(url, subprotocols=["foxglove.websocket.v1", "foxglove.sdk.v1"], proxy=None) as ws:
+        with connect(url, subprotocols=[LEGACY_SUBPROTOCOL, SUBPROTOCOL], proxy=None) as ws:
             channels = {}
             js_sub = None
             while not self._stop.is_set():

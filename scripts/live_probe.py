@@ -23,8 +23,9 @@ from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
 from pa10_dnbs.cli_values import OneLineParser, number_in, seconds  # noqa: E402
+from pa10_dnbs.live.server import LEGACY_SUBPROTOCOL, SUBPROTOCOL  # noqa: E402
 
-SUBPROTOCOLS = ["foxglove.websocket.v1", "foxglove.sdk.v1"]
+SUBPROTOCOLS = [LEGACY_SUBPROTOCOL, SUBPROTOCOL]
 #: --wait's bound [s]: an hour of retries is a hang, not a wait (as replay --wait-for-subscribers)
 WAIT_MAX_S = 3600.0
 

@@ -1,6 +1,6 @@
 """Eq. 27's reference for any arm: Table 1's pattern, each joint's amplitude and centre inside its limits.
 
-The rule (docs/arms.md): joint i takes Table 1's row i mod 7 (c, d, w); its centre is the middle of its URDF
+The rule (docs/arms.md): joint i takes Table 1's row i mod its row count (c, d, w); its centre is the middle of its URDF
 limits (0 for symmetric limits and for continuous joints) and its amplitude is c capped at two thirds of the
 half range, so the reference, the 0.1 rad start offset and the transient stay clear of the limits. On the
 PA10 (symmetric limits, the narrowest half range 1.64 rad on s2) the rule gives Table 1 exactly.
@@ -17,7 +17,7 @@ from typing import Callable
 
 import numpy as np
 
-#: Table 1 of the paper: c [rad], d [1/s^3], w [rad/s] of the PA10's seven joints.
+#: Table 1 of the paper: c [rad], d [1/s^3], w [rad/s], one row per joint of the PA10 (the pattern every arm takes).
 TABLE1_AMPLITUDE_RAD = (math.pi / 2, math.pi / 3, math.pi / 2, math.pi / 3, math.pi / 2, math.pi / 3, math.pi / 2)
 TABLE1_ENVELOPE_RATE_PER_S3 = (0.001, 0.001, 0.01, 0.01, 0.01, 0.01, 0.01)
 TABLE1_FREQUENCY_RAD_S = (0.285, 0.435, 0.555, 0.645, 0.345, 0.615, 0.465)

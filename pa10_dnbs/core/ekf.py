@@ -88,10 +88,6 @@ class EKFBank:
         self._PH = np.empty((n, L))
         self.last_hph = np.zeros(n)
 
-    @property
-    def n_rows(self) -> int:
-        return self.w.shape[0]
-
     def update(self, H: np.ndarray, error: np.ndarray, eta: np.ndarray, active: np.ndarray | None = None) -> np.ndarray:
         """One step per row with regressor H (n, L), training error (n,), learning rate eta (n,) and
         ``active`` (n,) 1.0 to train, 0.0 to skip (None: every row trains); returns the gain g = H^T K (n,).

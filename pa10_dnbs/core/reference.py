@@ -34,7 +34,7 @@ class Reference:
     Parameters
     ----------
     amplitude_rad, envelope_rate_per_s3, frequency_rad_s : array_like, shape (N,)
-        c_i [rad], d_i [1/s^3], w_i [rad/s] of Table 1.
+        c_i [rad], d_i [1/s^3], w_i [rad/s] of each joint (Table 1's on the PA10).
     dt_s : float
         Sampling time T [s].
     preview_steps : int

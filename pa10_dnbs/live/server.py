@@ -76,9 +76,6 @@ class LiveServer:
             self._latched[topic] = (payload, log_time_ns)
         self._channels[topic].log(payload, log_time=log_time_ns)
 
-    def has_latched(self, topic: str) -> bool:
-        return self._latched.get(topic) is not None
-
     def resend_latched(self) -> None:
         """Send the latched messages again to channels that got a new subscriber since the last call."""
         with self._lock:

@@ -13,6 +13,7 @@ from ..run_data import RunData  # noqa: E402
 from .finite_view import drawable  # noqa: E402
 
 _MAX_POINTS = 4000  # plotted samples per curve; the npz keeps every step
+ROW_HEIGHT_IN = 13 / 7  # [in] of the start-up figure per joint (13 in for seven joints)
 
 
 def _stride(n: int) -> int:
@@ -118,7 +119,7 @@ def startup_figure(run: RunData, path: Path, settle_band_rad: float, settling_s:
     n = max(2, int(round(t_show / run.dt_s)))
     t = run.time_s[:n]
     nj = len(run.joint_names)
-    fig, axes = plt.subplots(nj, 2, figsize=(11, 13 * nj / 7), sharex=True, squeeze=False)  # fixed layout: cheaper
+    fig, axes = plt.subplots(nj, 2, figsize=(11, ROW_HEIGHT_IN * nj), sharex=True, squeeze=False)  # fixed layout: cheaper
     fig.subplots_adjust(left=0.08, right=0.98, top=1 - 0.28 / nj, bottom=0.28 / nj, hspace=0.12, wspace=0.25)
     fig.suptitle(f"Start-up ({run.controller.upper()}): error with the {settle_band_rad:g} rad band, torque with "
                  "its limits")

@@ -23,7 +23,7 @@ process kill itself (SIGKILL) on the first state at or after that time
 (``incarnation`` 0 only: the launcher numbers restarts 1, 2, ...).
 With ``checkpoint_file`` the DNBS weights and covariances are saved every
 ``checkpoint.period_s`` of simulated time (each joint at its own phase of
-the period: joint i of 7 at i/7 of it) and at exit, and ``resume:=true``
+the period: joint i of n at i/n of it) and at exit, and ``resume:=true``
 starts from that file when it exists. Counters go to ``stats_file`` (JSON).
 """
 from __future__ import annotations

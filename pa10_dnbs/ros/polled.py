@@ -47,16 +47,6 @@ class PolledSubscription:
         got = self.handle.take_message(self.msg_type, self.raw)  # single-threaded use: no in-use guard needed
         return None if got is None else (got[0], got[1]["received_timestamp"])
 
-    def take_all(self, limit: int = 1_000_000) -> list:
-        """Every queued message, oldest first (at most ``limit``)."""
-        out = []
-        while len(out) < limit:
-            got = self.take()
-            if got is None:
-                break
-            out.append(got)
-        return out
-
     def get_publisher_count(self) -> int:
         with self.handle:
             return self.handle.get_publisher_count()

@@ -1,6 +1,6 @@
 """reference_node: publishes each joint's desired trajectory (eq. 27, Table 1) ahead of time.
 
-On <ns>/<joint>/reference (<ns>: the arm's namespace, /pa10 by default; trajectory_msgs/JointTrajectory, one joint,
+On <ns>/<joint>/reference (<ns>: the arm's namespace, /<arm name> by default; trajectory_msgs/JointTrajectory, one joint,
 reliable + transient-local) in batches of ``batch_steps`` points; header.stamp
 is the time of the first point, time_from_start counts from it. Paced by
 /clock (the plant's, 100 Hz of simulated time by default): it keeps at least
@@ -214,7 +214,7 @@ class ReferenceNode(Node):
         while self.published_until <= last_step:
             k0 = self.published_until
             steps = np.arange(k0, k0 + self.batch)
-            pos = self.reference.position(steps)  # (batch, 7)
+            pos = self.reference.position(steps)  # (batch, n_joints)
             vel = self.reference.velocity(steps)
             sec, nanosec = self.clock_.sec_nanosec(k0)
             for j, (name, pub) in enumerate(zip(self.joint_names, self._pubs)):

@@ -13,7 +13,7 @@ from ..derived_settings import check_reference
 from ..settings import Settings, replace_in
 from ..sim.closed_loop import Disturbances
 
-COULOMB_FRACTION = 0.05  # Coulomb friction of every joint: 5 % of its torque limit (none is published for the PA10)
+COULOMB_FRACTION = 0.05  # Coulomb friction of every joint: 5 % of its torque limit (a stated value, not an arm's)
 
 
 @dataclass(frozen=True)
@@ -52,7 +52,7 @@ SCENARIOS = {s.name: s for s in (
     Scenario("delay_1_tick", "every torque applied one step (1 ms) late",
              disturbances=lambda seed: Disturbances(torque_delay_steps=1)),
     Scenario("coulomb", f"Coulomb friction {COULOMB_FRACTION:.0%} of the torque limit on every joint", _coulomb),
-    Scenario("fast_reference", "Table 1 frequencies x1.5", _fast_reference),
+    Scenario("fast_reference", "reference frequencies x1.5", _fast_reference),
 )}
 
 

@@ -27,7 +27,7 @@ def comparison_markdown(results: dict[str, dict], command: str) -> str:
              f"{', '.join(map(str, opts['seeds']))}, {opts['duration_s']:g} s runs, sampler seed {opts['seed']}. "
              f"Below, held-out: seeds {', '.join(map(str, seeds))} (never seen by a search) on every scenario; "
              "worst-joint RMS over the metrics window, worst over the seeds [rad]; 'shipped' is the arm's "
-             "settings the search started from (hand-tuned on the PA10, the gain rule elsewhere).", "",
+             "settings the search started from (its arm file's values, the gain rule's where the file gives none).", "",
              "| scenario | " + " | ".join(f"{c.upper()} shipped | {c.upper()} tuned" for c in ctrls) + " |",
              "|---|" + "---|---|" * len(ctrls)]
     for sc in scenarios:

@@ -15,7 +15,6 @@ from dataclasses import dataclass
 DEFAULT_STATE_TOPIC = "/robot_joint_states"      # topic_based_ros2_control's joint_states_topic
 DEFAULT_COMMAND_TOPIC = "/robot_joint_command"   # ... and its joint_commands_topic
 FORWARD_STATE_TOPIC = "/joint_states"            # joint_state_broadcaster, beside a forward command controller
-COMMAND_FORMS = ("joint_state", "forward")
 
 
 class RobotFault(RuntimeError):
