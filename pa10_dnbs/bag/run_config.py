@@ -4,9 +4,11 @@
 A stored config is checked by the config schema (config.py) for the keys the readers use, so a hand-damaged one
 gives one line naming the bag and the key, never a traceback from deep inside a reader. Other keys are left as
 stored: a bag of an earlier version may lack a newer section (``metrics``: DEFAULT_METRICS stands in).
+The readers get what they use as :class:`BagRunSettings`, never the config's mapping.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 from ..config import SCHEMA, ConfigError, check_value, default_config_path
@@ -19,9 +21,37 @@ from .custom_data import CUSTOM_CONFIG, CUSTOM_PREFIX
 
 #: the stored config's keys the readers use: simulation.dt_s [s], simulation.window_s [s, s], the torque limits [N m]
 USED_KEYS = ("simulation.dt_s", "simulation.window_s", "plant.torque_limit_nm")
+#: the metrics section of a bag recorded before the config had one (the values every config had then)
+DEFAULT_METRICS = {"settle_band_rad": 0.01, "startup_s": 0.2}
 
 
-def _given_config(config_path: Path, joints: tuple[str, ...], bag_dt_s: float | None) -> tuple[dict, str]:
+@dataclass(frozen=True)
+class BagRunSettings:
+    """What the readers of a bag's run (``analyse``, ``replay --live``) take from its config, checked for the bag's
+    arm: the step ``dt_s`` [s], the metrics ``window_s`` (t0, t1) [s], ``torque_limit_nm`` (n_joints,) [N m],
+    ``settle_band_rad`` [rad], ``startup_s`` [s], ``seed`` (None: not stored), ``arm_file`` (the arm file the run
+    named, for its URDF when the bag holds none; None: not stored) and ``source`` (where the config came from,
+    for the report)."""
+
+    dt_s: float
+    window_s: tuple[float, float]
+    torque_limit_nm: tuple[float, ...]
+    settle_band_rad: float
+    startup_s: float
+    seed: int | None
+    arm_file: str | None
+    source: str
+
+
+def _from_mapping(cfg: dict, source: str) -> BagRunSettings:
+    """The settings of a stored config whose USED_KEYS (and metrics, when there) are checked."""
+    sim, metrics = cfg["simulation"], cfg.get("metrics") or DEFAULT_METRICS
+    return BagRunSettings(float(sim["dt_s"]), tuple(sim["window_s"]), tuple(cfg["plant"]["torque_limit_nm"]),
+                          float(metrics["settle_band_rad"]), float(metrics["startup_s"]), sim.get("seed"),
+                          cfg.get("arm"), source)
+
+
+def _given_config(config_path: Path, joints: tuple[str, ...], bag_dt_s: float | None) -> BagRunSettings:
     """The run's config from ``--config``: ConfigError naming it when its arm's joints are not the bag's
     ``joints`` (another arm's config would report the bag against that arm's torque limits) or its step is not
     the bag's ``bag_dt_s`` [s] (its stored config's; None: unknown), which would misread the run's steps."""
@@ -34,7 +64,15 @@ def _given_config(config_path: Path, joints: tuple[str, ...], bag_dt_s: float | 
         raise ConfigError(f"--config {config_path}: its simulation.dt_s {settings.simulation.dt_s:g} s is not the "
                           f"bag's step {bag_dt_s:g} s: pass the run's config, or leave --config out for the one "
                           "stored in the bag")
-    return settings.to_config(), str(Path(config_path).resolve())
+    return _from_settings(settings, str(Path(config_path).resolve()))
+
+
+def _from_settings(settings, source: str) -> BagRunSettings:
+    """The readers' part of a command's ``settings`` (settings.Settings)."""
+    sim = settings.simulation
+    return BagRunSettings(sim.dt_s, tuple(sim.window_s), tuple(settings.plant.torque_limit_nm),
+                          settings.metrics.settle_band_rad, settings.metrics.startup_s, sim.seed,
+                          str(settings.arm.file), source)
 
 
 def _stored_dt_s(info: dict) -> float | None:
@@ -61,7 +99,7 @@ def _checked_stored(bag: Bag, cfg) -> dict:
             out[section] = {**values, key: check_value(dotted, values[key], SCHEMA[section][key], None)}
         except ConfigError as exc:
             raise BagError(f"{where}: {exc}; pass --config") from None
-    if out.get("metrics"):   # absent in bags of runs before the section: DEFAULT_METRICS (report/metrics_file.py)
+    if out.get("metrics"):   # absent in bags of runs before the section: DEFAULT_METRICS
         try:
             out["metrics"] = check_value("metrics", out["metrics"], SCHEMA["metrics"], None)
         except ConfigError as exc:
@@ -91,22 +129,21 @@ def stored_steps(bag: Bag, info: dict, dt_s: float, n_joints: int) -> int | None
     return n
 
 
-def run_config(bag: Bag, info: dict, config_path: Path | None, joints: tuple[str, ...]) -> tuple[dict, str]:
-    """(the config to read the bag's run with, where it came from). ``info``: ``analysis.run_info(bag)``;
+def run_config(bag: Bag, info: dict, config_path: Path | None, joints: tuple[str, ...]) -> BagRunSettings:
+    """The settings to read the bag's run with (``source``: where they came from). ``info``: ``analysis.run_info(bag)``;
     ``joints``: the bag's arm's joints (``analysis.bag_joint_names``), whose count the torque limits must match.
     ConfigError naming ``--config``, BagError naming the bag (and the stored key)."""
     if config_path is not None:
         return _given_config(config_path, joints, _stored_dt_s(info))
     if info.get("config") is None:
         path = default_config_path()
-        cfg, note = build_settings(path).to_config(), f"{path} (the bag carries no config)"
+        found = _from_settings(build_settings(path), f"{path} (the bag carries no config)")
         whose = f"the shipped default config ({path}; the bag carries none) has torque limits for"
     else:
-        cfg = _checked_stored(bag, info["config"])
-        note = f"stored in the bag (recorded from {info.get('config_file', '?')})"
+        found = _from_mapping(_checked_stored(bag, info["config"]),
+                              f"stored in the bag (recorded from {info.get('config_file', '?')})")
         whose = "the config stored in the bag has torque limits for"
-    limits = cfg["plant"]["torque_limit_nm"]
-    if len(limits) != len(joints):
+    if len(found.torque_limit_nm) != len(joints):
         raise BagError(f"{bag.path}: the bag's arm has {len(joints)} joints ({', '.join(joints)}), {whose} "
-                       f"{len(limits)}: pass the run's --config")
-    return cfg, note
+                       f"{len(found.torque_limit_nm)}: pass the run's --config")
+    return found

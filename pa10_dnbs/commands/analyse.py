@@ -12,7 +12,7 @@ from ..config import config_file
 from .options import AnalyseOptions
 from ..number_text import interval
 from ..output_lock import lock_input
-from ..report.metrics_file import DEFAULT_METRICS, diverged_text, metrics_dict, run_ok, window_settings
+from ..report.metrics_file import diverged_text, metrics_dict, run_ok, window_settings
 from ..report.outputs import atomic_output_dir, check_output_dir, write_report
 from ..report.progress import ProgressBar
 
@@ -43,8 +43,8 @@ def run_analyse(options: AnalyseOptions) -> int:
     with Bag(o.bag_path) as bag:
         info = run_info(bag)
         joints = bag_joint_names(bag)
-        cfg, cfg_note = run_config(bag, info, o.config_path, joints)
-        dt = float(cfg["simulation"]["dt_s"])
+        run_settings = run_config(bag, info, o.config_path, joints)
+        dt = run_settings.dt_s
         n_steps = stored_steps(bag, info, dt, len(joints))
         bar = None
         if o.progress:
@@ -74,17 +74,17 @@ def run_analyse(options: AnalyseOptions) -> int:
                            f"step{'s' * (rec.n != 1)}; at least {MIN_STEPS + 1} joint states ({MIN_STEPS} steps of "
                            f"{dt:g} s) are needed for the metrics")
         controller = info.get("controller", "unknown")
-        run = rec.run_data(controller, joints, cfg["plant"]["torque_limit_nm"], math.nan)
-        stored = cfg.get("metrics") or DEFAULT_METRICS
-        measured = window_settings(cfg["simulation"]["window_s"], stored["settle_band_rad"], stored["startup_s"], rec.n * dt)
+        run = rec.run_data(controller, joints, run_settings.torque_limit_nm, math.nan)
+        measured = window_settings(run_settings.window_s, run_settings.settle_band_rad, run_settings.startup_s,
+                                   rec.n * dt)
         metrics = metrics_dict(run, measured, source="bag", bag=str(bag.path.resolve()), mode=info.get("mode"),
-                               seed=cfg["simulation"].get("seed"), malformed_messages=rec.malformed)
+                               seed=run_settings.seed, malformed_messages=rec.malformed)
         notes = [f"bag: `{bag.path}` ({bag.message_count} messages on {len(bag.topics)} topics; {bag.crc_note()})",
-                 f"config: {cfg_note}",
+                 f"config: {run_settings.source}",
                  f"source: rebuilt from the bag's {bag_arm(bag).joint_states} and reference topics ({info.get('mode', '?')} run)"]
         if truncated:
             notes.append(truncated)
-        chain = robot_chain(bag, cfg.get("arm"))
+        chain = robot_chain(bag, run_settings.arm_file)
         with atomic_output_dir(o.out, o.force) as tmp:
             write_report(tmp, [run], [metrics], title="Run from a bag", notes=notes, chain=chain,
                          figures=o.figures)

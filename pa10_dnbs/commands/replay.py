@@ -89,14 +89,14 @@ def _play(o: ReplayOptions, before: set[str]) -> NoReturn:
             exit_process(code)
         arm = find_arm(bag.topics) or ArmTopics()
         joints = bag_joint_names(bag, arm)
-        cfg = run_config(bag, run_info(bag), o.config_path, joints)[0]  # analyse's, checked for the bag's arm
+        run_settings = run_config(bag, run_info(bag), o.config_path, joints)  # analyse's, checked for the bag's arm
         arm = ArmTopics(namespace) if namespace else arm
         try:
             server = LiveServer(live_channels(arm), host=o.live_host, port=o.live_port)
         except LiveServerError as exc:
             raise ConfigError(f"--live: {exc}") from None
         try:
-            view = LiveView(server, cfg["plant"]["torque_limit_nm"], cfg["simulation"]["dt_s"], display_hz=o.live_hz,
+            view = LiveView(server, run_settings.torque_limit_nm, run_settings.dt_s, display_hz=o.live_hz,
                             joint_names=joints, arm=arm)
             print(f"LIVE {server.url} (Foxglove: Open connection, Foxglove WebSocket)", flush=True)
             code = run_node(functools.partial(PlayerNode, bag, opt, live=view), args=[])

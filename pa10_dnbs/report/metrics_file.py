@@ -7,7 +7,6 @@ from ..core.metrics import DIVERGED_RAD, divergence, first_non_finite, joint_met
 from ..run_data import RunData
 
 # metrics settings of configs written before the ``metrics`` section existed (bags of earlier runs)
-DEFAULT_METRICS = {"settle_band_rad": 0.01, "startup_s": 0.2}
 
 
 def effective_window(duration_s: float, window_s: tuple[float, float]) -> tuple[float, float]:
