@@ -12,7 +12,7 @@ _startup_sigint = interrupt.quiet_start()   # Ctrl-C while the modules load: one
 
 from .config import ConfigError, default_config_path
 from .console_stream import forgive_stderr, forgive_stdout
-from .supervisor.fault_flags import add_fault_arguments
+from .commands.fault_flags import add_fault_arguments
 from .loop.scheduling import DEFAULT_RT_PRIORITY
 from .cli_values import (EFFORT_TIMEOUT_MAX_S, MAX_REPLAY_CLOCK_HZ, REPLAY_RATE_MAX, REPLAY_RATE_MIN, RTF_MAX,
                          RTF_MIN, WAIT_FOR_SUBSCRIBERS_MAX_S, OneLineParser, nonnegative,
@@ -68,7 +68,7 @@ def _live_defaults(args: argparse.Namespace) -> None:
 def _launch_options(args: argparse.Namespace):
     """The ``launch`` command's options from its parsed flags."""
     from .commands.options import LaunchOptions
-    from .supervisor.fault_flags import FaultFlags
+    from .commands.fault_flags import FaultFlags
 
     realtime = args.mode == "realtime"
     _unused_flags(args, [("rtf", realtime, "only with --mode realtime (lockstep runs as fast as the graph answers)"),

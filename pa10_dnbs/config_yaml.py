@@ -189,3 +189,12 @@ def read_yaml(path: Path, error_class: type[Exception] = ConfigError, what: str 
 def read_config_yaml(path: Path):
     """The YAML document of the config file ``path`` (any type; the caller checks it), read strictly."""
     return read_yaml(path, ConfigError, "config file")
+
+
+def dumpable(obj):
+    """``obj`` with its tuples as lists, recursively (dicts and lists walked): what ``yaml.safe_dump`` writes."""
+    if isinstance(obj, dict):
+        return {k: dumpable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [dumpable(v) for v in obj]
+    return obj

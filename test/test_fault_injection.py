@@ -11,7 +11,7 @@ from pa10_dnbs.config import ConfigError
 from pa10_dnbs.faults.delay_line import DelayLine
 from pa10_dnbs.faults.link_faults import FaultInjector, LinkFaults
 from pa10_dnbs.arm import load_arm
-from pa10_dnbs.supervisor.fault_flags import FaultFlags, add_fault_arguments, apply_fault_flags, faults_active
+from pa10_dnbs.commands.fault_flags import FaultFlags, add_fault_arguments, apply_fault_flags, faults_active
 
 JOINT_NAMES = load_arm("pa10").joint_names
 

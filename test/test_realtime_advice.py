@@ -1,6 +1,6 @@
 """The launcher's advice after a realtime run that missed deadlines (supervisor/realtime_advice.py)."""
 from pa10_dnbs.config import default_config_path
-from pa10_dnbs.supervisor.fault_flags import FaultFlags, apply_fault_flags
+from pa10_dnbs.commands.fault_flags import FaultFlags, apply_fault_flags
 from pa10_dnbs.supervisor.realtime_advice import ON_TIME_TARGET, injected_misses, realtime_hint
 from pa10_dnbs.run_settings import build_settings
 

@@ -14,7 +14,7 @@ from ..interrupt import deferred, on_second_sigint, outputs_written
 from ..number_text import interval
 from ..report.metrics_file import diverged_text, metrics_dict, run_ok
 from ..report.outputs import atomic_output_dir, write_report
-from ..supervisor.fault_flags import plain
+from ..config_yaml import dumpable
 from ..supervisor.fault_report import fault_report
 from ..supervisor.graph_run import GraphFailure, run_graph
 from ..supervisor.params_file import write_params_file
@@ -48,7 +48,7 @@ def run_launch(options: LaunchOptions) -> int:
         with _finished(out, record), atomic_output_dir(out, o.force) as tmp:
             try:
                 used = tmp / "config_used.yaml"
-                used.write_text(yaml.safe_dump(plain(settings.to_config()), sort_keys=False))
+                used.write_text(yaml.safe_dump(dumpable(settings.to_config()), sort_keys=False))
                 ros_params = write_params_file(tmp / "ros_params.yaml", settings, controller, namespace)
                 result = run_graph(dataclasses.replace(opt, config_path=used, params_file=ros_params,
                                                        recorded_config=str(Path(out).absolute() / used.name)), tmp,

@@ -21,7 +21,7 @@ from ..run_size import check_run_size, say_note
 from ..run_steps import run_duration, run_steps
 from ..settings import Settings
 from ..supervisor.domain_ids import shell_domain
-from ..supervisor.fault_flags import apply_fault_flags, check_kill_times
+from .fault_flags import apply_fault_flags, check_kill_times
 from ..supervisor.graph_run import GraphOptions, loop_reliability, parse_netns
 from ..supervisor.plant_engine import plant_robot_options
 from ..supervisor.rmw_check import check_rmw

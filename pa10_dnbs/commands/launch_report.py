@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from ..number_text import interval
-from ..supervisor.fault_flags import faults_active
+from .fault_flags import faults_active
 from ..supervisor.fault_report import detected_faults, fault_note
 from .launch_plan import LaunchPlan
 from .options import LaunchOptions

@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..supervisor.fault_flags import FaultFlags
+from .fault_flags import FaultFlags
 from ..supervisor.robot_options import RobotOptions
 from ..loop.scheduling import DEFAULT_RT_PRIORITY
 from ..tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS

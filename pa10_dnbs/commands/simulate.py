@@ -19,7 +19,7 @@ from ..run_settings import built_settings_held, say_rules
 from ..run_size import check_run_size, say_note
 from ..run_steps import run_duration, run_steps
 from ..sim.closed_loop import simulate
-from ..supervisor.fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
+from .fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
 from ..trajectory_file import load_trajectory_file
 
 CHOICES = {"dnbs": ("dnbs",), "pid": ("pid",), "ctc": ("ctc",), "both": ("dnbs", "pid"), "all": ("dnbs", "pid", "ctc")}

@@ -17,7 +17,7 @@ from ..report.progress import ProgressBar
 from ..run_settings import built_settings_held, say_rules
 from ..run_steps import run_duration, run_steps
 from ..run_size import check_run_size, say_note
-from ..supervisor.fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
+from .fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
 from ..sim.closed_loop import CONTROLLERS
 from ..study.feasibility import infeasible_scenarios
 from ..study.lost_runs import RunsLost

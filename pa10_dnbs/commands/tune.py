@@ -23,7 +23,7 @@ from ..interrupt import EXIT_INTERRUPTED, check, deferred, immediate, on_second_
 from ..output_lock import lock_key, lock_output
 from ..report.outputs import OutputExistsError, check_creatable, check_output_dir, check_tune_dir, tune_files
 from ..run_size import check_run_size, say_note
-from ..supervisor.fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
+from .fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
 from ..study.executor import Executor
 from ..study.lost_runs import RunsLost
 from ..study.scenarios import SCENARIOS, check_scenario_references

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..plant.from_config import opened_plant, plant_params
+from ..plant.reference_torque import FIELDS as REFERENCE_FIELDS
 from ..plant.reference_torque import ReferenceTorque
 from ..settings import Settings
 from .scenarios import scenario_settings
@@ -26,7 +27,8 @@ def scenario_peak_torque(settings: Settings, scenario: str, duration_s: float) -
     changed, _ = scenario_settings(settings, scenario, 0)
     dt = changed.simulation.dt_s
     with opened_plant(changed.arm, plant_params(changed.plant, dt)) as plant:
-        return ReferenceTorque(plant, duration_s, dt).peak(changed.to_config()["reference"])
+        ref = changed.reference
+        return ReferenceTorque(plant, duration_s, dt).peak({k: getattr(ref, k) for k in REFERENCE_FIELDS})
 
 
 def infeasible_line(settings: Settings, scenario: str, duration_s: float) -> str | None:

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from ..ros.plant.counters import FAULT_KEYS, REPORT_KEYS
-from .fault_flags import plain
+from ..config_yaml import dumpable
 
 
 
@@ -14,7 +14,7 @@ def fault_report(settings, plant_stats: dict, result) -> dict:
         ctrl = result.controllers.get(name)
         joints.append({"name": name, "plant": {k: pj.get(k) for k in REPORT_KEYS}, "controller": ctrl})
     used = settings.to_config()
-    return {"configured": plain(used["faults"]), "guards": plain(used["guards"]), "joints": joints,
+    return {"configured": dumpable(used["faults"]), "guards": dumpable(used["guards"]), "joints": joints,
             "restarts": result.restarts}
 
 

@@ -171,12 +171,3 @@ def faults_active(faults: FaultSettings) -> bool:
 #: what an in-process command says when its config injects faults: only the node graph's wire carries them
 IN_PROCESS_FAULTS_NOTE = ("the config's faults section is injected by `launch` alone (on the messages between the "
                           "nodes); this in-process run has no faults")
-
-
-def plain(obj):
-    """Tuples as lists, recursively (for yaml.safe_dump)."""
-    if isinstance(obj, dict):
-        return {k: plain(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [plain(v) for v in obj]
-    return obj
