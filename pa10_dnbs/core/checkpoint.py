@@ -24,6 +24,8 @@ _NETWORKS = (("alpha", 2), ("torque", 3))   # each network's name in a state dic
 
 
 def save_checkpoint(path: Path, state: dict, step: int) -> None:
+    """Write one joint's controller ``state`` (its ``state_dict``: each network's weights (L,) and EKF covariance
+    (L, L)) and the ``step`` it was taken at, as one .npz at ``path``, atomically (never a half-written file)."""
     buf = io.BytesIO()
     np.savez(buf, step=np.array(step), **state)
     with atomic_path(path, ".tmp.npz") as tmp:

@@ -162,7 +162,9 @@ def _per_joint(value, n: int) -> np.ndarray:
 
 def initial_weights(seed: int, joint: int, n_alpha: int, n_torque: int, std_alpha: float, std_torque: float):
     """Joint ``joint``'s random initial weights (the paper: "initialized in a random way"), seeded by
-    (seed, joint): the same in a bank of one as in a bank of all the arm's joints."""
+    (seed, joint): the same in a bank of one as in a bank of all the arm's joints. Returns the alpha network's
+    (n_alpha,) and the torque network's (n_torque,) weights, each normal with mean 0 and its standard deviation
+    (dimensionless: the networks' outputs are scaled by their output scales)."""
     rng = np.random.default_rng((seed, joint))
     return rng.normal(0.0, std_alpha, n_alpha), rng.normal(0.0, std_torque, n_torque)
 

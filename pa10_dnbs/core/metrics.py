@@ -26,7 +26,7 @@ def at_limit(torque_nm: np.ndarray, torque_limit_nm) -> np.ndarray:
 
 
 def window_slice(n_steps: int, dt_s: float, window_s: tuple[float, float]) -> slice:
-    """Index range of the samples inside [t0, t1)."""
+    """Index range of the samples k with t0 <= k dt_s < t1, ``window_s`` = (t0, t1) [s], of a run of ``n_steps``."""
     t0, t1 = window_s
     if not (0.0 <= t0 < t1):
         raise ValueError(f"window must satisfy 0 <= t0 < t1, got {window_s}")
@@ -40,6 +40,9 @@ def window_slice(n_steps: int, dt_s: float, window_s: tuple[float, float]) -> sl
 def joint_metrics(error_rad: np.ndarray, torque_nm: np.ndarray, torque_limit_nm,
                   dt_s: float, window_s: tuple[float, float]) -> list[dict]:
     """Per joint: RMS and max |error| in the window, max |torque| and saturated fraction over the run.
+
+    ``error_rad`` and ``torque_nm`` (n_steps, n_joints) [rad, N m], ``torque_limit_nm`` (n_joints,) [N m],
+    ``dt_s`` [s], ``window_s`` (t0, t1) [s].
 
     A step counts as saturated when |torque| >= limit * AT_LIMIT_FRACTION (:func:`at_limit`).
     """

@@ -28,12 +28,14 @@ class StateGuard:
         object.__setattr__(self, "_high", np.asarray(self.upper_rad, dtype=float) + self.margin_rad)
 
     def all_plausible(self, x1: np.ndarray, x2: np.ndarray) -> bool:
-        """True when every joint's state passes (one expression: NaN and +-inf fail every comparison)."""
+        """True when every joint's state, x1 (n,) [rad] and x2 (n,) [rad/s], passes (one expression: NaN and +-inf
+        fail every comparison)."""
         ok = (x1 >= self._low) & (x1 <= self._high) & (np.abs(x2) <= self.max_speed_rad_s)
         return bool(np.logical_and.reduce(ok))
 
     def check(self, x1: np.ndarray, x2: np.ndarray) -> np.ndarray:
-        """int (n,): OK for a plausible state, else the index of the reason in REASONS (the first that applies)."""
+        """int (n,): OK for a plausible state x1 (n,) [rad], x2 (n,) [rad/s], else the index of the reason in
+        REASONS (the first that applies)."""
         with np.errstate(invalid="ignore"):
             code = np.where(np.abs(x2) > self.max_speed_rad_s, 2, OK)
             outside = (x1 < self.lower_rad - self.margin_rad) | (x1 > self.upper_rad + self.margin_rad)

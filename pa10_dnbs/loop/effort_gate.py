@@ -46,7 +46,7 @@ class EffortGate:
         self.on_time_per_bin: list[int] = []
 
     def offer(self, joint: int, step: int, effort: float) -> bool:
-        """Record an effort; True when all joints have answered the current step.
+        """Record joint ``joint``'s ``effort`` [N m] for ``step``; True when all joints have answered the current step.
 
         A non-finite effort for the current step counts as that joint's answer,
         replaced at once by its last applied torque ("hold") or zero, and counted.
@@ -79,7 +79,8 @@ class EffortGate:
         return [j for j in range(self.n) if not self._have[j]]
 
     def take_lockstep(self, timed_out: bool = False) -> np.ndarray:
-        """Torques for the current step; with ``timed_out`` the missing joints are filled in and counted."""
+        """Torques (n,) [N m] for the current step; with ``timed_out`` the missing joints are filled in and
+        counted."""
         if not timed_out and not self._have.all():
             raise RuntimeError("take_lockstep before all efforts arrived")
         for j in np.flatnonzero(~self._have):
@@ -88,7 +89,7 @@ class EffortGate:
         return self._fill_and_advance()
 
     def take_deadline(self) -> np.ndarray:
-        """Realtime, at the deadline of the current step's tick: the efforts that arrived, the missing ones
+        """Realtime, at the deadline of the current step's tick: the efforts (n,) [N m] that arrived, the missing ones
         filled in (hold/zero) and counted as misses; the tick counts as on time when none was missing."""
         missed = np.flatnonzero(~self._have)
         for j in missed:

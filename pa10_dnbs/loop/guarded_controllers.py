@@ -54,7 +54,8 @@ class GuardedControllers:
             self.bad_states[reason] += code == i
 
     def answer(self, x1: np.ndarray, x2: np.ndarray, ref: ReferenceSample) -> np.ndarray:
-        """The torques of ``step``, leaving a learning controller's training pending until ``learn``."""
+        """The torques (n,) [N m] of ``step`` for x1 (n,) [rad], x2 (n,) [rad/s], leaving a learning controller's
+        training pending until ``learn``."""
         if self.guard is None or self.guard.all_plausible(x1, x2):
             u = self._answer(x1, x2, ref)
             ok = None

@@ -59,14 +59,16 @@ class JointLoop:
         return step in self._ref_pos and step + self.preview_steps in self._ref_pos
 
     def add_reference(self, first_step: int, positions, velocities) -> list[tuple[int, float]]:
-        """Store points for steps first_step, first_step + 1, ...; answer states that were waiting."""
+        """Store reference points, ``positions`` [rad] and ``velocities`` [rad/s] (equal lengths), for steps
+        first_step, first_step + 1, ...; answer states that were waiting: (step, effort [N m]) pairs."""
         for i, (p, v) in enumerate(zip(positions, velocities)):
             self._ref_pos[first_step + i] = p
             self._ref_vel[first_step + i] = v
         return self._drain()
 
     def on_state(self, step: int, position: float, velocity: float) -> list[tuple[int, float]]:
-        """Answer state ``step``: a list of (step, effort) ready to publish (empty while waiting)."""
+        """Answer state ``step`` (``position`` [rad], ``velocity`` [rad/s]): a list of (step, effort [N m]) ready
+        to publish (empty while waiting)."""
         if step == self.last_step:
             self.duplicates += 1
             self._count_bad(position, velocity)

@@ -52,7 +52,8 @@ class ComputedTorqueController(FixedGainBank):
         self.last_scale = 1.0
 
     def answer(self, x1: np.ndarray, x2: np.ndarray, ref: ReferenceSample, active: np.ndarray | None = None) -> np.ndarray:
-        """Torques (n,) [N m]; needs ``ref.acceleration_rad_s2``. (No learning: ``active`` changes nothing.)"""
+        """Torques (n,) [N m] for angles x1 (n,) [rad] and velocities x2 (n,) [rad/s]; needs
+        ``ref.acceleration_rad_s2``. (No learning: ``active`` changes nothing.)"""
         if ref.acceleration_rad_s2 is None:
             raise ValueError("computed torque needs the reference acceleration")
         p = self.plant
