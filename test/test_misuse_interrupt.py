@@ -720,3 +720,26 @@ def test_launch_under_timeout_s_int_is_one_stop_not_a_second_ctrl_c(tmp_path, do
     assert len(codes) == len(nodes) and set(codes.values()) == {"0"}, codes   # each node by its own SIGINT path
     assert_no_leftovers(nodes, shm_before)
     assert list(tmp_path.iterdir()) == []   # an interrupted launch writes nothing
+
+
+def test_study_ctrl_c_after_its_last_run_writes_the_whole_study_not_a_partial_one(monkeypatch, capsys, tmp_path):
+    """A Ctrl-C that lands after the last run's result, before the study returns (the review hit it twice on a
+    loaded host with `timeout -s INT 2.3`): every run is done, so the study is written whole and the line says so;
+    it used to be kept as 'partial: rerun with --force for the whole study' (6 of 6 runs)."""
+    from pa10_dnbs.commands import study as study_command
+    from pa10_dnbs.commands.options import StudyOptions
+    from pa10_dnbs.study.runner import run_study
+
+    def every_run_then_interrupted(*args, on_done=None, **kwargs):
+        run_study(*args, on_done=on_done, **kwargs)
+        raise KeyboardInterrupt   # as if the SIGINT came while run_study was returning
+
+    monkeypatch.setattr(study_command, "run_study", every_run_then_interrupted)
+    out = tmp_path / "s"
+    options = StudyOptions(out, scenarios="nominal,coulomb", controllers="pid", duration_s=0.3, jobs=1)
+    assert study_command.run_study_command(options) == 130
+    assert one_line(capsys.readouterr().err) == f"pa10-dnbs: interrupted as it finished: {out} is written whole ({out}/study.md)"
+    assert {"study.md", "study.json", "study.png"} <= {p.name for p in out.iterdir()}
+    assert not (out / "interrupted.json").exists()
+    assert [(r["scenario"], r["controller"]) for r in json.loads((out / "study.json").read_text())["rows"]] == [
+        ("nominal", "pid"), ("coulomb", "pid")]

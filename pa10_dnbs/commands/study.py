@@ -75,21 +75,24 @@ def run_study_command(options: StudyOptions) -> int:
                + (f" --arm {shlex.quote(str(o.arm))}" if o.arm is not None else ""))
     head = {"config_file": str(config_path.resolve()), "arm": str(settings.arm.file), "duration_s": duration_s,
             **({"infeasible": infeasible} if infeasible else {})}
+    all_runs = list(product(scen, ctrl, range(o.seeds)))
     try:
         rows = run_study(settings, scen, ctrl, o.seeds, duration_s, o.jobs, on_done=finished, scheduler=o.scheduler)
     except KeyboardInterrupt:   # the workers are stopped (study/executor.py); the completed runs are kept
         bar.close()
-        return _keep_partial(o.out, o.force, done, list(product(scen, ctrl, range(o.seeds))), command, head)
+        rows = _every_run(done, all_runs)
+        if rows is None:
+            return _keep_partial(o.out, o.force, done, all_runs, command, head)
+        # the stop came after the last run's result, before the study returned: the study is whole
+        _write_study(o.out, o.force, rows, command, head, duration_s, infeasible)
+        say(f"pa10-dnbs: interrupted as it finished: {o.out} is written whole ({o.out}/study.md)")
+        outputs_written(AFTER_LINE)
+        return EXIT_INTERRUPTED
     except RunsLost as exc:   # a worker or the cluster lost: the completed runs are kept as for a Ctrl-C
         bar.close()
-        return _keep_partial(o.out, o.force, done, list(product(scen, ctrl, range(o.seeds))), command, head,
-                             lost=exc)
+        return _keep_partial(o.out, o.force, done, all_runs, command, head, lost=exc)
     bar.close()
-    with finished_output_dir(o.out, o.force, "study.md") as tmp:   # a Ctrl-C now: finished first, then said
-        (tmp / "study.json").write_text(json_text({**head, "rows": rows}))
-        (tmp / "study.md").write_text(study_markdown(rows, command, duration_s,
-                                                     {k: v.description for k, v in SCENARIOS.items()}, infeasible))
-        study_figure(rows, tmp / "study.png")
+    _write_study(o.out, o.force, rows, command, head, duration_s, infeasible)
     diverged = sum(r["diverged"] for r in rows)
     guarded = sum(r.get("guard_events", 0) > 0 for r in rows)
     print(f"{n} runs, {diverged} diverged"
@@ -98,6 +101,24 @@ def run_study_command(options: StudyOptions) -> int:
           + (f"; {len(infeasible)} scenario(s) infeasible on this arm, not run" if infeasible else "")
           + f"; wrote {o.out}/study.md")
     return 0
+
+
+def _every_run(done: list[dict], all_runs: list) -> list[dict] | None:
+    """The rows of ``done`` in the order of ``all_runs`` ((scenario, controller, seed) each), as run_study returns
+    them, when every run is there; else None."""
+    by_key = {(r["scenario"], r["controller"], r["seed"]): r for r in done}
+    return [by_key[k] for k in all_runs] if all(k in by_key for k in all_runs) else None
+
+
+def _write_study(out: Path, force: bool, rows: list[dict], command: str, head: dict, duration_s: float,
+                 infeasible: dict) -> None:
+    """The whole study into ``out``: study.json, study.md, study.png (a Ctrl-C meanwhile: finished first, then
+    said)."""
+    with finished_output_dir(out, force, "study.md") as tmp:
+        (tmp / "study.json").write_text(json_text({**head, "rows": rows}))
+        (tmp / "study.md").write_text(study_markdown(rows, command, duration_s,
+                                                     {k: v.description for k, v in SCENARIOS.items()}, infeasible))
+        study_figure(rows, tmp / "study.png")
 
 
 def _keep_partial(out: Path, force: bool, done: list[dict], all_runs: list, command: str, head: dict,
