@@ -11,6 +11,26 @@ from pathlib import Path
 from .json_text import json_text
 
 
+def umask() -> int:
+    """The process's file-mode creation mask (Linux: /proc/self/status, read without changing it; else set and
+    restored at once)."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("Umask:"):
+                return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def mkdir_mode(path) -> None:
+    """Give a folder made private by ``tempfile.mkdtemp`` (0700) the mode ``mkdir`` gives: 0777 less the umask,
+    so an output renamed into place is readable as any other folder the user makes."""
+    os.chmod(path, 0o777 & ~umask())
+
+
 @contextmanager
 def atomic_path(path, suffix: str = ".tmp"):
     """Yields the temporary path to write; on success it replaces ``path``, on error it is removed.

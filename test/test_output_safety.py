@@ -410,3 +410,23 @@ def test_folders_a_user_cannot_search_or_write_are_handled(tmp_path):
     r = _as_a_user("simulate", "--controller", "pid", *TINY, "--out", previous, "--force")
     assert r.returncode == 0, r.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["previous", "shut"]
+
+
+@pytest.mark.parametrize("mask", [0o022, 0o077])
+def test_an_output_folder_gets_the_mode_mkdir_would_give(tmp_path, mask):
+    """The output is written in a tempfile.mkdtemp folder (0700) and renamed into place: it used to stay 0700
+    whatever the umask, so other users (a web server, a container's other user) could not read the results."""
+    import os
+    import stat
+
+    from pa10_dnbs.report.outputs import atomic_output_dir
+
+    old = os.umask(mask)
+    try:
+        with atomic_output_dir(tmp_path / "run", force=False) as tmp:
+            (tmp / "report.md").write_text("x\n")
+        (tmp_path / "plain").mkdir()
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE((tmp_path / "run").stat().st_mode) == stat.S_IMODE((tmp_path / "plain").stat().st_mode) \
+        == 0o777 & ~mask

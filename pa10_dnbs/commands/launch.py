@@ -10,6 +10,7 @@ from pathlib import Path
 
 import yaml
 
+from ..atomic_file import mkdir_mode
 from ..interrupt import deferred, on_second_sigint, outputs_written
 from ..number_text import interval
 from ..report.metrics_file import diverged_text, metrics_dict, run_ok
@@ -156,6 +157,7 @@ def _keep_logs(exc: GraphFailure, tmp: Path, out: Path) -> GraphFailure:
             shutil.rmtree(kept)
         if kept.exists() or kept.is_symlink():   # not ours: a user's file or folder
             kept = Path(tempfile.mkdtemp(prefix=f"{out.name}.failed-", dir=out.parent))
+            mkdir_mode(kept)
         else:
             kept.mkdir(parents=True)
         (kept / FAILED_MARK).write_text(f"the logs of a failed pa10-dnbs launch into {out}\n")

@@ -27,6 +27,7 @@ import yaml
 
 from ..interrupt import deferred, on_second_sigint, outputs_written
 from ..file_path import shown
+from ..atomic_file import mkdir_mode
 from ..json_text import json_text
 from ..kinematics.urdf_chain import UrdfChain
 from ..output_lock import holds_output, lock_output, path_key, release_output
@@ -312,6 +313,7 @@ def atomic_output_dir(out: Path, force: bool):
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+        mkdir_mode(tmp)   # the output is renamed into place: not mkdtemp's owner-only 0700
     except BaseException:
         _remove_empty(made)
         _release(out)
