@@ -329,3 +329,24 @@ def test_huge_but_finite_facts_print_in_a_few_digits_without_overflow_warnings(t
     text = r.stdout + r.stderr
     assert "[-1.7e+308, +1.7e+308]" in text and "1e+300" in text
     assert "Warning" not in text and max(map(len, text.splitlines())) < 400, text
+
+
+def test_a_chain_of_more_joints_than_the_rules_can_sweep_is_one_line_at_once(tmp_path):
+    """A 300-joint chain ran the rules' n^3-per-pose sweep for minutes (`arm` still working after 90 s, the
+    review's rev_g finding 6): more than MAX_ACTUATED joints are refused in one line, before any sweep; with
+    `joints` naming a few of them the same URDF is an arm."""
+    from pa10_dnbs.arm.chain_select import MAX_ACTUATED
+
+    urdf = _write(tmp_path / "snake.urdf", chain_urdf(300))
+    r = run_cli("arm", "--arm", urdf)
+    assert r.returncode == 2 and "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert f"300 joints to actuate on the chain from l0, more than {MAX_ACTUATED}" in r.stderr, r.stderr
+    doc = {"name": "few", "urdf": "snake.urdf", "sources": {"urdf": "test"}, "joints": ["j1", "j2", "j3"]}
+    assert load_arm(_write(tmp_path / "few.yaml", yaml.safe_dump(doc))).joint_names == ("j1", "j2", "j3")
+
+
+def test_a_mimic_of_a_joint_the_urdf_lacks_says_so(tmp_path):
+    urdf = _write(tmp_path / "m.urdf", _chain().replace(
+        '<joint name="j3" type="revolute">', '<joint name="j3" type="revolute"><mimic joint="nope"/>'))
+    with pytest.raises(ArmError, match=r"joint 'j3' mimics joint 'nope', which is not in the URDF"):
+        load_arm(urdf)

@@ -11,6 +11,7 @@ from ..kinematics.urdf_chain import UrdfChain, UrdfJoint
 ACTUATABLE = ("revolute", "continuous")
 GRIPPER_NAME = re.compile(r"grip|finger|jaw|claw", re.IGNORECASE)
 FINGER_DEPTH_MAX = 4   # movable joints on a finger's longest path (Robotiq's 3-finger gripper: 4); an arm has more
+MAX_ACTUATED = 64     # joints one arm may actuate: the rules cost n^3 per pose (a snake of 64 links: about 4 s)
 
 
 def chain_joints(chain: UrdfChain, tip_link: str | None = None) -> list[UrdfJoint]:
@@ -157,10 +158,16 @@ def actuated_joints(chain: UrdfChain, exclude: tuple[str, ...] = (), tip_link: s
             raise ValueError(f"joint {j.name!r} is {j.kind}: only revolute or continuous joints can be actuated "
                              f"(list it in exclude_joints to lock it)")
         if j.mimics is not None:  # its motor is another joint's: driving it on its own is not this robot
-            raise ValueError(f"joint {j.name!r} mimics joint {j.mimics!r} (<mimic>): it has no actuator of its own "
-                             f"and cannot be controlled as one (list it in exclude_joints to lock it)")
+            absent = "" if j.mimics in known else ", which is not in the URDF"
+            raise ValueError(f"joint {j.name!r} mimics joint {j.mimics!r}{absent} (<mimic>): it has no actuator of "
+                             f"its own and cannot be controlled as one (list it in exclude_joints to lock it)")
     if not actuated:
         raise ValueError(_none_left(chain.root_link, on_chain, exclude, gripper, names))
+    if len(actuated) > MAX_ACTUATED:
+        raise ValueError(f"{len(actuated)} joints to actuate on the chain from {chain.root_link}, more than "
+                         f"{MAX_ACTUATED}: the rules sweep the arm's n x n mass matrix at every pose (n^3 each: 80 "
+                         "joints take 8 s here, 300 joints minutes); name fewer with joints or tip_link, or lock some "
+                         "with exclude_joints")
     chosen = {j.name for j in actuated}
     locked = [j for j in chain.movable if j.name not in chosen]
     return actuated, locked
