@@ -384,3 +384,36 @@ def test_a_robot_without_a_name_loads_named_after_its_file(tmp_path):
     assert ET.parse(arm.plant_urdf).getroot().get("name") == "nameless"
     d = compare_with_mujoco(arm, states=5, urdf=tmp_path / "named.urdf")
     assert d.worst < MUJOCO_RTOL, d
+
+
+def test_a_fixed_base_without_inertial_loads_without_pybullets_warning(tmp_path, capfd):
+    """A root link without ``<inertial>`` (a bare ``world`` or ``base``: common) is loaded as written (a fixed
+    base's mass never moves); PyBullet's "No inertial data for link, using mass=1" for it, and the link's name it
+    prints without a newline, used to land on stdout glued to the next line (`arm`: "baseARM ok ...")."""
+    urdf = tmp_path / "bare_base.urdf"
+    inertial = ('<inertial><origin xyz="0 0 0.1"/><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" '
+                'iyz="0" izz="0.01"/></inertial>')
+    urdf.write_text(f'<robot name="t"><link name="base"/><link name="l1">{inertial}</link>'
+                    '<joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/>'
+                    '<limit lower="-2" upper="2" effort="50" velocity="2"/></joint></robot>')
+    arm = load_arm(urdf)
+    assert arm.plant_urdf is None   # loaded as written
+    capfd.readouterr()
+    client = open_client()
+    try:
+        PyBulletArmPlant(client, arm, arm_plant_params(arm))
+    finally:
+        client.disconnect()
+    out = capfd.readouterr()
+    assert out.out == "" and out.err == "", out
+
+
+def test_a_warning_the_copy_did_not_foresee_is_kept():
+    from pa10_dnbs.plant.pybullet_plant import _unforeseen_warnings
+
+    tag = "b3Warning[examples/Importers/ImportURDFDemo/BulletUrdfImporter.cpp,126]:\n"
+    root = f"{tag}No inertial data for link, using mass=1, localinertiadiagonal = 1,1,1, identity local inertial frame{tag}world"
+    other = f"{tag}No inertial data for link, using mass=1, localinertiadiagonal = 1,1,1, identity local inertial frame{tag}l3"
+    assert _unforeseen_warnings(root, "world") == ""
+    assert _unforeseen_warnings(root + other, "world") == ("No inertial data for link, using mass=1, localinertiadiagonal "
+                                                           "= 1,1,1, identity local inertial frame l3")

@@ -30,6 +30,22 @@ def _pybullet_reason(printed: str) -> str:
     return f": {text[:300]}{'...' if len(text) > 300 else ''}" if text else ""
 
 
+def _unforeseen_warnings(printed: str, root_link: str) -> str:
+    """What PyBullet printed while loading, less the warning the plant expects: "No inertial data for link" on
+    the fixed base (``root_link``; its mass never moves, so the copy leaves it as written: plant_urdf.py), which
+    PyBullet prints as two warnings, the message and then the link's name."""
+    parts = re.split(r"b3Warning\[[^\]]*\]:\n", printed)
+    kept, i = [parts[0]], 1
+    while i < len(parts):
+        if parts[i].startswith("No inertial data for link") and i + 1 < len(parts) and \
+                parts[i + 1].strip() == root_link:
+            i += 2
+            continue
+        kept.append(parts[i])
+        i += 1
+    return " ".join(p.strip() for p in kept if p.strip())
+
+
 def _coulomb_root(v_free: float, k: float, inv_eps: float) -> float:
     """The root v of g(v) = v - v_free + k tanh(v inv_eps) (k >= 0), to |g| <= 1e-13 (1 + |v_free|).
 
@@ -130,8 +146,9 @@ class PyBulletArmPlant(ArmPlantBase):
             raise ArmError(f"{arm.urdf}: PyBullet cannot load this URDF"
                            + (f" (its cleaned copy {urdf_path})" if arm.plant_urdf is not None else "")
                            + _pybullet_reason(said[0])) from None
-        if said[0]:
-            os.write(1, said[0].encode())   # its warnings on a load that worked: where they went before
+        left = _unforeseen_warnings(said[0], arm.chain.root_link)
+        if left:   # a warning the cleaned copy did not foresee: on stderr, one line, never glued to stdout's
+            os.write(2, f"PyBullet, loading {arm.urdf}:{_pybullet_reason(left)[1:]}\n".encode())
         self._n_links = client.getNumJoints(self._body)
         index_of, dofs = {}, []
         for j in range(self._n_links):
