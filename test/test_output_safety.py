@@ -2,6 +2,7 @@
 unrelated files, not the current directory, its parents or the root; ``tune`` resumes only into its own folder.
 Each refusal: exit 2, one line naming the flag, before any run (nothing printed to stdout), inputs byte-identical.
 Tiny runs (0.2 s, pid unless a warm start needs dnbs, no figures)."""
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -430,3 +431,44 @@ def test_an_output_folder_gets_the_mode_mkdir_would_give(tmp_path, mask):
         os.umask(old)
     assert stat.S_IMODE((tmp_path / "run").stat().st_mode) == stat.S_IMODE((tmp_path / "plain").stat().st_mode) \
         == 0o777 & ~mask
+
+
+@pytest.mark.parametrize("how", ["moved", "copied"])
+def test_a_tune_folder_moved_or_copied_whole_resumes_where_it_is(tmp_path, how):
+    """tune.json names the storage by its absolute path (sqlite:////old/place/tune.db): a tune folder renamed, or
+    copied to another place, could never be resumed, each message pointing to the other (the review's rev_g
+    finding 2). Given no --storage, the folder's own tune.db is its storage wherever the folder is."""
+    import shutil
+
+    first, there = tmp_path / "first", tmp_path / "there"
+    r = run_cli(*TUNE, "--controller", "pid", "--trials", "1", "--out", first)
+    assert r.returncode == 0, r.stderr
+    (shutil.move if how == "moved" else shutil.copytree)(first, there)
+    r = run_cli(*TUNE, "--controller", "pid", "--trials", "2", "--out", there)
+    assert r.returncode == 0 and "2 trials" in r.stdout, r.stderr
+    assert json.loads((there / "tune.json").read_text())["storage"] == f"sqlite:///{(there / 'tune.db').resolve()}"
+
+
+def test_a_tune_whose_trials_are_lost_is_refused_not_started_over_its_reports(tmp_path):
+    """The storage of reported trials deleted (DIR/tune.db, or a --storage file): the same command started a new
+    study and wrote its reports over those of the lost trials, exit 0 (rev_g finding 3)."""
+    out = tmp_path / "t"
+    r = run_cli(*TUNE, "--controller", "pid", "--trials", "2", "--out", out)
+    assert r.returncode == 0, r.stderr
+    (out / "tune.db").unlink()
+    before = _tree(out)
+    _refused(run_cli(*TUNE, "--controller", "pid", "--trials", "3", "--out", out), "--out",
+             f"{out}/tune.json reports 2 trials", "tune.db, which held them, is gone")
+    assert _tree(out) == before
+
+    elsewhere = tmp_path / "db"
+    elsewhere.mkdir()
+    storage = f"sqlite:///{elsewhere / 'trials.db'}"
+    out2 = tmp_path / "t2"
+    r = run_cli(*TUNE, "--controller", "pid", "--trials", "2", "--storage", storage, "--out", out2)
+    assert r.returncode == 0, r.stderr
+    (elsewhere / "trials.db").unlink()
+    report = (out2 / "tune.md").read_text()
+    _refused(run_cli(*TUNE, "--controller", "pid", "--trials", "3", "--storage", storage, "--out", out2), "--out",
+             f"{out2}/tune.json reports 2 trials", f"but {storage} holds 0")
+    assert (out2 / "tune.md").read_text() == report

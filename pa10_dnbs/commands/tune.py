@@ -150,20 +150,40 @@ def _default_storage(out: Path) -> str:
     return f"sqlite:///{(out / 'tune.db').resolve()}"
 
 
-def _check_same_storage(out: Path, storage: str | None) -> None:
-    """OutputExistsError (one line naming --out) if ``out`` holds another storage's tune: a tune.json written from
-    another storage, or its own tune.db while the trials go to a --storage elsewhere (the reports would be
-    replaced by another storage's study, and disagree with DIR/tune.db)."""
+def _reports(out: Path) -> dict:
+    """DIR/tune.json, the reports of the tune run there last ({} when there are none or they do not read)."""
     import json
 
-    url = storage if storage is not None else _default_storage(out)
     try:
         done = json.loads((out / "tune.json").read_text())
     except (OSError, ValueError):
-        done = None
-    stored = done.get("storage") if isinstance(done, dict) else None
+        return {}
+    return done if isinstance(done, dict) else {}
+
+
+def _moved_here(stored: str, storage: str | None, out: Path) -> bool:
+    """The reports name a DIR/tune.db of another folder, and this folder, given no --storage, holds its own
+    tune.db: the tune's folder was copied or moved here (its study is checked by its stored options)."""
+    return storage is None and stored.endswith("/tune.db") and stored.startswith("sqlite:///") \
+        and (out / "tune.db").is_file()
+
+
+def _check_same_storage(out: Path, storage: str | None) -> None:
+    """OutputExistsError (one line naming --out) if ``out`` holds another storage's tune: a tune.json written from
+    another storage, or its own tune.db while the trials go to a --storage elsewhere (the reports would be
+    replaced by another storage's study, and disagree with DIR/tune.db). A tune folder copied or moved whole
+    (tune.json naming the tune.db of its old place) is this folder's own tune. Reports of trials whose tune.db is
+    gone are refused too: the same command would start a new study over them."""
+    url = storage if storage is not None else _default_storage(out)
+    done = _reports(out)
+    stored = done.get("storage")
     own = storage_key(_default_storage(out))
-    if isinstance(stored, str) and storage_key(stored) != storage_key(url):
+    if storage is None and isinstance(stored, str) and storage_key(stored) == own \
+            and isinstance(done.get("trials"), int) and done["trials"] > 0 and not (out / "tune.db").exists():
+        raise OutputExistsError(f"--out: {out}/tune.json reports {done['trials']} trials of study "
+                                f"{done.get('study')!r}, but {out}/tune.db, which held them, is gone: restore it to "
+                                "resume that tune, or give another --out for a new one")
+    if isinstance(stored, str) and storage_key(stored) != storage_key(url) and not _moved_here(stored, storage, out):
         that = "without --storage" if storage_key(stored) == own else f"with --storage {stored}"
         raise OutputExistsError(f"--out: {out} holds the reports of the tune in {stored}, not in {url}: give another "
                                 f"--out for this tune (or rerun {that} to resume that one)")
@@ -171,6 +191,18 @@ def _check_same_storage(out: Path, storage: str | None) -> None:
         raise OutputExistsError(f"--out: {out}/tune.db holds the trials of a tune without --storage, not of "
                                 f"{storage}: give another --out for this tune (or leave --storage out to resume "
                                 "that one)")
+
+
+def _check_reports_kept(out: Path, study, storage: str) -> None:
+    """OutputExistsError naming --out when DIR's reports count more trials of this study than ``storage`` holds:
+    the storage was replaced or lost (a --storage file deleted, a new database), and the tune would start anew
+    and write its reports over those of the lost trials."""
+    done = _reports(out)
+    n = len(completed(study))
+    if done.get("study") == study.study_name and isinstance(done.get("trials"), int) and done["trials"] > n:
+        raise OutputExistsError(f"--out: {out}/tune.json reports {done['trials']} trials of study {study.study_name!r}, "
+                                f"but {storage} holds {n}: the storage those trials were kept in is gone or another; "
+                                "restore it to resume that tune, or give another --out for a new one")
 
 
 def _interrupted_line(state: dict, trials: int) -> str:
@@ -222,6 +254,7 @@ def _tune(state, spec, base, trials, out, storage, pool_batch, scheduler, train,
         if scheduler is not None:
             batch = max(1, ex.jobs // (len(train) * seeds))   # the cluster's workers
         study = open_study(storage_obj, spec, batch)
+        _check_reports_kept(out, study, storage)
         state["study"], state["phase"] = study, "trials"
         t0 = time.monotonic()
         bar = state["bar"] = TrialProgress(study, trials, f"tune {controller} on {the_arm.name}", progress)
