@@ -5,6 +5,7 @@ Exit codes: 0 success, 1 run failure, 2 bad input (config, arguments, existing o
 from __future__ import annotations
 
 import argparse
+import errno
 import sys
 
 from . import interrupt
@@ -33,6 +34,9 @@ SETTING_FLAGS = {"arm": "--arm",
                  "robot": "--robot", "robot_command": "--robot-command", "robot_state_topic": "--robot-state-topic",
                  "robot_command_topic": "--robot-command-topic", "robot_timeout": "--robot-timeout"}
 
+
+#: errors of a write that name no file (a full disk, a quota, a read-only file system): the line names --out
+WRITE_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS})
 
 #: the commands that write no output folder (their Ctrl-C line says nothing about outputs)
 NO_OUTPUTS = frozenset({"robot", "replay", "arm"})
@@ -452,7 +456,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"pa10-dnbs: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:
-        print(f"pa10-dnbs: error: {exc}", file=sys.stderr)
+        out = getattr(args, "out", None)
+        where = f" (writing {out})" if exc.filename is None and out is not None and exc.errno in WRITE_ERRNOS else ""
+        print(f"pa10-dnbs: error: {exc}{where}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         writes = getattr(args, "func_name", None) not in NO_OUTPUTS

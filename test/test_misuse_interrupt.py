@@ -743,3 +743,19 @@ def test_study_ctrl_c_after_its_last_run_writes_the_whole_study_not_a_partial_on
     assert not (out / "interrupted.json").exists()
     assert [(r["scenario"], r["controller"]) for r in json.loads((out / "study.json").read_text())["rows"]] == [
         ("nominal", "pid"), ("coulomb", "pid")]
+
+
+def test_a_full_disk_names_the_output_it_was_writing(monkeypatch, capsys, tmp_path):
+    """ENOSPC names no file: the line was '[Errno 28] No space left on device' alone (rev_g finding 7)."""
+    import errno
+
+    from pa10_dnbs import cli
+    from pa10_dnbs.commands import simulate as simulate_command
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(simulate_command, "run_simulate", full)
+    out = tmp_path / "s"
+    assert cli.main(["simulate", "--duration", "0.2", "--out", str(out), "--no-progress"]) == 1
+    assert one_line(capsys.readouterr().err) == f"pa10-dnbs: error: [Errno 28] No space left on device (writing {out})"
