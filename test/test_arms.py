@@ -109,7 +109,8 @@ def test_a_config_value_beats_the_arm_file_and_the_rule(tmp_path):
     ({}, {"exclude_joints": ["nope"]}, r"joint 'nope' is not in the URDF"),
     ({'name="j2" type="revolute"': 'name="j2" type="prismatic"'}, {}, r"joint 'j2' is prismatic"),
     ({'name="j3" type="revolute"': 'name="j3" type="floating"'}, {}, r"joint 'j3' is floating"),
-    ({'effort="50.0"': 'effort="0"'}, {}, r"joint 'j1' has no effort limit > 0: give torque_limit_nm"),
+    ({'effort="50.0"': 'effort="0"'}, {}, r"joint 'j1' has effort 0, not a finite limit > 0: give torque_limit_nm"),
+    ({'effort="50.0"': 'effort="inf"'}, {}, r"joint 'j1' has effort inf, not a finite limit > 0: give torque_limit_nm"),
     ({'<link name="l2"><inertial>': '<link name="l2"><foo>', '</inertial></link><link name="l3">':
       '</foo></link><link name="l3">'}, {}, r"link 'l2' \(moved by 'j2'\) has no <inertial>"),
     ({}, {"rotor_inertia_kgm2": [0.1, 0.1]}, r"rotor_inertia_kgm2: expected 3 values"),

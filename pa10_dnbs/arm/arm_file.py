@@ -137,7 +137,9 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
         efforts = [j.effort for j in actuated]
         missing = [j.name for j, e in zip(actuated, efforts) if not (math.isfinite(e) and e > 0.0)]
         if missing:
-            raise ArmError(f"{urdf}: joint {missing[0]!r} has no effort limit > 0: give torque_limit_nm in the arm file")
+            e = efforts[[j.name for j in actuated].index(missing[0])]
+            what = "no <limit effort>" if math.isnan(e) else f"effort {e:g}, not a finite limit > 0"
+            raise ArmError(f"{urdf}: joint {missing[0]!r} has {what}: give torque_limit_nm in the arm file")
         torque = np.array(efforts, dtype=float)
         sources.setdefault("torque_limit_nm", "the URDF's <limit effort>")
     facts = {key: _vector(path, key, raw.get(key, 0.0), n, strict=False) for key in FACTS[1:]}
