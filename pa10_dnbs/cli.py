@@ -117,10 +117,17 @@ def _robot_command_options(args: argparse.Namespace):
         state_topic=args.state_topic, command_topic=args.command_topic, clock_hz=args.clock_hz)
 
 
+def _jobs_only_local(args: argparse.Namespace) -> None:
+    """--jobs counts local processes: with --scheduler the cluster's workers run everything, and it was ignored."""
+    _unused_flags(args, [("jobs", args.scheduler is None,
+                          "local worker processes only; with --scheduler the cluster's workers run the runs")])
+
+
 def _study_options(args: argparse.Namespace):
     """The ``study`` command's options from its parsed flags."""
     from .commands.options import StudyOptions
 
+    _jobs_only_local(args)
     return StudyOptions(
         out=args.out, scenarios=args.scenarios, controllers=args.controllers, seeds=args.seeds,
         duration_s=args.duration, force=args.force, config_path=args.config, jobs=args.jobs,
@@ -131,6 +138,7 @@ def _tune_options(args: argparse.Namespace):
     """The ``tune`` command's options from its parsed flags."""
     from .commands.options import TuneOptions
 
+    _jobs_only_local(args)
     return TuneOptions(
         controller=args.controller, out=args.out, trials=args.trials, arm=args.arm, config_path=args.config,
         storage=args.storage, seed=args.seed, jobs=args.jobs, scheduler=args.scheduler, scenarios=args.scenarios,

@@ -621,3 +621,14 @@ def test_a_plainly_written_number_is_read(text):
     assert seconds(text) == float(text)
     if text.lstrip("+").isdigit():
         assert whole_in(1)(text) == int(text)
+
+
+@pytest.mark.parametrize("command", [("study",), ("tune", "--controller", "pid")])
+def test_jobs_with_a_scheduler_is_one_line_not_silently_ignored(tmp_path, command):
+    """--jobs counts local processes; with --scheduler the cluster's workers run the runs and --jobs was silently
+    ignored (rev_g finding 9). Refused before anything is reached or written."""
+    out = tmp_path / "o"
+    r = run_cli(*command, "--jobs", "2", "--scheduler", "tcp://127.0.0.1:1", "--out", out, "--duration", "0.2")
+    assert r.returncode == 2 and r.stderr == ("pa10-dnbs: error: --jobs: local worker processes only; with "
+                                              "--scheduler the cluster's workers run the runs\n"), r.stderr
+    assert not out.exists()
