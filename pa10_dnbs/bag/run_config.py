@@ -43,12 +43,13 @@ class BagRunSettings:
     source: str
 
 
-def _from_mapping(cfg: dict, source: str) -> BagRunSettings:
-    """The settings of a stored config whose USED_KEYS (and metrics, when there) are checked."""
-    sim, metrics = cfg["simulation"], cfg.get("metrics") or DEFAULT_METRICS
-    return BagRunSettings(float(sim["dt_s"]), tuple(sim["window_s"]), tuple(cfg["plant"]["torque_limit_nm"]),
+def _from_mapping(stored: dict, source: str) -> BagRunSettings:
+    """The settings of the config mapping stored in a bag, its USED_KEYS (and metrics, when there) checked by
+    :func:`_checked_stored`: the one place a bag's stored config is read as a mapping."""
+    sim, metrics = stored["simulation"], stored.get("metrics") or DEFAULT_METRICS
+    return BagRunSettings(float(sim["dt_s"]), tuple(sim["window_s"]), tuple(stored["plant"]["torque_limit_nm"]),
                           float(metrics["settle_band_rad"]), float(metrics["startup_s"]), sim.get("seed"),
-                          cfg.get("arm"), source)
+                          stored.get("arm"), source)
 
 
 def _given_config(config_path: Path, joints: tuple[str, ...], bag_dt_s: float | None) -> BagRunSettings:
