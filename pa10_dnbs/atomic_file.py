@@ -1,10 +1,12 @@
 """Files written atomically: to a temporary sibling first, then renamed over the target, so a process killed
 mid-write leaves the previous file (or none), never half a file. The one writer for stats JSON files,
-controller checkpoints and the wire monitor's record.
+controller checkpoints and the wire monitor's record. Also the mode a folder made by ``tempfile.mkdtemp`` (for
+an output renamed into place) takes instead of mkdtemp's 0700: :func:`mkdir_mode`.
 """
 from __future__ import annotations
 
 import os
+import stat
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -27,8 +29,9 @@ def umask() -> int:
 
 def mkdir_mode(path) -> None:
     """Give a folder made private by ``tempfile.mkdtemp`` (0700) the mode ``mkdir`` gives: 0777 less the umask,
-    so an output renamed into place is readable as any other folder the user makes."""
-    os.chmod(path, 0o777 & ~umask())
+    so an output renamed into place is readable as any other folder the user makes; the setgid bit a folder
+    inherits from a shared group's parent is kept."""
+    os.chmod(path, (os.stat(path).st_mode & stat.S_ISGID) | (0o777 & ~umask()))
 
 
 @contextmanager

@@ -465,7 +465,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except OSError as exc:
         out = getattr(args, "out", None)
-        where = f" (writing {out})" if exc.filename is None and out is not None and exc.errno in WRITE_ERRNOS else ""
+        where = (f" (while writing the outputs for {out})"
+                 if exc.filename is None and out is not None and exc.errno in WRITE_ERRNOS else "")
         print(f"pa10-dnbs: error: {exc}{where}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:

@@ -758,4 +758,4 @@ def test_a_full_disk_names_the_output_it_was_writing(monkeypatch, capsys, tmp_pa
     monkeypatch.setattr(simulate_command, "run_simulate", full)
     out = tmp_path / "s"
     assert cli.main(["simulate", "--duration", "0.2", "--out", str(out), "--no-progress"]) == 1
-    assert one_line(capsys.readouterr().err) == f"pa10-dnbs: error: [Errno 28] No space left on device (writing {out})"
+    assert one_line(capsys.readouterr().err) == f"pa10-dnbs: error: [Errno 28] No space left on device (while writing the outputs for {out})"

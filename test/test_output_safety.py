@@ -433,6 +433,24 @@ def test_an_output_folder_gets_the_mode_mkdir_would_give(tmp_path, mask):
         == 0o777 & ~mask
 
 
+def test_an_output_folder_in_a_setgid_folder_keeps_the_bit_mkdir_gives(tmp_path):
+    """A shared group's folder (g+s) passes its group and the bit down to a folder made in it: the output, made
+    by mkdtemp and given mkdir's mode, must keep the bit (a chmod of 0777 less the umask alone cleared it)."""
+    import os
+    import stat
+
+    from pa10_dnbs.report.outputs import atomic_output_dir
+
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    os.chmod(shared, 0o2775)
+    with atomic_output_dir(shared / "run", force=False) as tmp:
+        (tmp / "report.md").write_text("x\n")
+    (shared / "plain").mkdir()
+    assert (shared / "run").stat().st_mode == (shared / "plain").stat().st_mode
+    assert (shared / "run").stat().st_mode & stat.S_ISGID
+
+
 @pytest.mark.parametrize("how", ["moved", "copied"])
 def test_a_tune_folder_moved_or_copied_whole_resumes_where_it_is(tmp_path, how):
     """tune.json names the storage by its absolute path (sqlite:////old/place/tune.db): a tune folder renamed, or
@@ -468,7 +486,16 @@ def test_a_tune_whose_trials_are_lost_is_refused_not_started_over_its_reports(tm
     r = run_cli(*TUNE, "--controller", "pid", "--trials", "2", "--storage", storage, "--out", out2)
     assert r.returncode == 0, r.stderr
     (elsewhere / "trials.db").unlink()
-    report = (out2 / "tune.md").read_text()
+    before = _tree(out2)
     _refused(run_cli(*TUNE, "--controller", "pid", "--trials", "3", "--storage", storage, "--out", out2), "--out",
-             f"{out2}/tune.json reports 2 trials", f"but {storage} holds 0")
-    assert (out2 / "tune.md").read_text() == report
+             f"{out2}/tune.json reports 2 trials", f"but {elsewhere / 'trials.db'}, which held them, is gone")
+    assert _tree(out2) == before and not (elsewhere / "trials.db").exists()   # nothing made again
+
+    # a storage there that holds none of them (another database put in its place): refused before the study is
+    # made in it
+    import optuna
+
+    optuna.create_study(storage=storage, study_name="unrelated")
+    r = run_cli(*TUNE, "--controller", "pid", "--trials", "3", "--storage", storage, "--out", out2)
+    _refused(r, "--out", f"{out2}/tune.json reports 2 trials", f"but {storage} holds 0")
+    assert optuna.get_all_study_names(storage) == ["unrelated"]

@@ -273,7 +273,7 @@ def test_without_namespace_the_sender_finds_the_graph_of_another_arm(domain):
         listener.interrupt()
         listener.wait(timeout=30)
     assert rc == 0, sender.output
-    assert sender.lines[-1] == f"sent {EXAMPLE} at /clock 0.000 s", sender.output
+    assert f"sent {EXAMPLE} at /clock 0.000 s" in sender.lines, sender.output
 
 
 @pytest.mark.graph

@@ -135,11 +135,11 @@ def _build(path: Path, raw: dict, bare: bool) -> Arm:
         torque = _vector(path, "torque_limit_nm", raw["torque_limit_nm"], n, strict=True)
     else:
         efforts = [j.effort for j in actuated]
-        missing = [j.name for j, e in zip(actuated, efforts) if not (math.isfinite(e) and e > 0.0)]
-        if missing:
-            e = efforts[[j.name for j in actuated].index(missing[0])]
+        bad = next(((j.name, e) for j, e in zip(actuated, efforts) if not (math.isfinite(e) and e > 0.0)), None)
+        if bad:
+            name, e = bad
             what = "no <limit effort>" if math.isnan(e) else f"effort {e:g}, not a finite limit > 0"
-            raise ArmError(f"{urdf}: joint {missing[0]!r} has {what}: give torque_limit_nm in the arm file")
+            raise ArmError(f"{urdf}: joint {name!r} has {what}: give torque_limit_nm in the arm file")
         torque = np.array(efforts, dtype=float)
         sources.setdefault("torque_limit_nm", "the URDF's <limit effort>")
     facts = {key: _vector(path, key, raw.get(key, 0.0), n, strict=False) for key in FACTS[1:]}

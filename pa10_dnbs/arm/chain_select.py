@@ -131,7 +131,8 @@ def actuated_joints(chain: UrdfChain, exclude: tuple[str, ...] = (), tip_link: s
     order); else every movable chain joint not in ``exclude`` and, unless ``keep_gripper``, not in the
     gripper at the chain's end (:func:`gripper_joints`). Raises ValueError naming the joint for an
     unknown name, or an actuated joint that is not revolute or continuous (prismatic, floating, planar) or
-    that mimics another (a URDF ``<mimic>``: a coupled joint with no actuator of its own).
+    that mimics another (a URDF ``<mimic>``: a coupled joint with no actuator of its own); and for more than
+    MAX_ACTUATED joints to actuate.
     """
     if not chain.joints:
         raise ValueError("the URDF has no joints")
@@ -165,9 +166,9 @@ def actuated_joints(chain: UrdfChain, exclude: tuple[str, ...] = (), tip_link: s
         raise ValueError(_none_left(chain.root_link, on_chain, exclude, gripper, names))
     if len(actuated) > MAX_ACTUATED:
         raise ValueError(f"{len(actuated)} joints to actuate on the chain from {chain.root_link}, more than "
-                         f"{MAX_ACTUATED}: the rules sweep the arm's n x n mass matrix at every pose (n^3 each: 80 "
-                         "joints take 8 s here, 300 joints minutes); name fewer with joints or tip_link, or lock some "
-                         "with exclude_joints")
+                         f"{MAX_ACTUATED}, the most one arm may have here (one controller process per joint on the "
+                         "graph; the gain rule sweeps the n x n mass matrix at every pose, n^3 each: 80 joints take "
+                         "8 s, 300 minutes); name fewer with joints or tip_link, or lock some with exclude_joints")
     chosen = {j.name for j in actuated}
     locked = [j for j in chain.movable if j.name not in chosen]
     return actuated, locked

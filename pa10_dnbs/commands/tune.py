@@ -35,7 +35,7 @@ from ..run_settings import built_settings_held, say_rules
 from ..run_steps import run_duration, run_steps
 from ..tune.tuner import (TrialProgress, TuneSpec, arm_digest, check_persistent, check_storage_file, completed,
                           held_out, open_storage, open_study, optimize, refusal, settings_digest, storage_key,
-                          stored_identity, study_lock_key)
+                          sqlite_file, stored_identity, study_lock_key)
 
 HELD_OUT_SEED0 = 100   # held-out seeds are 100, 101, ...: never a training seed (0 .. --seeds - 1)
 
@@ -162,10 +162,11 @@ def _reports(out: Path) -> dict:
 
 
 def _moved_here(stored: str, storage: str | None, out: Path) -> bool:
-    """The reports name a DIR/tune.db of another folder, and this folder, given no --storage, holds its own
-    tune.db: the tune's folder was copied or moved here (its study is checked by its stored options)."""
-    return storage is None and stored.endswith("/tune.db") and stored.startswith("sqlite:///") \
-        and (out / "tune.db").is_file()
+    """The reports name a DIR/tune.db of another folder, and this folder, given no --storage (or its own tune.db
+    as --storage), holds its own tune.db: the tune's folder was copied or moved here (its study is checked by its
+    stored options)."""
+    own = storage is None or storage_key(storage) == storage_key(_default_storage(out))
+    return own and stored.endswith("/tune.db") and stored.startswith("sqlite:///") and (out / "tune.db").is_file()
 
 
 def _check_same_storage(out: Path, storage: str | None) -> None:
@@ -178,10 +179,11 @@ def _check_same_storage(out: Path, storage: str | None) -> None:
     done = _reports(out)
     stored = done.get("storage")
     own = storage_key(_default_storage(out))
-    if storage is None and isinstance(stored, str) and storage_key(stored) == own \
-            and isinstance(done.get("trials"), int) and done["trials"] > 0 and not (out / "tune.db").exists():
+    db = sqlite_file(url)
+    if isinstance(stored, str) and storage_key(stored) == storage_key(url) and isinstance(done.get("trials"), int) \
+            and done["trials"] > 0 and db is not None and not db.exists():   # refused before the file is made again
         raise OutputExistsError(f"--out: {out}/tune.json reports {done['trials']} trials of study "
-                                f"{done.get('study')!r}, but {out}/tune.db, which held them, is gone: restore it to "
+                                f"{done.get('study')!r}, but {db}, which held them, is gone: restore it to "
                                 "resume that tune, or give another --out for a new one")
     if isinstance(stored, str) and storage_key(stored) != storage_key(url) and not _moved_here(stored, storage, out):
         that = "without --storage" if storage_key(stored) == own else f"with --storage {stored}"
@@ -193,14 +195,22 @@ def _check_same_storage(out: Path, storage: str | None) -> None:
                                 "that one)")
 
 
-def _check_reports_kept(out: Path, study, storage: str) -> None:
-    """OutputExistsError naming --out when DIR's reports count more trials of this study than ``storage`` holds:
-    the storage was replaced or lost (a --storage file deleted, a new database), and the tune would start anew
-    and write its reports over those of the lost trials."""
+def _check_reports_kept(out: Path, storage_obj, study_name: str, storage: str) -> None:
+    """OutputExistsError naming --out when DIR's reports count more trials of study ``study_name`` than the
+    storage holds: it was replaced or lost (a new database), and the tune would start anew and write its
+    reports over those of the lost trials. Read only: the study is neither made nor changed."""
+    from optuna.trial import TrialState
+
     done = _reports(out)
-    n = len(completed(study))
-    if done.get("study") == study.study_name and isinstance(done.get("trials"), int) and done["trials"] > n:
-        raise OutputExistsError(f"--out: {out}/tune.json reports {done['trials']} trials of study {study.study_name!r}, "
+    if done.get("study") != study_name or not isinstance(done.get("trials"), int):
+        return
+    try:
+        n = len(storage_obj.get_all_trials(storage_obj.get_study_id_from_name(study_name), deepcopy=False,
+                                           states=(TrialState.COMPLETE,)))
+    except KeyError:   # no such study there
+        n = 0
+    if done["trials"] > n:
+        raise OutputExistsError(f"--out: {out}/tune.json reports {done['trials']} trials of study {study_name!r}, "
                                 f"but {storage} holds {n}: the storage those trials were kept in is gone or another; "
                                 "restore it to resume that tune, or give another --out for a new one")
 
@@ -253,8 +263,8 @@ def _tune(state, spec, base, trials, out, storage, pool_batch, scheduler, train,
             storage_obj = open_storage(storage, default_file=out / "tune.db")
         if scheduler is not None:
             batch = max(1, ex.jobs // (len(train) * seeds))   # the cluster's workers
+        _check_reports_kept(out, storage_obj, spec.study_name, storage)   # before the study is made or changed
         study = open_study(storage_obj, spec, batch)
-        _check_reports_kept(out, study, storage)
         state["study"], state["phase"] = study, "trials"
         t0 = time.monotonic()
         bar = state["bar"] = TrialProgress(study, trials, f"tune {controller} on {the_arm.name}", progress)

@@ -6,8 +6,6 @@ import numpy as np
 from ..core.metrics import DIVERGED_RAD, divergence, first_non_finite, joint_metrics, run_metrics
 from ..run_data import RunData
 
-# metrics settings of configs written before the ``metrics`` section existed (bags of earlier runs)
-
 
 def effective_window(duration_s: float, window_s: tuple[float, float]) -> tuple[float, float]:
     """The configured window, or the second half of a run too short to hold it."""

@@ -6,8 +6,8 @@
 Each file (YAML or JSON, docs/trajectories.md) goes out as a trajectory_msgs/JointTrajectory exactly as
 written: the sender reads its fields but does not check them against an arm, so the reference node is the one
 that accepts or refuses it (its log says which, in one line). Without ``--namespace`` it sends to the one graph
-on the wire that takes trajectories (a ``<ns>/trajectory`` topic of JointTrajectory with a subscriber; several:
-exit 2 naming them, --namespace picks one). It waits until the reference node's
+on the wire that takes trajectories (a ``<ns>/trajectory`` topic of JointTrajectory with a subscriber,
+trajectory_target.py; several seen: exit 2 naming them, --namespace picks one). It waits until the reference node's
 subscription has matched (``--wait`` s of wall time, else exit 1), and with ``--after-clock S`` until /clock
 has reached S s of simulated time; then it sends the files in order, ``--gap`` s of wall time apart, or
 ``--clock-gap`` s of simulated time apart (/clock: independent of how fast the graph runs), reliable, so none
@@ -42,12 +42,12 @@ from ..trajectory_file import read_sendable
 from ..wire.topics import CLOCK, TRAJECTORY, check_topic_name, resolve
 from .reference_node import TRAJECTORY_QOS
 from .shm_cleanup import remove_stale, shm_files
+from .trajectory_target import SeveralGraphs, found_topic
 
 
 INT32_MAX = 2**31 - 1   # builtin_interfaces Time/Duration sec is an int32: a larger one wraps on the wire
 MAX_WAIT_S = 3600.0     # the longest --wait [s]
 SAY_WAITING_S = 1.0     # a wait for the subscriber or /clock longer than this is said in one line (stderr)
-SETTLE_S = 0.5          # without --namespace: a graph found is taken once no second one has shown up for this [s]
 
 
 def _stamp_ns(stamp_s: float) -> int:
@@ -140,50 +140,11 @@ def main(argv=None) -> int:
         remove_stale(shm_files(), ignore_pids=frozenset({os.getpid()}))
 
 
-TRAJECTORY_TYPE = "trajectory_msgs/msg/JointTrajectory"
-
-
-def trajectory_topics(node) -> list[str]:
-    """The ``<ns>/trajectory`` topics of JointTrajectory that some node subscribes to (a graph's reference
-    node), sorted; what this node's discovery has seen so far."""
-    tail = "/" + TRAJECTORY
-    return sorted(name for name, types in node.get_topic_names_and_types()
-                  if name.endswith(tail) and len(name) > len(tail) and TRAJECTORY_TYPE in types
-                  and node.count_subscribers(name) > 0)
-
-
-class SeveralGraphs(Exception):
-    """More than one graph takes trajectories and no --namespace says which."""
-
-
-def _found_topic(node, deadline: float) -> str | None:
-    """The one graph's trajectory topic, found by discovery before ``deadline`` (time.monotonic()); None if
-    none was seen; SeveralGraphs if more than one was (all seen within a last SETTLE_S, so that a second graph
-    still being discovered is not missed for the first)."""
-    say_at = time.monotonic() + SAY_WAITING_S
-    first_seen = None
-    while time.monotonic() < deadline:
-        found = trajectory_topics(node)
-        if len(found) > 1:
-            raise SeveralGraphs(", ".join(found))
-        if found:
-            first_seen = first_seen or time.monotonic()
-            if time.monotonic() - first_seen >= SETTLE_S:
-                return found[0]
-        if say_at is not None and time.monotonic() > say_at:
-            print("trajectory_sender: waiting for a graph that takes trajectories (a <ns>/trajectory subscriber)",
-                  file=sys.stderr, flush=True)
-            say_at = None
-        rclpy.spin_once(node, timeout_sec=0.05)
-    found = trajectory_topics(node)
-    return found[0] if len(found) == 1 else None
-
-
 def _send(node, msgs, args) -> int:
     deadline = time.monotonic() + args.wait
     if args.namespace is None:
         try:
-            topic = _found_topic(node, deadline)
+            topic = found_topic(node, deadline)
         except SeveralGraphs as exc:
             print(f"trajectory_sender: error: several graphs take trajectories ({exc}): give --namespace",
                   file=sys.stderr, flush=True)

@@ -97,11 +97,11 @@ def storage_key(url: str) -> str:
     path, ``//`` in it, or a tune's default ``DIR/tune.db`` name the same file alike); any other URL as given."""
     from ..output_lock import path_key
 
-    file = _sqlite_file(url)
+    file = sqlite_file(url)
     return url if file is None else f"sqlite:///{path_key(file)}"
 
 
-def _sqlite_file(url: str):
+def sqlite_file(url: str):
     """The file (a Path, ``~`` expanded) of an SQLite URL, or None: another database, in memory, a ``file:`` URI,
     or not a URL (open_storage says so)."""
     from pathlib import Path
@@ -151,7 +151,7 @@ def check_storage_file(url: str) -> None:
     database with tables of its own): the tune would add its tables to a file of the user's."""
     from ..report.outputs import not_optuna_storage
 
-    path = _sqlite_file(url)
+    path = sqlite_file(url)
     if path is not None and path.is_file() and (why := not_optuna_storage(path)):
         raise ConfigError(f"storage: {path} is not a tune's storage ({why}): a tune would add its tables to it; give "
                           "a new file or the storage of a tune", setting="storage")
