@@ -14,7 +14,7 @@ has reached S s of simulated time; then it sends the files in order, ``--gap`` s
 is lost and they arrive in order. ``--stamp S``: header.stamp (0, the default: the trajectory starts
 at the first step the reference node has not yet published). Prints one ``sent FILE`` line per file. Exit 0
 once every message is acknowledged, 1 on a timeout, 2 on a file it cannot read or a flag out of range (one
-line, before ROS starts), 130 on Ctrl-C. It refuses a file whose times --trajectory would refuse as out of range
+line, before ROS starts) or on several graphs and no --namespace, 130 on Ctrl-C. It refuses a file whose times --trajectory would refuse as out of range
 (not finite, before 0, past ``MAX_TIME_FROM_START_S``: ``trajectory_file.read_sendable``), so no time wraps on
 the wire (builtin_interfaces' sec is an int32), and a --stamp past what header.stamp carries.
 """
