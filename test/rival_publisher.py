@@ -5,29 +5,19 @@
 Creates a ``sensor_msgs/JointState`` publisher on TOPIC (reliable, depth 10), prints ``RIVAL READY`` and ends on
 SIGINT or SIGTERM with ``RIVAL END``.
 """
-import os
-import signal
 import sys
 import time
 
+from ros_child import ros_node, serve
+
 
 def main() -> int:
-    os.environ["ROS_DOMAIN_ID"] = sys.argv[1]
-    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    import rclpy
+    _, node = ros_node(sys.argv[1], "rival")
     from sensor_msgs.msg import JointState
 
-    rclpy.init(signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
-    node = rclpy.create_node("rival")
     node.create_publisher(JointState, sys.argv[2], 10)
-    stop = []
-    signal.signal(signal.SIGINT, lambda *_: stop.append(1))
-    signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
-    print("RIVAL READY", flush=True)
-    while not stop:
-        time.sleep(0.05)
-    print("RIVAL END", flush=True)
-    os._exit(0)
+    serve("RIVAL READY", "RIVAL END", lambda: time.sleep(0.05))
+    return 0
 
 
 if __name__ == "__main__":

@@ -124,6 +124,17 @@ def test_a_mimic_joint_is_refused_as_an_actuated_joint_and_locked_when_excluded(
     assert arm.joint_names == ("j1", "j2") and arm.locked_joints == ("j3",)
 
 
+def _printed_while_loading(arm, capfd):
+    """What the plant printed (capfd's out and err) while it loaded ``arm`` into a PyBullet client of its own."""
+    capfd.readouterr()
+    client = open_client()
+    try:
+        PyBulletArmPlant(client, arm, arm_plant_params(arm))
+    finally:
+        client.disconnect()
+    return capfd.readouterr()
+
+
 def test_package_meshes_that_do_not_resolve_neither_fail_nor_warn(capfd):
     client = open_client()
     try:
@@ -133,12 +144,7 @@ def test_package_meshes_that_do_not_resolve_neither_fail_nor_warn(capfd):
         client.disconnect()
     capfd.readouterr()
     arm = load_arm(_fixture("package_mesh"))
-    client = open_client()
-    try:
-        PyBulletArmPlant(client, arm, arm_plant_params(arm))
-    finally:
-        client.disconnect()
-    out = capfd.readouterr()
+    out = _printed_while_loading(arm, capfd)
     assert "mesh" not in (out.out + out.err) and "b3Warning" not in (out.out + out.err)
 
 
@@ -399,12 +405,7 @@ def test_a_fixed_base_without_inertial_loads_without_pybullets_warning(tmp_path,
     arm = load_arm(urdf)
     assert arm.plant_urdf is None   # loaded as written
     capfd.readouterr()
-    client = open_client()
-    try:
-        PyBulletArmPlant(client, arm, arm_plant_params(arm))
-    finally:
-        client.disconnect()
-    out = capfd.readouterr()
+    out = _printed_while_loading(arm, capfd)
     assert out.out == "" and out.err == "", out
 
 

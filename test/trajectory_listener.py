@@ -6,22 +6,18 @@ namespace given, a ``<ns>/trajectory`` subscription of JointTrajectory, and /clo
 Prints ``LISTENING`` once its subscriptions exist, ``GOT <topic> <joint names>`` for each message, and ends on
 SIGINT or SIGTERM with ``LISTENER END``.
 """
-import os
-import signal
 import sys
+
+from ros_child import ros_node, serve
 
 
 def main() -> int:
-    os.environ["ROS_DOMAIN_ID"] = sys.argv[1]
-    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    import rclpy
+    rclpy, node = ros_node(sys.argv[1], "trajectory_listener")
     from rosgraph_msgs.msg import Clock
     from trajectory_msgs.msg import JointTrajectory
 
     from pa10_dnbs.ros.reference_node import TRAJECTORY_QOS
 
-    rclpy.init(signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
-    node = rclpy.create_node("trajectory_listener")
     for ns in sys.argv[2:]:
         topic = ns + "/trajectory"
         node.create_subscription(JointTrajectory, topic,
@@ -29,14 +25,8 @@ def main() -> int:
                                  TRAJECTORY_QOS)
     clock = node.create_publisher(Clock, "/clock", 10)
     node.create_timer(0.05, lambda: clock.publish(Clock()))
-    stop = []
-    signal.signal(signal.SIGINT, lambda *_: stop.append(1))
-    signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
-    print("LISTENING", flush=True)
-    while not stop:
-        rclpy.spin_once(node, timeout_sec=0.05)
-    print("LISTENER END", flush=True)
-    os._exit(0)
+    serve("LISTENING", "LISTENER END", lambda: rclpy.spin_once(node, timeout_sec=0.05))
+    return 0
 
 
 if __name__ == "__main__":
