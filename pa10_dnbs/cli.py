@@ -20,19 +20,13 @@ from .cli_values import (EFFORT_TIMEOUT_MAX_S, MAX_REPLAY_CLOCK_HZ, REPLAY_RATE_
                          number_in, path_arg, plain_int, positive, seconds, utf8_text, whole_in)
 from .output_lock import held, release_all
 from .refused import Refused
+from .setting_flags import SETTING_FLAGS
 from .tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 
 if __name__ != "__main__" and not sys.argv[0].endswith("pa10-dnbs"):   # imported by a caller: its own Ctrl-C
     interrupt.end_quiet_start(_startup_sigint)
 
 LIVE_PORT = 8765  # Foxglove's default WebSocket port
-#: The flag of each setting a library's error can name (ConfigError.setting): the command line says it as given.
-SETTING_FLAGS = {"arm": "--arm",
-                 "trajectory": "--trajectory", "duration_s": "--duration", "jobs": "--jobs", "controller": "--controller",
-                 "params": "--params", "storage": "--storage", "scheduler": "--scheduler", "live_port": "--live",
-                 "live_host": "--live-host", "live_hz": "--live-hz", "netns": "--netns", "plant": "--plant",
-                 "robot": "--robot", "robot_command": "--robot-command", "robot_state_topic": "--robot-state-topic",
-                 "robot_command_topic": "--robot-command-topic", "robot_timeout": "--robot-timeout"}
 
 
 #: errors of a write that name no file (a full disk, a quota, a read-only file system): the line names --out
@@ -458,10 +452,10 @@ def main(argv: list[str] | None = None) -> int:
         with interrupt.two_stage_sigint():   # Ctrl-C: the command stops and says what it kept; twice: at once
             return args.func(args)
     except ConfigError as exc:
-        print(f"pa10-dnbs: error: {exc.named(SETTING_FLAGS.get(exc.setting))}", file=sys.stderr)
+        print(f"pa10-dnbs: error: {exc.named(SETTING_FLAGS)}", file=sys.stderr)
         return 2
     except Refused as exc:   # an output in the way, a bag, a kernel (refused.py)
-        print(f"pa10-dnbs: error: {exc}", file=sys.stderr)
+        print(f"pa10-dnbs: error: {exc.named(SETTING_FLAGS)}", file=sys.stderr)
         return 2
     except OSError as exc:
         out = getattr(args, "out", None)

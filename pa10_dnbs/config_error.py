@@ -1,8 +1,20 @@
 """The one error type of bad input (config files, arm files, options): its message names the key, file or
-setting."""
+setting. A library message names a setting, never a flag: the setting's name in backquotes (`force`), which
+whoever knows how the user gave it says their way (:func:`said_as`: the command line as ``--force``)."""
 from __future__ import annotations
 
+import re
 import unicodedata
+from collections.abc import Mapping
+
+#: a setting named inside a message: its name in single backquotes (`config_path`), not in a reST ``literal``
+SETTING_MARK = re.compile(r"(?<!`)`([a-z][a-z0-9_]*)`(?!`)")
+
+
+def said_as(text: str, names: Mapping[str, str]) -> str:
+    """``text`` with each setting marked in it (`force`) that ``names`` knows said as ``names`` says it
+    (``{"force": "--force"}``); a setting ``names`` does not know keeps its mark."""
+    return SETTING_MARK.sub(lambda m: names.get(m.group(1), m.group(0)), text)
 
 
 class ConfigError(ValueError):
@@ -16,12 +28,14 @@ class ConfigError(ValueError):
         super().__init__(message)
         self.setting = setting
 
-    def named(self, name: str | None) -> str:
-        """The message, the setting it opens with called ``name`` (e.g. ``--duration``) when there is one."""
+    def named(self, names: Mapping[str, str]) -> str:
+        """The message, each setting in it said as ``names`` says it (``{"duration_s": "--duration"}``): the one it
+        opens with (``setting``) and those marked inside it (:func:`said_as`)."""
         text = str(self)
-        if name and self.setting and text.startswith(self.setting):
-            return name + text[len(self.setting):]
-        return text
+        name = names.get(self.setting) if self.setting else None
+        if name and text.startswith(self.setting):
+            text = name + text[len(self.setting):]
+        return said_as(text, names)
 
 
 SHORT_CHARS = 80   # a value shown in a message is cut to this many characters (the message stays one line)

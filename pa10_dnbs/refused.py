@@ -4,6 +4,15 @@ Its own module, light, so that the CLI catches every such error without importin
 (ConfigError, config_error.py, is the other: a bad setting, its message naming the key.)"""
 from __future__ import annotations
 
+from collections.abc import Mapping
+
+from .config_error import said_as
+
 
 class Refused(Exception):
-    """Base of the errors a command ends on with their message as one line and exit code 2."""
+    """Base of the errors a command ends on with their message as one line and exit code 2. The message names
+    settings as a library does (`force`, config_error.SETTING_MARK)."""
+
+    def named(self, names: Mapping[str, str]) -> str:
+        """The message, each setting marked in it said as ``names`` says it (``{"force": "--force"}``)."""
+        return said_as(str(self), names)

@@ -25,6 +25,7 @@ from pa10_dnbs.cli import main as cli_main  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser, seconds, whole_in  # noqa: E402
 from pa10_dnbs.output_lock import OutputInUseError, lock_output, release_output  # noqa: E402
 from pa10_dnbs.report.outputs import OutputExistsError, check_output_dir  # noqa: E402
+from pa10_dnbs.setting_flags import SETTING_FLAGS  # noqa: E402
 from pa10_dnbs.tune.comparison import comparison_markdown  # noqa: E402
 from pa10_dnbs.tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS  # noqa: E402
 
@@ -82,7 +83,7 @@ def check_one_tune(controller: str, args: argparse.Namespace) -> str | None:
     """What ``pa10-dnbs tune`` would refuse for ``controller`` before it writes anything (its options, its
     DIR/<controller>: another command's output, another tune, a study of other options), in one line naming
     DIR/<controller> and this script's flags; None if it would start."""
-    from pa10_dnbs.cli import SETTING_FLAGS, build_parser as cli_parser, command_options
+    from pa10_dnbs.cli import build_parser as cli_parser, command_options
     from pa10_dnbs.commands.tune import check_tune
     from pa10_dnbs.config_error import ConfigError
     from pa10_dnbs.refused import Refused
@@ -92,9 +93,9 @@ def check_one_tune(controller: str, args: argparse.Namespace) -> str | None:
         check_tune(command_options(cli_parser().parse_args(
             ["tune", "--controller", controller, "--out", str(where), *tune_arguments(args)])))
     except ConfigError as exc:
-        text = exc.named(SETTING_FLAGS.get(exc.setting))
+        text = exc.named(SETTING_FLAGS)
     except Refused as exc:
-        text = str(exc)
+        text = exc.named(SETTING_FLAGS)
     else:
         return None
     return (text.replace("--out/--storage: study", f"{where}: study")
@@ -105,11 +106,11 @@ def check_one_tune(controller: str, args: argparse.Namespace) -> str | None:
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
-        check_output_dir(args.out, False, "--out", inputs={"--config": args.config},   # never "" (the cwd), ...;
+        check_output_dir(args.out, False, "out", inputs={"config_path": args.config},   # never "" (the cwd), ...;
                          resume=frozenset(CONTROLLERS) | {"comparison.md"})           # the same command resumes
         lock_output(args.out, "comparison directory")
     except (OutputExistsError, OutputInUseError) as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        print(f"{PROG}: error: {exc.named(SETTING_FLAGS)}", file=sys.stderr)
         return 2
     try:
         for c in args.controllers:   # every tune checked before the first starts (a refusal after a tune: lost time)

@@ -88,7 +88,7 @@ def test_written_bag_reads_back(tmp_path):
 
 def test_writer_refuses_an_existing_path_without_force(tmp_path):
     bag = _write_bag(tmp_path / "b")
-    with pytest.raises(BagExistsError, match="--force"):
+    with pytest.raises(BagExistsError, match="pass `force` to replace it"):
         BagWriter(bag)
     w = BagWriter(bag, force=True)
     w.close()

@@ -44,10 +44,10 @@ def test_launch_options_carry_the_fault_flags_not_the_namespace():
 
 def test_each_setting_a_library_names_has_a_flag_on_the_command_line():
     parser = cli.build_parser()
-    flags = {s for action in parser._subparsers._group_actions[0].choices.values()  # every subcommand's flags
-             for a in action._actions for s in a.option_strings}
+    actions = [a for sub in parser._subparsers._group_actions[0].choices.values() for a in sub._actions]
+    flags = {s for a in actions for s in a.option_strings} | {a.metavar for a in actions if not a.option_strings}
     assert set(cli.SETTING_FLAGS.values()) <= flags, set(cli.SETTING_FLAGS.values()) - flags
     exc = ConfigError("duration_s: 1e12 s is 1e15 steps", setting="duration_s")
-    assert exc.named(cli.SETTING_FLAGS[exc.setting]) == "--duration: 1e12 s is 1e15 steps"
+    assert exc.named(cli.SETTING_FLAGS) == "--duration: 1e12 s is 1e15 steps"
     assert str(exc) == "duration_s: 1e12 s is 1e15 steps"   # what a library caller sees
-    assert ConfigError("plant.payload_kg: must be >= 0").named("--x") == "plant.payload_kg: must be >= 0"
+    assert ConfigError("plant.payload_kg: must be >= 0").named({"plant": "--x"}) == "plant.payload_kg: must be >= 0"

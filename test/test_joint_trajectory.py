@@ -200,7 +200,7 @@ def test_files_yaml_and_json_and_their_mistakes(cfg, tmp_path):
         with pytest.raises(ConfigError) as err:
             load_trajectory_file(f, arm)
         assert str(err.value).startswith(f"trajectory {f}: ") and message in str(err.value), str(err.value)
-        assert err.value.named("--trajectory").startswith(f"--trajectory {f}: ")  # the command line's form
+        assert err.value.named({"trajectory": "--trajectory"}).startswith(f"--trajectory {f}: ")  # the command line's form
         assert "\n" not in str(err.value)
     with pytest.raises(ConfigError, match="No such file"):
         load_trajectory_file(tmp_path / "none.yaml", arm)

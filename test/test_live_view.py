@@ -231,7 +231,7 @@ def test_a_stalled_client_does_not_block_logging(live):
 def test_live_options_are_checked_before_anything_starts():
     with pytest.raises(ConfigError, match="^live_port: port must be in 0..65535") as err:
         check_live_options("127.0.0.1", 70000)
-    assert err.value.named("--live").startswith("--live: port must be in 0..65535")  # as the command line says it
+    assert err.value.named({"live_port": "--live"}).startswith("--live: port must be in 0..65535")  # as the command line says it
     with pytest.raises(ConfigError, match="^live_hz"):
         check_live_options("127.0.0.1", 0, 0.0)
     with socket.socket() as s:

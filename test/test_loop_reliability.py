@@ -39,6 +39,6 @@ def test_a_graph_that_never_matched_across_namespaces_says_to_link_them():
 
     failure = "plant: FAILED RuntimeError: graph not ready after start_timeout_s = 30 s: /pa10/s1/state: 0 of 1"
     hint = netns_hint(failure, {"plant": "host_a", "reference": "host_a"})
-    assert hint == ("\n(with --netns, the nodes in host_a meet the others only through a link between the namespaces, "
+    assert hint == ("\n(with `netns`, the nodes in host_a meet the others only through a link between the namespaces, "
                     "as scripts/netns_hosts.sh makes one: docs/graph.md, \"Several hosts on one machine\")")
     assert netns_hint(failure, {}) == "" and netns_hint("interrupted (SIGINT)", {"plant": "host_a"}) == ""

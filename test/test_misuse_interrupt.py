@@ -20,7 +20,9 @@ import pytest
 
 from script_module import load_script
 
+from pa10_dnbs.config_error import said_as
 from pa10_dnbs.interrupt import AFTER_LINE, child_pids
+from pa10_dnbs.setting_flags import SETTING_FLAGS
 from pa10_dnbs.tune.tuner import refusal
 
 REPO = Path(__file__).resolve().parent.parent
@@ -562,7 +564,9 @@ def test_a_ctrl_c_while_the_pool_is_waited_on_is_raised_by_the_executor_not_insi
 def test_a_refused_resume_names_each_differing_flag_and_what_to_do():
     stored = {"arm": "pa10", "controller": "pid", "params": ["kp"], "scenarios": ["nominal"], "seeds": [0],
               "duration_s": 2.0, "config_file": "/c.yaml", "seed": 0}
-    line = refusal("pa10-pid", stored, dict(stored, duration_s=1.0, seeds=[0, 1]))
+    text = refusal("pa10-pid", stored, dict(stored, duration_s=1.0, seeds=[0, 1]))
+    assert "`seeds` 2 (stored: 1)" in text and "--" not in text   # the library names settings, not flags
+    line = said_as(text, SETTING_FLAGS)   # as the command line says it
     assert "\n" not in line and "--seeds 2 (stored: 1)" in line and "--duration 1 (stored: 2)" in line
     assert "--arm" not in line and "rerun with the stored options to resume it" in line and "another --out" in line
 

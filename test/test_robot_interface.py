@@ -95,7 +95,7 @@ def test_launch_flags_are_checked_with_one_line_naming_the_flag(monkeypatch):
         with pytest.raises(ConfigError, match=f"^{setting}: ") as err:
             check_robot_options(opt, mode)
         flag = "--" + setting.replace("_", "-")
-        assert err.value.setting == setting and err.value.named(flag).startswith(f"{flag}: ")
+        assert err.value.setting == setting and err.value.named({setting: flag}).startswith(f"{flag}: ")
     monkeypatch.setenv("ROS_DOMAIN_ID", "42")
     assert shell_domain("the robot's domain") == 42
     monkeypatch.delenv("ROS_DOMAIN_ID")

@@ -8,6 +8,7 @@ import pytest
 from cli_runner import run_cli
 
 import pa10_dnbs.run_size as run_size
+from pa10_dnbs.setting_flags import SETTING_FLAGS
 
 ONE_RUN = ("--controller", "pid", "--scenarios", "nominal", "--seeds", 1, "--held-out-seeds", 0, "--no-progress")
 
@@ -239,6 +240,7 @@ def test_a_folder_named_tune_db_in_out_is_named_as_such_not_as_a_storage(tmp_pat
                                               "another kind of file): a tune keeps its trials in DIR/tune.db; move "
                                               "it or give another --out\n"), r.stderr
     assert [p.name for p in out.iterdir()] == ["tune.db"] and not any((out / "tune.db").iterdir())
-    with pytest.raises(ConfigError) as e:   # the tune's own storage that does not open: --out and the file
+    with pytest.raises(ConfigError) as e:   # the tune's own storage that does not open: `out` and the file
         open_storage(f"sqlite:///{out / 'tune.db'}", default_file=out / "tune.db")
-    assert str(e.value).startswith(f"--out: cannot open {out}/tune.db (the tune's storage): ") and not e.value.setting
+    assert str(e.value).startswith(f"`out`: cannot open {out}/tune.db (the tune's storage): ") and not e.value.setting
+    assert e.value.named(SETTING_FLAGS).startswith(f"--out: cannot open {out}/tune.db")

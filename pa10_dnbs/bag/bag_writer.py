@@ -60,11 +60,11 @@ def check_bag_path(path: Path, force: bool) -> None:
     writer made (it holds OUTPUT_MARK): a user's folder is never emptied for a bag. Raises BagExistsError."""
     path = Path(path)
     if os.path.lexists(path) and not force:
-        raise BagExistsError(f"{path} exists; pass --force to replace it")
+        raise BagExistsError(f"{path} exists; pass `force` to replace it")
     if os.path.lexists(path) and (path.is_symlink() or not path.is_dir()):
-        raise BagExistsError(f"{path} exists and is not a folder: --force replaces only a bag folder")
+        raise BagExistsError(f"{path} exists and is not a folder: `force` replaces only a bag folder")
     if path.is_dir() and any(path.iterdir()) and not is_previous_output(path):
-        raise BagExistsError(f"{path} holds files that are not a pa10-dnbs bag: --force replaces only an empty "
+        raise BagExistsError(f"{path} holds files that are not a pa10-dnbs bag: `force` replaces only an empty "
                              "folder or a bag pa10-dnbs recorded; remove it yourself or choose another folder")
     if not path.parent.is_dir():
         raise FileNotFoundError(f"{path.parent}: no such directory for the bag")

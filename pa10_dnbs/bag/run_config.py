@@ -53,17 +53,17 @@ def _from_mapping(stored: dict, source: str) -> BagRunSettings:
 
 
 def _given_config(config_path: Path, joints: tuple[str, ...], bag_dt_s: float | None) -> BagRunSettings:
-    """The run's config from ``--config``: ConfigError naming it when its arm's joints are not the bag's
+    """The run's config from ``config_path``: ConfigError naming it when its arm's joints are not the bag's
     ``joints`` (another arm's config would report the bag against that arm's torque limits) or its step is not
     the bag's ``bag_dt_s`` [s] (its stored config's; None: unknown), which would misread the run's steps."""
     settings = build_settings(config_path)
     if tuple(settings.arm.joint_names) != tuple(joints):
-        raise ConfigError(f"--config {config_path}: its arm {settings.arm.name} (joints "
+        raise ConfigError(f"`config_path` {config_path}: its arm {settings.arm.name} (joints "
                           f"{', '.join(settings.arm.joint_names)}) is not the bag's (joints {', '.join(joints)}): pass "
-                          "the run's config, or leave --config out for the one stored in the bag")
+                          "the run's config, or leave `config_path` out for the one stored in the bag")
     if bag_dt_s is not None and settings.simulation.dt_s != bag_dt_s:
-        raise ConfigError(f"--config {config_path}: its simulation.dt_s {settings.simulation.dt_s:g} s is not the "
-                          f"bag's step {bag_dt_s:g} s: pass the run's config, or leave --config out for the one "
+        raise ConfigError(f"`config_path` {config_path}: its simulation.dt_s {settings.simulation.dt_s:g} s is not the "
+                          f"bag's step {bag_dt_s:g} s: pass the run's config, or leave `config_path` out for the one "
                           "stored in the bag")
     return _from_settings(settings, str(Path(config_path).resolve()))
 
@@ -89,22 +89,22 @@ def _checked_stored(bag: Bag, cfg) -> dict:
     tuples); BagError naming the bag and the key."""
     where = f"{bag.path}: the config stored in the bag ({CUSTOM_CONFIG})"
     if not isinstance(cfg, dict):
-        raise BagError(f"{where} is not a mapping; pass --config")
+        raise BagError(f"{where} is not a mapping; pass `config_path`")
     out = dict(cfg)
     for dotted in USED_KEYS:
         section, key = dotted.split(".")
         values = out.get(section)
         if not isinstance(values, dict) or key not in values:
-            raise BagError(f"{where} lacks {dotted}; pass --config")
+            raise BagError(f"{where} lacks {dotted}; pass `config_path`")
         try:
             out[section] = {**values, key: check_value(dotted, values[key], SCHEMA[section][key], None)}
         except ConfigError as exc:
-            raise BagError(f"{where}: {exc}; pass --config") from None
+            raise BagError(f"{where}: {exc}; pass `config_path`") from None
     if out.get("metrics"):   # absent in bags of runs before the section: DEFAULT_METRICS
         try:
             out["metrics"] = check_value("metrics", out["metrics"], SCHEMA["metrics"], None)
         except ConfigError as exc:
-            raise BagError(f"{where}: {exc}; pass --config") from None
+            raise BagError(f"{where}: {exc}; pass `config_path`") from None
     return out
 
 
@@ -123,7 +123,7 @@ def stored_steps(bag: Bag, info: dict, dt_s: float, n_joints: int) -> int | None
         raise BagError(f"{bag.path}: custom_data {CUSTOM_PREFIX}{why}") from None
     try:
         check_run_size(duration_s, n, n_joints, graph=True)
-    except ConfigError:   # its words name the command's --duration: here the stored key is to blame
+    except ConfigError:   # its words name the command's duration: here the stored key is to blame
         raise BagError(f"{bag.path}: custom_data {CUSTOM_PREFIX}duration_s: {duration_s:g} s is {n:,} steps of "
                        f"{dt_s:g} s, about {run_bytes(n, n_joints, graph=True) / 2**30:,.0f} GiB to hold, more than "
                        "is available here") from None
@@ -133,7 +133,7 @@ def stored_steps(bag: Bag, info: dict, dt_s: float, n_joints: int) -> int | None
 def run_config(bag: Bag, info: dict, config_path: Path | None, joints: tuple[str, ...]) -> BagRunSettings:
     """The settings to read the bag's run with (``source``: where they came from). ``info``: ``analysis.run_info(bag)``;
     ``joints``: the bag's arm's joints (``analysis.bag_joint_names``), whose count the torque limits must match.
-    ConfigError naming ``--config``, BagError naming the bag (and the stored key)."""
+    ConfigError naming ``config_path``, BagError naming the bag (and the stored key)."""
     if config_path is not None:
         return _given_config(config_path, joints, _stored_dt_s(info))
     if info.get("config") is None:
@@ -146,5 +146,5 @@ def run_config(bag: Bag, info: dict, config_path: Path | None, joints: tuple[str
         whose = "the config stored in the bag has torque limits for"
     if len(found.torque_limit_nm) != len(joints):
         raise BagError(f"{bag.path}: the bag's arm has {len(joints)} joints ({', '.join(joints)}), {whose} "
-                       f"{len(found.torque_limit_nm)}: pass the run's --config")
+                       f"{len(found.torque_limit_nm)}: pass the run's `config_path`")
     return found

@@ -38,7 +38,7 @@ def run_analyse(options: AnalyseOptions) -> int:
     o = options
     if o.config_path is not None:   # a folder given as --config is said so, not "--out lies inside --config"
         config_file(Path(o.config_path))
-    check_output_dir(o.out, o.force, "--out", inputs={"BAG": o.bag_path, "--config": o.config_path})
+    check_output_dir(o.out, o.force, "out", inputs={"bag_path": o.bag_path, "config_path": o.config_path})
     lock_input(o.bag_path, "bag")  # a bag another run is still recording (or replacing) is refused, not misread
     with Bag(o.bag_path) as bag:
         info = run_info(bag)

@@ -11,11 +11,13 @@ from pathlib import Path
 import yaml
 
 from ..atomic_file import mkdir_mode
+from ..config_error import said_as
 from ..interrupt import deferred, on_second_sigint, outputs_written
 from ..number_text import interval
 from ..report.metrics_file import diverged_text, metrics_dict, run_ok
 from ..report.outputs import atomic_output_dir, write_report
 from ..config_yaml import dumpable
+from ..setting_flags import SETTING_FLAGS
 from ..supervisor.fault_report import fault_report
 from ..supervisor.graph_run import GraphFailure, run_graph
 from ..supervisor.params_file import write_params_file
@@ -84,7 +86,7 @@ def run_launch(options: LaunchOptions) -> int:
             except GraphFailure as exc:
                 raise _keep_logs(exc, tmp, Path(out)) from None
     except GraphFailure as exc:
-        print(f"pa10-dnbs launch: FAILED: {exc}", file=sys.stderr, flush=True)
+        print(f"pa10-dnbs launch: FAILED: {said_as(str(exc), SETTING_FLAGS)}", file=sys.stderr, flush=True)
         note = failed_run_bag_note(record, bag_before)
         if note is not None:
             print(f"pa10-dnbs launch: {note}", file=sys.stderr)
@@ -101,7 +103,8 @@ def run_launch(options: LaunchOptions) -> int:
         print(f"realtime --rtf {t['target_real_time_factor']:g}: every effort before the deadline on "
               f"{100 * t['on_time_fraction']:.2f} % of ticks, late tick starts {t['late_start_ticks']}")
         if t["on_time_fraction"] < ON_TIME_TARGET:
-            print(realtime_hint(t["target_real_time_factor"], t["rt_priority_applied"], injected_misses(settings.faults)))
+            print(said_as(realtime_hint(t["target_real_time_factor"], t["rt_priority_applied"],
+                                         injected_misses(settings.faults)), SETTING_FLAGS))
     if record is not None:
         size = sum(f.stat().st_size for f in record.iterdir())
         print(f"recorded {record} ({size / 1e6:.1f} MB, {size / 1e6 / (n_steps * dt):.2f} MB per simulated second, "

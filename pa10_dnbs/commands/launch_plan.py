@@ -105,9 +105,9 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
             raise ConfigError(f"--init-from: {exc}") from None
         init_from = checkpoint_dir(o.init_from).resolve()
     out, force, controller, mode, record = o.out, o.force, o.controller, o.mode, o.record
-    check_output_dir(out, force, "--out", inputs={"--config": config_path, "--arm": the_arm.file,
-                                                  "arm URDF": the_arm.urdf, "--trajectory": trajectory,
-                                                  "--init-from": init_from, "--record": record})
+    check_output_dir(out, force, "out", inputs={"config_path": config_path, "arm": the_arm.file,
+                                                  "arm URDF": the_arm.urdf, "trajectory": trajectory,
+                                                  "init_from": init_from, "record": record})
     rt_priority, refused = granted_priority(o.rt_priority)
     if refused:  # said once here, rather than by each of the ten nodes in its log
         print(f"launch: {refused}", flush=True)
@@ -120,9 +120,9 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
         lock_output(record, "bag")
         # the rule of --out: never the current directory, its parents, the root, a link or one of the run's
         # inputs; --force replaces only an empty folder or a bag pa10-dnbs recorded (its OUTPUT_MARK)
-        check_output_dir(given, force, "--record", inputs={"--config": config_path, "--arm": the_arm.file,
-                                                           "arm URDF": the_arm.urdf, "--trajectory": trajectory,
-                                                           "--init-from": init_from})
+        check_output_dir(given, force, "record", inputs={"config_path": config_path, "arm": the_arm.file,
+                                                           "arm URDF": the_arm.urdf, "trajectory": trajectory,
+                                                           "init_from": init_from})
         try:
             check_bag_path(record, force)
         except BagExistsError as exc:

@@ -17,6 +17,7 @@ from ..report.progress import ProgressBar
 from ..run_settings import built_settings_held, say_rules
 from ..run_steps import run_duration, run_steps
 from ..run_size import check_run_size, say_note
+from ..setting_flags import SETTING_FLAGS
 from .fault_flags import IN_PROCESS_FAULTS_NOTE, faults_active
 from ..sim.closed_loop import CONTROLLERS
 from ..study.feasibility import infeasible_scenarios
@@ -44,7 +45,7 @@ def run_study_command(options: StudyOptions) -> int:
                    total_runs=n_runs, say=say_note, setting=given)
     if faults_active(settings.faults):
         say_note(IN_PROCESS_FAULTS_NOTE)
-    check_output_dir(o.out, o.force, "--out", inputs={"--config": config_path, "--arm": settings.arm.file,
+    check_output_dir(o.out, o.force, "out", inputs={"config_path": config_path, "arm": settings.arm.file,
                                                       "arm URDF": settings.arm.urdf})
     check_scenario_references(settings, scen)   # a reference past the Nyquist rate: one line, nothing runs
     infeasible = infeasible_scenarios(settings, scen, duration_s)   # before any run: one line each, not run
@@ -129,7 +130,7 @@ def _keep_partial(out: Path, force: bool, done: list[dict], all_runs: list, comm
     nothing written. A second Ctrl-C meanwhile removes the half-written folder and ends at once."""
     n = len(all_runs)
     kept = len({(r["scenario"], r["controller"], r["seed"]) for r in done})
-    opening = f"pa10-dnbs: error: {lost.line()}; stopped " if lost is not None else "pa10-dnbs: interrupted "
+    opening = f"pa10-dnbs: error: {lost.named(SETTING_FLAGS)}; stopped " if lost is not None else "pa10-dnbs: interrupted "
     code = 2 if lost is not None else EXIT_INTERRUPTED
     if not kept:
         say(f"{opening}after 0 of {n} runs; nothing written to {out}: run the same command again")

@@ -33,6 +33,7 @@ from ..tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS
 from ..tune.space import select, start_values
 from ..run_settings import built_settings_held, say_rules
 from ..run_steps import run_duration, run_steps
+from ..setting_flags import SETTING_FLAGS
 from ..tune.tuner import (TrialProgress, TuneSpec, arm_digest, check_persistent, check_storage_file, completed,
                           held_out, open_storage, open_study, optimize, refusal, settings_digest, storage_key,
                           sqlite_file, stored_identity, study_lock_key)
@@ -105,7 +106,7 @@ def _checks(o: TuneOptions, say) -> dict:
     out = Path(o.out)
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out: {out} exists and is not a directory")
-    check_creatable(out, "--out")
+    check_creatable(out, "out")
     if o.storage is not None:
         check_persistent(o.storage)   # an in-memory database keeps nothing: refused before any run
         check_storage_file(o.storage)   # nor a database of the user's own, which would get the tune's tables
@@ -136,7 +137,7 @@ def _checks(o: TuneOptions, say) -> dict:
                     arm_digest(the_arm), settings_digest(base))
     command = _command(o.controller, o.trials, out, o.arm, config_path, o.storage, o.seed, o.scenarios, o.seeds, o.held_out_seeds,
                        duration_s, o.params, base.simulation.duration_s)
-    check_output_dir(out, False, "--out", inputs={"--config": config_path, "--arm": the_arm.file,
+    check_output_dir(out, False, "out", inputs={"config_path": config_path, "arm": the_arm.file,
                                                    "arm URDF": the_arm.urdf},
                      resume=tune_files(out, o.storage))
     check_tune_dir(out, spec.study_name, spec.identity(), refusal)  # only this tune's own files: it resumes
@@ -239,7 +240,7 @@ def _interrupted_line(state: dict, trials: int) -> str:
 def _lost_line(exc: RunsLost, state: dict, trials: int) -> str:
     """A local worker process or the cluster lost mid-tune: one line naming --jobs or --scheduler, how many
     trials the storage keeps, where, and that the same command resumes."""
-    opening = f"pa10-dnbs: error: {exc.line()}"
+    opening = f"pa10-dnbs: error: {exc.named(SETTING_FLAGS)}"
     if state["study"] is None:
         return f"{opening}; before this run's first trial: run the same command again"
     n, where_kept = len(completed(state["study"])), state["where_kept"]

@@ -40,7 +40,7 @@ from .partial import partial_mark
 
 
 class OutputExistsError(FileExistsError, Refused):
-    """The output directory exists and ``--force`` was not given, or cannot be written, or another run uses it."""
+    """The output directory exists and ``force`` was not given, or cannot be written, or another run uses it."""
 
 
 # OUTPUT_MARK (output_mark.py): atomic_output_dir writes it into every output (simulate, study, launch, analyse;
@@ -68,88 +68,88 @@ def tune_files(out: Path, storage: str | None) -> frozenset[str]:
     return TUNE_FILES | {file.name + end for end in ("", "-journal", "-wal", "-shm")}
 
 
-def check_output_dir(out: Path, force: bool, flag: str = "--out", inputs: dict | None = None,
+def check_output_dir(out: Path, force: bool, setting: str = "out", inputs: dict | None = None,
                      resume: frozenset[str] | None = None) -> None:
     """:func:`_check_output_dir`; a path the system cannot look at (too long, a folder that cannot be searched,
-    a loop of symbolic links) is refused in one line naming ``flag``, as the other refusals. Checked again by the
+    a loop of symbolic links) is refused in one line naming ``setting``, as the other refusals. Checked again by the
     same run (its outputs about to be written) after something else made or swapped ``out`` meanwhile: not
     refused, :func:`atomic_output_dir` then keeps the finished outputs beside it."""
     key = os.path.abspath(out)
-    with _one_line(out, flag):
+    with _one_line(out, setting):
         if not holds_output(out):   # a new run (a command called again in one process): a first look
             _checked.pop(key, None)
         elif key in _checked and _identity(out) != _checked[key]:
             return
-        _check_output_dir(out, force, flag, inputs, resume)
+        _check_output_dir(out, force, setting, inputs, resume)
         _checked.setdefault(key, _identity(out))
 
 
 @contextmanager
-def _one_line(out: Path, flag: str):
+def _one_line(out: Path, setting: str):
     """Within: an OSError (a path too long, a folder that cannot be searched) or a loop of symbolic links while
-    looking at ``out`` becomes an OutputExistsError, one line naming ``flag``."""
+    looking at ``out`` becomes an OutputExistsError, one line naming ``setting``."""
     try:
         yield
     except OutputExistsError:
         raise
     except RuntimeError:   # Path.resolve's "Symlink loop from ..."
-        raise OutputExistsError(f"{flag}: {shown(out)}: a loop of symbolic links in the path") from None
+        raise OutputExistsError(f"`{setting}`: {shown(out)}: a loop of symbolic links in the path") from None
     except OSError as exc:
         where = f" ({shown(exc.filename)})" if exc.filename and str(exc.filename) != str(out) else ""
-        raise OutputExistsError(f"{flag}: {shown(out)}: {exc.strerror or exc}{where}") from None
+        raise OutputExistsError(f"`{setting}`: {shown(out)}: {exc.strerror or exc}{where}") from None
 
 
 #: abspath -> what was there ((device, inode) or None) when the run holding its lock first checked that folder
 _checked: dict[str, tuple[int, int] | None] = {}
 
 
-def _check_output_dir(out: Path, force: bool, flag: str, inputs: dict | None,
+def _check_output_dir(out: Path, force: bool, setting: str, inputs: dict | None,
                       resume: frozenset[str] | None) -> None:
     """Fail early, before any work, if ``out`` is in use by another run (output_lock.py: this process then
-    holds it until the output is in place), exists and may not be replaced, or cannot be created. ``flag``:
-    how the message names the output (a command passes its flag).
+    holds it until the output is in place), exists and may not be replaced, or cannot be created. ``setting``:
+    the setting that names the output (``out``, ``record``), as the message names it (config_error.SETTING_MARK).
 
     Never an output, even with ``force``: the current directory, one of its parents or the root; a path equal
-    to, inside, or holding one of ``inputs`` ({flag or name: path or None}: the run's config, arm file, bag,
+    to, inside, or holding one of ``inputs`` ({setting or name: path or None}: the run's config, arm file, bag,
     checkpoints, ...; each compared as given, made absolute, and resolved). ``force`` replaces only an empty
     folder or a previous pa10-dnbs output (OUTPUT_MARK). Refused up front too: an ``out`` that is a symbolic
     link, ends in '.' or '..', or whose name is too long for its temporary siblings.
     ``resume`` (tune): an existing ``out`` holding only these names is accepted without ``force`` (the command
     then checks it is its own run's)."""
     out = Path(out)
-    check_name(out, flag)
+    check_name(out, setting)
     if out.exists() and not out.is_dir():
-        raise OutputExistsError(f"{flag}: {out} exists and is not a directory")
-    check_not_cwd(out, flag)
+        raise OutputExistsError(f"`{setting}`: {out} exists and is not a directory")
+    check_not_cwd(out, setting)
     if (last := os.path.basename(str(out).rstrip("/"))) in (".", ".."):
-        raise OutputExistsError(f"{flag}: {out} ends in {last!r}: name the folder itself")
-    check_apart(out, inputs or {}, flag)
-    check_creatable(out, flag)
+        raise OutputExistsError(f"`{setting}`: {out} ends in {last!r}: name the folder itself")
+    check_apart(out, inputs or {}, setting)
+    check_creatable(out, setting)
     lock_output(out)
     if not out.exists():
         return
     if resume is not None:
         if foreign := sorted(p.name for p in out.iterdir() if p.name not in resume):
-            raise OutputExistsError(f"{flag}: {out} holds files that are not this command's outputs "
+            raise OutputExistsError(f"`{setting}`: {out} holds files that are not this command's outputs "
                                     f"({', '.join(foreign[:3])}{', ...' if len(foreign) > 3 else ''}): "
                                     "choose another folder")
         return
     if not force:
         if (mark := partial_mark(out)) is not None:
             raise OutputExistsError(f"output directory exists: {out} holds the partial outputs of an interrupted "
-                                    f"run ({mark.get('completed')} of {mark.get('total')} done; use --force to "
+                                    f"run ({mark.get('completed')} of {mark.get('total')} done; use `force` to "
                                     "replace it with a complete run)")
-        raise OutputExistsError(f"output directory exists: {out} (use --force to replace it)" if flag == "--out" else
-                                f"{flag}: {out} exists; pass --force to replace it")
+        raise OutputExistsError(f"output directory exists: {out} (use `force` to replace it)" if setting == "out" else
+                                f"`{setting}`: {out} exists; pass `force` to replace it")
     if any(out.iterdir()) and not is_previous_output(out):
         if "tune.db" in {p.name for p in out.iterdir()}:   # a tune's folder (its storage: trials, never replaced)
-            raise OutputExistsError(f"{flag}: {out} is a tune's folder (its storage tune.db holds the trials): "
-                                    "--force never replaces one; remove it yourself or choose another folder")
-        raise OutputExistsError(f"{flag}: {out} holds files that are not a pa10-dnbs output: --force replaces only "
+            raise OutputExistsError(f"`{setting}`: {out} is a tune's folder (its storage tune.db holds the trials): "
+                                    "`force` never replaces one; remove it yourself or choose another folder")
+        raise OutputExistsError(f"`{setting}`: {out} holds files that are not a pa10-dnbs output: `force` replaces only "
                                 "an empty folder or a previous output; remove it yourself or choose another folder")
 
 
-def check_name(out: Path, flag: str) -> None:
+def check_name(out: Path, setting: str) -> None:
     """``out`` names a folder that atomic_output_dir can replace: every component at most NAME_MAX bytes and
     its last one at most NAME_ROOM (its temporary siblings must fit); not a symbolic link (the link would be
     replaced, not the folder it points to)."""
@@ -157,27 +157,28 @@ def check_name(out: Path, flag: str) -> None:
     last = os.path.basename(text.rstrip("/"))
     for part in Path(out).parts[:-1]:
         if len(os.fsencode(part)) > NAME_MAX:
-            raise OutputExistsError(f"{flag}: a folder name in the path is too long ({len(os.fsencode(part))} "
+            raise OutputExistsError(f"`{setting}`: a folder name in the path is too long ({len(os.fsencode(part))} "
                                     f"bytes; at most {NAME_MAX})")
     if (size := len(os.fsencode(last))) > NAME_ROOM:
-        raise OutputExistsError(f"{flag}: the name is too long ({size} bytes; at most {NAME_ROOM} so that its "
+        raise OutputExistsError(f"`{setting}`: the name is too long ({size} bytes; at most {NAME_ROOM} so that its "
                                 "temporary sibling fits)")
     if os.path.islink(text.rstrip("/") or text):
-        raise OutputExistsError(f"{flag}: {out} is a symbolic link: give the folder itself")
+        raise OutputExistsError(f"`{setting}`: {out} is a symbolic link: give the folder itself")
 
 
-def check_not_cwd(out: Path, flag: str) -> None:
-    """``out`` is not the current directory, one of its parents or the root (``--out ""`` is ``.``)."""
+def check_not_cwd(out: Path, setting: str) -> None:
+    """``out`` is not the current directory, one of its parents or the root (an empty path is ``.``)."""
     where, cwd = Path(out).resolve(), Path.cwd().resolve()
     if where == cwd or where in cwd.parents or where == Path(where.anchor):
-        raise OutputExistsError(f"{flag}: {str(out) or '(empty)'!s} is "
+        raise OutputExistsError(f"`{setting}`: {str(out) or '(empty)'!s} is "
                                 + ("the filesystem root" if where == Path(where.anchor) else
                                    "the current directory" if where == cwd else "a parent of the current directory")
                                 + ": give a folder of its own for the outputs")
 
 
-def check_apart(out: Path, inputs: dict, flag: str) -> None:
-    """``out`` is neither one of ``inputs`` ({name: path or None}; a config's ``extends`` files count too) nor
+def check_apart(out: Path, inputs: dict, setting: str) -> None:
+    """``out`` is neither one of ``inputs`` ({setting or words: path or None}; a config's (``config_path``)
+    ``extends`` files count too) nor
     holds one nor lies inside one: an output never replaces or mixes with what its run reads. Each path is
     compared both as given (made absolute, not resolved: a symbolic link inside ``out`` counts as inside) and
     resolved (what it points to)."""
@@ -185,14 +186,20 @@ def check_apart(out: Path, inputs: dict, flag: str) -> None:
     for name, path in inputs.items():
         if path is None:
             continue
-        given = config_files(path) + [Path(os.path.abspath(path))] if name == "--config" else [Path(path)]
+        given = config_files(path) + [Path(os.path.abspath(path))] if name == "config_path" else [Path(path)]
         for used in sorted({u for g in given for u in _both(g)}):
             for where in wheres:
                 how = "is" if used == where else "holds" if where in used.parents else \
                     "lies inside" if used in where.parents else None
                 if how is not None:
-                    raise OutputExistsError(f"{flag}: {out} {how} this run's {name} {used}: an output never "
+                    raise OutputExistsError(f"`{setting}`: {out} {how} this run's {_said(name)} {used}: an output never "
                                             "replaces or mixes with what its run uses; choose another output folder")
+
+
+def _said(name: str) -> str:
+    """An input's name in a message: a setting (``config_path``) marked as one, other words (``arm URDF``) as
+    they are."""
+    return f"`{name}`" if name.isidentifier() else name
 
 
 def _both(path) -> set[Path]:
@@ -225,8 +232,8 @@ def check_tune_dir(out: Path, study_name: str, identity: dict, refusal) -> None:
     out = Path(out)
     for name in sorted(TUNE_FILES):
         if (out / name).is_symlink():
-            raise OutputExistsError(f"--out: {out}/{name} is a symbolic link (to {os.readlink(out / name)}): a tune "
-                                    "resumes only the files in its own folder; remove the link or give another --out")
+            raise OutputExistsError(f"`out`: {out}/{name} is a symbolic link (to {os.readlink(out / name)}): a tune "
+                                    "resumes only the files in its own folder; remove the link or give another `out`")
     try:
         done = json.loads((out / "tune.json").read_text())
     except (OSError, ValueError):
@@ -234,20 +241,20 @@ def check_tune_dir(out: Path, study_name: str, identity: dict, refusal) -> None:
     if isinstance(done, dict) and (done.get("study"), done.get("options")) != (study_name, identity):
         raise OutputExistsError(refusal(done.get("study", "?"), done.get("options") or {}, identity)
                                 if done.get("study") == study_name else
-                                f"--out: {out} holds the tune {done.get('study')!r}, not {study_name!r}: "
-                                "give another --out for this tune")
+                                f"`out`: {out} holds the tune {done.get('study')!r}, not {study_name!r}: "
+                                "give another `out` for this tune")
     if (out / "tune.db").exists() and not (out / "tune.db").is_file():
-        raise OutputExistsError(f"--out: {out}/tune.db is not a file (a folder or another kind of file): a tune keeps "
-                                "its trials in DIR/tune.db; move it or give another --out")
+        raise OutputExistsError(f"`out`: {out}/tune.db is not a file (a folder or another kind of file): a tune keeps "
+                                "its trials in DIR/tune.db; move it or give another `out`")
     if (out / "tune.db").is_file():
         why = not_optuna_storage(out / "tune.db")
         if why:   # a file of the user's, which the tune would write its tables into
-            raise OutputExistsError(f"--out: {out}/tune.db is not a tune's storage ({why}): a tune keeps its trials "
-                                    "in DIR/tune.db; move the file or give another --out")
+            raise OutputExistsError(f"`out`: {out}/tune.db is not a tune's storage ({why}): a tune keeps its trials "
+                                    "in DIR/tune.db; move the file or give another `out`")
         others = [n for n in _sqlite_study_names(out / "tune.db") if n != study_name]
         if others:
-            raise OutputExistsError(f"--out: {out}/tune.db holds the tune {others[0]!r}, not {study_name!r}: "
-                                    "give another --out for this tune")
+            raise OutputExistsError(f"`out`: {out}/tune.db holds the tune {others[0]!r}, not {study_name!r}: "
+                                    "give another `out` for this tune")
 
 
 def _read_only(db: Path):
@@ -277,29 +284,29 @@ def _sqlite_study_names(db: Path) -> list[str]:
         return []
 
 
-def check_creatable(path: Path, flag: str) -> None:
+def check_creatable(path: Path, setting: str) -> None:
     """``path`` can be made: its nearest existing ancestor is a directory in which a folder can be created
     (tried with a temporary one, removed at once: a check that holds for root and read-only mounts too)."""
-    with _one_line(path, flag):
-        _check_creatable(path, flag)
+    with _one_line(path, setting):
+        _check_creatable(path, setting)
 
 
-def _check_creatable(path: Path, flag: str) -> None:
+def _check_creatable(path: Path, setting: str) -> None:
     for above in Path(os.path.abspath(path)).parents:   # the nearest existing folder above, links not followed
         if os.path.lexists(above):
             if above.is_symlink() and not above.exists():   # a link to nothing: the run's end could not make it
-                raise OutputExistsError(f"{flag}: {above} is a symbolic link to {os.readlink(above)}, which does "
+                raise OutputExistsError(f"`{setting}`: {above} is a symbolic link to {os.readlink(above)}, which does "
                                         f"not exist (output {shown(path)})")
             break
     parent = Path(path).resolve().parent
     while not parent.exists():
         parent = parent.parent
     if not parent.is_dir():
-        raise OutputExistsError(f"{flag}: {parent} is not a directory (output {path})")
+        raise OutputExistsError(f"`{setting}`: {parent} is not a directory (output {path})")
     try:
         os.rmdir(tempfile.mkdtemp(prefix=".pa10_dnbs-probe-", dir=parent))
     except OSError as exc:
-        raise OutputExistsError(f"{flag}: cannot create {path}: {exc.strerror} in {parent}") from None
+        raise OutputExistsError(f"`{setting}`: cannot create {path}: {exc.strerror} in {parent}") from None
 
 
 @contextmanager
@@ -391,7 +398,7 @@ def _appeared(out: Path, tmp: Path) -> OutputExistsError:
     visible sibling, which the error names (they are whole: never deleted for a folder not ours)."""
     kept = out.with_name(f"{out.name}.finished-{os.getpid()}")
     tmp.rename(kept)
-    return OutputExistsError(f"--out: {out} was created by something else while this run went on; it is left as "
+    return OutputExistsError(f"`out`: {out} was created by something else while this run went on; it is left as "
                              f"it was, and this run's finished outputs are in {kept}")
 
 

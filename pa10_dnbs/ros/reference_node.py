@@ -90,7 +90,7 @@ class ReferenceNode(Node):
             try:
                 trajectory = load_reference_trajectory(settings, p["trajectory_file"])
             except ConfigError as exc:
-                raise ParameterError(exc.named("parameter trajectory_file:")) from None
+                raise ParameterError(exc.named({"trajectory": "parameter trajectory_file:"})) from None
         self.reference = switchable_reference(settings, build_reference(settings, trajectory))
         self.trajectories = {"accepted": 0, "refused": 0}
         self.accepted: list[dict] = []  # the first MAX_KEPT accepted: steps, points, knots

@@ -144,7 +144,7 @@ class RemoteRobot:
         self.stamp = self._next[0]
         sec, nanosec = self.stamp
         self.fault(f"lockstep: the robot sent its state at robot time {sec + nanosec / NS_PER_S:.6f} s before the "
-                   "command answering the previous one: it does not wait for commands (a paced robot: --mode "
+                   "command answering the previous one: it does not wait for commands (a paced robot: `mode` "
                    "realtime; docs/your_robot.md)")
 
     def wait_first(self, timeout_s: float) -> bool:

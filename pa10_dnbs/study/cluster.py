@@ -1,6 +1,6 @@
 """The Dask cluster of ``--scheduler`` (study/executor.py runs on it): its address checked and connected to (a
 scheduler, a worker, every worker importing this pa10_dnbs), and watched while runs are out (the scheduler lost,
-no worker for ``WORKERLESS_S``, a run Dask gave up): :class:`ClusterLost`, one line naming ``--scheduler``."""
+no worker for ``WORKERLESS_S``, a run Dask gave up): :class:`ClusterLost`, one line naming ``scheduler``."""
 from __future__ import annotations
 
 import re

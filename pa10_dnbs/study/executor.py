@@ -10,8 +10,8 @@ results are keyed, so a run that comes back twice is counted once and ``on_done`
 - otherwise ``jobs`` local processes (default: one per core); ``jobs == 1`` runs in this process.
 
 The cluster lost while runs are out (its scheduler gone, or no worker for ``WORKERLESS_S``, or a run's workers
-killed again and again): :class:`ClusterLost`, one line naming ``--scheduler`` (exit 2); a local worker process
-killed (the OOM killer): :class:`PoolBroken`, naming ``--jobs``. The runs completed so far went to ``on_done``, so
+killed again and again): :class:`ClusterLost`, one line naming ``scheduler`` (exit 2); a local worker process
+killed (the OOM killer): :class:`PoolBroken`, naming ``jobs``. The runs completed so far went to ``on_done``, so
 the command keeps them as for a Ctrl-C.
 
 A Ctrl-C (or SIGTERM) while runs are out is noted and raised at the wait loop's next check (every ``POLL_S``),
@@ -206,5 +206,5 @@ def _pool_broken(pool, procs) -> PoolBroken:
         codes.remove(-signal.SIGTERM)
     how = ", ".join(f"killed by {signal.Signals(-c).name}" if c < 0 and -c in signal.valid_signals()
                     else f"exit code {c}" for c in codes) or "ended"
-    oom = " (out of memory? fewer --jobs need less)" if -signal.SIGKILL in codes else ""
+    oom = " (out of memory? fewer `jobs` need less)" if -signal.SIGKILL in codes else ""
     return PoolBroken(f"a local worker process died ({how}){oom}, so its run cannot finish")

@@ -1,5 +1,5 @@
 """The errors of runs that cannot be finished where they run (study/executor.py): a local worker process killed,
-the Dask cluster lost. Each is one line naming the option that chose the place, exit 2 (a ConfigError, as an
+the Dask cluster lost. Each is one line naming the setting that chose the place, exit 2 (a ConfigError, as an
 unreachable scheduler); the command keeps what completed, as for a Ctrl-C."""
 from __future__ import annotations
 
@@ -7,25 +7,22 @@ from ..config_error import ConfigError
 
 
 class RunsLost(ConfigError):
-    """The runs cannot be finished where they run: one line naming the option that chose the place (``flag``)
-    and exit 2; what completed before was given to ``on_done``, and the command keeps it as for a Ctrl-C."""
+    """The runs cannot be finished where they run: one line opening with the setting that chose the place
+    (``setting_name``) and exit 2; what completed before was given to ``on_done``, and the command keeps it as
+    for a Ctrl-C."""
 
-    setting_name, flag = "jobs", "--jobs"
+    setting_name = "jobs"
 
     def __init__(self, message: str, scheduler_alive: bool = False):
         super().__init__(f"{self.setting_name}: {message}", setting=self.setting_name)
         self.scheduler_alive = scheduler_alive
 
-    def line(self) -> str:
-        """The message, opening with the flag."""
-        return self.named(self.flag)
-
 
 class ClusterLost(RunsLost):
     """The Dask cluster cannot finish the runs (its scheduler gone, no worker left, a run whose workers died
-    again and again): named ``--scheduler``, as an unreachable scheduler."""
+    again and again): named ``scheduler``, as an unreachable scheduler."""
 
-    setting_name, flag = "scheduler", "--scheduler"
+    setting_name = "scheduler"
 
 
 class PoolBroken(RunsLost):

@@ -44,7 +44,7 @@ def netns_hint(failure: str, netns: dict[str, str]) -> str:
     namespace) and the graph never matched: a namespace without a link to the others is the usual cause."""
     if not netns or "graph not ready" not in failure:
         return ""
-    return (f"\n(with --netns, the nodes in {', '.join(sorted(set(netns.values())))} meet the others only through a "
+    return (f"\n(with `netns`, the nodes in {', '.join(sorted(set(netns.values())))} meet the others only through a "
             "link between the namespaces, as scripts/netns_hosts.sh makes one: docs/graph.md, \"Several hosts on one "
             "machine\")")
 

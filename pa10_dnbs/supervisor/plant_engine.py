@@ -18,17 +18,17 @@ MUJOCO_ROBOT = "mujoco_robot"
 
 
 def plant_robot_options(plant: str, robot: RobotOptions | None, mode: str) -> RobotOptions | None:
-    """The joint bus's options for ``--plant`` (None and ``robot`` unchanged for pybullet); ConfigError naming the
-    flag when ``--plant mujoco`` is combined with what it cannot run."""
+    """The joint bus's options for ``plant`` (None and ``robot`` unchanged for pybullet); ConfigError naming the
+    setting when ``plant`` mujoco is combined with what it cannot run."""
     if plant not in PLANTS:
         raise ConfigError(f"plant: expected one of {', '.join(PLANTS)}, got {plant!r}", setting="plant")
     if plant == "pybullet":
         return robot
     if robot is not None:
-        raise ConfigError("plant mujoco: not with an external robot (--robot external; it starts its own robot, "
+        raise ConfigError("plant mujoco: not with an external robot (`robot` external; it starts its own robot, "
                           "behind the joint bus)", setting="plant")
     if mode != "lockstep":
-        raise ConfigError("plant mujoco: only in lockstep mode so far (--mode lockstep; the joint bus runs lockstep)",
+        raise ConfigError("plant mujoco: only in lockstep mode so far (`mode` lockstep; the joint bus runs lockstep)",
                           setting="plant")
     return RobotOptions()
 

@@ -22,14 +22,14 @@ def injected_misses(faults) -> list[str]:
 def realtime_hint(real_time_factor: float, priority_applied: bool, injected: list[str] | None = None) -> str:
     """One line for a run below ``ON_TIME_TARGET``: what limits it and what to try next. ``injected``: the
     faults that lose or delay messages on purpose (``injected_misses``); they miss ticks whatever the CPU."""
-    head = f"realtime --rtf {real_time_factor:g}: below {100 * ON_TIME_TARGET:g} % on time"
+    head = f"realtime `real_time_factor` {real_time_factor:g}: below {100 * ON_TIME_TARGET:g} % on time"
     if injected:
         return (f"{head}, with injected faults ({', '.join(injected)}) that miss ticks by design, whatever the "
                 "machine: the missed ticks per joint are in metrics.json (timing.joints); the same run without "
-                "the fault flags says whether the CPU keeps up as well")
-    tries = [f"a lower --rtf (e.g. {real_time_factor / 2:g})"]
+                "the injected faults says whether the CPU keeps up as well")
+    tries = [f"a lower `real_time_factor` (e.g. {real_time_factor / 2:g})"]
     if not priority_applied:
-        tries.append("--rt-priority 50 where the OS allows SCHED_FIFO")
+        tries.append("`rt_priority` 50 where the OS allows SCHED_FIFO")
     return (f"{head}: this machine does not "
             f"give the graph the CPU each tick needs; try {' or '.join(tries)}; "
             "scripts/bench_graph.py measures the highest factor it sustains (docs/timing.md)")

@@ -146,8 +146,8 @@ def watch(procs: list[ManagedProcess], opt: GraphOptions, say, stop: StopRequest
         while not monitor.saw("COMPLETE") and time.monotonic() < end and not stop.signal_name:
             time.sleep(0.05)
         if not monitor.saw("COMPLETE") and not stop.signal_name:
-            hint = (" (every node ran under SCHED_FIFO (--rt-priority): where the loop needs the whole machine "
-                    "the observer can still fall behind it; try a lower --rtf, or --rt-priority 0)"
+            hint = (" (every node ran under SCHED_FIFO (`rt_priority`): where the loop needs the whole machine "
+                    "the observer can still fall behind it; try a lower `real_time_factor`, or `rt_priority` 0)"
                     if opt.rt_priority else "")
             return (f"the {monitor.name} did not receive the whole run{hint}\n--- last lines of its log ---\n"
                     + monitor.tail())

@@ -129,7 +129,7 @@ STORAGE_OPEN_WAIT_S = 60.0   # how long a tune waits for another to finish openi
 
 
 def check_persistent(url: str) -> None:
-    """ConfigError naming --storage for an in-memory SQLite URL (``sqlite://``, ``sqlite:///:memory:``, a
+    """ConfigError naming ``storage`` for an in-memory SQLite URL (``sqlite://``, ``sqlite:///:memory:``, a
     ``file::memory:`` or ``mode=memory`` URI with ``uri=true``): its trials end with the process, so nothing
     could be kept or resumed. Other URLs are opened (and said wrong) by :func:`open_storage`."""
     from sqlalchemy.engine import make_url
@@ -142,12 +142,12 @@ def check_persistent(url: str) -> None:
     if u.get_backend_name() == "sqlite" and (db in ("", ":memory:") or uri and (
             db.startswith("file::memory:") or str(u.query.get("mode", "")) == "memory")):
         raise ConfigError(f"storage: {url} is an in-memory database: its trials would end with this run, nothing "
-                          "kept or resumed; give a file (sqlite:///PATH.db), a database server, or leave --storage "
+                          "kept or resumed; give a file (sqlite:///PATH.db), a database server, or leave `storage` "
                           "out (DIR/tune.db)", setting="storage")
 
 
 def check_storage_file(url: str) -> None:
-    """ConfigError naming --storage for an SQLite file that exists and is no Optuna storage (not SQLite, or a
+    """ConfigError naming ``storage`` for an SQLite file that exists and is no Optuna storage (not SQLite, or a
     database with tables of its own): the tune would add its tables to a file of the user's."""
     from ..report.outputs import not_optuna_storage
 
@@ -159,13 +159,13 @@ def check_storage_file(url: str) -> None:
 
 def open_storage(url: str, default_file=None):
     """An Optuna RDB storage at ``url`` (sqlite:///file.db, postgresql://..., ...); ConfigError if it does not
-    open, naming --storage, or ``--out`` and the file for a tune's own ``default_file`` (DIR/tune.db: no --storage
-    given). Two tunes opening one new storage at once would both create its tables (sqlite: "table studies
+    open, naming ``storage``, or ``out`` and the file for a tune's own ``default_file`` (DIR/tune.db: no
+    ``storage`` given). Two tunes opening one new storage at once would both create its tables (sqlite: "table studies
     already exists", 4 of 10 tries): one opens it at a time, the other waits (a lock named by the URL as given)."""
     import optuna
 
     quiet_optuna()
-    where = f"--storage: {url}" if default_file is None else f"--out: {default_file} (the tune's storage)"
+    where = f"`storage`: {url}" if default_file is None else f"`out`: {default_file} (the tune's storage)"
     try:
         with waiting_for(f"optuna storage {storage_key(url)}",
                          f"{where} is being opened by another run (pid {{pid}}) "
@@ -176,7 +176,7 @@ def open_storage(url: str, default_file=None):
     except Exception as exc:  # sqlalchemy's errors for bad URLs, missing drivers, unreachable servers
         text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         if default_file is not None:
-            raise ConfigError(f"--out: cannot open {default_file} (the tune's storage): {text}") from None
+            raise ConfigError(f"`out`: cannot open {default_file} (the tune's storage): {text}") from None
         raise ConfigError(f"storage: cannot open {url}: {text}", setting="storage") from None
 
 
@@ -226,28 +226,28 @@ def stored_identity(db, study_name: str) -> dict | None:
         return None
 
 
-IDENTITY_FLAGS = {"arm": "--arm", "controller": "--controller", "params": "--params", "scenarios": "--scenarios",
-                  "seeds": "--seeds", "duration_s": "--duration", "config_file": "--config", "seed": "--seed",
-                  "arm_digest": "--arm", "settings_digest": "--config"}
+#: the setting that gives each part of a study's identity (its name for the others)
+IDENTITY_SETTINGS = {"config_file": "config_path", "arm_digest": "arm", "settings_digest": "config_path"}
 DIGESTS = {"arm_digest": "the arm file's and URDF's content", "settings_digest": "the merged settings"}
 
 
 def refusal(study_name: str, stored: dict, given: dict) -> str:
-    """Why a stored study cannot go on with these options, and what to do: one line naming each flag that
-    differs, as stored and as given."""
+    """Why a stored study cannot go on with these options, and what to do: one line naming each setting that
+    differs (config_error.SETTING_MARK), as stored and as given."""
     def shown(key, v):
         if key in DIGESTS:
             return f"sha256 {v[:12]}" if isinstance(v, str) and v else "not recorded (an older pa10-dnbs's study)"
         if key == "seeds" and isinstance(v, list):
-            return str(len(v))          # --seeds N means seeds 0..N-1
+            return str(len(v))          # seeds N means seeds 0..N-1
         return ",".join(map(str, v)) if isinstance(v, list) else f"{v:g}" if isinstance(v, float) else str(v)
     def differs(k):
-        what = f"{IDENTITY_FLAGS.get(k, k)}: {DIGESTS[k]}," if k in DIGESTS else IDENTITY_FLAGS.get(k, k)
+        name = f"`{IDENTITY_SETTINGS.get(k, k)}`"
+        what = f"{name}: {DIGESTS[k]}," if k in DIGESTS else name
         return f"{what} {shown(k, given.get(k))} (stored: {shown(k, stored.get(k))})"
     diff = [differs(k) for k in given if stored.get(k) != given[k]]
-    return (f"--out/--storage: study {study_name!r} there was run with other options, so its trials do not "
+    return (f"`out`/`storage`: study {study_name!r} there was run with other options, so its trials do not "
             f"score the same objective: {'; '.join(diff)}; rerun with the stored options to resume it, or give "
-            "another --out (or --storage) to start a new study")
+            "another `out` (or `storage`) to start a new study")
 
 
 def completed(study) -> list:

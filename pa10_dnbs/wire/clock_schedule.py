@@ -23,17 +23,17 @@ def check_clock_hz(clock_hz: float, dt_s: float, off_allowed: bool = True) -> No
 
 
 def checked_clock_hz(clock_hz: float | None, dt_s: float, off_allowed: bool = True) -> float:
-    """The /clock rate of a run: ``clock_hz`` [Hz] as given by --clock-hz (None: not given, DEFAULT_CLOCK_HZ),
-    checked against the step ``dt_s`` as :func:`check_clock_hz` does. ConfigError naming --clock-hz when the flag
-    was given; when it was not, naming simulation.dt_s: the config's step is what the default does not fit."""
+    """The /clock rate of a run: ``clock_hz`` [Hz] as given (None: not given, DEFAULT_CLOCK_HZ), checked against
+    the step ``dt_s`` as :func:`check_clock_hz` does. ConfigError naming ``clock_hz`` when it was given; when it
+    was not, naming simulation.dt_s: the config's step is what the default does not fit."""
     rate = DEFAULT_CLOCK_HZ if clock_hz is None else clock_hz
     try:
         check_clock_hz(rate, dt_s, off_allowed)
     except ValueError as exc:
         if clock_hz is not None:
-            raise ConfigError(f"--clock-hz: {exc}") from None
+            raise ConfigError(f"clock_hz: {exc}", setting="clock_hz") from None
         raise ConfigError(f"simulation.dt_s: a step of {dt_s:g} s takes at most {1.0 / dt_s:g} /clock per second "
-                          f"(one per step), fewer than the default --clock-hz {DEFAULT_CLOCK_HZ:g}: give --clock-hz "
+                          f"(one per step), fewer than the default `clock_hz` {DEFAULT_CLOCK_HZ:g}: give `clock_hz` "
                           f"{1.0 / dt_s:g} or less, or a simulation.dt_s of at most {1.0 / DEFAULT_CLOCK_HZ:g} s") \
             from None
     return rate
