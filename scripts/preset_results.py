@@ -15,6 +15,8 @@ Exit 2 with one line for a bad flag or an arm that does not load; 130 on Ctrl-C,
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import sys
 from pathlib import Path
 
@@ -24,9 +26,12 @@ sys.path.insert(0, str(ROOT / "scripts"))
 
 import bench_record  # noqa: E402
 from flag_values import names_in  # noqa: E402
-from pa10_dnbs.arm import load_arm, preset_names  # noqa: E402
+from pa10_dnbs.arm import preset_names  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser, seconds  # noqa: E402
+from pa10_dnbs.config import default_config_path  # noqa: E402
 from pa10_dnbs.interrupt import EXIT_INTERRUPTED  # noqa: E402
+from pa10_dnbs.report.metrics_file import metrics_settings  # noqa: E402
+from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.study.collection import CONTROLLERS, run_row  # noqa: E402
 
 PRESETS = ("pa10", "iiwa", "panda")   # the README's columns, in order
@@ -42,15 +47,18 @@ def duration(text: str) -> float:
 
 
 def arm_result(key: str, duration_s: float) -> dict:
-    """One column: the arm's description and, per controller, the row's figures; RuntimeError with the one
-    line of an arm that does not load or a controller that fails."""
+    """One column: the arm's description, the metrics' window [s], band [rad] and startup [s], and per
+    controller the row's figures; RuntimeError with the one line of an arm that does not load or a controller
+    that fails."""
     row = run_row(key, "preset", key, duration_s)
     if row["status"] != "accepted":
         raise RuntimeError(f"--arms: {key}: {row['reason']}")
     for kind in CONTROLLERS:
         if "error" in row[kind]:
             raise RuntimeError(f"{key}, {kind}: {row[kind]['error']}")
-    return {"arm": key, "description": load_arm(key).description,
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):  # the rules' table
+        settings = build_settings(default_config_path(), arm=key)
+    return {"arm": key, "description": settings.arm.description, **metrics_settings(settings, duration_s),
             **{kind: row[kind] for kind in CONTROLLERS}}
 
 
