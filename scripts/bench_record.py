@@ -1,7 +1,7 @@
 """A benchmark's record: the figures it measured with when, how, where and on how busy a machine.
 
 One JSON file per benchmark in ``benchmarks/`` (``--save-record FILE`` of the benchmark scripts), read by
-``scripts/readme_figures.py`` to regenerate the README's figures block. A record holds:
+``scripts/readme_figures.py`` to regenerate the README's results and figures blocks. A record holds:
 
 - ``benchmark``: the benchmark's name (``bench_sim``, ``main_job``, ...);
 - ``date_utc``: when it started, ISO 8601 in UTC to the second; ``wall_s``: how long it ran [s];

@@ -1,12 +1,14 @@
 #!/usr/bin/env python3
-"""Regenerate the README's figures block from the benchmark records in benchmarks/*.json.
+"""Regenerate the README's results and figures blocks from the benchmark records in benchmarks/*.json.
 
-The block is the part of README.md between the lines ``<!-- figures: begin (scripts/readme_figures.py) -->``
+The figures block is the part of README.md between the lines ``<!-- figures: begin (scripts/readme_figures.py) -->``
 and ``<!-- figures: end -->``: a table with one row per recorded figure (the main job's lockstep real-time
 factor and bag size, the in-process DNBS / PID cost, the bag writer's CPU, the node graph's realtime on-time
 fraction, the test suite's count and time), each with the command that measured it, its date (UTC) and the
-machine's load before and after. The records are written by the benchmarks' ``--save-record FILE``
-(scripts/bench_record.py), which also hold the commit and the machine; nothing in the block is typed by hand.
+machine's load before and after. The results block (``<!-- results: begin ... -->`` to ``<!-- results: end -->``)
+is the per-arm table of DNBS / PID / CTC that scripts/preset_results.py records. The records are written by the
+benchmarks' ``--save-record FILE`` (scripts/bench_record.py), which also hold the commit and the machine;
+nothing in either block is typed by hand.
 
     .venv/bin/python scripts/readme_figures.py            # rewrite the block
     .venv/bin/python scripts/readme_figures.py --check    # exit 1 if the block is not what the records give
@@ -31,6 +33,9 @@ from pa10_dnbs.cli_values import OneLineParser  # noqa: E402
 
 BEGIN = "<!-- figures: begin (scripts/readme_figures.py) -->"
 END = "<!-- figures: end -->"
+RESULTS_BEGIN = "<!-- results: begin (scripts/readme_figures.py) -->"
+RESULTS_END = "<!-- results: end -->"
+RESULTS = "preset_results"   # the benchmark of the results block (scripts/preset_results.py)
 HEADER = ["| figure | measured | by | when (UTC), load avg before -> after |", "|---|---|---|---|"]
 
 
@@ -134,17 +139,18 @@ def read_records(folder: Path) -> list[dict]:
             rec = bench_record.read(path)
         except (ValueError, OSError) as exc:  # json.JSONDecodeError is a ValueError
             raise BadInput(f"{path}: {exc}") from None
-        if rec["benchmark"] not in ROWS:
+        if rec["benchmark"] not in ROWS and rec["benchmark"] != RESULTS:
             raise BadInput(f"{path}: no README row for benchmark '{rec['benchmark']}' (scripts/readme_figures.py ROWS)")
         rec["_file"] = path.name
         recs.append(rec)
-    order = list(ROWS)
+    order = list(ROWS) + [RESULTS]
     return sorted(recs, key=lambda r: (order.index(r["benchmark"]), r["_file"]))
 
 
 def table(recs: list[dict]) -> list[str]:
     """The block's lines between the markers."""
     lines = list(HEADER)
+    recs = [r for r in recs if r["benchmark"] != RESULTS]
     for rec in recs:
         try:
             rows = ROWS[rec["benchmark"]](rec)
@@ -159,15 +165,62 @@ def table(recs: list[dict]) -> list[str]:
     return lines
 
 
-def render(readme: str, block: list[str]) -> str:
-    """``readme`` with the lines between the markers replaced by ``block``."""
+#: the results block's rows: (label, field, number format, DNBS in bold)
+RESULT_ROWS = [("settled into 1e-2 rad after [s]", "settled_s", "{:.2f}", True),
+               ("max abs error over the run [rad]", "max_abs_error_rad", "{:.3f}", False),
+               ("torque variation (sum abs d tau / limit)", "torque_variation", "{:.1f}", False),
+               ("steps at a torque limit after {startup}", "steps_at_limit_after_startup", "{:d}", False),
+               ("RMS error over {window} [rad]", "rms_rad", "{:.1e}", True)]
+
+
+def _short_e(text: str) -> str:
+    """``3.2e-05`` as ``3.2e-5`` (the README's form)."""
+    mantissa, e, exponent = text.partition("e")
+    return f"{mantissa}e{int(exponent)}" if e else text
+
+
+def results_table(recs: list[dict]) -> list[str]:
+    """The results block's lines: one column per arm of the preset_results record, one row per figure, each
+    cell DNBS / PID / CTC (``never`` for a run that did not settle), then the line naming the record."""
+    found = [r for r in recs if r["benchmark"] == RESULTS]
+    if len(found) != 1:
+        raise BadInput(f"benchmarks/ holds {len(found)} {RESULTS} records: the results block needs exactly one "
+                       "(scripts/preset_results.py --save-record benchmarks/preset_results.json)")
+    rec = found[0]
+    try:
+        arms, kinds = rec["figures"]["arms"], rec["figures"]["controllers"]
+        first = arms[0]
+        window = f"[{first['window_s'][0]:g}, {first['window_s'][1]:g}) s"
+        startup = f"{first['startup_s']:g} s"
+        heads = [f"{a['description'].split(' (')[0]} (`--arm {a['arm']}`{', default' if a['arm'] == 'pa10' else ''})"
+                 for a in arms]
+        lines = ["| | " + " | ".join(heads) + " |", "|---|" + "---|" * len(arms)]
+        for label, field, fmt, bold in RESULT_ROWS:
+            cells = []
+            for a in arms:
+                parts = []
+                for k in kinds:
+                    v = a[k][field]
+                    text = "never" if v is None else _short_e(fmt.format(v))
+                    parts.append(f"**{text}**" if bold and k == "dnbs" else text)
+                cells.append(" / ".join(parts))
+            lines.append(f"| {label.format(window=window, startup=startup)} | " + " | ".join(cells) + " |")
+    except (KeyError, TypeError, ValueError, IndexError) as exc:
+        raise BadInput(f"benchmarks/{rec['_file']}: cannot read its figures ({type(exc).__name__}: {exc})") from None
+    lines += ["", f"`{short_command(rec['command'])}` ([record](benchmarks/{rec['_file']})), {when(rec)}"]
+    return lines
+
+
+def render(readme: str, block: list[str], begin: str = BEGIN, end: str = END, name: str = "figures") -> str:
+    """``readme`` with the lines between the markers ``begin`` and ``end`` (its ``name`` block) replaced by
+    ``block``."""
     lines = readme.split("\n")
     try:
-        i, j = lines.index(BEGIN), lines.index(END)
+        i, j = lines.index(begin), lines.index(end)
     except ValueError:
-        raise BadInput(f"README.md has no figures block: the lines '{BEGIN}' and '{END}'") from None
+        raise BadInput(f"README.md has no {name} block: the lines '{begin}' and '{end}'") from None
     if j < i:
-        raise BadInput(f"README.md: '{END}' comes before '{BEGIN}'")
+        raise BadInput(f"README.md: '{end}' comes before '{begin}'")
     return "\n".join(lines[:i + 1] + block + lines[j:])
 
 
@@ -187,22 +240,23 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     try:
         old = args.readme.read_text()
-        new = render(old, table(read_records(args.records)))
+        recs = read_records(args.records)
+        new = render(render(old, table(recs)), results_table(recs), RESULTS_BEGIN, RESULTS_END, "results")
     except (BadInput, OSError) as exc:
         print(f"readme_figures: {exc}", file=sys.stderr)
         return 2
     if args.check:
         if new == old:
-            print(f"readme_figures: {args.readme.name}'s figures block matches {args.records.name}/")
+            print(f"readme_figures: {args.readme.name}'s results and figures blocks match {args.records.name}/")
             return 0
         diff = difflib.unified_diff(old.splitlines(), new.splitlines(), "README.md", "from the records", lineterm="")
         print("\n".join(diff))
-        print(f"readme_figures: {args.readme.name}'s figures block is not what {args.records.name}/*.json gives: "
+        print(f"readme_figures: {args.readme.name}'s blocks are not what {args.records.name}/*.json give: "
               "run .venv/bin/python scripts/readme_figures.py (and commit the records with it)", file=sys.stderr)
         return 1
     if new != old:
         args.readme.write_text(new)
-        print(f"readme_figures: rewrote the figures block of {args.readme}")
+        print(f"readme_figures: rewrote the blocks of {args.readme}")
     else:
         print(f"readme_figures: {args.readme.name} already up to date")
     return 0

@@ -1,4 +1,4 @@
-"""The README's figures block is what benchmarks/*.json give (scripts/readme_figures.py), and the records hold
+"""The README's results and figures blocks are what benchmarks/*.json give (scripts/readme_figures.py), and the records hold
 what scripts/bench_record.py promises: a hand edit of the block, or a new record committed without
 regenerating the block, fails here."""
 from __future__ import annotations
@@ -30,7 +30,7 @@ def test_every_committed_record_is_complete():
     assert paths, "no records in benchmarks/"
     for path in paths:
         rec = bench_record.read(path)
-        assert rec["benchmark"] in figures.ROWS, path
+        assert rec["benchmark"] in figures.ROWS or rec["benchmark"] == figures.RESULTS, path
         assert len(rec["load_before"]) == 3 and len(rec["load_after"]) == 3, path
         assert rec["machine"]["nproc"] >= 1 and rec["date_utc"].endswith("Z"), path
         assert len(rec["git_commit"]) == 40, path
@@ -55,7 +55,7 @@ def test_a_hand_edit_of_the_block_fails_the_check_until_regenerated(copy, capsys
     row = next(line for line in block.splitlines() if line.startswith("| ") and "benchmarks/" in line)
     readme.write_text(text.replace(row, row.replace(" | ", " | 9.99x ", 1)))
     assert _check(copy) == 1
-    assert "is not what" in capsys.readouterr().err
+    assert "are not what" in capsys.readouterr().err
     assert figures.main(["--readme", str(readme), "--records", str(copy / "benchmarks")]) == 0
     assert readme.read_text() == text
     assert _check(copy) == 0
@@ -81,6 +81,26 @@ def test_a_readme_without_markers_or_a_foreign_record_is_bad_input(copy, capsys)
     (copy / "README.md").write_text("# no block\n")
     assert _check(copy) == 2
     assert "no figures block" in capsys.readouterr().err
+
+
+def test_the_results_block_is_the_preset_record_and_a_hand_edit_fails_the_check(copy, capsys):
+    readme = copy / "README.md"
+    text = readme.read_text()
+    block = text[text.index(figures.RESULTS_BEGIN):text.index(figures.RESULTS_END)]
+    rms = next(line for line in block.splitlines() if line.startswith("| RMS error over [10, 20) s [rad] |"))
+    rec = json.loads((copy / "benchmarks" / "preset_results.json").read_text())
+    pa10 = next(a for a in rec["figures"]["arms"] if a["arm"] == "pa10")
+    assert f"**{pa10['dnbs']['rms_rad']:.1e}**".replace("e-05", "e-5") in rms   # the record's, as the README says it
+    readme.write_text(text.replace(rms, rms.replace("**", "", 2)))
+    assert _check(copy) == 1
+    assert figures.main(["--readme", str(readme), "--records", str(copy / "benchmarks")]) == 0
+    assert readme.read_text() == text
+
+
+def test_the_results_block_needs_exactly_one_preset_record(copy, capsys):
+    (copy / "benchmarks" / "preset_results.json").unlink()
+    assert _check(copy) == 2
+    assert "holds 0 preset_results records" in capsys.readouterr().err
 
 
 def test_a_record_holds_date_command_commit_machine_load_and_figures(tmp_path):
@@ -160,3 +180,33 @@ def test_the_recorded_main_jobs_error_is_the_in_process_runs_bit_for_bit():
         assert rms == record["worst_rms_error_rad"], (rms, record, recorded, ran, env)
     else:
         assert rms == pytest.approx(record["worst_rms_error_rad"], rel=1e-12, abs=0.0), (rms, recorded, ran)
+
+
+PRESET = """
+import json, sys
+sys.path.insert(0, sys.argv[2])
+import preset_results
+from pa10_dnbs.numeric_platform import numeric_platform
+print(json.dumps({"arm": preset_results.arm_result(sys.argv[1], float(sys.argv[3])), "platform": numeric_platform()}))
+"""
+
+
+def test_the_recorded_preset_results_are_what_the_arm_gives_today():
+    """One column of the README's results (the iiwa: the PA10's DNBS is the main job's, above) run again: a
+    record made before a change of the numbers is caught here, bit for bit on the record's numeric platform."""
+    rec = json.loads((ROOT / "benchmarks" / "preset_results.json").read_text())
+    recorded, figs = rec["machine"]["numeric_platform"], rec["figures"]
+    env = platform_env(recorded, numeric_platform())
+    run_env = dict(os.environ, PYTHONPATH=str(ROOT), **(env or {}))
+    if "NPY_DISABLE_CPU_FEATURES" in (env or {}):
+        run_env.pop("NPY_ENABLE_CPU_FEATURES", None)
+    r = subprocess.run([sys.executable, "-c", PRESET, "iiwa", str(ROOT / "scripts"), str(figs["duration_s"])],
+                       cwd=ROOT, env=run_env, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    ran = json.loads(r.stdout.splitlines()[-1])
+    want = next(a for a in figs["arms"] if a["arm"] == "iiwa")
+    if all(ran["platform"].get(k) == v for k, v in recorded.items()):
+        assert ran["arm"] == want
+    else:
+        for kind in figs["controllers"]:
+            assert ran["arm"][kind]["rms_rad"] == pytest.approx(want[kind]["rms_rad"], rel=1e-9, abs=0.0), kind
