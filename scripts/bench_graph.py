@@ -40,10 +40,14 @@ import bench_record  # noqa: E402
 
 from pa10_dnbs.cli_values import RTF_MAX, RTF_MIN, OneLineParser, number_in, seconds, whole_in  # noqa: E402
 from pa10_dnbs.config import ConfigError, default_config_path  # noqa: E402
+from pa10_dnbs.config_error import said_as  # noqa: E402
 from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.supervisor.graph_run import GraphFailure, GraphOptions, run_graph  # noqa: E402
 from pa10_dnbs.supervisor.realtime_advice import ON_TIME_TARGET  # noqa: E402
 from pa10_dnbs.loop.scheduling import DEFAULT_RT_PRIORITY, check_priority, granted_priority  # noqa: E402
+
+#: the settings a graph failure can name (config_error.SETTING_MARK), as this script's flags
+FLAGS = {"rt_priority": "--rt-priority", "real_time_factor": "--factors"}
 
 CPU_LINE = re.compile(r"^CPU (\S+) ([0-9.]+) us per step")
 
@@ -64,7 +68,8 @@ def one_run(mode: str, factor: float, args, attempts: int = 3) -> tuple[dict | N
         try:
             return _run(mode, factor, args)
         except GraphFailure as exc:
-            print(f"  ({mode} R={factor:g} attempt {attempt} failed: {str(exc).splitlines()[0]})", flush=True)
+            first = said_as(str(exc).splitlines()[0], FLAGS)   # the launcher's settings, as this script's flags
+            print(f"  ({mode} R={factor:g} attempt {attempt} failed: {first})", flush=True)
     return None, {}
 
 

@@ -103,6 +103,21 @@ def test_the_results_block_needs_exactly_one_preset_record(copy, capsys):
     assert "holds 0 preset_results records" in capsys.readouterr().err
 
 
+def test_the_collection_block_is_the_collection_benchmarks_table(copy, capsys):
+    readme = copy / "README.md"
+    text = readme.read_text()
+    block = text[text.index(figures.COLLECTION_BEGIN):text.index(figures.COLLECTION_END)]
+    data = json.loads((copy / "benchmarks" / figures.COLLECTION).read_text())
+    ur5 = next(r for r in data["rows"] if r["arm"] == "ur5" and r["mode"] == "arm_file")
+    row = next(line for line in block.splitlines() if line.startswith("| ur5 |"))
+    assert f"| {ur5['dnbs']['rms_rad']:.1e} / {ur5['pid']['rms_rad']:.1e} / {ur5['ctc']['rms_rad']:.1e} |" in row
+    readme.write_text(text.replace(row, row.replace("| ur5 |", "| ur5e |")))
+    assert _check(copy) == 1
+    (copy / "benchmarks" / figures.COLLECTION).unlink()
+    assert _check(copy) == 2
+    assert "cannot read the collection's table" in capsys.readouterr().err
+
+
 def test_a_record_holds_date_command_commit_machine_load_and_figures(tmp_path):
     rec = bench_record.Record.start("bench_sim", command=None)
     saved = rec.save(tmp_path / "r" / "x.json", {"ratio": 1.5})
