@@ -106,8 +106,8 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
         init_from = checkpoint_dir(o.init_from).resolve()
     out, force, controller, mode, record = o.out, o.force, o.controller, o.mode, o.record
     check_output_dir(out, force, "out", inputs={"config_path": config_path, "arm": the_arm.file,
-                                                  "arm URDF": the_arm.urdf, "trajectory": trajectory,
-                                                  "init_from": init_from, "record": record})
+                                                "arm URDF": the_arm.urdf, "trajectory": trajectory,
+                                                "init_from": init_from, "record": record})
     rt_priority, refused = granted_priority(o.rt_priority)
     if refused:  # said once here, rather than by each of the ten nodes in its log
         print(f"launch: {refused}", flush=True)
@@ -121,8 +121,8 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
         # the rule of --out: never the current directory, its parents, the root, a link or one of the run's
         # inputs; --force replaces only an empty folder or a bag pa10-dnbs recorded (its OUTPUT_MARK)
         check_output_dir(given, force, "record", inputs={"config_path": config_path, "arm": the_arm.file,
-                                                           "arm URDF": the_arm.urdf, "trajectory": trajectory,
-                                                           "init_from": init_from})
+                                                         "arm URDF": the_arm.urdf, "trajectory": trajectory,
+                                                         "init_from": init_from})
         try:
             check_bag_path(record, force)
         except BagExistsError as exc:

@@ -55,8 +55,8 @@ def run_simulate(options: SimulateOptions) -> int:
         except ValueError as exc:
             raise ConfigError(f"--init-from: {exc}") from None
     check_output_dir(o.out, o.force, "out", inputs={"config_path": config_path, "arm": the_arm.file,
-                                                      "arm URDF": the_arm.urdf, "trajectory": o.trajectory,
-                                                      "init_from": o.init_from})
+                                                    "arm URDF": the_arm.urdf, "trajectory": o.trajectory,
+                                                    "init_from": o.init_from})
     say_rules(rules)
     if "dnbs" in kinds:
         settings = resolve_kernel(settings, say=print)  # dnbs.kernel: auto -> c or numpy, said in one line

@@ -46,7 +46,7 @@ def run_study_command(options: StudyOptions) -> int:
     if faults_active(settings.faults):
         say_note(IN_PROCESS_FAULTS_NOTE)
     check_output_dir(o.out, o.force, "out", inputs={"config_path": config_path, "arm": settings.arm.file,
-                                                      "arm URDF": settings.arm.urdf})
+                                                    "arm URDF": settings.arm.urdf})
     check_scenario_references(settings, scen)   # a reference past the Nyquist rate: one line, nothing runs
     infeasible = infeasible_scenarios(settings, scen, duration_s)   # before any run: one line each, not run
     if len(infeasible) < len(scen):
@@ -130,7 +130,8 @@ def _keep_partial(out: Path, force: bool, done: list[dict], all_runs: list, comm
     nothing written. A second Ctrl-C meanwhile removes the half-written folder and ends at once."""
     n = len(all_runs)
     kept = len({(r["scenario"], r["controller"], r["seed"]) for r in done})
-    opening = f"pa10-dnbs: error: {lost.named(SETTING_FLAGS)}; stopped " if lost is not None else "pa10-dnbs: interrupted "
+    opening = (f"pa10-dnbs: error: {lost.named(SETTING_FLAGS)}; stopped " if lost is not None
+               else "pa10-dnbs: interrupted ")
     code = 2 if lost is not None else EXIT_INTERRUPTED
     if not kept:
         say(f"{opening}after 0 of {n} runs; nothing written to {out}: run the same command again")

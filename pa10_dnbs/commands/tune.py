@@ -138,7 +138,7 @@ def _checks(o: TuneOptions, say) -> dict:
     command = _command(o.controller, o.trials, out, o.arm, config_path, o.storage, o.seed, o.scenarios, o.seeds, o.held_out_seeds,
                        duration_s, o.params, base.simulation.duration_s)
     check_output_dir(out, False, "out", inputs={"config_path": config_path, "arm": the_arm.file,
-                                                   "arm URDF": the_arm.urdf},
+                                                "arm URDF": the_arm.urdf},
                      resume=tune_files(out, o.storage))
     check_tune_dir(out, spec.study_name, spec.identity(), refusal)  # only this tune's own files: it resumes
     _check_same_storage(out, o.storage)   # DIR's reports and tune.db are of this storage's study
