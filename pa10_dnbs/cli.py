@@ -12,6 +12,7 @@ from . import interrupt
 _startup_sigint = interrupt.quiet_start()   # Ctrl-C while the modules load: one line, exit 130
 
 from .config import ConfigError, default_config_path
+from .config_error import said_as
 from .console_stream import forgive_stderr, forgive_stdout
 from .commands.fault_flags import add_fault_arguments
 from .loop.scheduling import DEFAULT_RT_PRIORITY
@@ -455,7 +456,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"pa10-dnbs: error: {exc.named(SETTING_FLAGS)}", file=sys.stderr)
         return 2
     except Refused as exc:   # an output in the way, a bag, a kernel (refused.py)
-        print(f"pa10-dnbs: error: {exc.named(SETTING_FLAGS)}", file=sys.stderr)
+        print(f"pa10-dnbs: error: {said_as(str(exc), SETTING_FLAGS)}", file=sys.stderr)
         return 2
     except OSError as exc:
         out = getattr(args, "out", None)

@@ -1,6 +1,6 @@
 """How the command line names each setting a library message can name (config_error.SETTING_MARK): the flag
 that sets it, or the positional argument. The CLI and its commands say a library's message with it
-(``ConfigError.named``, ``Refused.named``); a library never names a flag itself."""
+(``ConfigError.named``, ``config_error.said_as``); a library never names a flag itself."""
 from __future__ import annotations
 
 #: setting (an options dataclass's field, commands/options.py) -> how the command line gives it

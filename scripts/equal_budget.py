@@ -25,6 +25,7 @@ from pa10_dnbs.cli import main as cli_main  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser, seconds, whole_in  # noqa: E402
 from pa10_dnbs.output_lock import OutputInUseError, lock_output, release_output  # noqa: E402
 from pa10_dnbs.report.outputs import OutputExistsError, check_output_dir  # noqa: E402
+from pa10_dnbs.config_error import said_as  # noqa: E402
 from pa10_dnbs.setting_flags import SETTING_FLAGS  # noqa: E402
 from pa10_dnbs.tune.comparison import comparison_markdown  # noqa: E402
 from pa10_dnbs.tune.objective import TRAINING_SCENARIOS, TRAINING_SEEDS  # noqa: E402
@@ -95,7 +96,7 @@ def check_one_tune(controller: str, args: argparse.Namespace) -> str | None:
     except ConfigError as exc:
         text = exc.named(SETTING_FLAGS)
     except Refused as exc:
-        text = exc.named(SETTING_FLAGS)
+        text = said_as(str(exc), SETTING_FLAGS)
     else:
         return None
     return (text.replace("--out/--storage: study", f"{where}: study")
@@ -110,7 +111,7 @@ def main(argv: list[str] | None = None) -> int:
                          resume=frozenset(CONTROLLERS) | {"comparison.md"})           # the same command resumes
         lock_output(args.out, "comparison directory")
     except (OutputExistsError, OutputInUseError) as exc:
-        print(f"{PROG}: error: {exc.named(SETTING_FLAGS)}", file=sys.stderr)
+        print(f"{PROG}: error: {said_as(str(exc), SETTING_FLAGS)}", file=sys.stderr)
         return 2
     try:
         for c in args.controllers:   # every tune checked before the first starts (a refusal after a tune: lost time)

@@ -1,5 +1,5 @@
 """A library's error names the setting (`force`), never the flag: the command line says it as its flag
-(setting_flags.py, ConfigError.named, Refused.named), a Python caller reads the setting it passed."""
+(setting_flags.py, config_error.said_as, ConfigError.named), a Python caller reads the setting it passed."""
 from __future__ import annotations
 
 import ast
@@ -90,10 +90,10 @@ def test_an_existing_output_names_force_as_a_setting_and_the_cli_as_its_flag(tmp
         with pytest.raises(OutputExistsError) as err:
             check_output_dir(out, False)
         assert str(err.value) == f"output directory exists: {out} (use `force` to replace it)"
-        assert err.value.named(SETTING_FLAGS) == f"output directory exists: {out} (use --force to replace it)"
+        assert said_as(str(err.value), SETTING_FLAGS) == f"output directory exists: {out} (use --force to replace it)"
         with pytest.raises(OutputExistsError) as err:
             check_output_dir(out, True, "record")
     finally:
         release_all(keep=before)   # the lock the check took, as the CLI drops it
-    assert err.value.named(SETTING_FLAGS).startswith(f"--record: {out} holds files that are not a pa10-dnbs "
+    assert said_as(str(err.value), SETTING_FLAGS).startswith(f"--record: {out} holds files that are not a pa10-dnbs "
                                                      "output: --force replaces only an empty folder")

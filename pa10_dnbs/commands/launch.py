@@ -103,8 +103,8 @@ def run_launch(options: LaunchOptions) -> int:
         print(f"realtime --rtf {t['target_real_time_factor']:g}: every effort before the deadline on "
               f"{100 * t['on_time_fraction']:.2f} % of ticks, late tick starts {t['late_start_ticks']}")
         if t["on_time_fraction"] < ON_TIME_TARGET:
-            print(said_as(realtime_hint(t["target_real_time_factor"], t["rt_priority_applied"],
-                                         injected_misses(settings.faults)), SETTING_FLAGS))
+            hint = realtime_hint(t["target_real_time_factor"], t["rt_priority_applied"], injected_misses(settings.faults))
+            print(said_as(hint, SETTING_FLAGS))
     if record is not None:
         size = sum(f.stat().st_size for f in record.iterdir())
         print(f"recorded {record} ({size / 1e6:.1f} MB, {size / 1e6 / (n_steps * dt):.2f} MB per simulated second, "
