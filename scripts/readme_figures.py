@@ -8,7 +8,9 @@ fraction, the test suite's count and time), each with the command that measured 
 machine's load before and after. The results block (``<!-- results: begin ... -->`` to ``<!-- results: end -->``)
 is the per-arm table of DNBS / PID / CTC that scripts/preset_results.py records; the collection block, one line
 per arm of the collection benchmark (scripts/arm_collection.py: benchmarks/collection/arm_collection.json,
-study/collection.py ``compact_table``). The records are written by the
+study/collection.py ``compact_table``); the equal-budget block, the tuned controllers of each arm side by side
+(scripts/equal_budget.py's comparisons kept in benchmarks/equal_budget/<arm>/: their comparison.md and each
+controller's tune.json; tune/comparison.py ``arms_table``). The records are written by the
 benchmarks' ``--save-record FILE`` (scripts/bench_record.py), which also hold the commit and the machine;
 nothing in either block is typed by hand.
 
@@ -42,6 +44,10 @@ RESULTS = "preset_results"   # the benchmark of the results block (scripts/prese
 COLLECTION_BEGIN = "<!-- collection: begin (scripts/readme_figures.py) -->"
 COLLECTION_END = "<!-- collection: end -->"
 COLLECTION = Path("collection") / "arm_collection.json"   # under the records' folder (scripts/arm_collection.py)
+BUDGET_BEGIN = "<!-- equal budget: begin (scripts/readme_figures.py) -->"
+BUDGET_END = "<!-- equal budget: end -->"
+BUDGET = Path("equal_budget")   # under the records' folder: one comparison folder per arm
+BUDGET_ORDER = ("pa10", "iiwa", "panda")   # the columns' order; other arms after them, by name
 HEADER = ["| figure | measured | by | when (UTC), load avg before -> after |", "|---|---|---|---|"]
 
 
@@ -236,6 +242,24 @@ def collection_table(folder: Path) -> list[str]:
     return lines
 
 
+def budget_table(folder: Path) -> list[str]:
+    """The equal-budget block's lines: the tuned controllers of every comparison in ``folder``/BUDGET side by side
+    (tune/comparison.py ``arms_table``: refused unless the budgets are equal), then the line naming them."""
+    from pa10_dnbs.tune.comparison import arms_table
+
+    root = folder / BUDGET
+    dirs = sorted((d for d in root.iterdir() if d.is_dir()) if root.is_dir() else [],
+                  key=lambda d: (BUDGET_ORDER.index(d.name) if d.name in BUDGET_ORDER else len(BUDGET_ORDER), d.name))
+    if not dirs:
+        raise BadInput(f"{root}: no equal-budget comparison (scripts/equal_budget.py --out {root}/ARM)")
+    try:
+        lines = arms_table(dirs).rstrip("\n").split("\n")
+    except (OSError, ValueError, KeyError, TypeError, IndexError) as exc:
+        raise BadInput(f"{root}: cannot read the comparisons ({type(exc).__name__}: {exc})") from None
+    links = ", ".join(f"[{d.name}](benchmarks/{BUDGET.as_posix()}/{d.name}/comparison.md)" for d in dirs)
+    return lines + ["", f"Each arm's comparison, with its command and each controller's best point: {links}"]
+
+
 def render(readme: str, block: list[str], begin: str = BEGIN, end: str = END, name: str = "figures") -> str:
     """``readme`` with the lines between the markers ``begin`` and ``end`` (its ``name`` block) replaced by
     ``block``."""
@@ -268,6 +292,7 @@ def main(argv: list[str] | None = None) -> int:
         recs = read_records(args.records)
         new = render(render(old, table(recs)), results_table(recs), RESULTS_BEGIN, RESULTS_END, "results")
         new = render(new, collection_table(args.records), COLLECTION_BEGIN, COLLECTION_END, "collection")
+        new = render(new, budget_table(args.records), BUDGET_BEGIN, BUDGET_END, "equal budget")
     except (BadInput, OSError) as exc:
         print(f"readme_figures: {exc}", file=sys.stderr)
         return 2

@@ -118,6 +118,24 @@ def test_the_collection_block_is_the_collection_benchmarks_table(copy, capsys):
     assert "cannot read the collection's table" in capsys.readouterr().err
 
 
+def test_the_equal_budget_block_is_the_kept_comparisons_and_refuses_unequal_budgets(copy, capsys):
+    readme = copy / "README.md"
+    text = readme.read_text()
+    block = text[text.index(figures.BUDGET_BEGIN):text.index(figures.BUDGET_END)]
+    tune = json.loads((copy / "benchmarks" / figures.BUDGET / "pa10" / "pid" / "tune.json").read_text())
+    worst = max(r["worst_rms_error_rad"] for r in tune["held_out"]["tuned"] if r["scenario"] == "nominal")
+    row = next(line for line in block.splitlines() if line.startswith("| nominal |"))
+    assert f" / {worst:.1e}".replace("e-0", "e-") in row.split(" | ")[1]   # PA10's PID, tuned: its tune.json
+    readme.write_text(text.replace(row, row.replace("| nominal |", "| nominal (tuned) |")))
+    assert _check(copy) == 1
+    tune_file = copy / "benchmarks" / figures.BUDGET / "iiwa" / "dnbs" / "tune.json"
+    other = json.loads(tune_file.read_text())
+    other["trials"] = 59
+    tune_file.write_text(json.dumps(other))
+    assert _check(copy) == 2
+    assert "not equal budgets" in capsys.readouterr().err
+
+
 def test_a_record_holds_date_command_commit_machine_load_and_figures(tmp_path):
     rec = bench_record.Record.start("bench_sim", command=None)
     saved = rec.save(tmp_path / "r" / "x.json", {"ratio": 1.5})
