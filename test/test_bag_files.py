@@ -298,7 +298,7 @@ def test_standalone_recorder_rejects_bad_parameters(tmp_path, domain):
                         "is not a topic name")
     existing = _write_bag(tmp_path / "old")
     before = sorted(p.name for p in existing.iterdir())
-    _assert_clear_error(_recorder(domain, f"bag:={existing}", "all_topics:=true"), "exists", "--force")
+    _assert_clear_error(_recorder(domain, f"bag:={existing}", "all_topics:=true"), "exists", "pass force:=true")
     assert sorted(p.name for p in existing.iterdir()) == before
     assert not (tmp_path / "b").exists()
 

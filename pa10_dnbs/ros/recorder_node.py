@@ -31,7 +31,8 @@ from typing import NoReturn
 from rclpy.node import Node
 
 from ..bag.custom_data import CUSTOM_CONFIG, CUSTOM_PREFIX
-from ..bag.bag_writer import COMPRESSIONS, BagWriter
+from ..bag.bag_writer import COMPRESSIONS, BagExistsError, BagWriter
+from ..config_error import said_as
 from ..bag.tf_messages import tf_message_cdr
 from ..wire import joint_state_cdr
 from ..wire.reference_buffer import ReferenceBuffer
@@ -129,7 +130,10 @@ class RecorderNode(Node):
         # x_d from the reference batches, for the worst |e| on PROGRESS lines (sampled at tf_rate_hz)
         self.refs = ReferenceBuffer(len(self.joint_names), StepClock(settings.simulation.dt_s))
         self._ref_joint = {self.arm.reference(j): i for i, j in enumerate(self.joint_names)}
-        self.writer = BagWriter(Path(p["bag"]), force=p["force"], custom_data=custom, compression=p["compression"])
+        try:
+            self.writer = BagWriter(Path(p["bag"]), force=p["force"], custom_data=custom, compression=p["compression"])
+        except BagExistsError as exc:   # its `force` is this node's parameter
+            raise BagExistsError(said_as(str(exc), {"force": "force:=true"})) from None
         self.cpu = CpuMeter()
         self.inbox = Inbox(self, p["poll_period_s"])
         self._discover()
