@@ -193,7 +193,8 @@ def _short_e(text: str) -> str:
 
 def results_table(recs: list[dict]) -> list[str]:
     """The results block's lines: one column per arm of the preset_results record, one row per figure, each
-    cell DNBS / PID / CTC (``never`` for a run that did not settle), then the line naming the record."""
+    cell DNBS / PID / CTC (``never`` for a run that did not settle, ``diverged`` for one without a figure), then the
+    line naming the record."""
     found = [r for r in recs if r["benchmark"] == RESULTS]
     if len(found) != 1:
         raise BadInput(f"benchmarks/ holds {len(found)} {RESULTS} records: the results block needs exactly one "
@@ -213,7 +214,8 @@ def results_table(recs: list[dict]) -> list[str]:
                 parts = []
                 for k in kinds:
                     v = a[k][field]
-                    text = "never" if v is None else _short_e(fmt.format(v))
+                    text = (("never" if field == "settled_s" else "diverged") if v is None   # no value: why
+                            else _short_e(fmt.format(v)))
                     parts.append(f"**{text}**" if bold and k == "dnbs" else text)
                 cells.append(" / ".join(parts))
             lines.append(f"| {label.format(window=window, startup=startup)} | " + " | ".join(cells) + " |")
