@@ -300,7 +300,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if args.check:
         if new == old:
-            print(f"readme_figures: {args.readme.name}'s results and figures blocks match {args.records.name}/")
+            print(f"readme_figures: {args.readme.name}'s generated blocks match {args.records.name}/")
             return 0
         diff = difflib.unified_diff(old.splitlines(), new.splitlines(), "README.md", "from the records", lineterm="")
         print("\n".join(diff))
