@@ -6,9 +6,7 @@ and ``<!-- figures: end -->``: a table with one row per recorded figure (the mai
 factor and bag size, the in-process DNBS / PID cost, the bag writer's CPU, the node graph's realtime on-time
 fraction, the test suite's count and time), each with the command that measured it, its date (UTC) and the
 machine's load before and after. The results block (``<!-- results: begin ... -->`` to ``<!-- results: end -->``)
-is the per-arm table of DNBS / PID / CTC that scripts/preset_results.py records; the collection block, one line
-per arm of the collection benchmark (scripts/arm_collection.py: benchmarks/collection/arm_collection.json,
-study/collection.py ``compact_table``); the equal-budget block, the tuned controllers of each arm side by side
+is the per-arm table of DNBS / PID / CTC that scripts/preset_results.py records; the equal-budget block, the tuned controllers of each arm side by side
 (scripts/equal_budget.py's comparisons kept in benchmarks/equal_budget/<arm>/: their comparison.md and each
 controller's tune.json; tune/comparison.py ``arms_table``). The records are written by the
 benchmarks' ``--save-record FILE`` (scripts/bench_record.py), which also hold the commit and the machine;
@@ -24,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import difflib
-import json
 import shlex
 import sys
 from pathlib import Path
@@ -41,9 +38,6 @@ END = "<!-- figures: end -->"
 RESULTS_BEGIN = "<!-- results: begin (scripts/readme_figures.py) -->"
 RESULTS_END = "<!-- results: end -->"
 RESULTS = "preset_results"   # the benchmark of the results block (scripts/preset_results.py)
-COLLECTION_BEGIN = "<!-- collection: begin (scripts/readme_figures.py) -->"
-COLLECTION_END = "<!-- collection: end -->"
-COLLECTION = Path("collection") / "arm_collection.json"   # under the records' folder (scripts/arm_collection.py)
 BUDGET_BEGIN = "<!-- equal budget: begin (scripts/readme_figures.py) -->"
 BUDGET_END = "<!-- equal budget: end -->"
 BUDGET = Path("equal_budget")   # under the records' folder: one comparison folder per arm
@@ -225,25 +219,6 @@ def results_table(recs: list[dict]) -> list[str]:
     return lines
 
 
-def collection_table(folder: Path) -> list[str]:
-    """The collection block's lines: the table of ``folder``/COLLECTION (one line per arm, study/collection.py
-    ``compact_table``), then the line naming its command, collection and run length."""
-    from pa10_dnbs.study.collection import compact_table
-
-    path = folder / COLLECTION
-    try:
-        data = json.loads(path.read_text())
-        meta = data["meta"]
-        lines = compact_table(data["rows"]).rstrip("\n").split("\n")
-        done = "" if meta["rows_done"] == meta["rows_planned"] else \
-            f", **{meta['rows_done']} of {meta['rows_planned']} rows** (interrupted)"
-        lines += ["", f"`{meta['command']}`: {meta['collection']}, {meta['duration_s']:g} s runs{done} "
-                      f"([table](benchmarks/{COLLECTION.with_suffix('.md').as_posix()}); `!`: diverged)"]
-    except (OSError, ValueError, KeyError, TypeError, IndexError) as exc:
-        raise BadInput(f"{path}: cannot read the collection's table ({type(exc).__name__}: {exc})") from None
-    return lines
-
-
 def budget_table(folder: Path) -> list[str]:
     """The equal-budget block's lines: the tuned controllers of every comparison in ``folder``/BUDGET side by side
     (tune/comparison.py ``arms_table``: refused unless the budgets are equal), then the line naming them."""
@@ -293,7 +268,6 @@ def main(argv: list[str] | None = None) -> int:
         old = args.readme.read_text()
         recs = read_records(args.records)
         new = render(render(old, table(recs)), results_table(recs), RESULTS_BEGIN, RESULTS_END, "results")
-        new = render(new, collection_table(args.records), COLLECTION_BEGIN, COLLECTION_END, "collection")
         new = render(new, budget_table(args.records), BUDGET_BEGIN, BUDGET_END, "equal budget")
     except (BadInput, OSError) as exc:
         print(f"readme_figures: {exc}", file=sys.stderr)
