@@ -48,11 +48,16 @@ def _check(folder: Path) -> int:
     return figures.main(["--check", "--readme", str(folder / "README.md"), "--records", str(folder / "benchmarks")])
 
 
+def _row(readme: Path, begin: str, end: str, opening: str) -> tuple[str, str]:
+    """(the README's text, the first line between ``begin`` and ``end`` that opens with ``opening``)."""
+    text = readme.read_text()
+    block = text[text.index(begin):text.index(end)]
+    return text, next(line for line in block.splitlines() if line.startswith(opening))
+
+
 def test_a_hand_edit_of_the_block_fails_the_check_until_regenerated(copy, capsys):
     readme = copy / "README.md"
-    text = readme.read_text()
-    block = text[text.index(figures.BEGIN):text.index(figures.END)]
-    row = next(line for line in block.splitlines() if line.startswith("| ") and "benchmarks/" in line)
+    text, row = _row(readme, figures.BEGIN, figures.END, "| main job")
     readme.write_text(text.replace(row, row.replace(" | ", " | 9.99x ", 1)))
     assert _check(copy) == 1
     assert "are not what" in capsys.readouterr().err
@@ -85,9 +90,7 @@ def test_a_readme_without_markers_or_a_foreign_record_is_bad_input(copy, capsys)
 
 def test_the_results_block_is_the_preset_record_and_a_hand_edit_fails_the_check(copy, capsys):
     readme = copy / "README.md"
-    text = readme.read_text()
-    block = text[text.index(figures.RESULTS_BEGIN):text.index(figures.RESULTS_END)]
-    rms = next(line for line in block.splitlines() if line.startswith("| RMS error over [10, 20) s [rad] |"))
+    text, rms = _row(readme, figures.RESULTS_BEGIN, figures.RESULTS_END, "| RMS error over [10, 20) s [rad] |")
     rec = json.loads((copy / "benchmarks" / "preset_results.json").read_text())
     pa10 = next(a for a in rec["figures"]["arms"] if a["arm"] == "pa10")
     assert f"**{pa10['dnbs']['rms_rad']:.1e}**".replace("e-05", "e-5") in rms   # the record's, as the README says it
@@ -103,28 +106,11 @@ def test_the_results_block_needs_exactly_one_preset_record(copy, capsys):
     assert "holds 0 preset_results records" in capsys.readouterr().err
 
 
-def test_the_collection_block_is_the_collection_benchmarks_table(copy, capsys):
-    readme = copy / "README.md"
-    text = readme.read_text()
-    block = text[text.index(figures.COLLECTION_BEGIN):text.index(figures.COLLECTION_END)]
-    data = json.loads((copy / "benchmarks" / figures.COLLECTION).read_text())
-    ur5 = next(r for r in data["rows"] if r["arm"] == "ur5" and r["mode"] == "arm_file")
-    row = next(line for line in block.splitlines() if line.startswith("| ur5 |"))
-    assert f"| {ur5['dnbs']['rms_rad']:.1e} / {ur5['pid']['rms_rad']:.1e} / {ur5['ctc']['rms_rad']:.1e} |" in row
-    readme.write_text(text.replace(row, row.replace("| ur5 |", "| ur5e |")))
-    assert _check(copy) == 1
-    (copy / "benchmarks" / figures.COLLECTION).unlink()
-    assert _check(copy) == 2
-    assert "cannot read the collection's table" in capsys.readouterr().err
-
-
 def test_the_equal_budget_block_is_the_kept_comparisons_and_refuses_unequal_budgets(copy, capsys):
     readme = copy / "README.md"
-    text = readme.read_text()
-    block = text[text.index(figures.BUDGET_BEGIN):text.index(figures.BUDGET_END)]
+    text, row = _row(readme, figures.BUDGET_BEGIN, figures.BUDGET_END, "| nominal |")
     tune = json.loads((copy / "benchmarks" / figures.BUDGET / "pa10" / "pid" / "tune.json").read_text())
     worst = max(r["worst_rms_error_rad"] for r in tune["held_out"]["tuned"] if r["scenario"] == "nominal")
-    row = next(line for line in block.splitlines() if line.startswith("| nominal |"))
     assert f" / {worst:.1e}".replace("e-0", "e-") in row.split(" | ")[1]   # PA10's PID, tuned: its tune.json
     readme.write_text(text.replace(row, row.replace("| nominal |", "| nominal (tuned) |")))
     assert _check(copy) == 1
