@@ -28,6 +28,7 @@ from pa10_dnbs.paths import share_path  # noqa: E402
 from pa10_dnbs.report.metrics_file import metrics_dict, metrics_settings  # noqa: E402
 from pa10_dnbs.sim.closed_loop import simulate  # noqa: E402
 from pa10_dnbs.study.executor import Executor  # noqa: E402
+from pa10_dnbs.study.lost_runs import RunsLost  # noqa: E402
 from pa10_dnbs.study.scenarios import scenario_settings  # noqa: E402
 from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.settings import replace_in  # noqa: E402
@@ -125,18 +126,24 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
+NOTHING_PRINTED = "nothing printed (the table comes whole, once every run is done): run the same command again"
+
+
 def interruptible_main(argv: list[str] | None = None) -> int:
     """``main`` with Ctrl-C done right (docs/tuning.md, "Interrupting"): the workers stopped, one line, exit 130
-    (a second Ctrl-C ends at once: pa10_dnbs/interrupt.py)."""
+    (a second Ctrl-C ends at once: pa10_dnbs/interrupt.py); a worker process killed (the OOM killer): one line
+    naming --workers, exit 2."""
     from pa10_dnbs.interrupt import EXIT_INTERRUPTED, say, two_stage_sigint
 
     try:
         with two_stage_sigint():
             return main(argv)
     except KeyboardInterrupt:
-        say("ablation: interrupted; nothing printed (the table comes whole, once every run is done): run the same "
-            "command again")
+        say(f"ablation: interrupted; {NOTHING_PRINTED}")
         return EXIT_INTERRUPTED
+    except RunsLost as exc:
+        say(f"ablation: error: {exc.named({'jobs': '--workers'})}; {NOTHING_PRINTED}")
+        return 2
 
 
 if __name__ == "__main__":

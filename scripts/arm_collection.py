@@ -8,8 +8,9 @@
 Each (arm, mode) runs DNBS, PID and CTC in-process (pa10_dnbs/study/collection.py) in a pool of ``--jobs``
 processes. The table goes to ``--out`` (benchmarks/collection/arm_collection.json) and beside it as markdown
 (.md: the full table, the study's, and the README's one line per arm), rewritten after every row, so Ctrl-C
-(exit 130) keeps the completed rows. The collection is not in requirements.txt: it is the benchmark's choice
-(131 MB that no test needs), pinned in ONE place, requirements-collection.txt, which ``--install`` installs.
+(exit 130) keeps the completed rows, as does a worker process killed (one line naming --jobs, exit 2). The
+collection is not in requirements.txt: it is the benchmark's choice (131 MB that no test needs), pinned in ONE
+place, requirements-collection.txt, which ``--install`` installs.
 Exit 2 with one line when it is not installed. ``--study`` then runs every study scenario x DNBS and PID x 3
 seeds on each accepted arm file (about a minute per arm on 2 cores at 20 s) and adds a second table: where
 DNBS's worst seed is below PID's best, and which scenarios are beyond the arm's torque limits (named with the
@@ -125,6 +126,7 @@ def main(argv=None) -> int:
         write()
 
     from pa10_dnbs.study.executor import Executor
+    from pa10_dnbs.study.lost_runs import RunsLost
     try:
         with Executor(min(a.jobs, len(tasks))) as ex:
             ex.run(run_row, tasks, on_done)
@@ -140,6 +142,11 @@ def main(argv=None) -> int:
         write()
         print(f"arm_collection: interrupted: {len(done)} of {len(tasks)} rows kept in {a.out}", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except RunsLost as exc:   # a worker process killed (the OOM killer): the completed rows kept, as for a Ctrl-C
+        write()
+        print(f"arm_collection: error: {exc.named({'jobs': '--jobs'})}; {len(done)} of {len(tasks)} rows kept in "
+              f"{a.out}", file=sys.stderr)
+        return 2
     write()
     print(f"wrote {a.out} and {a.out.with_suffix('.md')} ({len(done)} rows, "
           f"{time.perf_counter() - t0:.0f} s)")

@@ -9,7 +9,7 @@ shipped (hand- or rule-tuned, the start of its search) and as tuned, per scenari
 
 Every option is checked before the first tune starts (bad input: one line, exit 2). A tune that exists in
 DIR/<controller>/ resumes (the same command finishes an interrupted comparison); a second copy running into the
-same DIR at once is refused.
+same DIR at once is refused, and so is a --controllers that leaves out a controller DIR holds a tune of.
 """
 from __future__ import annotations
 
@@ -21,6 +21,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from pa10_dnbs.atomic_file import atomic_path  # noqa: E402
 from pa10_dnbs.cli import main as cli_main  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser, seconds, whole_in  # noqa: E402
 from pa10_dnbs.output_lock import OutputInUseError, lock_output, release_output  # noqa: E402
@@ -114,6 +115,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{PROG}: error: {said_as(str(exc), SETTING_FLAGS)}", file=sys.stderr)
         return 2
     try:
+        dropped = [c for c in CONTROLLERS if c not in args.controllers and (args.out / c).exists()]
+        if dropped:   # comparison.md is rewritten whole, from the listed controllers' tunes alone
+            print(f"{PROG}: error: --controllers: {args.out} holds the tune of {', '.join(dropped)} too, which "
+                  "comparison.md would drop: list every controller of the comparison (the same command resumes), "
+                  "or give another --out", file=sys.stderr)
+            return 2
         for c in args.controllers:   # every tune checked before the first starts (a refusal after a tune: lost time)
             line = check_one_tune(c, args)
             if line is not None:
@@ -126,7 +133,8 @@ def main(argv: list[str] | None = None) -> int:
                 return rc
             results[c] = json.loads((args.out / c / "tune.json").read_text())
         command = "python scripts/equal_budget.py " + " ".join(shlex.quote(a) for a in (argv or sys.argv[1:]))
-        (args.out / "comparison.md").write_text(comparison_markdown(results, command))
+        with atomic_path(args.out / "comparison.md") as tmp:   # a Ctrl-C while it is written: the old one stays
+            tmp.write_text(comparison_markdown(results, command))
     finally:
         release_output(args.out)
     print(f"wrote {args.out}/comparison.md")

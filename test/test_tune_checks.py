@@ -207,6 +207,24 @@ def test_equal_budget_checks_every_controllers_tune_before_the_first(tmp_path, l
     assert not (eq / "pid").exists() and out == ""
 
 
+def test_equal_budget_refuses_a_controllers_list_that_would_drop_a_tune_from_the_comparison(tmp_path):
+    """DIR compares PID and CTC; the same command with --controllers pid rewrote comparison.md with PID alone,
+    silently: now refused in one line, comparison.md kept as it was."""
+    from test_misuse_inputs import _script
+
+    eq = tmp_path / "eq"
+    common = ("--trials", 1, "--scenarios", "nominal", "--seeds", 1, "--duration", 0.2, "--held-out-seeds", 1,
+              "--no-progress", "--jobs", 1, "--out", eq)
+    assert _script("equal_budget", *common, "--controllers", "pid,ctc")[0] == 0
+    before = (eq / "comparison.md").read_bytes()
+    rc, out, err = _script("equal_budget", *common, "--controllers", "pid")
+    assert rc == 2 and out == "" and err == (
+        f"equal_budget: error: --controllers: {eq} holds the tune of ctc too, which comparison.md would drop: list "
+        "every controller of the comparison (the same command resumes), or give another --out\n"), err
+    assert (eq / "comparison.md").read_bytes() == before
+    assert _script("equal_budget", *common, "--controllers", "ctc,pid")[0] == 0   # the same comparison resumes
+
+
 def test_equal_budget_table_refuses_unfinished_and_unequal_comparisons(tmp_path):
     """An interrupted comparison (no comparison.md) and comparisons of other budgets put side by side without a
     word: now one line each, exit 2."""
