@@ -238,12 +238,15 @@ def two_stage_sigint():
         _state.update(deferred=0, requested=False, raised=False, cleanup=None)
 
 
-def quiet_start() -> object:
+def quiet_start(prog: str = "pa10-dnbs") -> object:
     """While the command's modules load (before it can say anything useful): a SIGINT ends at once with one
-    line and exit 130 instead of an import traceback. Returns the previous handler for :func:`end_quiet_start`."""
+    line opening with ``prog`` and exit 130 instead of an import traceback. Returns the previous handler for
+    :func:`end_quiet_start`."""
+    line = f"{prog}: interrupted while starting, before any work: nothing changed\n".encode()
+
     def stop(signum, frame):
         with contextlib.suppress(Exception):
-            os.write(2, b"pa10-dnbs: interrupted while starting, before any work: nothing changed\n")
+            os.write(2, line)
         os._exit(EXIT_INTERRUPTED)
     try:
         return signal.signal(signal.SIGINT, stop)

@@ -20,6 +20,7 @@ One JSON file per benchmark in ``benchmarks/`` (``--save-record FILE`` of the be
 from __future__ import annotations
 
 import argparse
+import contextlib
 import datetime as dt
 import json
 import os
@@ -111,10 +112,16 @@ class Record:
         rec = self.as_dict(figures)
         if path is not None:
             path = Path(path)
-            path.parent.mkdir(parents=True, exist_ok=True)
             tmp = path.with_suffix(path.suffix + ".tmp")
-            tmp.write_text(json.dumps(rec, indent=2, default=_plain) + "\n")
-            tmp.replace(path)
+            try:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                tmp.write_text(json.dumps(rec, indent=2, default=_plain) + "\n")
+                tmp.replace(path)
+            except OSError as exc:   # checked writable when parsed; refused now all the same (root, a full disk)
+                with contextlib.suppress(OSError):
+                    tmp.unlink()
+                raise SystemExit(f"{Path(sys.argv[0]).stem}: error: --save-record: cannot write {path}: "
+                                 f"{exc.strerror or exc}") from None
             print(f"record written: {path}", flush=True)
         return rec
 
@@ -129,6 +136,8 @@ def _plain(value):
 def read(path: Path | str) -> dict:
     """A record from its file; ValueError naming the file and the first missing key."""
     rec = json.loads(Path(path).read_text())
+    if not isinstance(rec, dict):
+        raise ValueError(f"{path}: not a benchmark record: not a JSON object")
     for key in KEYS:
         if key not in rec:
             raise ValueError(f"{path}: not a benchmark record: no '{key}'")

@@ -23,13 +23,13 @@ import math
 import sys
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
+import numpy as np  # noqa: E402
 from flag_values import arm_settings  # noqa: E402
-from pa10_dnbs.cli_values import OneLineParser, positive  # noqa: E402
+from pa10_dnbs.cli_values import OneLineParser, number_in  # noqa: E402
 from pa10_dnbs.core.reference import Reference  # noqa: E402
 from pa10_dnbs.plant.from_config import opened_plant, plant_params  # noqa: E402
 
@@ -87,8 +87,9 @@ def fastest_mode(dt_s: float, poses, k_a, k_u, k_i):
 def main() -> int:
     ap = OneLineParser(description=__doc__.splitlines()[0])
     ap.add_argument("--arm", default="pa10", help="preset name, arm file or URDF")
-    ap.add_argument("--ekf-gain", type=positive, default=None,
-                    help="K of the bias's EKF (default: the torque network's steady gain from its q and r)")
+    ap.add_argument("--ekf-gain", type=number_in(0.0, 1.0), default=None,
+                    help="K of the bias's EKF, in (0, 1] (a Kalman gain; default: the torque network's steady "
+                    "gain from its q and r)")
     a = ap.parse_args()
     settings = arm_settings(ap, a.arm)
     arm, run, ref_s = settings.arm, settings.simulation, settings.reference
@@ -119,4 +120,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(script_main.run(main, "cascade_modes", {"arm": "--arm"}, interrupted="the rows above are complete: "
+                                                                                "run the same command again"))

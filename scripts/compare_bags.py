@@ -14,9 +14,12 @@ import struct
 import sys
 from pathlib import Path
 
-from pa10_dnbs.bag.analysis import bag_arm, bag_joint_names
-from pa10_dnbs.bag.bag_reader import Bag, BagError
-from pa10_dnbs.cli_values import OneLineParser
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
+from pa10_dnbs.bag.analysis import bag_arm, bag_joint_names  # noqa: E402
+from pa10_dnbs.bag.bag_reader import Bag, BagError  # noqa: E402
+from pa10_dnbs.cli_values import OneLineParser  # noqa: E402
 
 STAMP = struct.Struct("<iI")  # std_msgs/Header stamp after the 4-byte CDR encapsulation: sec, nanosec
 
@@ -62,4 +65,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(script_main.run(main, "compare_bags", interrupted="nothing compared: run the same command again"))

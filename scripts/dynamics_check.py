@@ -8,7 +8,7 @@ Each arm is read as ``--arm`` reads it (chain, locked gripper, cleaned copy for 
 URDF as written (``pa10_dnbs/plant/dynamics_check.py``). Figures: the largest relative difference over
 ``--states`` seeded random states. ``--collection`` needs example-robot-data installed (131 MB, not in
 requirements.txt: ``pip install example-robot-data==6.0.0``); exit 2 naming it otherwise. Exit 1 when an
-arm differs by more than ``--tolerance``.
+arm differs by more than ``--tolerance``; exit 2, after the table, when an arm was refused (not checked).
 """
 from __future__ import annotations
 
@@ -17,7 +17,9 @@ import sysconfig
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
 from pa10_dnbs.arm import load_arm  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser, positive, whole_in  # noqa: E402
 from pa10_dnbs.config_error import ConfigError  # noqa: E402
@@ -57,21 +59,29 @@ def main(argv: list[str] | None = None) -> int:
     if not specs:
         ap.error("give arms or --collection")
     print(f"| arm | joints (locked) | M(q) | bias torques | forward dynamics |\n|---|---|---|---|---|")
-    worst = 0.0
+    worst, refused = 0.0, []
     for spec in specs:
         try:
             arm = load_arm(spec)
         except ConfigError as exc:
             print(f"| {Path(spec).name} | refused: {exc} | | | |")
+            refused.append(spec)
             continue
         d = compare_with_mujoco(arm, states=args.states)
         worst = max(worst, d.worst)
         locked = f" ({', '.join(arm.locked_joints)})" if arm.locked_joints else ""
         print(f"| {arm.name} | {arm.n_joints}{locked} | {d.mass_matrix:.1e} | {d.bias_torque:.1e} | "
               f"{d.forward_dynamics:.1e} |")
-    print(f"\nlargest relative difference {worst:.1e} (tolerance {args.tolerance:g}, {args.states} states per arm)")
+    if len(refused) < len(specs):
+        print(f"\nlargest relative difference {worst:.1e} (tolerance {args.tolerance:g}, {args.states} states per "
+              "arm)")
+    if refused:   # a mistyped arm is no pass
+        print(f"dynamics_check: error: {len(refused)} of {len(specs)} arms refused, not checked: "
+              f"{', '.join(refused)}", file=sys.stderr)
+        return 2
     return 0 if worst <= args.tolerance else 1
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(script_main.run(main, "dynamics_check", interrupted="the table is not finished: run the same command "
+                                                                 "again"))

@@ -21,13 +21,14 @@ import math
 import sys
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
+import numpy as np  # noqa: E402
 from flag_values import arm_settings, list_of  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser, positive, seconds, whole_in  # noqa: E402
+from pa10_dnbs.run_steps import run_steps  # noqa: E402
 from pa10_dnbs.sim import closed_loop  # noqa: E402
 from pa10_dnbs.study.scenarios import scenario_settings  # noqa: E402
 
@@ -43,7 +44,7 @@ class FilteredLoop:
     """The joint loop the run built, behind one filter per joint: ``step`` gets the measured x1, x2 (n,)."""
 
     def __init__(self, loop, dt_s: float, gain: float, cutoff_rad_s: float | None):
-        self.loop, self.controllers = loop, loop.controllers
+        self.loop = loop
         self.dt_s, self.gain = dt_s, gain
         self.smooth = 1.0 if cutoff_rad_s is None else dt_s * cutoff_rad_s / (1.0 + dt_s * cutoff_rad_s)
         self.q = self.v = None
@@ -56,6 +57,10 @@ class FilteredLoop:
             ahead = self.q + self.dt_s * self.v
             self.q = ahead + self.gain * (x1 - ahead)
         return self.loop.step(self.q, self.v, reference)
+
+    def __getattr__(self, name: str):
+        """The rest of the loop's interface (its controllers, its guard's counters), unfiltered."""
+        return getattr(self.loop, name)
 
 
 def worst_rms(settings, controller: str, seed: int, duration_s: float, filt) -> float:
@@ -86,6 +91,7 @@ def main() -> int:
                     help="velocity low-pass cut-offs to try [rad/s]")
     a = ap.parse_args()
     settings = arm_settings(ap, a.arm)
+    run_steps(a.duration, settings.simulation.dt_s)   # too short a run: refused before the first row
     _, dist = scenario_settings(settings, "encoder_noise", 0)
     gain = kalman_gain(settings.simulation.dt_s, dist.position_noise_std_rad, dist.velocity_noise_std_rad_s)
     variants = [("none", None), (f"position (L = {gain:.4f})", (gain, None))]
@@ -100,4 +106,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(script_main.run(main, "encoder_noise_filters", {"arm": "--arm", "duration_s": "--duration"},
+                             interrupted="the rows above are complete: run the same command again"))

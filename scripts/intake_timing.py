@@ -27,6 +27,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "test"))
 sys.path.insert(0, str(ROOT / "scripts"))
 
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
 import yaml  # noqa: E402
 
 from chain_urdf import chain_urdf  # noqa: E402
@@ -63,17 +64,21 @@ def _arm_seconds(urdf: Path, repeat: int) -> float:
     return _best(repeat, run)
 
 
+MAX_JOINTS = 1000       # a chain far longer than any arm's
+MAX_POINTS = 10**7      # a trajectory file of about 2 GB as JSON
+
+
 def _point_count(text: str) -> int:
-    """A trajectory length: a whole number >= 1, written plainly or as 1e4."""
+    """A trajectory length: a whole number in [1, MAX_POINTS], written plainly or as 1e4."""
     v = positive(text)
-    if v != int(v):
-        raise argparse.ArgumentTypeError(f"must be a whole number of points, got {text!r}")
+    if v > MAX_POINTS or v != int(v):
+        raise argparse.ArgumentTypeError(f"must be a whole number of points up to {MAX_POINTS:.0e}, got {text!r}")
     return int(v)
 
 
 def main() -> int:
     ap = OneLineParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--joints", type=list_of(whole_in(1), allow_empty=True), default="7,20,40",
+    ap.add_argument("--joints", type=list_of(whole_in(1, MAX_JOINTS), allow_empty=True), default="7,20,40",
                     help="comma-separated chain lengths ('' for none)")
     ap.add_argument("--points", type=list_of(_point_count, allow_empty=True), default="1e3,1e4,1e5",
                     help="comma-separated trajectory lengths ('' for none)")
@@ -106,4 +111,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(script_main.run(main, "intake_timing", interrupted="the lines above are complete: run the same "
+                                                                "command again for the rest"))

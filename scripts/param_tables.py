@@ -11,6 +11,9 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
 
 NODES = [("plant", "plant.node"), ("joint_controller_<joint>", "joint_controller_node"), ("reference", "reference_node"),
          ("wire_monitor", "wire_monitor"), ("recorder", "recorder_node"), ("live_view", "live_observer_node")]
@@ -27,9 +30,9 @@ def table(params: dict) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    import argparse
+    from pa10_dnbs.cli_values import OneLineParser
 
-    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args(argv)  # --help; no options
+    OneLineParser(description=__doc__.splitlines()[0]).parse_args(argv)  # --help; no options
     from pa10_dnbs.ros.shm_cleanup import remove_stale, shm_files
 
     before = shm_files()
@@ -42,4 +45,5 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(script_main.run(main, "param_tables", interrupted="the tables above are complete: run the same "
+                                                              "command again"))

@@ -20,6 +20,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
 import bench_record  # noqa: E402
 
 from pa10_dnbs.cli_values import OneLineParser  # noqa: E402
@@ -60,4 +61,4 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(script_main.run(main, "record_tests", interrupted="no record written: run the same command again"))

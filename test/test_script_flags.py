@@ -85,6 +85,11 @@ CASES = [
     ("encoder_noise_filters", ["--arm", "zz"], "--arm"),
     ("cascade_modes", ["--arm", "zz"], "--arm"),
     ("cascade_modes", ["--ekf-gain", "-1"], "--ekf-gain"),
+    ("cascade_modes", ["--ekf-gain", "1e308"], "--ekf-gain"),   # a Kalman gain is at most 1: was a LinAlgError
+    ("intake_timing", ["--points", "1e30"], "--points"),         # was a ValueError traceback
+    ("intake_timing", ["--joints", "99999999999999999999"], "--joints"),   # was a hang
+    ("engine_comparison", ["--arms", ","], "--arms"),             # was an empty table, exit 0
+    ("engine_comparison", ["--controllers", "pid,nope"], "--controllers"),
     ("result_fingerprint", ["--compare", "{missing}"], "--compare"),
     ("result_fingerprint", ["--compare", "{dir}"], "--compare"),
     ("result_fingerprint", ["--compare", "{binary}"], "--compare"),
@@ -98,6 +103,8 @@ CASES = [
     ("make_foxglove_layout", ["--out", "{dir}"], "--out"),
     ("make_foxglove_layout", ["--config", "{garbage}", "--out", "{out}"], "--config"),
     ("make_foxglove_layout", ["--config", "{binary}", "--out", "{out}"], "--config"),
+    ("make_foxglove_layout", ["--arm", "", "--out", "{out}"], "--arm"),   # named --config
+    ("make_foxglove_layout", ["--arm", "iiwa"], "--out"),   # overwrote the PA10's config/foxglove_layout.json
     ("live_probe", ["notaurl"], "url"),
     ("live_probe", ["--wait", "nan"], "--wait"),
     ("live_probe", ["--wait", "0"], "--wait"),

@@ -1,0 +1,59 @@
+"""How a developer script ends, whatever stops it: the CLI's rules (pa10_dnbs/interrupt.py) for scripts/*.py.
+
+- Ctrl-C, SIGTERM or SIGHUP: one line, exit 130 (a second Ctrl-C: at once); also while the modules load, once
+  this module is imported (import it before anything heavy, when the script is the process).
+- A setting the library refuses (ConfigError): one line naming the script's flag for it, exit 2.
+- Its standard output closed early (``| head``): no traceback, exit 1 (Python's own rule for EPIPE).
+
+    import script_main  # noqa: F401  (first)
+    ...
+    if __name__ == "__main__":
+        sys.exit(script_main.run(main, "dynamics_check", {"arm": "ARM"}))
+"""
+from __future__ import annotations
+
+import os
+import sys
+from collections.abc import Callable, Mapping
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from pa10_dnbs import interrupt  # noqa: E402  (the standard library only)
+
+SCRIPTS = Path(__file__).resolve().parent
+NOTHING_WRITTEN = "nothing written: run the same command again"
+
+
+def _prog() -> str | None:
+    """The script this process runs (scripts/NAME.py -> NAME), or None (imported by a test or a tool)."""
+    main = Path(sys.argv[0]) if sys.argv and sys.argv[0] else None
+    return main.stem if main is not None and main.suffix == ".py" and main.resolve().parent == SCRIPTS else None
+
+
+_startup = interrupt.quiet_start(_prog()) if _prog() else None
+
+
+def run(main: Callable[[], int], prog: str, names: Mapping[str, str] | None = None,
+        interrupted: str = NOTHING_WRITTEN) -> int:
+    """``main()``'s exit code, or the one line and code of how it was stopped (the module's list); ``names``:
+    the library's setting -> this script's flag (``{"duration_s": "--duration"}``); ``interrupted``: what the
+    Ctrl-C line says after "PROG: interrupted; "."""
+    from pa10_dnbs.config_error import ConfigError
+
+    interrupt.end_quiet_start(_startup)
+    try:
+        with interrupt.two_stage_sigint():
+            interrupt.on_second_sigint(f"{prog}: interrupted again: stopped at once")
+            return main()
+    except KeyboardInterrupt:
+        interrupt.say(f"{prog}: interrupted; {interrupted}")
+        return interrupt.EXIT_INTERRUPTED
+    except ConfigError as exc:
+        interrupt.say(f"{prog}: error: {exc.named(names or {})}")
+        return 2
+    except BrokenPipeError:   # the reader is gone: nothing more to say, and nothing left to flush at exit
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
+    finally:
+        interrupt.quiet_end()

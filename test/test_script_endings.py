@@ -1,0 +1,90 @@
+"""How the developer scripts end (scripts/script_main.py): a Ctrl-C is one line and exit 130, a setting the
+library refuses is one line naming the script's flag and exit 2, a closed pipe is no traceback; each was a
+traceback (or a wrong exit 0) before. And encoder_noise_filters.py runs at all (it failed on its second row)."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+SCRIPTS = ROOT / "scripts"
+
+
+def _script(name: str, *args, timeout_s: float = 120.0) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, str(SCRIPTS / f"{name}.py"), *map(str, args)], capture_output=True,
+                          text=True, timeout=timeout_s, cwd=ROOT)
+
+
+@pytest.mark.parametrize("name,args,line", [
+    ("dynamics_check", ["pa10", "no_such_arm"], "dynamics_check: error: 1 of 2 arms refused, not checked: "
+                                                "no_such_arm"),
+    ("engine_comparison", ["--arms", "no_such_arm", "--duration", "0.1"],
+     "engine_comparison: error: --arms: no arm called 'no_such_arm'"),
+    ("engine_comparison", ["--arms", "pa10", "--duration", "0.0001"],
+     "engine_comparison: error: --duration: 0.0001 s is shorter than two steps"),
+    ("encoder_noise_filters", ["--duration", "0.001"],
+     "encoder_noise_filters: error: --duration: 0.001 s is shorter than two steps"),
+], ids=["dynamics_check-refused-arm", "engine_comparison-arm", "engine_comparison-duration",
+        "encoder_noise_filters-duration"])
+def test_a_setting_the_library_refuses_is_one_line_naming_the_flag(name, args, line):
+    done = _script(name, *args, "--states", 2) if name == "dynamics_check" else _script(name, *args)
+    err = done.stderr.splitlines()
+    assert done.returncode == 2 and "Traceback" not in done.stderr, (done.returncode, done.stderr)
+    assert err and err[-1].startswith(line), done.stderr
+
+
+def test_encoder_noise_filters_prints_every_row():
+    done = _script("encoder_noise_filters", "--duration", 0.2, "--seeds", 1, "--cutoffs", 200)
+    rows = [ln for ln in done.stdout.splitlines() if ln.startswith("| ") and "filter" not in ln]
+    assert done.returncode == 0, done.stderr
+    assert [r.split(" | ")[0] for r in rows] == ["| none", "| position (L = 0.0100)", "| position+lowpass 200 rad/s"]
+
+
+@pytest.mark.slow
+def test_ctrl_c_in_a_long_script_is_one_line_and_exit_130():
+    proc = subprocess.Popen([sys.executable, str(SCRIPTS / "dynamics_check.py"), "pa10", "--states", "2000000"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            cwd=ROOT)
+    try:
+        t0 = time.monotonic()
+        while "| arm |" not in (proc.stdout.readline() or "| arm |"):   # its table begun: past the imports
+            assert time.monotonic() - t0 < 60
+        time.sleep(0.5)
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+    assert proc.returncode == 130 and err == (
+        "dynamics_check: interrupted; the table is not finished: run the same command again\n"), (proc.returncode, err)
+
+
+def test_a_closed_pipe_is_no_traceback():
+    done = subprocess.run(f"{sys.executable} {SCRIPTS / 'param_tables.py'} | head -c 10", shell=True,
+                          capture_output=True, text=True, timeout=120, cwd=ROOT)
+    assert done.stdout == "### `plant" and done.stderr == "", done.stderr
+
+
+def test_a_record_that_cannot_be_written_is_one_line_and_no_file(tmp_path):
+    sys.path.insert(0, str(SCRIPTS))
+    import bench_record
+
+    target = tmp_path / "ro" / "r.json"
+    target.parent.mkdir()
+    target.parent.chmod(0o500)   # root ignores the mode: a file in /sys refuses everyone
+    where = target if os.geteuid() != 0 else Path("/sys/kernel/pa10_record.json")
+    try:
+        with pytest.raises(SystemExit) as end:
+            bench_record.Record.start("tests", command="x").save(where, {"n": 1})
+    finally:
+        target.parent.chmod(0o700)
+    assert str(end.value).endswith(f"error: --save-record: cannot write {where}: Permission denied") or \
+        str(end.value).endswith(f"error: --save-record: cannot write {where}: Operation not permitted"), end.value
+    assert not where.exists() and not where.with_suffix(".json.tmp").exists()
