@@ -236,6 +236,17 @@ def test_equal_budget_refuses_an_unwritable_out(tmp_path):
     _assert_one_line(rc, out, err, "--out")
 
 
+def test_equal_budget_refuses_a_config_that_is_a_pipe_instead_of_waiting_on_it(tmp_path):
+    """The output check read the config (for its ``extends``) before loading it: a FIFO held it forever."""
+    os.mkfifo(tmp_path / "fifo")
+    r = subprocess.run([PY, str(REPO / "scripts" / "equal_budget.py"), "--controllers", "pid", "--out",
+                        str(tmp_path / "eq"), "--config", str(tmp_path / "fifo")], capture_output=True, text=True,
+                       timeout=60)
+    assert r.returncode == 2 and r.stderr == (f"equal_budget: error: config file {tmp_path}/fifo: not a regular file "
+                                              "(a pipe or a device): give the path of a file\n"), r.stderr
+    assert not (tmp_path / "eq").exists()
+
+
 def _help(script: str) -> str:
     r = subprocess.run([PY, str(REPO / "scripts" / script), "--help"], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0 and r.stderr == ""
@@ -632,3 +643,19 @@ def test_jobs_with_a_scheduler_is_one_line_not_silently_ignored(tmp_path, comman
     assert r.returncode == 2 and r.stderr == ("pa10-dnbs: error: --jobs: local worker processes only; with "
                                               "--scheduler the cluster's workers run the runs\n"), r.stderr
     assert not out.exists()
+
+
+@pytest.mark.parametrize("text,why", [("{}", "no arm"), ("nope", "Expecting value"),
+                                      ("5", "not a JSON object with an object of options"),
+                                      ('{"arm": "pa10", "options": {}, "trials": 1, "held_out_seeds": [], '
+                                       '"held_out": {}, "start_objective": 1, "best_objective": 1, '
+                                       '"best_params": {}, "best_trial": 0}', "no options.scenarios")],
+                         ids=["empty-object", "not-json", "a-number", "no-options"])
+def test_equal_budget_table_names_a_tune_report_it_cannot_read(tmp_path, text, why):
+    """A damaged DIR/<controller>/tune.json was a KeyError traceback, or a JSON error naming no file."""
+    (tmp_path / "eq" / "pid").mkdir(parents=True)
+    (tmp_path / "eq" / "pid" / "tune.json").write_text(text)
+    (tmp_path / "eq" / "comparison.md").write_text("")
+    rc, out, err = _script("equal_budget_table", tmp_path / "eq")
+    assert rc == 2 and out == "" and err.count("\n") == 1 and err.startswith(
+        f"equal_budget_table: error: {tmp_path}/eq/pid/tune.json: not a tune report: {why}"), err

@@ -214,6 +214,8 @@ def config_files(path: Path) -> list[Path]:
     path = Path(path)
     while path.resolve() not in files:
         files.append(path.resolve())
+        if not path.is_file():   # a FIFO would block the read: loading the config refuses it
+            break
         try:
             base = yaml.safe_load(path.read_text()).get("extends")
         except (OSError, ValueError, AttributeError, RecursionError, yaml.YAMLError):

@@ -55,11 +55,31 @@ def _short(v) -> str:
     return "diverged" if v is None else f"{v:.1e}".replace("e-0", "e-").replace("e+0", "e+")
 
 
+TUNE_KEYS = ("arm", "options", "trials", "held_out_seeds", "held_out", "start_objective", "best_objective",
+             "best_params", "best_trial")   # what a table reads of a tune.json
+OPTION_KEYS = ("scenarios", "seeds", "duration_s", "seed")
+
+
+def _tune_report(path: Path) -> dict:
+    """One tune.json; ValueError naming it when it is not JSON or lacks a key the tables read."""
+    try:
+        tune = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise ValueError(f"{path}: not a tune report: {exc}") from None
+    if not isinstance(tune, dict) or not isinstance(tune.get("options", {}), dict):
+        raise ValueError(f"{path}: not a tune report: not a JSON object with an object of options")
+    missing = [k for k in TUNE_KEYS if k not in tune] or [f"options.{k}" for k in OPTION_KEYS
+                                                            if k not in tune["options"]]
+    if missing:
+        raise ValueError(f"{path}: not a tune report: no {missing[0]}")
+    return tune
+
+
 def load_comparison(directory: Path) -> dict[str, dict]:
     """{controller: its tune.json} of one finished comparison DIR (its comparison.md written), DNBS, PID and CTC
     first; ValueError when there is none, or it is unfinished (an interrupted equal_budget.py)."""
     directory = Path(directory)
-    results = {c.name: json.loads((c / "tune.json").read_text())
+    results = {c.name: _tune_report(c / "tune.json")
                for c in (sorted(directory.iterdir()) if directory.is_dir() else []) if (c / "tune.json").is_file()}
     if not results:
         raise ValueError(f"no DIR/<controller>/tune.json under {directory}")
