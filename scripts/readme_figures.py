@@ -31,6 +31,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_record  # noqa: E402
 
+from pa10_dnbs.atomic_file import atomic_path  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser  # noqa: E402
 
 BEGIN = "<!-- figures: begin (scripts/readme_figures.py) -->"
@@ -141,10 +142,12 @@ def read_records(folder: Path) -> list[dict]:
     """Every record of ``folder``, in the table's order (then by file name)."""
     recs = []
     for path in sorted(folder.glob("*.json")):
+        if not path.is_file():   # a pipe would hold the read forever
+            raise BadInput(f"{path}: not a regular file")
         try:
             rec = bench_record.read(path)
         except (ValueError, OSError) as exc:  # json.JSONDecodeError is a ValueError
-            raise BadInput(f"{path}: {exc}") from None
+            raise BadInput(str(exc) if str(exc).startswith(str(path)) else f"{path}: {exc}") from None
         if rec["benchmark"] not in ROWS and rec["benchmark"] != RESULTS:
             raise BadInput(f"{path}: no README row for benchmark '{rec['benchmark']}' (scripts/readme_figures.py ROWS)")
         rec["_file"] = path.name
@@ -185,13 +188,13 @@ def _short_e(text: str) -> str:
     return f"{mantissa}e{int(exponent)}" if e else text
 
 
-def results_table(recs: list[dict]) -> list[str]:
+def results_table(recs: list[dict], folder: str = "benchmarks") -> list[str]:
     """The results block's lines: one column per arm of the preset_results record, one row per figure, each
     cell DNBS / PID / CTC (``never`` for a run that did not settle, ``diverged`` for one without a figure), then the
     line naming the record."""
     found = [r for r in recs if r["benchmark"] == RESULTS]
     if len(found) != 1:
-        raise BadInput(f"benchmarks/ holds {len(found)} {RESULTS} records: the results block needs exactly one "
+        raise BadInput(f"{folder}/ holds {len(found)} {RESULTS} records: the results block needs exactly one "
                        "(scripts/preset_results.py --save-record benchmarks/preset_results.json)")
     rec = found[0]
     try:
@@ -258,16 +261,28 @@ def records_folder(text: str) -> Path:
     return path
 
 
+def readme_file(text: str) -> Path:
+    """``--readme``'s argparse type: an existing regular file (not a folder, nor a pipe that would hold the read)."""
+    path = Path(text)
+    if not text or not path.is_file():
+        raise argparse.ArgumentTypeError(f"{text!r} is not a file")
+    return path
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = OneLineParser(description=__doc__.splitlines()[0])
     ap.add_argument("--check", action="store_true", help="exit 1 if the README's block differs from the records'")
-    ap.add_argument("--readme", type=Path, default=bench_record.ROOT / "README.md")
+    ap.add_argument("--readme", type=readme_file, default=bench_record.ROOT / "README.md")
     ap.add_argument("--records", type=records_folder, default=bench_record.RECORDS, help="the records' folder (benchmarks/)")
     args = ap.parse_args(argv)
     try:
-        old = args.readme.read_text()
+        try:
+            old = args.readme.read_text()
+        except (OSError, UnicodeDecodeError) as exc:
+            raise BadInput(f"--readme: {args.readme}: cannot read it as text ({exc})") from None
         recs = read_records(args.records)
-        new = render(render(old, table(recs)), results_table(recs), RESULTS_BEGIN, RESULTS_END, "results")
+        new = render(render(old, table(recs)), results_table(recs, str(args.records)), RESULTS_BEGIN, RESULTS_END,
+                     "results")
         new = render(new, budget_table(args.records), BUDGET_BEGIN, BUDGET_END, "equal budget")
     except (BadInput, OSError) as exc:
         print(f"readme_figures: {exc}", file=sys.stderr)
@@ -282,7 +297,8 @@ def main(argv: list[str] | None = None) -> int:
               "run .venv/bin/python scripts/readme_figures.py (and commit the records with it)", file=sys.stderr)
         return 1
     if new != old:
-        args.readme.write_text(new)
+        with atomic_path(args.readme) as tmp:
+            tmp.write_text(new)
         print(f"readme_figures: rewrote the blocks of {args.readme}")
     else:
         print(f"readme_figures: {args.readme.name} already up to date")

@@ -103,7 +103,28 @@ def test_the_results_block_is_the_preset_record_and_a_hand_edit_fails_the_check(
 def test_the_results_block_needs_exactly_one_preset_record(copy, capsys):
     (copy / "benchmarks" / "preset_results.json").unlink()
     assert _check(copy) == 2
-    assert "holds 0 preset_results records" in capsys.readouterr().err
+    assert f"{copy}/benchmarks/ holds 0 preset_results records" in capsys.readouterr().err
+
+
+def test_a_pipe_a_number_or_bytes_in_place_of_a_file_is_one_line(copy, capsys):
+    """A FIFO as --readme or as a record held the check forever; a record holding 5 and a README of other bytes
+    were tracebacks."""
+    os.mkfifo(copy / "pipe.md")
+    with pytest.raises(SystemExit) as end:
+        figures.main(["--check", "--readme", str(copy / "pipe.md")])
+    assert end.value.code == 2 and "argument --readme: " in capsys.readouterr().err
+    (copy / "README.md").write_bytes(b"\xff\xfe not text")
+    assert _check(copy) == 2
+    assert capsys.readouterr().err.startswith(f"readme_figures: --readme: {copy}/README.md: cannot read it as text")
+    shutil.copy(ROOT / "README.md", copy / "README.md")
+    (copy / "benchmarks" / "a_number.json").write_text("5")
+    assert _check(copy) == 2
+    assert capsys.readouterr().err == (f"readme_figures: {copy}/benchmarks/a_number.json: not a benchmark record: "
+                                       "not a JSON object\n")
+    (copy / "benchmarks" / "a_number.json").unlink()
+    os.mkfifo(copy / "benchmarks" / "a_pipe.json")
+    assert _check(copy) == 2
+    assert capsys.readouterr().err == f"readme_figures: {copy}/benchmarks/a_pipe.json: not a regular file\n"
 
 
 def test_the_equal_budget_block_is_the_kept_comparisons_and_refuses_unequal_budgets(copy, capsys):
