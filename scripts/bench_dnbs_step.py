@@ -21,11 +21,11 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
+import numpy as np  # noqa: E402
 from flag_values import names_in  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser, positive, seconds, whole_in  # noqa: E402
 
@@ -167,4 +167,4 @@ def _ratios(kernel: str, plant: float, pid: float, dnbs7: float, one: float, nj:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(script_main.run(main, "bench_dnbs_step", interrupted="no record written: run the same command again"))

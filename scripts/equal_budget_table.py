@@ -12,8 +12,11 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from pa10_dnbs.tune.comparison import arms_table
-from pa10_dnbs.cli_values import OneLineParser
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
+from pa10_dnbs.tune.comparison import arms_table  # noqa: E402
+from pa10_dnbs.cli_values import OneLineParser  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -30,4 +33,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(script_main.run(main, "equal_budget_table", interrupted="nothing printed: run the same command again"))
