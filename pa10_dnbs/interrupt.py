@@ -307,11 +307,14 @@ def written_line() -> str | None:
     return _state.get("written")
 
 
-def quiet_end() -> None:
+def quiet_end(line: str | None = None) -> None:
     """Once the command has returned: a SIGINT while Python code still runs (threads joined, exit functions)
     ends it at once with one line and exit 130 instead of a traceback from the interpreter's own clean-up; after
-    the exit functions it is ignored (:func:`_hold_sigint_to_the_end`) and the command's exit code stands."""
+    the exit functions it is ignored (:func:`_hold_sigint_to_the_end`) and the command's exit code stands.
+    ``line``: that line (default: the outputs' line of :func:`outputs_written`, else ``AFTER_LINE``)."""
     _state["ended"] = True
+    if line is not None:
+        _state["written"] = line
     with contextlib.suppress(ValueError):
         for sig in stop_signals():   # SIGTERM, SIGHUP too, as a Ctrl-C (their default action: death by the signal)
             signal.signal(sig, _after_output)

@@ -21,7 +21,9 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
 from pa10_dnbs.cli_values import OneLineParser, number_in, whole_in  # noqa: E402
 from pa10_dnbs.config import default_config_path  # noqa: E402
 from pa10_dnbs.paths import share_path  # noqa: E402
@@ -32,6 +34,9 @@ from pa10_dnbs.study.lost_runs import RunsLost  # noqa: E402
 from pa10_dnbs.study.scenarios import scenario_settings  # noqa: E402
 from pa10_dnbs.run_settings import build_settings  # noqa: E402
 from pa10_dnbs.settings import replace_in  # noqa: E402
+
+
+NOTHING_PRINTED = "nothing printed (the table comes whole, once every run is done): run the same command again"
 
 
 def _set(path: str, value):
@@ -111,8 +116,13 @@ def main(argv: list[str] | None = None) -> int:
     jobs = [(i, sc, d, w) for i in rows for sc, d, w in (
         ("nominal", 20.0, (10.0, 20.0)), ("payload_5kg", 20.0, (10.0, 20.0)),
         ("encoder_noise", a.long_s, (a.long_s - 20.0, a.long_s)))]
-    with Executor(min(a.workers or os.cpu_count() or 1, len(jobs))) as ex:   # Ctrl-C: its workers stopped
-        res = {(r["variant"], r["scenario"]): r for r in ex.run(_run, dict(enumerate((j,) for j in jobs))).values()}
+    try:
+        with Executor(min(a.workers or os.cpu_count() or 1, len(jobs))) as ex:   # Ctrl-C: its workers stopped
+            res = {(r["variant"], r["scenario"]): r
+                   for r in ex.run(_run, dict(enumerate((j,) for j in jobs))).values()}
+    except RunsLost as exc:   # a worker process killed (the OOM killer)
+        print(f"ablation: error: {exc.named({'jobs': '--workers'})}; {NOTHING_PRINTED}", file=sys.stderr)
+        return 2
     print(f"| variant | nominal: settled [s] | max abs [rad] | torque variation | at limit after 0.2 s | RMS [rad] | "
           f"payload 5 kg: settled [s] | torque variation | RMS [rad] | noise, {a.long_s:g} s: RMS last 20 s [rad] |")
     print("|---" * 10 + "|")
@@ -126,25 +136,5 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-NOTHING_PRINTED = "nothing printed (the table comes whole, once every run is done): run the same command again"
-
-
-def interruptible_main(argv: list[str] | None = None) -> int:
-    """``main`` with Ctrl-C done right (docs/tuning.md, "Interrupting"): the workers stopped, one line, exit 130
-    (a second Ctrl-C ends at once: pa10_dnbs/interrupt.py); a worker process killed (the OOM killer): one line
-    naming --workers, exit 2."""
-    from pa10_dnbs.interrupt import EXIT_INTERRUPTED, say, two_stage_sigint
-
-    try:
-        with two_stage_sigint():
-            return main(argv)
-    except KeyboardInterrupt:
-        say(f"ablation: interrupted; {NOTHING_PRINTED}")
-        return EXIT_INTERRUPTED
-    except RunsLost as exc:
-        say(f"ablation: error: {exc.named({'jobs': '--workers'})}; {NOTHING_PRINTED}")
-        return 2
-
-
-if __name__ == "__main__":
-    sys.exit(interruptible_main())
+if __name__ == "__main__":   # Ctrl-C: the workers stopped, one line, exit 130 (docs/tuning.md, "Interrupting")
+    sys.exit(script_main.run(main, "ablation", {"jobs": "--workers"}, interrupted=NOTHING_PRINTED))

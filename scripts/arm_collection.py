@@ -28,6 +28,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "scripts"))
 
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
 from flag_values import file_to_write, names_in  # noqa: E402
 from pa10_dnbs.atomic_file import atomic_path, write_json  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser, seconds  # noqa: E402
@@ -153,5 +154,6 @@ def main(argv=None) -> int:
     return 0
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+if __name__ == "__main__":   # a Ctrl-C in the pool's wait is taken at a safe point (pa10_dnbs/interrupt.py)
+    sys.exit(script_main.run(main, "arm_collection", {"jobs": "--jobs", "duration_s": "--duration"},
+                             interrupted="no row kept"))

@@ -167,4 +167,5 @@ def _ratios(kernel: str, plant: float, pid: float, dnbs7: float, one: float, nj:
 
 
 if __name__ == "__main__":
-    sys.exit(script_main.run(main, "bench_dnbs_step", interrupted="no record written: run the same command again"))
+    sys.exit(script_main.run(main, "bench_dnbs_step", {"duration_s": "--duration"},
+                             interrupted="no record written: run the same command again"))

@@ -111,4 +111,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(script_main.run(main, "bench_sim", interrupted="no record written: run the same command again"))
+    sys.exit(script_main.run(main, "bench_sim", {"duration_s": "--duration"},
+                             interrupted="no record written: run the same command again"))

@@ -60,6 +60,8 @@ class FilteredLoop:
 
     def __getattr__(self, name: str):
         """The rest of the loop's interface (its controllers, its guard's counters), unfiltered."""
+        if name == "loop":   # not set yet (a copy being made): no loop to ask
+            raise AttributeError(name)
         return getattr(self.loop, name)
 
 

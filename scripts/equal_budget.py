@@ -115,7 +115,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{PROG}: error: {said_as(str(exc), SETTING_FLAGS)}", file=sys.stderr)
         return 2
     try:
-        dropped = [c for c in CONTROLLERS if c not in args.controllers and (args.out / c).exists()]
+        dropped = [c for c in CONTROLLERS if c not in args.controllers
+                   and any((args.out / c / f).exists() for f in ("tune.db", "tune.json"))]
         if dropped:   # comparison.md is rewritten whole, from the listed controllers' tunes alone
             print(f"{PROG}: error: --controllers: {args.out} holds the tune of {', '.join(dropped)} too, which "
                   "comparison.md would drop: list every controller of the comparison (the same command resumes), "

@@ -28,6 +28,10 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as exc:
         print(f"equal_budget_table: error: {exc}", file=sys.stderr)
         return 2
+    except (KeyError, TypeError, IndexError, AttributeError) as exc:   # a value of the wrong kind inside a tune.json
+        print(f"equal_budget_table: error: a tune.json under {', '.join(map(str, args.dirs))} is not a tune report "
+              f"({type(exc).__name__}: {exc})", file=sys.stderr)
+        return 2
     print(table, end="")
     return 0
 

@@ -40,10 +40,10 @@ def namespace(text: str) -> str:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
-def _keep_pa10_layout(ap: argparse.ArgumentParser, arm: str, ns: str) -> None:
-    """Refuse (exit 2) a layout of another arm or namespace into the shipped PA10 layout."""
+def _keep_pa10_layout(ap: argparse.ArgumentParser, what: str) -> None:
+    """Refuse (exit 2) a layout of ``what`` (another arm or namespace) into the shipped PA10 layout."""
     ap.error(f"argument --out: {PA10_LAYOUT.relative_to(ROOT)} is the PA10's layout at /pa10; give the file for "
-             f"{arm} at {ns}")
+             f"{what}")
 
 
 def main() -> int:
@@ -56,7 +56,7 @@ def main() -> int:
                     help=f"the layout file (default, for the PA10 at /pa10 only: {PA10_LAYOUT.relative_to(ROOT)})")
     args = ap.parse_args()
     if args.out is None and (args.arm not in (None, "pa10") or args.namespace not in (None, "/pa10")):
-        _keep_pa10_layout(ap, args.arm or "the config's arm", args.namespace or f"/{args.arm}")   # before the table
+        _keep_pa10_layout(ap, " at ".join(w for w in (args.arm or "the config's arm", args.namespace) if w))
     try:
         settings = build_settings(args.config, arm=args.arm)
     except ConfigError as exc:  # a bad config file or arm, in one line naming the flag
@@ -65,7 +65,7 @@ def main() -> int:
     arm = settings.arm
     ns = args.namespace or default_namespace(arm.name)
     if args.out is None and (arm.name, ns) != ("pa10", "/pa10"):   # a config of another arm
-        _keep_pa10_layout(ap, arm.name, ns)
+        _keep_pa10_layout(ap, f"{arm.name} at {ns}")
     out = args.out or PA10_LAYOUT
     text = layout_json(arm.joint_names, settings.plant.torque_limit_nm, arm.description, arm.chain.root_link,
                        arm_topics(ns))

@@ -24,6 +24,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "scripts"))
 
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
 import bench_record  # noqa: E402
 from flag_values import names_in  # noqa: E402
 from pa10_dnbs.arm import preset_names  # noqa: E402
@@ -86,5 +87,5 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+if __name__ == "__main__":   # SIGTERM, SIGHUP as a Ctrl-C; a Ctrl-C while it loads or exits: one line
+    sys.exit(script_main.run(main, "preset_results", {"duration_s": "--duration"}, interrupted="nothing written"))

@@ -29,6 +29,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
 import bench_record  # noqa: E402
 
 from pa10_dnbs.atomic_file import atomic_path  # noqa: E402
@@ -306,4 +307,5 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(script_main.run(main, "readme_figures", interrupted="the README is as it was: run the same command "
+                                                                 "again"))

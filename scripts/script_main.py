@@ -1,7 +1,8 @@
 """How a developer script ends, whatever stops it: the CLI's rules (pa10_dnbs/interrupt.py) for scripts/*.py.
 
-- Ctrl-C, SIGTERM or SIGHUP: one line, exit 130 (a second Ctrl-C: at once); also while the modules load, once
-  this module is imported (import it before anything heavy, when the script is the process).
+- Ctrl-C, SIGTERM or SIGHUP: one line, exit 130 (a second Ctrl-C: at once); a Ctrl-C also while the modules
+  load, once this module is imported (import it before anything heavy, when the script is the process), and
+  while the script exits.
 - A setting the library refuses (ConfigError): one line naming the script's flag for it, exit 2.
 - Its standard output closed early (``| head``): no traceback, exit 1 (Python's own rule for EPIPE).
 
@@ -31,7 +32,8 @@ def _prog() -> str | None:
     return main.stem if main is not None and main.suffix == ".py" and main.resolve().parent == SCRIPTS else None
 
 
-_startup = interrupt.quiet_start(_prog()) if _prog() else None
+if _prog():   # the script is this process: a Ctrl-C while its modules load is one line too
+    interrupt.quiet_start(_prog())
 
 
 def run(main: Callable[[], int], prog: str, names: Mapping[str, str] | None = None,
@@ -41,11 +43,17 @@ def run(main: Callable[[], int], prog: str, names: Mapping[str, str] | None = No
     Ctrl-C line says after "PROG: interrupted; "."""
     from pa10_dnbs.config_error import ConfigError
 
-    interrupt.end_quiet_start(_startup)
-    try:
+    again = f"{prog}: interrupted again: stopped at once"
+    after = again   # a Ctrl-C while it exits: after its own, or after it finished (below)
+    try:   # two_stage_sigint takes over from quiet_start's handler, and gives it back on leaving
         with interrupt.two_stage_sigint():
-            interrupt.on_second_sigint(f"{prog}: interrupted again: stopped at once")
-            return main()
+            interrupt.on_second_sigint(again)
+            try:
+                rc = main()
+            finally:   # a reader gone (| head) is found here, not in the interpreter's last flush (also --help)
+                sys.stdout.flush()
+        after = f"{prog}: interrupted while exiting, after the script had finished (the lines above say what it did)"
+        return rc
     except KeyboardInterrupt:
         interrupt.say(f"{prog}: interrupted; {interrupted}")
         return interrupt.EXIT_INTERRUPTED
@@ -56,4 +64,4 @@ def run(main: Callable[[], int], prog: str, names: Mapping[str, str] | None = No
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 1
     finally:
-        interrupt.quiet_end()
+        interrupt.quiet_end(after)

@@ -649,13 +649,18 @@ def test_jobs_with_a_scheduler_is_one_line_not_silently_ignored(tmp_path, comman
                                       ("5", "not a JSON object with an object of options"),
                                       ('{"arm": "pa10", "options": {}, "trials": 1, "held_out_seeds": [], '
                                        '"held_out": {}, "start_objective": 1, "best_objective": 1, '
-                                       '"best_params": {}, "best_trial": 0}', "no options.scenarios")],
-                         ids=["empty-object", "not-json", "a-number", "no-options"])
+                                       '"best_params": {}, "best_trial": 0}', "no options.scenarios"),
+                                      ('{"arm": "pa10", "options": {"scenarios": [], "seeds": [], "duration_s": 1, '
+                                       '"seed": 0}, "trials": 1, "held_out_seeds": 3, "held_out": {}, '
+                                       '"start_objective": 1, "best_objective": 1, "best_params": {}, '
+                                       '"best_trial": 0}', None)],
+                         ids=["empty-object", "not-json", "a-number", "no-options", "a-number-of-seeds"])
 def test_equal_budget_table_names_a_tune_report_it_cannot_read(tmp_path, text, why):
     """A damaged DIR/<controller>/tune.json was a KeyError traceback, or a JSON error naming no file."""
     (tmp_path / "eq" / "pid").mkdir(parents=True)
     (tmp_path / "eq" / "pid" / "tune.json").write_text(text)
     (tmp_path / "eq" / "comparison.md").write_text("")
     rc, out, err = _script("equal_budget_table", tmp_path / "eq")
-    assert rc == 2 and out == "" and err.count("\n") == 1 and err.startswith(
-        f"equal_budget_table: error: {tmp_path}/eq/pid/tune.json: not a tune report: {why}"), err
+    line = (f"equal_budget_table: error: {tmp_path}/eq/pid/tune.json: not a tune report: {why}" if why else
+            f"equal_budget_table: error: a tune.json under {tmp_path}/eq is not a tune report (TypeError: ")
+    assert rc == 2 and out == "" and err.count("\n") == 1 and err.startswith(line), err

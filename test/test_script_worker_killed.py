@@ -1,6 +1,6 @@
 """A pool worker of scripts/ablation.py or scripts/arm_collection.py killed (``kill -9``, the OOM killer's way):
 one line naming the script's own flag and how the worker died, exit 2; the collection keeps its completed rows
-as for a Ctrl-C. Both ended in a BrokenProcessPool traceback (exit 1) before."""
+as for a Ctrl-C. Both ended in a traceback of the pool's PoolBroken (exit 1) before."""
 import json
 import os
 import re
@@ -32,7 +32,8 @@ sys.exit(script.main(sys.argv[1:]))
 
 
 def _run_and_kill_a_worker(argv: list[str]) -> tuple[int, str, str]:
-    """Run ``python ARGV``; once it has two pool workers (and 0.5 s more) SIGKILL one; (rc, stdout, stderr)."""
+    """Run ``python ARGV``; once it has two pool workers (and 0.5 s more) SIGKILL one; (rc, stdout, stderr). The
+    runs must last well beyond that (seconds each), or there is no worker left to kill."""
     proc = subprocess.Popen([sys.executable, *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             start_new_session=True)
     try:
@@ -42,7 +43,9 @@ def _run_and_kill_a_worker(argv: list[str]) -> tuple[int, str, str]:
             assert time.monotonic() - t0 < WAIT_S, "the pool never started"
             time.sleep(0.05)
         time.sleep(0.5)
-        os.kill(psutil.Process(proc.pid).children()[0].pid, signal.SIGKILL)
+        workers = psutil.Process(proc.pid).children()
+        assert proc.poll() is None and workers, "the runs ended before a worker could be killed: make them longer"
+        os.kill(workers[0].pid, signal.SIGKILL)
         out, err = proc.communicate(timeout=WAIT_S)
     finally:
         if proc.poll() is None:
@@ -52,7 +55,7 @@ def _run_and_kill_a_worker(argv: list[str]) -> tuple[int, str, str]:
 
 
 def test_ablation_whose_worker_is_killed_says_one_line_naming_workers():
-    rc, out, err = _run_and_kill_a_worker([str(REPO / "scripts" / "ablation.py"), "--only", "0", "--long-s", "20",
+    rc, out, err = _run_and_kill_a_worker([str(REPO / "scripts" / "ablation.py"), "--only", "0", "--long-s", "200",
                                            "--workers", "2"])
     assert rc == 2 and out == "" and re.fullmatch(
         r"ablation: error: --workers: a local worker process died \(killed by SIGKILL\) \(out of memory\? fewer "
