@@ -79,13 +79,14 @@ def load_comparison(directory: Path) -> dict[str, dict]:
     """{controller: its tune.json} of one finished comparison DIR (its comparison.md written), DNBS, PID and CTC
     first; ValueError when there is none, or it is unfinished (an interrupted equal_budget.py)."""
     directory = Path(directory)
-    results = {c.name: _tune_report(c / "tune.json")
-               for c in (sorted(directory.iterdir()) if directory.is_dir() else []) if (c / "tune.json").is_file()}
-    if not results:
+    reports = [c / "tune.json" for c in (sorted(directory.iterdir()) if directory.is_dir() else [])
+               if (c / "tune.json").is_file()]
+    if not reports:
         raise ValueError(f"no DIR/<controller>/tune.json under {directory}")
     if not (directory / "comparison.md").is_file():
         raise ValueError(f"{directory} is an unfinished comparison (no comparison.md: its equal_budget.py was "
                          "interrupted): run that command again to finish it")
+    results = {path.parent.name: _tune_report(path) for path in reports}
     first = [c for c in ("dnbs", "pid", "ctc") if c in results]
     return {c: results[c] for c in first + [c for c in results if c not in first]}
 
