@@ -36,6 +36,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
 import bench_record  # noqa: E402
 
 from pa10_dnbs.cli_values import RTF_MAX, RTF_MIN, OneLineParser, number_in, seconds, whole_in  # noqa: E402
@@ -68,6 +69,8 @@ def one_run(mode: str, factor: float, args, attempts: int = 3) -> tuple[dict | N
         try:
             return _run(mode, factor, args)
         except GraphFailure as exc:
+            if exc.interrupted:   # a Ctrl-C stopped the graph: it stops the benchmark, not this attempt alone
+                raise KeyboardInterrupt from None
             first = said_as(str(exc).splitlines()[0], FLAGS)   # the launcher's settings, as this script's flags
             print(f"  ({mode} R={factor:g} attempt {attempt} failed: {first})", flush=True)
     return None, {}
@@ -242,4 +245,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(script_main.run(main, "bench_graph", FLAGS, interrupted="the graph stopped; no record written: run "
+                                                                      "the same command again"))

@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import signal
 import subprocess
 import sys
 import tempfile
@@ -25,6 +26,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "scripts"))
 
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
 from bench_record import record_path  # noqa: E402
 from flag_values import folder  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser, seconds, whole_in  # noqa: E402
@@ -59,14 +61,15 @@ def run(kind: str, duration: float, out: Path) -> dict:
                                      stderr=subprocess.STDOUT)
             launch += ["--robot", "external"]
         t0 = time.monotonic()
-        rc = subprocess.run(launch + ["--domain-id", str(lease.domain_id)], env=env, capture_output=True,
-                            text=True).returncode
-        total = time.monotonic() - t0
-        if robot is not None:
-            try:
+        graph = subprocess.Popen(launch + ["--domain-id", str(lease.domain_id)], env=env,
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        try:
+            rc = graph.wait()
+            total = time.monotonic() - t0
+            if robot is not None:
                 robot.wait(timeout=60)
-            except subprocess.TimeoutExpired:
-                robot.kill()
+        finally:   # a Ctrl-C, or a robot that never ends: both stopped, SIGINT first, before the lease goes
+            _stop([graph] + ([robot] if robot is not None else []))
     if rc != 0:
         raise SystemExit(f"{kind} run failed (exit {rc}); logs in {out}.failed")
     stats = json.loads((out / "metrics.json").read_text())
@@ -80,6 +83,20 @@ def run(kind: str, duration: float, out: Path) -> dict:
     if kind == "bus":
         res["cpu_per_tick_us"]["robot"] = _cpu(out.parent / f"{out.name}_robot.log")
     return res
+
+
+def _stop(procs: list[subprocess.Popen], grace_s: float = 15.0) -> None:
+    """SIGINT to each process still running, SIGKILL to what is left after ``grace_s``; every one reaped."""
+    for proc in procs:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGINT)
+    deadline = time.monotonic() + grace_s
+    for proc in procs:
+        try:
+            proc.wait(timeout=max(0.0, deadline - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
 
 
 class _Keep:
@@ -123,4 +140,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(script_main.run(main, "bench_joint_bus", interrupted="its graphs stopped, nothing written: run the "
+                                                                  "same command again"))

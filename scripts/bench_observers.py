@@ -32,7 +32,9 @@ import threading
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
 from pa10_dnbs.cli_values import OneLineParser, seconds, whole_in  # noqa: E402
 from pa10_dnbs.config import default_config_path  # noqa: E402
 from pa10_dnbs.live.server import LEGACY_SUBPROTOCOL, SUBPROTOCOL  # noqa: E402
@@ -135,6 +137,8 @@ def main() -> int:
             try:
                 stats, cpu, size, frames = one_run(mode, args.duration, args.reliability)
             except GraphFailure as exc:  # e.g. a node whose teardown outlived the grace period on a loaded machine
+                if exc.interrupted:   # a Ctrl-C stopped the graph: it stops the benchmark
+                    raise KeyboardInterrupt from None
                 print(f"{mode:11s} run {i + 1}: FAILED; not counted:\n{exc}")
                 continue
             rtfs[mode].append(stats["real_time_factor"])
@@ -165,4 +169,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(script_main.run(main, "bench_observers", interrupted="the graph stopped; the lines above are the "
+                                                                  "runs done"))

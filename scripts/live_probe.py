@@ -18,11 +18,14 @@ from pathlib import Path
 from urllib.parse import urlsplit
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
 from pa10_dnbs.cli_values import OneLineParser, number_in, seconds  # noqa: E402
+from pa10_dnbs.interrupt import EXIT_INTERRUPTED  # noqa: E402
 from pa10_dnbs.live.server import LEGACY_SUBPROTOCOL, SUBPROTOCOL  # noqa: E402
 
 SUBPROTOCOLS = [LEGACY_SUBPROTOCOL, SUBPROTOCOL]
@@ -68,6 +71,7 @@ def main() -> int:
         return 1
     print(f"connected to {args.url}, subprotocol {ws.subprotocol}")
     channels, subs, counts, last = {}, {}, {}, {}
+    interrupted = False
     deadline = time.monotonic() + args.seconds
     try:
         while time.monotonic() < deadline:
@@ -91,6 +95,9 @@ def main() -> int:
                 last[topic] = bytes(frame[13:])
     except ConnectionClosed:
         print("the server closed the connection")
+    except KeyboardInterrupt:   # the counts so far are the probe's answer
+        print("interrupted: the counts so far")
+        interrupted = True
     finally:
         ws.close()
     for topic in sorted(counts):
@@ -98,8 +105,8 @@ def main() -> int:
     if "/pa10/tracking" in last:
         f = json.loads(last["/pa10/tracking"])
         print(f"last frame: step {f['step']}, worst |e| so far {f['worst_abs_error_rad']} rad")
-    return 0 if counts else 1
+    return EXIT_INTERRUPTED if interrupted else 0 if counts else 1
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(script_main.run(main, "live_probe", interrupted="nothing counted"))

@@ -19,6 +19,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
 import bench_record  # noqa: E402
 
 from pa10_dnbs.cli_values import OneLineParser  # noqa: E402
@@ -45,7 +46,7 @@ def main() -> int:
     args = ap.parse_args()
     cmd = ["bash", "scripts/run_main.sh", *args.launch_args]
     record = bench_record.Record.start("main_job", command=" ".join(shlex.quote(c) for c in cmd))
-    rc = subprocess.run(cmd, cwd=ROOT).returncode
+    rc = script_main.wait_child(subprocess.Popen(cmd, cwd=ROOT))   # stopped: the launcher stops its graph
     if rc != 0:
         print(f"record_main_job: the main job exited {rc}: no record", file=sys.stderr)
         return rc
@@ -57,4 +58,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(script_main.run(main, "record_main_job", interrupted="no record written: run the same command "
+                                                                  "again"))

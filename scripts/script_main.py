@@ -14,6 +14,8 @@
 from __future__ import annotations
 
 import os
+import signal
+import subprocess
 import sys
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -34,6 +36,27 @@ def _prog() -> str | None:
 
 if _prog():   # the script is this process: a Ctrl-C while its modules load is one line too
     interrupt.quiet_start(_prog())
+
+
+def stop_child(proc: subprocess.Popen, grace_s: float = 60.0) -> None:
+    """The script stopped (Ctrl-C, SIGTERM): its child stopped the same way, SIGINT, then SIGKILL after
+    ``grace_s`` (a launcher stops its graph within it), and reaped, so that nothing outlives the script."""
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(timeout=grace_s)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
+def wait_child(proc: subprocess.Popen) -> int:
+    """``proc``'s exit code; stopped while waiting (KeyboardInterrupt), the child first (:func:`stop_child`)."""
+    try:
+        return proc.wait()
+    except KeyboardInterrupt:
+        stop_child(proc)
+        raise
 
 
 def run(main: Callable[[], int], prog: str, names: Mapping[str, str] | None = None,

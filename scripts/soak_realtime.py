@@ -24,7 +24,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "scripts"))
 
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
 from pa10_dnbs.cli_values import RTF_MAX, RTF_MIN, OneLineParser, number_in, positive  # noqa: E402
 
 
@@ -36,6 +38,26 @@ def rss_kb(pid: int) -> int | None:
     except OSError:
         return None
     return None
+
+
+def _sample(proc: subprocess.Popen, lines: list[str], pids: dict, start_mem: dict, end_mem: dict) -> None:
+    """Until the launcher ends: the nodes' pids from its line, their VmRSS [kB] 20 s after the plant starts
+    (``start_mem``) and the last complete sample before they stop (``end_mem``), every second."""
+    t_running = None
+    while proc.poll() is None:
+        text = "".join(lines)
+        if not pids and (m := re.search(r"launch: domain \d+, \d+ nodes: (.*); observer (\w+)=(\d+)", text)):
+            pids.update({k: int(v) for k, v in (kv.split("=") for kv in m.group(1).split(", "))})
+            pids[m.group(2)] = int(m.group(3))
+        if t_running is None and "launch: plant running" in text:
+            t_running = time.monotonic()
+        if t_running is not None and not start_mem and time.monotonic() - t_running > 20.0:
+            start_mem.update({n: rss_kb(p) for n, p in pids.items()})
+        if start_mem:
+            sample = {n: rss_kb(p) for n, p in pids.items()}
+            if all(v is not None for v in sample.values()):
+                end_mem.update(sample)  # the last complete sample before the nodes stop
+        time.sleep(1.0)
 
 
 def main() -> int:
@@ -56,21 +78,11 @@ def main() -> int:
     pids: dict[str, int] = {}
     start_mem: dict[str, int | None] = {}
     end_mem: dict[str, int | None] = {}
-    t_running = None
-    while proc.poll() is None:
-        text = "".join(lines)
-        if not pids and (m := re.search(r"launch: domain \d+, \d+ nodes: (.*); observer (\w+)=(\d+)", text)):
-            pids = {k: int(v) for k, v in (kv.split("=") for kv in m.group(1).split(", "))}
-            pids[m.group(2)] = int(m.group(3))
-        if t_running is None and "launch: plant running" in text:
-            t_running = time.monotonic()
-        if t_running is not None and not start_mem and time.monotonic() - t_running > 20.0:
-            start_mem = {n: rss_kb(p) for n, p in pids.items()}
-        if start_mem:
-            sample = {n: rss_kb(p) for n, p in pids.items()}
-            if all(v is not None for v in sample.values()):
-                end_mem = sample  # the last complete sample before the nodes stop
-        time.sleep(1.0)
+    try:
+        _sample(proc, lines, pids, start_mem, end_mem)
+    except KeyboardInterrupt:   # the launcher stops its graph (SIGINT first) before this ends
+        script_main.stop_child(proc)
+        raise
     t.join(timeout=5)
     print("".join(lines[-3:]), end="")
     if proc.returncode != 0:
@@ -90,4 +102,4 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(script_main.run(main, "soak_realtime", interrupted="the graph stopped, nothing printed"))

@@ -93,3 +93,36 @@ def test_a_record_that_cannot_be_written_is_one_line_and_no_file(tmp_path, monke
     assert any(str(end.value).endswith(f"error: --save-record: cannot write {where}: {why}") for why in (
         "Permission denied", "Operation not permitted", "Read-only file system")), end.value
     assert not where.exists() and not where.with_suffix(".json.tmp").exists()
+
+
+@pytest.mark.graph
+def test_ctrl_c_stops_a_graph_benchmark_and_leaves_no_process_and_no_shared_memory():
+    """bench_graph took the Ctrl-C that stopped its graph for a failed attempt and started the next run; killed
+    at last, it left Fast DDS's files in /dev/shm. Now the stopped graph stops the benchmark: one line, 130."""
+    import psutil
+
+    from pa10_dnbs.ros.shm_cleanup import shm_files
+
+    shm_before = shm_files()
+    proc = subprocess.Popen([sys.executable, str(SCRIPTS / "bench_graph.py"), "--duration", "60", "--repeat", "1",
+                             "--factors", "1", "--rt-priority", "0"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True, cwd=ROOT)
+    try:
+        t0 = time.monotonic()
+        while len(psutil.Process(proc.pid).children(recursive=True)) < 9:   # observer, plant, reference, 7 joints
+            assert proc.poll() is None and time.monotonic() - t0 < 90, proc.communicate()
+            time.sleep(0.2)
+        time.sleep(2.0)
+        family = psutil.Process(proc.pid).children(recursive=True)
+        os.killpg(proc.pid, signal.SIGINT)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+    assert proc.returncode == 130 and err.splitlines()[-1:] == [
+        "bench_graph: interrupted; the graph stopped; no record written: run the same command again"], (
+        proc.returncode, out, err)
+    assert "attempt" not in out, out   # no second attempt, no next run
+    assert not [p.pid for p in family if p.is_running() and p.status() != psutil.STATUS_ZOMBIE]
+    assert not shm_files() - shm_before
