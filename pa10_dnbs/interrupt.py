@@ -321,5 +321,6 @@ def quiet_end(line: str | None = None) -> None:
 
 
 def say(line: str) -> None:
-    """One line on stderr (the interruption's verdict)."""
-    print(line, file=sys.stderr, flush=True)
+    """One line on stderr (the interruption's verdict); none where stderr leads nowhere (a hung-up terminal)."""
+    with contextlib.suppress(OSError):
+        print(line, file=sys.stderr, flush=True)

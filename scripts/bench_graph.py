@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import os
 import re
+import shutil
 import statistics
 import sys
 import tempfile
@@ -83,7 +84,8 @@ def _run(mode: str, factor: float, args) -> tuple[dict, dict[str, float]]:
                            real_time_factor=factor, rt_priority=args.rt_priority,
                            sched_batch=args.sched_batch, joint_names=args.joint_names,
                            record_bag=Path(tmp) / "bag" if mode == "record" else None)
-        res = run_graph(opt, Path(tmp), say=lambda s: None)
+        res = run_graph(opt, Path(tmp), say=lambda s: None,   # a second Ctrl-C: the run's folder goes too
+                        on_hard_stop=lambda: shutil.rmtree(tmp, ignore_errors=True))
         cpu = {}
         for log in sorted((Path(tmp) / "logs").glob("*.log")):
             for line in log.read_text(errors="replace").splitlines():

@@ -10,6 +10,7 @@ bus run equals the plain run bit for bit (timeseries.npz). Each run on its own l
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -55,20 +56,21 @@ def run(kind: str, duration: float, out: Path) -> dict:
         robot = None
         if kind == "bus":
             robot_log = out.parent / f"{out.name}_robot.log"
-            robot = subprocess.Popen([sys.executable, "-m", "pa10_dnbs.ros.plant.node", "--ros-args", "-r",
-                                      "__node:=robot", "-p", "interface:=standard", "-p", f"duration_s:={duration}",
-                                      "-p", "start_timeout_s:=120.0"], env=env, stdout=open(robot_log, "w"),
-                                     stderr=subprocess.STDOUT)
+            robot = script_main.start_child([sys.executable, "-m", "pa10_dnbs.ros.plant.node", "--ros-args", "-r",
+                                             "__node:=robot", "-p", "interface:=standard", "-p",
+                                             f"duration_s:={duration}", "-p", "start_timeout_s:=120.0"], env=env,
+                                            stdout=open(robot_log, "w"), stderr=subprocess.STDOUT)
             launch += ["--robot", "external"]
         t0 = time.monotonic()
-        graph = subprocess.Popen(launch + ["--domain-id", str(lease.domain_id)], env=env,
-                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        graph = script_main.start_child(launch + ["--domain-id", str(lease.domain_id)], env=env,
+                                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         try:
             rc = graph.wait()
             total = time.monotonic() - t0
             if robot is not None:
-                robot.wait(timeout=60)
-        finally:   # a Ctrl-C, or a robot that never ends: both stopped, SIGINT first, before the lease goes
+                with contextlib.suppress(subprocess.TimeoutExpired):   # a robot that never ends: stopped below
+                    robot.wait(timeout=60)
+        finally:   # a Ctrl-C, or that robot: both stopped, one SIGINT each first, before the lease goes
             _stop([graph] + ([robot] if robot is not None else []))
     if rc != 0:
         raise SystemExit(f"{kind} run failed (exit {rc}); logs in {out}.failed")

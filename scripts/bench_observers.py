@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import re
 import resource
+import shutil
 import statistics
 import sys
 import tempfile
@@ -107,7 +108,8 @@ def one_run(mode: str, duration: float, reliability: str | None) -> tuple[dict, 
                                          duration_s=duration, reliability=reliability,
                                          record_bag=bag, bag_compression="none" if mode == "record-none" else "zstd",
                                          live_port=0 if client else None),
-                            Path(tmp), say=client.say if client else (lambda s: None))
+                            Path(tmp), say=client.say if client else (lambda s: None),
+                            on_hard_stop=lambda: shutil.rmtree(tmp, ignore_errors=True))   # a second Ctrl-C
         finally:
             if client is not None:
                 client.close()

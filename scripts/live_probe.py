@@ -96,7 +96,7 @@ def main() -> int:
     except ConnectionClosed:
         print("the server closed the connection")
     except KeyboardInterrupt:   # the counts so far are the probe's answer
-        print("interrupted: the counts so far")
+        print("live_probe: interrupted; the counts below are those so far", file=sys.stderr, flush=True)
         interrupted = True
     finally:
         ws.close()

@@ -46,7 +46,7 @@ def main() -> int:
     args = ap.parse_args()
     cmd = ["bash", "scripts/run_main.sh", *args.launch_args]
     record = bench_record.Record.start("main_job", command=" ".join(shlex.quote(c) for c in cmd))
-    rc = script_main.wait_child(subprocess.Popen(cmd, cwd=ROOT))   # stopped: the launcher stops its graph
+    rc = script_main.wait_child(script_main.start_child(cmd, cwd=ROOT))   # stopped: the launcher stops its graph
     if rc != 0:
         print(f"record_main_job: the main job exited {rc}: no record", file=sys.stderr)
         return rc

@@ -13,6 +13,7 @@
 """
 from __future__ import annotations
 
+import ctypes  # noqa: F401  (loaded before any fork: start_child's preexec_fn then imports nothing)
 import os
 import signal
 import subprocess
@@ -38,9 +39,22 @@ if _prog():   # the script is this process: a Ctrl-C while its modules load is o
     interrupt.quiet_start(_prog())
 
 
+def start_child(argv: list[str], **popen) -> subprocess.Popen:
+    """``subprocess.Popen(argv, **popen)`` in a process group of its own, so that the script alone stops it
+    (:func:`stop_child`: one SIGINT, a first stop to the child, never taken for its second), and sent SIGINT by
+    Linux if the script dies (even by SIGKILL), so that it never outlives the script."""
+    parent = os.getpid()
+    return subprocess.Popen(argv, process_group=0, preexec_fn=lambda: _die_with(parent), **popen)
+
+
+def _die_with(parent: int) -> None:
+    if not interrupt.signal_on_parent_death(signal.SIGINT, parent):
+        os._exit(interrupt.EXIT_INTERRUPTED)   # the script died before the child could ask: it stops at once
+
+
 def stop_child(proc: subprocess.Popen, grace_s: float = 60.0) -> None:
-    """The script stopped (Ctrl-C, SIGTERM): its child stopped the same way, SIGINT, then SIGKILL after
-    ``grace_s`` (a launcher stops its graph within it), and reaped, so that nothing outlives the script."""
+    """The script stopped (Ctrl-C, SIGTERM): its child (:func:`start_child`) stopped as by a Ctrl-C, one SIGINT,
+    then SIGKILL after ``grace_s`` (a launcher stops its graph within it), and reaped."""
     if proc.poll() is None:
         proc.send_signal(signal.SIGINT)
     try:

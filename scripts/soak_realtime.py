@@ -71,7 +71,7 @@ def main() -> int:
     cmd = [sys.executable, "-m", "pa10_dnbs.cli", "launch", "--mode", "realtime", "--rtf", str(args.rtf),
            "--duration", str(duration),
            "--out", str(args.out), "--force", "--no-progress"]
-    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    proc = script_main.start_child(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     lines: list[str] = []
     t = threading.Thread(target=lambda: lines.extend(proc.stdout), daemon=True)
     t.start()

@@ -100,6 +100,7 @@ def test_ctrl_c_stops_a_graph_benchmark_and_leaves_no_process_and_no_shared_memo
     """bench_graph took the Ctrl-C that stopped its graph for a failed attempt and started the next run; killed
     at last, it left Fast DDS's files in /dev/shm. Now the stopped graph stops the benchmark: one line, 130."""
     import psutil
+    from graph_harness import assert_no_leftovers
 
     from pa10_dnbs.ros.shm_cleanup import shm_files
 
@@ -109,11 +110,11 @@ def test_ctrl_c_stops_a_graph_benchmark_and_leaves_no_process_and_no_shared_memo
                             stderr=subprocess.PIPE, text=True, start_new_session=True, cwd=ROOT)
     try:
         t0 = time.monotonic()
-        while len(psutil.Process(proc.pid).children(recursive=True)) < 9:   # observer, plant, reference, 7 joints
+        while len(psutil.Process(proc.pid).children(recursive=True)) < 10:   # observer, plant, reference, 7 joints
             assert proc.poll() is None and time.monotonic() - t0 < 90, proc.communicate()
             time.sleep(0.2)
         time.sleep(2.0)
-        family = psutil.Process(proc.pid).children(recursive=True)
+        family = [p.pid for p in psutil.Process(proc.pid).children(recursive=True)]
         os.killpg(proc.pid, signal.SIGINT)
         out, err = proc.communicate(timeout=60)
     finally:
@@ -124,5 +125,4 @@ def test_ctrl_c_stops_a_graph_benchmark_and_leaves_no_process_and_no_shared_memo
         "bench_graph: interrupted; the graph stopped; no record written: run the same command again"], (
         proc.returncode, out, err)
     assert "attempt" not in out, out   # no second attempt, no next run
-    assert not [p.pid for p in family if p.is_running() and p.status() != psutil.STATUS_ZOMBIE]
-    assert not shm_files() - shm_before
+    assert_no_leftovers(family, shm_before)

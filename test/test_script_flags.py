@@ -150,7 +150,7 @@ def test_bench_graph_writes_no_record_when_every_run_failed(tmp_path, monkeypatc
     from script_module import load_script
     bench_graph = load_script("bench_graph")
 
-    def failing_graph(opt, workdir, say):
+    def failing_graph(opt, workdir, say, on_hard_stop=None):
         raise bench_graph.GraphFailure("nodes exited with non-zero codes: plant=1")
 
     monkeypatch.setattr(bench_graph, "run_graph", failing_graph)
