@@ -5,11 +5,13 @@
   while the script exits.
 - A setting the library refuses (ConfigError): one line naming the script's flag for it, exit 2.
 - Its standard output closed early (``| head``): no traceback, exit 1 (Python's own rule for EPIPE).
+- A child command (:func:`start_child`): stopped by the script alone, first (:func:`stop_child`,
+  :func:`wait_child`), and by Linux if the script dies.
 
-    import script_main  # noqa: F401  (first)
+    import script_main  # noqa: E402  (first)
     ...
     if __name__ == "__main__":
-        sys.exit(script_main.run(main, "dynamics_check", {"arm": "ARM"}))
+        sys.exit(script_main.run(main, "bench_sim", {"duration_s": "--duration"}))
 """
 from __future__ import annotations
 
