@@ -28,7 +28,7 @@ def _script(name: str, *args, timeout_s: float = 120.0) -> subprocess.CompletedP
      "engine_comparison: error: --arms: no arm called 'no_such_arm'"),
     ("engine_comparison", ["--arms", "pa10", "--duration", "0.0001"],
      "engine_comparison: error: --duration: 0.0001 s is shorter than two steps"),
-    ("encoder_noise_filters", ["--duration", "0.001"],
+    ("encoder_noise_filters", ["--arm", "pa10", "--duration", "0.001"],   # its default arm needs the collection
      "encoder_noise_filters: error: --duration: 0.001 s is shorter than two steps"),
 ], ids=["dynamics_check-refused-arm", "engine_comparison-arm", "engine_comparison-duration",
         "encoder_noise_filters-duration"])
@@ -40,7 +40,7 @@ def test_a_setting_the_library_refuses_is_one_line_naming_the_flag(name, args, l
 
 
 def test_encoder_noise_filters_prints_every_row():
-    done = _script("encoder_noise_filters", "--duration", 0.2, "--seeds", 1, "--cutoffs", 200)
+    done = _script("encoder_noise_filters", "--arm", "pa10", "--duration", 0.2, "--seeds", 1, "--cutoffs", 200)
     rows = [ln for ln in done.stdout.splitlines() if ln.startswith("| ") and "filter" not in ln]
     assert done.returncode == 0, done.stderr
     assert [r.split(" | ")[0] for r in rows] == ["| none", "| position (L = 0.0100)", "| position+lowpass 200 rad/s"]
