@@ -14,7 +14,6 @@ import contextlib
 import json
 import os
 import re
-import signal
 import subprocess
 import sys
 import tempfile
@@ -71,7 +70,7 @@ def run(kind: str, duration: float, out: Path) -> dict:
                 with contextlib.suppress(subprocess.TimeoutExpired):   # a robot that never ends: stopped below
                     robot.wait(timeout=60)
         finally:   # a Ctrl-C, or that robot: both stopped, one SIGINT each first, before the lease goes
-            _stop([graph] + ([robot] if robot is not None else []))
+            script_main.stop_child(graph, *([robot] if robot is not None else []), grace_s=15.0)
     if rc != 0:
         raise SystemExit(f"{kind} run failed (exit {rc}); logs in {out}.failed")
     stats = json.loads((out / "metrics.json").read_text())
@@ -85,20 +84,6 @@ def run(kind: str, duration: float, out: Path) -> dict:
     if kind == "bus":
         res["cpu_per_tick_us"]["robot"] = _cpu(out.parent / f"{out.name}_robot.log")
     return res
-
-
-def _stop(procs: list[subprocess.Popen], grace_s: float = 15.0) -> None:
-    """SIGINT to each process still running, SIGKILL to what is left after ``grace_s``; every one reaped."""
-    for proc in procs:
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGINT)
-    deadline = time.monotonic() + grace_s
-    for proc in procs:
-        try:
-            proc.wait(timeout=max(0.0, deadline - time.monotonic()))
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
 
 
 class _Keep:

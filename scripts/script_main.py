@@ -20,6 +20,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
@@ -37,8 +38,8 @@ def _prog() -> str | None:
     return main.stem if main is not None and main.suffix == ".py" and main.resolve().parent == SCRIPTS else None
 
 
-if _prog():   # the script is this process: a Ctrl-C while its modules load is one line too
-    interrupt.quiet_start(_prog())
+if (_PROG := _prog()) is not None:   # the script is this process: a Ctrl-C while its modules load is one line too
+    interrupt.quiet_start(_PROG)
 
 
 def start_child(argv: list[str], **popen) -> subprocess.Popen:
@@ -54,16 +55,19 @@ def _die_with(parent: int) -> None:
         os._exit(interrupt.EXIT_INTERRUPTED)   # the script died before the child could ask: it stops at once
 
 
-def stop_child(proc: subprocess.Popen, grace_s: float = 60.0) -> None:
-    """The script stopped (Ctrl-C, SIGTERM): its child (:func:`start_child`) stopped as by a Ctrl-C, one SIGINT,
-    then SIGKILL after ``grace_s`` (a launcher stops its graph within it), and reaped."""
-    if proc.poll() is None:
-        proc.send_signal(signal.SIGINT)
-    try:
-        proc.wait(timeout=grace_s)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.wait()
+def stop_child(*procs: subprocess.Popen, grace_s: float = 60.0) -> None:
+    """The script stopped (Ctrl-C, SIGTERM): its children (:func:`start_child`) stopped as by a Ctrl-C, one SIGINT
+    each, then SIGKILL to what is left after ``grace_s`` (a launcher stops its graph within it); all reaped."""
+    for proc in procs:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGINT)
+    deadline = time.monotonic() + grace_s
+    for proc in procs:
+        try:
+            proc.wait(timeout=max(0.0, deadline - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
 
 
 def wait_child(proc: subprocess.Popen) -> int:

@@ -3,6 +3,7 @@ library refuses is one line naming the script's flag and exit 2, a closed pipe i
 traceback (or a wrong exit 0) before. And encoder_noise_filters.py runs at all (it failed on its second row)."""
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
@@ -19,6 +20,20 @@ SCRIPTS = ROOT / "scripts"
 def _script(name: str, *args, timeout_s: float = 120.0) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, str(SCRIPTS / f"{name}.py"), *map(str, args)], capture_output=True,
                           text=True, timeout=timeout_s, cwd=ROOT)
+
+
+@contextlib.contextmanager
+def _in_its_group(name: str, *args):
+    """scripts/<name>.py ARGS running in a process group of its own (a terminal's foreground job: Ctrl-C is
+    ``os.killpg(proc.pid, SIGINT)``); the group SIGKILLed on leaving if the script still runs."""
+    proc = subprocess.Popen([sys.executable, str(SCRIPTS / f"{name}.py"), *map(str, args)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True, cwd=ROOT)
+    try:
+        yield proc
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
 
 
 @pytest.mark.parametrize("name,args,line", [
@@ -48,20 +63,13 @@ def test_encoder_noise_filters_prints_every_row():
 
 @pytest.mark.slow
 def test_ctrl_c_in_a_long_script_is_one_line_and_exit_130():
-    proc = subprocess.Popen([sys.executable, str(SCRIPTS / "dynamics_check.py"), "pa10", "--states", "2000000"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
-                            cwd=ROOT)
-    try:
+    with _in_its_group("dynamics_check", "pa10", "--states", 2000000) as proc:
         t0 = time.monotonic()
         while "| arm |" not in (proc.stdout.readline() or "| arm |"):   # its table begun: past the imports
             assert time.monotonic() - t0 < 60
         time.sleep(0.5)
         os.killpg(proc.pid, signal.SIGINT)
         _, err = proc.communicate(timeout=30)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.communicate()
     assert proc.returncode == 130 and err == (
         "dynamics_check: interrupted; the table is not finished: run the same command again\n"), (proc.returncode, err)
 
@@ -105,10 +113,7 @@ def test_ctrl_c_stops_a_graph_benchmark_and_leaves_no_process_and_no_shared_memo
     from pa10_dnbs.ros.shm_cleanup import shm_files
 
     shm_before = shm_files()
-    proc = subprocess.Popen([sys.executable, str(SCRIPTS / "bench_graph.py"), "--duration", "60", "--repeat", "1",
-                             "--factors", "1", "--rt-priority", "0"], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True, cwd=ROOT)
-    try:
+    with _in_its_group("bench_graph", "--duration", 60, "--repeat", 1, "--factors", 1, "--rt-priority", 0) as proc:
         t0 = time.monotonic()
         while len(psutil.Process(proc.pid).children(recursive=True)) < 10:   # observer, plant, reference, 7 joints
             assert proc.poll() is None and time.monotonic() - t0 < 90, proc.communicate()
@@ -117,10 +122,6 @@ def test_ctrl_c_stops_a_graph_benchmark_and_leaves_no_process_and_no_shared_memo
         family = [p.pid for p in psutil.Process(proc.pid).children(recursive=True)]
         os.killpg(proc.pid, signal.SIGINT)
         out, err = proc.communicate(timeout=60)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.communicate()
     assert proc.returncode == 130 and err.splitlines()[-1:] == [
         "bench_graph: interrupted; the graph stopped; no record written: run the same command again"], (
         proc.returncode, out, err)
