@@ -53,7 +53,7 @@ def stop_signals() -> tuple[int, ...]:
                  if not (sig == signal.SIGHUP and signal.getsignal(sig) == signal.SIG_IGN))
 
 _second_line = "pa10-dnbs: interrupted again: stopped at once"
-_state = {"deferred": 0, "requested": False, "raised": False, "cleanup": None}
+_state = {"deferred": 0, "requested": False, "raised": False, "cleanup": None, "before_kill": None}
 
 
 def pool_worker_start(parent_pid: int) -> None:
@@ -106,6 +106,13 @@ def on_second_sigint(line: str, cleanup=None) -> None:
     global _second_line
     _second_line = line
     _state["cleanup"] = cleanup
+
+
+def before_second_kill(stop) -> None:
+    """``stop()``: run on a second Ctrl-C before the children are killed (errors ignored), for the rest of
+    :func:`two_stage_sigint`: a child that has children of its own (a launcher and its nodes) gets to stop them
+    its own quick way first."""
+    _state["before_kill"] = stop
 
 
 def child_pids(parent: int | None = None) -> list[int]:
@@ -162,6 +169,9 @@ def _same_stop(signum) -> bool:
 def _second(signum, frame) -> None:
     if _same_stop(signum):
         return   # the same stop sent twice: the first goes on
+    if _state.get("before_kill") is not None:
+        with contextlib.suppress(Exception):
+            _state["before_kill"]()
     kill_children()
     if _state.get("cleanup") is not None:
         with contextlib.suppress(Exception):
@@ -229,13 +239,13 @@ def two_stage_sigint():
         yield
         return
     _second_line = "pa10-dnbs: interrupted again: stopped at once"
-    _state.update(deferred=0, requested=False, raised=False, cleanup=None, written=None, first=None)
+    _state.update(deferred=0, requested=False, raised=False, cleanup=None, before_kill=None, written=None, first=None)
     try:
         yield
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
-        _state.update(deferred=0, requested=False, raised=False, cleanup=None)
+        _state.update(deferred=0, requested=False, raised=False, cleanup=None, before_kill=None)
 
 
 def quiet_start(prog: str = "pa10-dnbs") -> object:

@@ -29,6 +29,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "scripts"))
 
+import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
 from bench_record import record_path  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser, seconds, whole_in  # noqa: E402
 
@@ -124,7 +125,6 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", type=record_path, default=None, metavar="FILE",
                    help="write the table and summary: Markdown if FILE ends in .md, else JSON")
     args = p.parse_args(argv)
-    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))   # stopped: the try's processes and folder go too
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     rng = random.Random(args.seed)
     base = Path(tempfile.mkdtemp(prefix="interrupt_tune-"))
@@ -242,5 +242,7 @@ def _counts(values) -> dict:
     return out
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+if __name__ == "__main__":   # stopped (Ctrl-C, SIGTERM): the try's processes and folders go in the finally blocks
+    sys.exit(script_main.run(main, "interrupt_tune",
+                             interrupted="the tries' processes and folders removed; nothing written: run the same "
+                                         "command again"))

@@ -6,7 +6,8 @@
 - A setting the library refuses (ConfigError): one line naming the script's flag for it, exit 2.
 - Its standard output closed early (``| head``): no traceback, exit 1 (Python's own rule for EPIPE).
 - A child command (:func:`start_child`): stopped by the script alone, first (:func:`stop_child`,
-  :func:`wait_child`), and by Linux if the script dies.
+  :func:`wait_child`; at a second Ctrl-C it gets a second stop before it is killed), and by Linux if the script
+  dies.
 
     import script_main  # noqa: E402  (first)
     ...
@@ -42,12 +43,44 @@ if (_PROG := _prog()) is not None:   # the script is this process: a Ctrl-C whil
     interrupt.quiet_start(_PROG)
 
 
+_children: list[subprocess.Popen] = []   # what start_child started
+_signalled: dict[int, float] = {}        # pid -> time.monotonic() [s] of the last SIGINT this script sent it
+
+
 def start_child(argv: list[str], **popen) -> subprocess.Popen:
     """``subprocess.Popen(argv, **popen)`` in a process group of its own, so that the script alone stops it
-    (:func:`stop_child`: one SIGINT, a first stop to the child, never taken for its second), and sent SIGINT by
-    Linux if the script dies (even by SIGKILL), so that it never outlives the script."""
+    (:func:`stop_child`: one SIGINT, a first stop to the child, never taken for its second; a second Ctrl-C of
+    the script: a second SIGINT, :func:`_stop_at_once`), and sent SIGINT by Linux if the script dies (even by
+    SIGKILL), so that it never outlives the script."""
     parent = os.getpid()
-    return subprocess.Popen(argv, process_group=0, preexec_fn=lambda: _die_with(parent), **popen)
+    proc = subprocess.Popen(argv, process_group=0, preexec_fn=lambda: _die_with(parent), **popen)
+    _children.append(proc)
+    return proc
+
+
+def _sigint(pid: int) -> None:
+    try:
+        os.kill(pid, signal.SIGINT)
+    except OSError:   # gone already
+        return
+    _signalled[pid] = time.monotonic()
+
+
+def _stop_at_once(wait_s: float = 5.0) -> None:
+    """The script's second Ctrl-C, before its children are killed: each living child gets a second stop (a
+    second SIGINT, at least ``SAME_STOP_S`` after the first so that it is not taken for the same one), so that a
+    launcher kills its nodes and removes their shared memory itself; waits at most ``wait_s`` for them to end.
+    Runs in a signal handler, maybe while the main thread holds a Popen's wait lock: looks at /proc, not Popen."""
+    living = [p.pid for p in _children if p.pid in interrupt.child_pids()]
+    for pid in living:
+        if pid not in _signalled:   # the script had not stopped it yet: this SIGINT is its first stop
+            _sigint(pid)
+    for pid in living:
+        time.sleep(max(0.0, _signalled.get(pid, 0.0) + 1.5 * interrupt.SAME_STOP_S - time.monotonic()))
+        _sigint(pid)
+    deadline = time.monotonic() + wait_s
+    while set(living) & set(interrupt.child_pids()) and time.monotonic() < deadline:
+        time.sleep(0.02)
 
 
 def _die_with(parent: int) -> None:
@@ -60,7 +93,7 @@ def stop_child(*procs: subprocess.Popen, grace_s: float = 60.0) -> None:
     each, then SIGKILL to what is left after ``grace_s`` (a launcher stops its graph within it); all reaped."""
     for proc in procs:
         if proc.poll() is None:
-            proc.send_signal(signal.SIGINT)
+            _sigint(proc.pid)
     deadline = time.monotonic() + grace_s
     for proc in procs:
         try:
@@ -91,6 +124,7 @@ def run(main: Callable[[], int], prog: str, names: Mapping[str, str] | None = No
     try:   # two_stage_sigint takes over from quiet_start's handler, and gives it back on leaving
         with interrupt.two_stage_sigint():
             interrupt.on_second_sigint(again)
+            interrupt.before_second_kill(_stop_at_once)
             try:
                 rc = main()
             finally:   # a reader gone (| head) is found here, not in the interpreter's last flush (also --help)

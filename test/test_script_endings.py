@@ -74,6 +74,73 @@ def test_ctrl_c_in_a_long_script_is_one_line_and_exit_130():
         "dynamics_check: interrupted; the table is not finished: run the same command again\n"), (proc.returncode, err)
 
 
+def test_ctrl_c_of_interrupt_tune_is_one_line_and_leaves_no_folder(tmp_path):
+    """interrupt_tune removed its tries' processes and folders on a Ctrl-C but ended in a traceback."""
+    env = dict(os.environ, TMPDIR=str(tmp_path))   # its tries' folders: tempfile.mkdtemp
+    proc = subprocess.Popen([sys.executable, str(SCRIPTS / "interrupt_tune.py"), "--tries", "1", "--trials", "2"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            cwd=ROOT, env=env)
+    try:
+        t0 = time.monotonic()
+        while not list(tmp_path.glob("interrupt_tune-*/full")):   # its uninterrupted tune has begun
+            assert proc.poll() is None and time.monotonic() - t0 < 60, proc.communicate()
+            time.sleep(0.1)
+        time.sleep(1.0)
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+    assert proc.returncode == 130 and "Traceback" not in err, (proc.returncode, err)
+    assert err.splitlines()[-1] == ("interrupt_tune: interrupted; the tries' processes and folders removed; "
+                                    "nothing written: run the same command again"), err
+    assert not list(tmp_path.glob("interrupt_tune-*"))   # left: the output locks (pa10_dnbs-locks-*)
+
+
+_CHILD_SCRIPT = """
+import sys
+sys.path.insert(0, {scripts!r})
+import script_main
+
+
+def main():
+    child = script_main.start_child([sys.executable, "-m", "pa10_dnbs.cli", "simulate", "--controller", "all",
+                                     "--duration", "60", "--no-progress", "--out", sys.argv[1]])
+    return script_main.wait_child(child)
+
+
+sys.exit(script_main.run(main, "with_child"))
+"""
+
+
+def test_a_second_ctrl_c_lets_a_script_s_child_stop_its_own_quick_way(tmp_path):
+    """A script that runs a command (a launcher, a simulate) and gets a second Ctrl-C while the command stops:
+    the command gets its own second stop, which removes its half-written output, before the script kills what is
+    left. Before, the script SIGKILLed it at once and its ``.out.partial-*`` folder stayed behind."""
+    script, out = tmp_path / "with_child.py", tmp_path / "out"
+    script.write_text(_CHILD_SCRIPT.format(scripts=str(SCRIPTS)))
+    proc = subprocess.Popen([sys.executable, str(script), str(out)], stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True, start_new_session=True, cwd=ROOT)
+    try:
+        t0 = time.monotonic()
+        while not (proc.stdout.readline() or "dnbs:").startswith("dnbs:"):   # DNBS done, PID running
+            assert time.monotonic() - t0 < 90
+        time.sleep(0.5)
+        os.killpg(proc.pid, signal.SIGINT)   # the terminal's Ctrl-C: the script's group, not its child's
+        time.sleep(0.4)                      # the child keeps DNBS's run and writes it (figures: about 1 s)
+        os.killpg(proc.pid, signal.SIGINT)
+        rest, _ = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+    assert proc.returncode == 130, rest
+    assert f"pa10-dnbs: interrupted again: stopped at once; nothing written to {out}" in rest.splitlines(), rest
+    assert rest.splitlines()[-1] == "with_child: interrupted again: stopped at once", rest
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["with_child.py"]   # no out, no .out.partial-*
+
+
 @pytest.mark.parametrize("unbuffered", ["1", None], ids=["unbuffered", "buffered"])
 def test_a_closed_pipe_is_no_traceback(unbuffered):
     """Buffered (the default), the failed write is the interpreter's last flush, after main returned."""
