@@ -60,6 +60,9 @@ def test_the_pybullet_robot_behind_the_bus_is_the_in_process_run(form, tmp_path,
         robot.kill()
     assert rc == 0, la.output
     assert robot_rc == 0, robot.output
+    # its /clock's readers (the graph's reference) were stopped by their launcher before they acknowledged the last
+    # ticks: the robot waited for them 10 s at every run's end
+    assert "not every subscriber acknowledged" not in robot.output, robot.output
     assert "joint_bus" in pids and "plant" not in pids
     bus_log = (out / "logs" / "joint_bus.log").read_text()
     assert "graph time from the robot's /clock" in bus_log, bus_log
