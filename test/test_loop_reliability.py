@@ -37,7 +37,7 @@ def test_a_graph_that_never_matched_across_namespaces_says_to_link_them():
     no cause (0 subscribers matched); the namespaces' link is the usual one."""
     from pa10_dnbs.supervisor.netns import netns_hint
 
-    failure = "plant: FAILED RuntimeError: graph not ready after start_timeout_s = 30 s: /pa10/s1/state: 0 of 1"
+    failure = "plant: FAILED graph not ready after start_timeout_s = 30 s: /pa10/s1/state: 0 of 1"
     hint = netns_hint(failure, {"plant": "host_a", "reference": "host_a"})
     assert hint == ("\n(with `netns`, the nodes in host_a meet the others only through a link between the namespaces, "
                     "as scripts/netns_hosts.sh makes one: docs/graph.md, \"Several hosts on one machine\")")

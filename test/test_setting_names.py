@@ -22,6 +22,7 @@ ROS_ARGUMENTS = {"--ros-args", "--params-file", "--param"}   # rcl's own, in a n
 #: library text that names a flag on purpose: (file, what the string opens with) -> why
 FLAG_ON_PURPOSE = {
     ("output_mark.py", "Written by pa10-dnbs"): "the mark file a command writes into its output folder",
+    ("ros/runtime.py", "--help"): "a node's own argument, before its --ros-args: its parameters, nothing started",
     ("report/outputs.py", "Figures not drawn"): "a note in the report.md a command writes",
     ("report/partial.py", "` lists them)"): "the banner of a command's partial report.md",
     ("tune/report.py", "): keep the start"): "the tune report a command writes",

@@ -125,7 +125,7 @@ class JointBusNode(PlantNode):
 def main(args=None) -> NoReturn:
     from .runtime import exit_process, run_node
 
-    exit_process(run_node(JointBusNode, args))
+    exit_process(run_node(JointBusNode, args, params=PARAMS))
 
 
 if __name__ == "__main__":

@@ -290,7 +290,7 @@ class JointControllerNode(Node):
 
 
 def main(args=None) -> NoReturn:
-    exit_process(run_node(functools.partial(JointControllerNode, args), args))
+    exit_process(run_node(functools.partial(JointControllerNode, args), args, params=PARAMS))
 
 
 if __name__ == "__main__":

@@ -115,7 +115,7 @@ class LiveObserverNode(Node):
 
 
 def main(args=None) -> NoReturn:
-    exit_process(run_node(LiveObserverNode, args))
+    exit_process(run_node(LiveObserverNode, args, params=PARAMS))
 
 
 if __name__ == "__main__":

@@ -232,7 +232,7 @@ def missing_joints_text(arm_joints, command_joints) -> str:
 def main(args=None) -> NoReturn:
     from .runtime import exit_process, run_node
 
-    exit_process(run_node(MuJoCoRobotNode, args))
+    exit_process(run_node(MuJoCoRobotNode, args, params=PARAMS))
 
 
 if __name__ == "__main__":

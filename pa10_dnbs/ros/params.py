@@ -71,6 +71,20 @@ class Param:
         return f"[{self.lo:g}, {self.hi:g}]"
 
 
+def params_help(prog: str, specs: dict[str, Param]) -> str:
+    """A node's ``--help``: how it is started and its own parameters, one per line (name, default, range,
+    description); the settings a node also takes as parameters (its config sections) are in docs/graph.md."""
+    width = max(map(len, specs), default=0)
+    lines = [f"usage: {prog} [--ros-args [-r __ns:=NS] [-p NAME:=VALUE ...] [--params-file FILE]]", "",
+             "a ROS 2 node; its parameters (-p NAME:=VALUE; read-only, read once at start; docs/graph.md lists them "
+             "with the settings it also takes):"]
+    for name, spec in specs.items():
+        default = repr(spec.default) if isinstance(spec.default, str) else spec.default
+        bounds = f" {spec.range_text()}" if spec.range_text() else ""
+        lines.append(f"  {name:<{width}}  {default}{bounds}: {spec.description}")
+    return "\n".join(lines)
+
+
 def declare(node: Node, specs: dict[str, Param]) -> dict:
     """Declare every parameter of ``specs`` with its descriptor and return their current values; a value
     rclpy refuses (type, range) raises ParameterError naming the parameter."""

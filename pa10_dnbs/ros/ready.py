@@ -23,6 +23,11 @@ POLL_S = 0.01  # wall seconds between two checks of a node's readiness
 READER_DEPTH = 100  # the plant's reader: one instance (an unkeyed topic), the latest status of every node
 
 
+class GraphNotReady(RuntimeError):
+    """The graph a node waits for did not match within its ``start_timeout_s``; the message says what was lacking.
+    A node ends on it with one line (``runtime.run_node``: ``FAILED <message>``, exit 1), no traceback."""
+
+
 def ready_qos(depth: int = 1) -> QoSProfile:
     """Latched: reliable, transient-local, keep-last ``depth``."""
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.RELIABLE,

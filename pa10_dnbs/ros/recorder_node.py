@@ -260,7 +260,7 @@ class RecorderNode(Node):
 
 
 def main(args=None) -> NoReturn:
-    exit_process(run_node(RecorderNode, args))
+    exit_process(run_node(RecorderNode, args, params=PARAMS))
 
 
 if __name__ == "__main__":

@@ -225,7 +225,7 @@ class ReferenceNode(Node):
 
 
 def main(args=None) -> NoReturn:
-    exit_process(run_node(ReferenceNode, args))
+    exit_process(run_node(ReferenceNode, args, params=PARAMS))
 
 
 if __name__ == "__main__":

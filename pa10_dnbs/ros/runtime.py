@@ -48,7 +48,9 @@ from . import exit_deadline
 from ..interrupt import LAUNCHER_PID_ENV, signal_on_parent_death, stop_signals
 from ..wire.robot_interface import RobotFault
 from .param_overrides import bad_param_override
-from .params import ParameterError
+from .params import ParameterError, params_help
+from .shm_cleanup import remove_stale, shm_files
+from .ready import GraphNotReady
 
 SLICE_S = 0.2  # longest a spin call runs before the stop future is checked again
 # Exceptions that ended run_node. A failed start-up's traceback holds the half-built node; freeing it
@@ -140,13 +142,23 @@ def announce_ready(name: str) -> None:
     print(f"READY {name}", flush=True)
 
 
-def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
+def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None, params: dict | None = None) -> int:
     """Create the node and spin it until SIGINT, SIGTERM or SIGHUP (or its own ``loop`` returns); return the exit code.
 
     ``make_node`` builds the node after ``rclpy.init``; the node may define
     ``exit_code`` (int), ``loop(executor, stop)`` (its own spin loop, which
     must return once ``stop`` is done) and ``close()`` (write files, report).
+    ``params``: the node's ``PARAMS``, which ``-h``/``--help`` (before any ``--ros-args``) prints, exit 0, no node
+    started.
     """
+    argv = list(sys.argv[1:] if args is None else args)
+    own = argv[:argv.index("--ros-args")] if "--ros-args" in argv else argv
+    if params is not None and ("-h" in own or "--help" in own):
+        module = sys.modules[getattr(make_node, "func", make_node).__module__]   # __main__ under python -m
+        print(params_help(f"python -m {getattr(module.__spec__, 'name', module.__name__)}", params), flush=True)
+        # importing rclpy made LTTng-UST's /dev/shm/lttng-ust-wait-* (ros/shm_cleanup.py): gone if no one maps them
+        remove_stale({f for f in shm_files() if f.startswith("lttng-ust-wait-")}, frozenset({os.getpid()}))
+        return 0
     # a -p value rcl cannot read: named before rclpy.init (ros/param_overrides.py); anything else rcl refuses in
     # its --ros-args (an unknown argument): from rclpy.init itself. The user's input: one line, exit 2
     refused = bad_param_override(list(sys.argv if args is None else args)) or _init_rcl(args)
@@ -183,6 +195,10 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None) -> int:
     except RobotFault as exc:  # the joint bus's robot broke the interface: one line (docs/your_robot.md)
         _KEPT_EXCEPTIONS.append(exc)
         print(f"ROBOT FAULT: {exc}", file=sys.stderr, flush=True)
+        code = 1
+    except GraphNotReady as exc:  # what was lacking is the whole story: one line
+        _KEPT_EXCEPTIONS.append(exc)
+        print(f"FAILED {exc}", file=sys.stderr, flush=True)
         code = 1
     except Exception as exc:  # a node that fails says why and exits non-zero
         _KEPT_EXCEPTIONS.append(exc)

@@ -125,7 +125,7 @@ class WireMonitorNode(Node):
 
 
 def main(args=None) -> NoReturn:
-    exit_process(run_node(WireMonitorNode, args))
+    exit_process(run_node(WireMonitorNode, args, params=PARAMS))
 
 
 if __name__ == "__main__":

@@ -60,7 +60,7 @@ from .realtime import run_realtime
 from .stats import diagnostics_report, plant_stats
 from .standard_endpoints import StandardPlantEndpoints
 from .endpoints import PlantEndpoints
-from ..ready import ReadyListener
+from ..ready import GraphNotReady, ReadyListener
 from ..wall_timer import wall_timer
 from ..runtime import announce_ready
 from ..settings_params import NODE_SECTIONS
@@ -300,8 +300,8 @@ class PlantNode(Node):
                 return not stop.done()
             if time.monotonic() >= wait.deadline:
                 lacking = wait.lacking + (board.lacking if board is not None else [])
-                raise RuntimeError(f"graph not ready after start_timeout_s = {self.p['start_timeout_s']:g} s: "
-                                   + "; ".join(lacking))
+                raise GraphNotReady(f"graph not ready after start_timeout_s = {self.p['start_timeout_s']:g} s: "
+                                    + "; ".join(lacking))
             executor.spin_once(timeout_sec=0.02)
         return False
 
@@ -343,7 +343,7 @@ def _check_positive(p: dict, *keys: str) -> None:
 def main(args=None) -> NoReturn:
     from ..runtime import exit_process, run_node
 
-    exit_process(run_node(PlantNode, args))
+    exit_process(run_node(PlantNode, args, params=PARAMS))
 
 
 if __name__ == "__main__":
