@@ -92,7 +92,10 @@ def report_markdown(metrics: list[dict], figures: list[tuple[str, str]], title: 
                      + _wall_time(m['wall_time_s'], rtf) + _diverged(m) + _guards(m))
     lines += [""] + [f"- {n}" for n in notes]
     lines += ["", f"## Tracking over [{m0['window_s'][0]:g}, {m0['window_s'][1]:g}) s", "", metrics_table(metrics)]
-    lines += ["", "## Start-up: the whole run", "", startup_table(metrics), "", "## Figures", ""]
+    lines += ["", "## Start-up: the whole run", "", startup_table(metrics), "",
+              f"Steps at a torque limit after {m0['startup_s']:g} s (any joint): "
+              + ", ".join(f"{m['controller'].upper()} {m['steps_at_limit_after_s']}" for m in metrics)
+              + ".", "", "## Figures", ""]
     for caption, path in figures:
         lines += [f"### {caption}", "", f"![{caption}]({path})", ""]
     return "\n".join(lines)

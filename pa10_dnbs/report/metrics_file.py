@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.metrics import DIVERGED_RAD, divergence, first_non_finite, joint_metrics, run_metrics
+from ..core.metrics import (DIVERGED_RAD, at_limit, divergence, first_non_finite, first_step, joint_metrics,
+                             run_metrics)
 from ..run_data import RunData
 
 
@@ -76,6 +77,10 @@ def metrics_dict(run: RunData, settings: dict, **extra) -> dict:
         "worst_max_abs_error_run_rad": max(j["max_abs_error_run_rad"] for j in joints),
         "worst_torque_variation": max(j["torque_variation"] for j in joints),
         "worst_saturated_fraction_after_s": max(j["saturated_fraction_after_s"] for j in joints),
+        # the steps from startup_s on at which any joint's torque is at its limit (the README's and the arms' tables)
+        "steps_at_limit_after_s": int(np.sum(np.any(at_limit(run.torque_nm[first_step(settings["startup_s"],
+                                                                                         run.dt_s):],
+                                                              run.torque_limit_nm), axis=1))),
         "all_finite": finite,
         "diverged": diverged,
         "non_finite_from_step": None if gone is None else gone["step"],

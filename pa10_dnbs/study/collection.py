@@ -17,7 +17,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.metrics import at_limit, first_step
 
 #: example-robot-data's version the benchmark is pinned to (requirements-collection.txt).
 COLLECTION_VERSION = "6.0.0"
@@ -62,16 +61,15 @@ def _controller_figures(run, settings, duration_s: float) -> dict:
     from ..report.metrics_file import metrics_dict, metrics_settings
 
     m = metrics_dict(run, metrics_settings(settings, duration_s))
-    err, tau = run.error_rad, run.torque_nm
+    err = run.error_rad
     max_abs = float(np.nanmax(np.abs(err))) if np.any(np.isfinite(err)) else math.inf
-    start = first_step(settings.metrics.startup_s, run.dt_s)   # the steps the metrics count after startup
-    at_limit_after = int(np.sum(np.any(at_limit(tau[start:], run.torque_limit_nm), axis=1)))
 
     def num(x):
         return float(x) if x is not None and math.isfinite(x) else None
 
     return {"rms_rad": num(m["worst_rms_error_rad"]), "settled_s": num(m["worst_settling_time_s"]),
-            "torque_variation": num(m["worst_torque_variation"]), "steps_at_limit_after_startup": at_limit_after,
+            "torque_variation": num(m["worst_torque_variation"]),
+            "steps_at_limit_after_startup": m["steps_at_limit_after_s"],
             "max_abs_error_rad": max_abs if math.isfinite(max_abs) else None,
             "diverged": m["diverged"] is not None,
             "worst_rms_joint": max(m["joints"], key=lambda j: j["rms_error_rad"]
