@@ -126,6 +126,7 @@ def test_steps_at_a_limit_after_startup_are_the_steps_the_metrics_count(_default
     lim = np.asarray(s.plant.torque_limit_nm, float)
     tau = np.zeros((n, nj))
     start = int(round(s.metrics.startup_s / s.simulation.dt_s))
+    tau[start - 1, 2] = lim[2]   # before startup_s: not counted
     tau[start, 0] = lim[0]
     tau[start + 10, 1] = -lim[1] * (1 - 1e-10)
     zeros = np.zeros((n, nj))
@@ -134,4 +135,4 @@ def test_steps_at_a_limit_after_startup_are_the_steps_the_metrics_count(_default
     m = metrics_dict(run, metrics_settings(s, n * s.simulation.dt_s))
     after = n - start
     counted = round(sum(j["saturated_fraction_after_s"] for j in m["joints"]) * after)
-    assert figures["steps_at_limit_after_startup"] == counted == 2, (figures, counted)
+    assert figures["steps_at_limit_after_startup"] == counted == m["steps_at_limit_after_s"] == 2, (figures, counted)
