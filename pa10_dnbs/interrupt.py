@@ -8,7 +8,9 @@ A terminal's Ctrl-C sends SIGINT to every process of the foreground group: the c
   also die with the command, however it ends (a plain ``kill``, SIGKILL), so none is left behind.
 - The command: the first SIGINT raises KeyboardInterrupt (the command stops its work, keeps what is complete,
   says where, exits 130); from then on a second SIGINT ends at once (:func:`two_stage_sigint`): every child is
-  killed and reaped, one line (:func:`on_second_sigint` sets it), exit 130, no clean-up that could wait. The same
+  killed and reaped, one line (:func:`on_second_sigint` sets it), exit 130, no clean-up that could wait (but
+  :func:`before_second_kill`'s: a developer script lets its child command stop its own children first, at most
+  about 5 s; a third SIGINT then ends at once). The same
   signal again within ``SAME_STOP_S`` is the same stop (``timeout`` signals the command, then its group).
   SIGTERM (``kill``, ``timeout``, a batch scheduler's cancel) and SIGHUP (the terminal closed, an ssh session
   dropped) are taken as a Ctrl-C (STOP_SIGNALS): no half-written output folder is left behind by them.
@@ -169,9 +171,10 @@ def _same_stop(signum) -> bool:
 def _second(signum, frame) -> None:
     if _same_stop(signum):
         return   # the same stop sent twice: the first goes on
-    if _state.get("before_kill") is not None:
+    stop_first, _state["before_kill"] = _state.get("before_kill"), None   # once: a third Ctrl-C waits for nothing
+    if stop_first is not None:
         with contextlib.suppress(Exception):
-            _state["before_kill"]()
+            stop_first()
     kill_children()
     if _state.get("cleanup") is not None:
         with contextlib.suppress(Exception):

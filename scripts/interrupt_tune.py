@@ -31,6 +31,7 @@ sys.path.insert(0, str(ROOT / "scripts"))
 
 import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
 from bench_record import record_path  # noqa: E402
+from pa10_dnbs import interrupt  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser, seconds, whole_in  # noqa: E402
 
 HANG_S = 60.0   # a try not ended this long after its SIGINT counts as a hang (then killed)
@@ -128,6 +129,8 @@ def main(argv: list[str] | None = None) -> int:
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     rng = random.Random(args.seed)
     base = Path(tempfile.mkdtemp(prefix="interrupt_tune-"))
+    interrupt.on_second_sigint("interrupt_tune: interrupted again: stopped at once; the tries' folders removed",
+                               cleanup=lambda: shutil.rmtree(base, ignore_errors=True))
     load = list(os.getloadavg())
     try:
         return _run(args, argv, env, rng, base, load)

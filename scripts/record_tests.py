@@ -46,8 +46,8 @@ def main() -> int:
     record = bench_record.Record.start("tests", command=" ".join(shlex.quote(c) for c in shown))
     with tempfile.TemporaryDirectory(prefix="pa10_tests_") as tmp:
         xml_file = Path(tmp) / "junit.xml"
-        rc = script_main.wait_child(script_main.start_child([*shown, f"--junitxml={xml_file}"],
-                                                         cwd=bench_record.ROOT))
+        rc = script_main.wait_child(script_main.start_child([*shown, f"--junitxml={xml_file}"], second_stop=False,
+                                                         cwd=bench_record.ROOT))   # pytest: killed at a 2nd Ctrl-C
         if not xml_file.is_file():
             print(f"record_tests: pytest exited {rc} without a report: no record", file=sys.stderr)
             return rc or 1

@@ -1,6 +1,7 @@
 """How a developer script ends, whatever stops it: the CLI's rules (pa10_dnbs/interrupt.py) for scripts/*.py.
 
-- Ctrl-C, SIGTERM or SIGHUP: one line, exit 130 (a second Ctrl-C: at once); a Ctrl-C also while the modules
+- Ctrl-C, SIGTERM or SIGHUP: one line, exit 130 (a second Ctrl-C: at once, a child command after its own quick
+  stop, 5 s at most; a third: at once); a Ctrl-C also while the modules
   load, once this module is imported (import it before anything heavy, when the script is the process), and
   while the script exits.
 - A setting the library refuses (ConfigError): one line naming the script's flag for it, exit 2.
@@ -43,18 +44,23 @@ if (_PROG := _prog()) is not None:   # the script is this process: a Ctrl-C whil
     interrupt.quiet_start(_PROG)
 
 
-_children: list[subprocess.Popen] = []   # what start_child started
+_children: list[subprocess.Popen] = []   # what start_child started that takes a second stop of its own
 _signalled: dict[int, float] = {}        # pid -> time.monotonic() [s] of the last SIGINT this script sent it
+FRESH_GAP_S = interrupt.SAME_STOP_S + 0.4   # first and second stop sent together: the child's handler may run late
 
 
-def start_child(argv: list[str], **popen) -> subprocess.Popen:
+def start_child(argv: list[str], second_stop: bool = True, **popen) -> subprocess.Popen:
     """``subprocess.Popen(argv, **popen)`` in a process group of its own, so that the script alone stops it
-    (:func:`stop_child`: one SIGINT, a first stop to the child, never taken for its second; a second Ctrl-C of
-    the script: a second SIGINT, :func:`_stop_at_once`), and sent SIGINT by Linux if the script dies (even by
-    SIGKILL), so that it never outlives the script."""
+    (:func:`stop_child`: one SIGINT, a first stop to the child, never taken for its second), and sent SIGINT by
+    Linux if the script dies (even by SIGKILL), so that it never outlives the script. ``second_stop``: at the
+    script's second Ctrl-C the child gets a second SIGINT before it is killed (:func:`_stop_at_once`: a launcher
+    stops its nodes and sweeps /dev/shm itself); False: killed at once (pytest, whose second KeyboardInterrupt
+    is a traceback)."""
     parent = os.getpid()
     proc = subprocess.Popen(argv, process_group=0, preexec_fn=lambda: _die_with(parent), **popen)
-    _children.append(proc)
+    _signalled.pop(proc.pid, None)   # a pid used again
+    if second_stop:
+        _children.append(proc)
     return proc
 
 
@@ -67,16 +73,21 @@ def _sigint(pid: int) -> None:
 
 
 def _stop_at_once(wait_s: float = 5.0) -> None:
-    """The script's second Ctrl-C, before its children are killed: each living child gets a second stop (a
-    second SIGINT, at least ``SAME_STOP_S`` after the first so that it is not taken for the same one), so that a
-    launcher kills its nodes and removes their shared memory itself; waits at most ``wait_s`` for them to end.
-    Runs in a signal handler, maybe while the main thread holds a Popen's wait lock: looks at /proc, not Popen."""
-    living = [p.pid for p in _children if p.pid in interrupt.child_pids()]
+    """The script's second Ctrl-C, before its children are killed: each living child of :func:`start_child`
+    with ``second_stop`` gets a second stop (a second SIGINT, at least ``SAME_STOP_S`` after the first so that it
+    is not taken for the same one), so that a launcher kills its nodes and removes their shared memory itself;
+    waits at most ``wait_s`` for them to end. Runs in a signal handler, maybe while the main thread holds a
+    Popen's wait lock: reads ``returncode`` and /proc, calls no Popen method."""
+    living = sorted({p.pid for p in _children if p.returncode is None} & set(interrupt.child_pids()))
+    send_at = {}
     for pid in living:
-        if pid not in _signalled:   # the script had not stopped it yet: this SIGINT is its first stop
+        if pid in _signalled:   # stopped once already (stop_child): the second stop is due
+            send_at[pid] = _signalled[pid] + 1.5 * interrupt.SAME_STOP_S
+        else:                   # not stopped yet: this SIGINT is its first stop
             _sigint(pid)
+            send_at[pid] = time.monotonic() + FRESH_GAP_S
     for pid in living:
-        time.sleep(max(0.0, _signalled.get(pid, 0.0) + 1.5 * interrupt.SAME_STOP_S - time.monotonic()))
+        time.sleep(max(0.0, send_at[pid] - time.monotonic()))
         _sigint(pid)
     deadline = time.monotonic() + wait_s
     while set(living) & set(interrupt.child_pids()) and time.monotonic() < deadline:

@@ -128,8 +128,10 @@ def test_a_second_ctrl_c_lets_a_script_s_child_stop_its_own_quick_way(tmp_path):
             assert time.monotonic() - t0 < 90
         time.sleep(0.5)
         os.killpg(proc.pid, signal.SIGINT)   # the terminal's Ctrl-C: the script's group, not its child's
-        time.sleep(0.4)                      # the child keeps DNBS's run and writes it (figures: about 1 s)
-        os.killpg(proc.pid, signal.SIGINT)
+        while not list(tmp_path.glob(".out.partial-*")):   # the child keeps DNBS's run: writing it (0.2-0.8 s)
+            assert time.monotonic() - t0 < 120 and proc.poll() is None
+            time.sleep(0.005)
+        os.killpg(proc.pid, signal.SIGINT)   # while it writes (the script's second SIGINT to it: >= 0.15 s after)
         rest, _ = proc.communicate(timeout=30)
     finally:
         if proc.poll() is None:

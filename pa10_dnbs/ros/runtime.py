@@ -155,9 +155,13 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None, params: dict
     own = argv[:argv.index("--ros-args")] if "--ros-args" in argv else argv
     if params is not None and ("-h" in own or "--help" in own):
         module = sys.modules[getattr(make_node, "func", make_node).__module__]   # __main__ under python -m
-        print(params_help(f"python -m {getattr(module.__spec__, 'name', module.__name__)}", params), flush=True)
         # importing rclpy made LTTng-UST's /dev/shm/lttng-ust-wait-* (ros/shm_cleanup.py): gone if no one maps them
         remove_stale({f for f in shm_files() if f.startswith("lttng-ust-wait-")}, frozenset({os.getpid()}))
+        try:
+            print(params_help(f"python -m {getattr(module.__spec__, 'name', module.__name__)}", params), flush=True)
+        except BrokenPipeError:   # its reader gone (| head): quiet, as Python's own rule for EPIPE, exit 1
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 1
         return 0
     # a -p value rcl cannot read: named before rclpy.init (ros/param_overrides.py); anything else rcl refuses in
     # its --ros-args (an unknown argument): from rclpy.init itself. The user's input: one line, exit 2
