@@ -60,6 +60,9 @@ def metrics_dict(run: RunData, settings: dict, **extra) -> dict:
                     "joint": run.joint_names[diverged["joint"]],
                     "why": "non-finite" if diverged["non_finite"] else f"|e| > {DIVERGED_RAD:g} rad"}
     finite = bool(np.all(np.isfinite(run.position_rad)) and np.all(np.isfinite(run.torque_nm)))
+    # (steps from startup_s on, joints): the torque at its limit; a step with any joint there counts once (the
+    # README's and the arms' tables)
+    limited_after = at_limit(run.torque_nm[first_step(settings["startup_s"], run.dt_s):], run.torque_limit_nm)
     # the applied torque (which the plant clips), and in-process what the controllers asked (the paper's claim)
     within = bool(np.all(np.abs(run.torque_nm) <= run.torque_limit_nm * (1 + 1e-12))
                   and not any(run.extra.get("torques_asked_beyond_limits", ())))
@@ -77,10 +80,7 @@ def metrics_dict(run: RunData, settings: dict, **extra) -> dict:
         "worst_max_abs_error_run_rad": max(j["max_abs_error_run_rad"] for j in joints),
         "worst_torque_variation": max(j["torque_variation"] for j in joints),
         "worst_saturated_fraction_after_s": max(j["saturated_fraction_after_s"] for j in joints),
-        # the steps from startup_s on at which any joint's torque is at its limit (the README's and the arms' tables)
-        "steps_at_limit_after_s": int(np.sum(np.any(at_limit(run.torque_nm[first_step(settings["startup_s"],
-                                                                                         run.dt_s):],
-                                                              run.torque_limit_nm), axis=1))),
+        "steps_at_limit_after_s": int(np.sum(np.any(limited_after, axis=1))),
         "all_finite": finite,
         "diverged": diverged,
         "non_finite_from_step": None if gone is None else gone["step"],

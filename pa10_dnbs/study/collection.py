@@ -17,7 +17,6 @@ from pathlib import Path
 
 import numpy as np
 
-
 #: example-robot-data's version the benchmark is pinned to (requirements-collection.txt).
 COLLECTION_VERSION = "6.0.0"
 CONTROLLERS = ("dnbs", "pid", "ctc")
