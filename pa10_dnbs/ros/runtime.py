@@ -223,9 +223,15 @@ def exit_process(code: int) -> NoReturn:
     Nothing of rclpy or DDS is torn down (see the module docstring): destroying an endpoint, the node or the
     context (also at finalization, by the garbage collection of their handles) publishes graph updates
     through the shared-memory ports and can block there with the GIL held. Files are written and closed by
-    ``close()`` before this is called. The DDS participant's shared-memory files in /dev/shm stay behind:
-    the launcher removes them (``ros/shm_cleanup.py``), as it does for a killed node.
+    ``close()`` before this is called. The DDS participant's shared-memory files in /dev/shm stay behind: a
+    launcher (its pid in LAUNCHER_PID_ENV) removes them once its nodes are gone (``ros/shm_cleanup.py``), as it
+    does for a killed node. A node started without one (by hand, or from the user's own launch file) sweeps as a
+    launcher does, its own process not counted: every file whose owner is gone (or is this process) and that no
+    other live process maps. File operations and locks that never wait, no DDS call; the last node out takes
+    what several mapped.
     """
+    if not os.environ.get(LAUNCHER_PID_ENV):
+        remove_stale(shm_files(), frozenset({os.getpid()}))
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)
