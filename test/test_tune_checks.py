@@ -2,6 +2,7 @@
 tuner asks ``--jobs // runs per trial`` trials at once), a pool no larger than what runs at once, a resumed study
 whose arm, URDF or settings changed (refused, naming the flag), an in-memory ``--storage`` (refused)."""
 import json
+import shutil
 
 import pytest
 
@@ -226,16 +227,22 @@ def test_equal_budget_refuses_a_controllers_list_that_would_drop_a_tune_from_the
 
 
 def test_equal_budget_table_refuses_unfinished_and_unequal_comparisons(tmp_path):
-    """An interrupted comparison (no comparison.md) and comparisons of other budgets put side by side without a
-    word: now one line each, exit 2."""
+    """An interrupted comparison (no comparison.md), comparisons of other budgets put side by side without a
+    word, and one arm in two columns (the same DIR twice, or two of one arm): now one line each, exit 2."""
     from test_misuse_inputs import _script
 
     common = ("--controllers", "pid", "--scenarios", "nominal", "--seeds", 1, "--held-out-seeds", 1,
               "--no-progress", "--jobs", 1)
     assert _script("equal_budget", *common, "--trials", 1, "--duration", 0.2, "--out", tmp_path / "a")[0] == 0
     assert _script("equal_budget", *common, "--trials", 2, "--duration", 0.2, "--out", tmp_path / "b")[0] == 0
-    rc, out, err = _script("equal_budget_table", tmp_path / "a", tmp_path / "a")
-    assert rc == 0 and out.startswith("| scenario | pa10 PID | pa10 PID |"), err
+    rc, out, err = _script("equal_budget_table", tmp_path / "a", tmp_path / "a")   # two columns "pa10 PID" before
+    assert rc == 2 and out == "" and err == f"equal_budget_table: error: {tmp_path}/a given twice\n", err
+    shutil.copytree(tmp_path / "a", tmp_path / "a_copy")
+    rc, out, err = _script("equal_budget_table", tmp_path / "a", tmp_path / "a_copy")
+    assert rc == 2 and out == "" and err == (f"equal_budget_table: error: {tmp_path}/a and {tmp_path}/a_copy are both "
+                                             "comparisons on pa10: give one DIR per arm\n"), err
+    rc, out, err = _script("equal_budget_table", tmp_path / "a")
+    assert rc == 0 and out.startswith("| scenario | pa10 PID |\n"), err
     rc, out, err = _script("equal_budget_table", tmp_path / "a", tmp_path / "b")
     assert rc == 2 and out == "" and err == (
         f"equal_budget_table: error: not equal budgets: {tmp_path}/a/pid: 1 trials of 1 scenarios x 1 seeds x 0.2 s, "

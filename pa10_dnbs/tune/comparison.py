@@ -109,6 +109,12 @@ def arms_table(dirs: list[Path]) -> str:
             budgets.setdefault(budget(t), f"{d}/{c}")
     if len(budgets) > 1:   # the table says 'equal budget': so must its columns be
         raise ValueError("not equal budgets: " + "; ".join(f"{where}: {text}" for text, where in budgets.items()))
+    first: dict[str, Path] = {}
+    for d, (arm, _) in zip(dirs, arms):   # the columns are arms: two of one arm would read as two arms
+        if arm in first:
+            raise ValueError(f"{d} given twice" if Path(first[arm]).resolve() == Path(d).resolve() else
+                             f"{first[arm]} and {d} are both comparisons on {arm}: give one DIR per arm")
+        first[arm] = d
     scenarios = list(dict.fromkeys(r["scenario"] for _, res in arms for t in res.values()
                                    for r in t["held_out"]["tuned"]))
     lines = ["| scenario | " + " | ".join(f"{arm} {' / '.join(c.upper() for c in res)}" for arm, res in arms) + " |",
