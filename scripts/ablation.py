@@ -27,6 +27,7 @@ import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one
 from pa10_dnbs.cli_values import OneLineParser, number_in, whole_in  # noqa: E402
 from pa10_dnbs.config import default_config_path  # noqa: E402
 from pa10_dnbs.paths import share_path  # noqa: E402
+from pa10_dnbs.numeric_platform import numeric_platform, platform_line  # noqa: E402
 from pa10_dnbs.report.metrics_file import metrics_dict, metrics_settings  # noqa: E402
 from pa10_dnbs.sim.closed_loop import simulate  # noqa: E402
 from pa10_dnbs.study.executor import Executor  # noqa: E402
@@ -133,6 +134,9 @@ def main(argv: list[str] | None = None) -> int:
               f"{n['worst_torque_variation']:.2f} | {n['worst_saturated_fraction_after_s']:.4f} | "
               f"{n['worst_rms_error_rad']:.2e} | {_f(p['worst_settling_time_s'], '.3f')} | "
               f"{p['worst_torque_variation']:.2f} | {p['worst_rms_error_rad']:.2e} | {z['worst_rms_error_rad']:.2e} |")
+    # the diverged and the long noisy runs carry the last bits of the plant's solve and numpy's loops into their
+    # printed digits: their cells are this platform's (docs/controller.md, "Ablation")
+    print(f"\nnumeric platform: {platform_line(numeric_platform())}")
     return 0
 
 
