@@ -231,7 +231,10 @@ def exit_process(code: int) -> NoReturn:
     what several mapped.
     """
     if not os.environ.get(LAUNCHER_PID_ENV):
-        remove_stale(shm_files(), frozenset({os.getpid()}))
+        try:
+            remove_stale(shm_files(), frozenset({os.getpid()}))
+        except Exception as exc:   # a sweep that fails must not keep the process from leaving (finalization)
+            print(f"shared-memory sweep failed: {exc}", file=sys.stderr)
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)
