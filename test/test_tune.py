@@ -3,6 +3,7 @@ files (a tuned.yaml that ``simulate --config`` runs), the same trials from the s
 after Ctrl-C."""
 import json
 import math
+import shutil
 import subprocess
 import sys
 
@@ -197,8 +198,12 @@ def test_equal_budget_writes_one_table_of_every_controller(tmp_path):
     # the README's table of several comparisons: one column per arm, the tuned controllers, DNBS first
     from pa10_dnbs.tune.comparison import arms_table
 
-    many = arms_table([tmp_path / "eq", tmp_path / "eq"]).splitlines()
-    assert many[0] == "| scenario | pa10 PID / CTC | pa10 PID / CTC |"
+    shutil.copytree(tmp_path / "eq", tmp_path / "eq2")   # a second arm's comparison, for the layout (one per arm)
+    for c in ("pid", "ctc"):
+        report = json.loads((tmp_path / "eq2" / c / "tune.json").read_text())
+        (tmp_path / "eq2" / c / "tune.json").write_text(json.dumps({**report, "arm": "iiwa"}))
+    many = arms_table([tmp_path / "eq", tmp_path / "eq2"]).splitlines()
+    assert many[0] == "| scenario | pa10 PID / CTC | iiwa PID / CTC |"
     assert len(many) == 2 + 8 + 1 and all(line.count("|") == 4 for line in many)
     tuned = json.loads((tmp_path / "eq" / "pid" / "tune.json").read_text())["held_out"]["tuned"]
     assert many[2].startswith(f"| nominal | {tuned[0]['worst_rms_error_rad']:.1e} / ".replace("e-0", "e-"))
