@@ -83,8 +83,33 @@ def test_with_a_params_file_the_nodes_get_it_and_the_runs_config_for_what_it_lac
     for name, argv in cmds.items():
         assert argv[-2:] == ["--params-file", str(tmp_path / "ros_params.yaml")], name
         # read only for a key the params file lacks: the run's own config, never the shipped default
-        assert f"config_file:={used}" in argv, (name, argv)
+        assert f'config_file:="{used}"' in argv, (name, argv)
     without = dict(node_commands(GraphOptions(config_path=Path("config/default.yaml"), joint_names=JOINTS),
                                  tmp_path / "stats.json", tmp_path / "wire.npz"))
-    assert "config_file:=config/default.yaml" in without["plant"] and "--params-file" not in without["plant"]
-    assert "config_file:=config/default.yaml" in without["joint_controller_s1"]
+    assert 'config_file:="config/default.yaml"' in without["plant"] and "--params-file" not in without["plant"]
+    assert 'config_file:="config/default.yaml"' in without["joint_controller_s1"]
+
+
+@pytest.mark.parametrize("odd", ["it's run", "a #b", "c: d", "[e]", "ü f"])
+def test_every_path_a_node_gets_reads_back_as_that_path(tmp_path, odd):
+    """rcl reads a -p value as YAML: an --out holding "'" broke the recorder's custom_data list (the graph had
+    started: exit 1, a .failed folder), " #" cut config_file and stats_file short (the plant wrote its stats to a
+    stray file '.a' in the working folder), ": " made a mapping of them. Each value now reads back as given."""
+    import yaml
+
+    from pa10_dnbs.ros.param_overrides import bad_param_override, param_rules
+
+    run = tmp_path / odd
+    opt = GraphOptions(config_path=run / "config_used.yaml", joint_names=JOINTS, live_port=0,
+                       record_bag=tmp_path / f"bag {odd}", trajectory_file=run / "t.yaml", init_from=run / "init")
+    for name, argv in node_commands(opt, run / "stats.json", run / "wire.npz"):
+        assert bad_param_override(argv) is None, (name, argv)
+        values = {k: yaml.safe_load(v) for k, _, v in (rule.partition(":=") for _, rule in param_rules(argv))}
+        for key, value in values.items():
+            if key.endswith("_file") or key in ("bag",):
+                assert isinstance(value, str) and (odd in value), (name, key, value)
+        if name == "recorder":
+            assert f"config_file={run / 'config_used.yaml'}" in values["custom_data"], values["custom_data"]
+            assert values["bag"] == str(tmp_path / f"bag {odd}")
+        if name == "joint_controller_s1":
+            assert values["init_file"] == str(run / "init" / "s1.npz")

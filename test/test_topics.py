@@ -22,10 +22,28 @@ def test_valid_namespaces(ns):
     assert check_namespace(ns) == ns and arm_topics(ns).state("s1") == f"{ns}/s1/state"
 
 
-@pytest.mark.parametrize("ns", ["", "/", "pa10", "/pa10/", "//pa10", "/pa10//x", "/pa-10", "/pa 10", "/2arm", "/a/1b"])
+@pytest.mark.parametrize("ns", ["", "/", "pa10", "/pa10/", "//pa10", "/pa10//x", "/pa-10", "/pa 10", "/2arm", "/a/1b",
+                                "/a__b", "/lab/__arm"])   # '__': rcl cannot parse the remap rule (it started the graph)
 def test_invalid_namespaces(ns):
     with pytest.raises(ValueError, match="ROS namespace"):
         check_namespace(ns)
+
+
+@pytest.mark.parametrize("name,ns", [("pa10", "/pa10"), ("PA10 - lab copy", "/PA10_lab_copy"), ("__x_", "/x"),
+                                     ("7dof", "/arm_7dof"), ("--", "/arm")])
+def test_an_arm_s_name_gives_a_namespace_rcl_can_take(name, ns):
+    """'PA10 - lab copy' gave /PA10___lab_copy, which every node of the graph then failed to take."""
+    from pa10_dnbs.wire.topics import default_namespace
+
+    assert default_namespace(name) == ns and check_namespace(ns) == ns
+
+
+def test_a_joint_name_with_a_double_underscore_is_refused_before_any_node_starts():
+    from pa10_dnbs.wire.topics import check_joint_name
+
+    assert check_joint_name("arm_left_1") == "arm_left_1"
+    with pytest.raises(ValueError, match="without '__'"):
+        check_joint_name("arm__1")
 
 
 def test_find_arm_new_old_and_none():

@@ -23,6 +23,7 @@ from ..run_settings import built_settings_held, say_rules
 from ..supervisor.domain_ids import shell_domain
 from ..supervisor.rmw_check import check_rmw
 from ..run_steps import run_steps
+from ..ros.param_overrides import override_value
 from ..ros.shm_cleanup import remove_stale, shm_files
 from ..wire.clock_schedule import checked_clock_hz
 from ..wire.topics import check_free_topic, check_not_the_graphs, check_topic_name, default_namespace, resolve
@@ -49,12 +50,12 @@ def robot_argv(options: RobotCommandOptions) -> list[str]:
         raise ConfigError(f"--command-topic: must differ from --state-topic (both {o.command_topic!r}{same}): the "
                           "robot would read its own states as commands")
     say_rules(rules)
-    params = {"config_file": config_path.resolve(), "arm": settings.arm.file, "mode": o.mode, "duration_s": duration_s,
+    params = {"config_file": Path(config_path).resolve(), "arm": Path(settings.arm.file), "mode": o.mode, "duration_s": duration_s,
               "state_topic": o.state_topic, "command_topic": o.command_topic, "clock_hz": float(clock_hz)}
     args = [sys.executable, "-m", "pa10_dnbs.ros.mujoco_robot_node", "--ros-args", "-r", "__node:=mujoco_robot",
             "-r", f"__ns:={namespace}"]
     for k, v in params.items():
-        args += ["-p", f"{k}:={v}"]
+        args += ["-p", f"{k}:={override_value(v)}"]
     return args
 
 

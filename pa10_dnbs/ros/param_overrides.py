@@ -7,7 +7,24 @@ every other bad parameter, docs/graph.md). No rclpy here.
 """
 from __future__ import annotations
 
+import json
+from pathlib import PurePath
+
 import yaml
+
+
+def override_value(value) -> str:
+    """``value`` as the VALUE of a ``-p NAME:=VALUE`` rule that rcl reads back as given: a path (PurePath) or each
+    string of a list or tuple double-quoted (YAML; a path holding ``: ``, `` #``, ``'`` or a leading ``[`` read as
+    a path, not as a mapping, a comment or a broken list), a bool as true/false, anything else as str() (numbers,
+    and strings meant as YAML: names, ``'[...]'``)."""
+    if isinstance(value, PurePath):
+        return json.dumps(str(value), ensure_ascii=False)
+    if isinstance(value, (list, tuple)):
+        return "[" + ",".join(json.dumps(str(v), ensure_ascii=False) for v in value) + "]"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return str(value)
 
 
 def param_rules(argv):

@@ -15,6 +15,7 @@ import math
 import sys
 from pathlib import Path
 
+from ..ros.param_overrides import override_value
 from ..wire.topics import CLOCK, DEFAULT_NS, DIAGNOSTICS, REFERENCE_DEPTH, ArmTopics
 from .graph_options import GraphOptions, loop_reliability
 
@@ -37,7 +38,7 @@ def node_group(name: str) -> str:
 def _ros_args(node: str, params: dict, ns: str = DEFAULT_NS) -> list[str]:
     args = ["--ros-args", "-r", f"__node:={node}", "-r", f"__ns:={ns}"]
     for k, v in params.items():
-        args += ["-p", f"{k}:={v}"]
+        args += ["-p", f"{k}:={override_value(v)}"]
     return args
 
 
@@ -72,24 +73,20 @@ def reference_batch(opt: GraphOptions) -> int:
     return max(batch, math.ceil(reference_lookahead(opt) / (REFERENCE_DEPTH - 2)))
 
 
-def _yaml_list(items: list[str]) -> str:
-    return "[" + ",".join(f"'{i}'" for i in items) + "]"
-
-
 def controller_command(opt: GraphOptions, workdir: Path, joint: str, incarnation: int = 0) -> list[str]:
     """argv of joint ``joint``'s controller; a restarted one (incarnation > 0) resumes unless opt.restart is
     'fresh', and is not killed again by faults.kill_controller_at_s."""
-    params = {"config_file": str(opt.config_path), "joint": joint, "controller": opt.controller,
+    params = {"config_file": Path(opt.config_path), "joint": joint, "controller": opt.controller,
               "reliability": loop_reliability(opt), "queue_depth": 1 if opt.mode == "realtime" else 2000,
               "rt_priority": opt.rt_priority, "sched_batch": str(opt.sched_batch).lower(),
-              "stats_file": str(workdir / f"controller_{joint}.json"), "incarnation": incarnation,
+              "stats_file": workdir / f"controller_{joint}.json", "incarnation": incarnation,
               "resume": str(incarnation > 0 and opt.restart != "fresh").lower(),
               "effort_subscribers": 1 + int(opt.record_bag is not None),  # the plant and the recorder
               "use_sim_time": "true"}
     if opt.controller == "dnbs":
-        params["checkpoint_file"] = str(workdir / "checkpoints" / f"{joint}.npz")
+        params["checkpoint_file"] = workdir / "checkpoints" / f"{joint}.npz"
         if opt.init_from is not None:
-            params["init_file"] = str(opt.init_from / f"{joint}.npz")
+            params["init_file"] = opt.init_from / f"{joint}.npz"
     files = ["--params-file", str(opt.params_file)] if opt.params_file is not None else []
     return [sys.executable, "-m", "pa10_dnbs.ros.joint_controller_node"] + _ros_args(f"joint_controller_{joint}",
                                                                                     params, opt.namespace) + files
@@ -107,10 +104,10 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
         return _ros_args(node, {**params, "sched_batch": str(opt.sched_batch).lower(),
                                 "use_sim_time": "true", "rt_priority": opt.rt_priority}, opt.namespace) + files
 
-    config_file = str(opt.config_path)
+    config_file = Path(opt.config_path)
     if opt.record_bag is None:
         cmds = [("wire_monitor", py + ["pa10_dnbs.ros.wire_monitor"] + ros("wire_monitor", {
-                    "config_file": config_file, "duration_s": opt.duration_s, "out_file": str(wire_file)}))]
+                    "config_file": config_file, "duration_s": opt.duration_s, "out_file": Path(wire_file)}))]
     else:  # the recorder is the observer: the run is rebuilt from the bag
         end_ns = int(round(opt.duration_s / opt.dt_s)) * int(round(opt.dt_s * 1e9))
         custom = [f"controller={opt.controller}", f"mode={opt.mode}", f"duration_s={opt.duration_s!r}",
@@ -118,8 +115,8 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
                   f"clock_hz={opt.clock_hz!r}",
                   f"namespace={opt.namespace}"]
         cmds = [("recorder", py + ["pa10_dnbs.ros.recorder_node"] + ros("recorder", {
-            "config_file": config_file, "bag": str(opt.record_bag), "force": str(opt.force_bag).lower(),
-            "topics": _yaml_list(graph_topics(opt.joint_names, opt.namespace)), "custom_data": _yaml_list(custom), "end_stamp_ns": end_ns,
+            "config_file": config_file, "bag": Path(opt.record_bag), "force": str(opt.force_bag).lower(),
+            "topics": graph_topics(opt.joint_names, opt.namespace), "custom_data": custom, "end_stamp_ns": end_ns,
             "compression": opt.bag_compression}))]
     if opt.live_port is not None:  # display only: started after the observer, never waited for by the plant
         cmds.append((LIVE_VIEW, py + ["pa10_dnbs.ros.live_observer_node"] + ros(LIVE_VIEW, {
@@ -131,8 +128,8 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
         "reference", {"config_file": config_file, "duration_s": opt.duration_s, "batch_steps": batch,
                       "lookahead_steps": reference_lookahead(opt),
                       "reference_subscribers": 2,  # the joint's controller and the observer
-                      "stats_file": str(stats_file.parent / REFERENCE_STATS),  # the trajectories it took
-                      **({"trajectory_file": str(opt.trajectory_file)} if opt.trajectory_file else {})})))
+                      "stats_file": Path(stats_file).parent / REFERENCE_STATS,  # the trajectories it took
+                      **({"trajectory_file": Path(opt.trajectory_file)} if opt.trajectory_file else {})})))
     if not opt.joint_names:
         raise ValueError("GraphOptions.joint_names: the arm's joints are needed to start one controller each")
     for j in opt.joint_names:
@@ -149,11 +146,11 @@ def node_commands(opt: GraphOptions, stats_file: Path, wire_file: Path) -> list[
         extra = {"robot_command": opt.robot_command, "robot_state_topic": opt.robot_state_topic or "''",
                  "robot_command_topic": opt.robot_command_topic or "''", "robot_timeout_s": opt.robot_timeout_s}
     cmds.append((plant, py + [module] + _ros_args(plant, ({
-        **extra, "ready_nodes": _yaml_list(ready), "settle_s": 0.0,
+        **extra, "ready_nodes": ready, "settle_s": 0.0,
         "config_file": config_file, "mode": opt.mode, "duration_s": opt.duration_s, "reliability": loop_reliability(opt),
         "effort_timeout_s": opt.effort_timeout_s, "on_missing_effort": opt.on_missing_effort,
         "real_time_factor": opt.real_time_factor, "deadline_fraction": opt.deadline_fraction,
         "rt_priority": opt.rt_priority,
-        "stats_file": str(stats_file), "min_joint_states_subscribers": int(opt.record_bag is None),
+        "stats_file": Path(stats_file), "min_joint_states_subscribers": int(opt.record_bag is None),
         "recorders": int(opt.record_bag is not None), "clock_hz": opt.clock_hz}), opt.namespace) + files))
     return cmds

@@ -9,6 +9,7 @@ latched, and its first state once the bus has matched).
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 from ..config import ConfigError
 from .robot_options import RobotOptions
@@ -37,6 +38,6 @@ def mujoco_robot_command(opt, ros_args) -> tuple[str, list[str]]:
     """(name, argv) of the MuJoCo robot node of the graph ``opt`` (a GraphOptions); ``ros_args(node, params)``:
     node_specs' ROS arguments."""
     return MUJOCO_ROBOT, [sys.executable, "-m", "pa10_dnbs.ros.mujoco_robot_node"] + ros_args(MUJOCO_ROBOT, {
-        "config_file": str(opt.config_path), "mode": "lockstep", "duration_s": 0.0, "clock_hz": opt.clock_hz,
+        "config_file": Path(opt.config_path), "mode": "lockstep", "duration_s": 0.0, "clock_hz": opt.clock_hz,
         "state_topic": opt.robot_state_topic or "/robot_joint_states",
         "command_topic": opt.robot_command_topic or "/robot_joint_command"})

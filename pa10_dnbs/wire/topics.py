@@ -53,18 +53,21 @@ def reference_topic(joint: str) -> str:
 
 def check_namespace(ns: str) -> str:
     """``ns`` if it is a valid arm namespace (starts with '/', [A-Za-z0-9_] segments, no '//', no trailing '/',
-    no segment starting with a digit), else ValueError saying why."""
-    if not isinstance(ns, str) or not _NS_RE.fullmatch(ns) or any(s[0].isdigit() for s in ns.split("/")[1:]):
+    no segment starting with a digit, no '__': rcl's remap rule ``__ns:=`` cannot carry one), else ValueError
+    saying why."""
+    if not isinstance(ns, str) or not _NS_RE.fullmatch(ns) or "__" in ns \
+            or any(s[0].isdigit() for s in ns.split("/")[1:]):
         raise ValueError(f"expected a ROS namespace like /pa10 or /lab/arm2 ('/'-separated names of letters, digits "
-                         f"and '_', not starting with a digit; no '//' and no trailing '/'), got {ns!r}")
+                         f"and '_', not starting with a digit, without '__'; no '//' and no trailing '/'), got {ns!r}")
     return ns
 
 
 def check_joint_name(joint: str) -> str:
     """``joint`` if the graph can name its node (``joint_controller_<joint>``) and topics (``<joint>/state``, ...)
     after it, else ValueError naming the joint and the rule (checked before any node starts)."""
-    if not isinstance(joint, str) or not _TOKEN_RE.fullmatch(joint):
-        raise ValueError(f"joint {joint!r} cannot name a ROS node or topic: expected {_TOKEN_RULE}")
+    if not isinstance(joint, str) or not _TOKEN_RE.fullmatch(joint) or "__" in joint:
+        raise ValueError(f"joint {joint!r} cannot name a ROS node or topic: expected {_TOKEN_RULE}, without '__' "
+                         "(rcl's remap rule __node:= cannot carry one)")
     return joint
 
 
@@ -157,8 +160,9 @@ class ArmTopics:
 
 
 def default_namespace(arm_name: str) -> str:
-    """``/<arm name>`` (its characters outside [A-Za-z0-9_] as _): the namespace of an arm's graph by default."""
-    name = re.sub(r"[^A-Za-z0-9_]", "_", arm_name) or "arm"
+    """``/<arm name>`` (each run of characters outside [A-Za-z0-9] as one _, as a namespace cannot hold '__'): the
+    namespace of an arm's graph by default."""
+    name = re.sub(r"[^A-Za-z0-9]+", "_", arm_name).strip("_") or "arm"
     return "/" + (name if name[0].isalpha() else "arm_" + name)
 
 
