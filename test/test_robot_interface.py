@@ -121,7 +121,7 @@ def test_the_launcher_starts_the_joint_bus_in_the_plants_place(tmp_path):
     argv = cmds[-1][1]
     assert "pa10_dnbs.ros.joint_bus_node" in argv
     for param in ("robot_command:=forward:arm", "robot_state_topic:=/arm/states", "robot_command_topic:=''",
-                  "robot_timeout_s:=1.0", f"stats_file:={tmp_path / 'plant_stats.json'}"):
+                  "robot_timeout_s:=1.0", f'stats_file:="{tmp_path / "plant_stats.json"}"'):
         assert param in argv, (param, argv)
     ready = next(a for a in argv if a.startswith("ready_nodes:="))
     assert "joint_controller_s1" in ready and "reference" in ready and "joint_bus" not in ready
