@@ -42,8 +42,9 @@ def test_a_joint_name_with_a_double_underscore_is_refused_before_any_node_starts
     from pa10_dnbs.wire.topics import check_joint_name
 
     assert check_joint_name("arm_left_1") == "arm_left_1"
-    with pytest.raises(ValueError, match="without '__'"):
-        check_joint_name("arm__1")
+    for joint in ("arm__1", "_j1"):   # joint_controller__j1: the same '__'
+        with pytest.raises(ValueError, match="without '__'"):
+            check_joint_name(joint)
 
 
 def test_find_arm_new_old_and_none():

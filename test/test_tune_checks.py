@@ -240,7 +240,8 @@ def test_equal_budget_table_refuses_unfinished_and_unequal_comparisons(tmp_path)
     shutil.copytree(tmp_path / "a", tmp_path / "a_copy")
     rc, out, err = _script("equal_budget_table", tmp_path / "a", tmp_path / "a_copy")
     assert rc == 2 and out == "" and err == (f"equal_budget_table: error: {tmp_path}/a and {tmp_path}/a_copy are both "
-                                             "comparisons on pa10: give one DIR per arm\n"), err
+                                             "comparisons on an arm named pa10 (the columns are named by arm): "
+                                             "give one DIR per arm\n"), err
     rc, out, err = _script("equal_budget_table", tmp_path / "a")
     assert rc == 0 and out.startswith("| scenario | pa10 PID |\n"), err
     report = tmp_path / "a_copy" / "pid" / "tune.json"   # as a tune with --held-out-seeds 0 writes it

@@ -227,14 +227,18 @@ def exit_process(code: int) -> NoReturn:
     launcher (its pid in LAUNCHER_PID_ENV) removes them once its nodes are gone (``ros/shm_cleanup.py``), as it
     does for a killed node. A node started without one (by hand, or from the user's own launch file) sweeps as a
     launcher does, its own process not counted: every file whose owner is gone (or is this process) and that no
-    other live process maps. File operations and locks that never wait, no DDS call; the last node out takes
-    what several mapped.
+    other live process maps: no DDS call, non-blocking locks, and an exit deadline in case reading another
+    process's /proc maps stalls. A file another node still maps is left to whoever sweeps after it (nodes
+    that leave together can each leave some: the next sweep takes them).
     """
     if not os.environ.get(LAUNCHER_PID_ENV):
+        sweep_deadline = exit_deadline.arm(TEARDOWN_LIMIT_S, code if 0 <= code <= 255 else 1)
+        if sweep_deadline is None:
+            signal.alarm(int(TEARDOWN_LIMIT_S) + 2)
         try:
             remove_stale(shm_files(), frozenset({os.getpid()}))
-        except Exception as exc:   # a sweep that fails must not keep the process from leaving (finalization)
-            print(f"shared-memory sweep failed: {exc}", file=sys.stderr)
+        except (Exception, KeyboardInterrupt) as exc:   # a sweep that fails must not keep the process from leaving
+            print(f"shared-memory sweep not finished: {type(exc).__name__} {exc}", file=sys.stderr)
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)

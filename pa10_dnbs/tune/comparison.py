@@ -116,7 +116,8 @@ def arms_table(dirs: list[Path]) -> str:
     for d, (arm, _) in zip(dirs, arms):   # the columns are arms: two of one arm would read as two arms
         if arm in first:
             raise ValueError(f"{d} given twice" if Path(first[arm]).resolve() == Path(d).resolve() else
-                             f"{first[arm]} and {d} are both comparisons on {arm}: give one DIR per arm")
+                             f"{first[arm]} and {d} are both comparisons on an arm named {arm} (the columns are "
+                             "named by arm): give one DIR per arm")
         first[arm] = d
     scenarios = list(dict.fromkeys(r["scenario"] for _, res in arms for t in res.values()
                                    for r in t["held_out"]["tuned"]))

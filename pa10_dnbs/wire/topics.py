@@ -65,9 +65,10 @@ def check_namespace(ns: str) -> str:
 def check_joint_name(joint: str) -> str:
     """``joint`` if the graph can name its node (``joint_controller_<joint>``) and topics (``<joint>/state``, ...)
     after it, else ValueError naming the joint and the rule (checked before any node starts)."""
-    if not isinstance(joint, str) or not _TOKEN_RE.fullmatch(joint) or "__" in joint:
+    if not isinstance(joint, str) or not _TOKEN_RE.fullmatch(joint) or "__" in f"_{joint}":
         raise ValueError(f"joint {joint!r} cannot name a ROS node or topic: expected {_TOKEN_RULE}, without '__' "
-                         "(rcl's remap rule __node:= cannot carry one)")
+                         "and not starting with '_' (its node joint_controller_<joint> goes through rcl's remap "
+                         "rule __node:=, which cannot carry '__')")
     return joint
 
 
