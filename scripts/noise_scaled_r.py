@@ -2,8 +2,8 @@
 """Would an EKF that slows its learning under encoder noise put DNBS below PID there, and at what cost?
 
 The study's ``encoder_noise`` scenario (1e-4 rad on x1, 1e-3 rad/s on x2, white at 1 kHz) on the collection's
-arm files (or the presets), seeds 0..N-1: DNBS as shipped, DNBS with a noise-scaled R, and PID. The noise-scaled R is what an
-adaptive Kalman filter would do with the measurement noise it estimates (covariance matching): each joint
+arm files (or the presets), seeds 0..N-1: DNBS as shipped, DNBS with a noise-scaled R, and PID. The noise-scaled R is
+what an adaptive Kalman filter would do with the measurement noise it estimates (covariance matching): each joint
 estimates its own encoder noise from the third differences of the x1 it receives (white noise of std s gives
 them variance 20 s^2; a smooth motion almost none: jerk T^3), averaged over ``--window`` s, and both of its
 networks' R become R max(1, (s_hat / floor)^2). Without noise s_hat stays below the floor and the run is the
@@ -115,7 +115,8 @@ def main() -> int:
     ap.add_argument("--floor", type=positive, default=1e-5, help="noise [rad] below which R is left as it is")
     ap.add_argument("--window", type=positive, default=0.5, help="averaging time of the noise estimate [s]")
     ap.add_argument("--check", choices=sorted(SCENARIOS), default="nominal",
-                    help="a scenario without noise, run once per arm with the scaled R: its largest factor (< 1: R untouched)")
+                    help="a scenario without noise, run once per arm with the scaled R: its largest factor "
+                         "(< 1: R untouched)")
     a = ap.parse_args()
     scaled = (a.floor, a.window)
     print(f"encoder_noise, {a.duration:g} s, seeds 0-{a.seeds - 1}; noise-scaled R: floor {a.floor:g} rad, window "

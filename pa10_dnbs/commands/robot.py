@@ -50,7 +50,8 @@ def robot_argv(options: RobotCommandOptions) -> list[str]:
         raise ConfigError(f"--command-topic: must differ from --state-topic (both {o.command_topic!r}{same}): the "
                           "robot would read its own states as commands")
     say_rules(rules)
-    params = {"config_file": Path(config_path).resolve(), "arm": Path(settings.arm.file), "mode": o.mode, "duration_s": duration_s,
+    params = {"config_file": Path(config_path).resolve(), "arm": Path(settings.arm.file), "mode": o.mode,
+              "duration_s": duration_s,
               "state_topic": o.state_topic, "command_topic": o.command_topic, "clock_hz": float(clock_hz)}
     args = [sys.executable, "-m", "pa10_dnbs.ros.mujoco_robot_node", "--ros-args", "-r", "__node:=mujoco_robot",
             "-r", f"__ns:={namespace}"]
