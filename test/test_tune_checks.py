@@ -248,7 +248,7 @@ def test_equal_budget_table_refuses_unfinished_and_unequal_comparisons(tmp_path)
     report.write_text(json.dumps({**json.loads(report.read_text()), "held_out": None}))
     rc, out, err = _script("equal_budget_table", tmp_path / "a_copy")   # a TypeError's text before
     assert rc == 2 and out == "" and err == (f"equal_budget_table: error: {report}: a tune without held-out runs "
-                                             "(--held-out-seeds 0): the comparison's tables are of held-out "
+                                             "(no held-out seeds): the comparison's tables are of held-out "
                                              "runs\n"), err
     rc, out, err = _script("equal_budget_table", tmp_path / "a", tmp_path / "b")
     assert rc == 2 and out == "" and err == (

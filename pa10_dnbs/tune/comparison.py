@@ -73,7 +73,7 @@ def _tune_report(path: Path) -> dict:
     if missing:
         raise ValueError(f"{path}: not a tune report: no {missing[0]}")
     if not isinstance(tune["held_out"], dict):   # a tune run with --held-out-seeds 0: nothing to compare
-        raise ValueError(f"{path}: a tune without held-out runs (--held-out-seeds 0): the comparison's tables are of "
+        raise ValueError(f"{path}: a tune without held-out runs (no held-out seeds): the comparison's tables are of "
                          "held-out runs")
     return tune
 
