@@ -25,12 +25,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import script_main  # noqa: E402  (first: a Ctrl-C while the modules load is one line)
-import numpy as np  # noqa: E402
 from flag_values import arm_settings, list_of  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser, positive, seconds, whole_in  # noqa: E402
 from pa10_dnbs.run_steps import run_steps  # noqa: E402
-from pa10_dnbs.sim import closed_loop  # noqa: E402
 from pa10_dnbs.study.scenarios import scenario_settings  # noqa: E402
+from wrapped_loop import second_half_worst_rms  # noqa: E402
 
 
 def kalman_gain(dt_s: float, position_std_rad: float, velocity_std_rad_s: float) -> float:
@@ -67,21 +66,8 @@ class FilteredLoop:
 
 def worst_rms(settings, controller: str, seed: int, duration_s: float, filt) -> float:
     """One run of the scenario with ``filt`` = None or (gain, cut-off or None) in front of the controllers."""
-    s, dist = scenario_settings(settings, "encoder_noise", seed)
-    built = closed_loop.joint_loop
-
-    def joint_loop(*args, **kwargs):
-        reference, loop = built(*args, **kwargs)
-        return reference, (loop if filt is None else FilteredLoop(loop, s.simulation.dt_s, *filt))
-
-    closed_loop.joint_loop = joint_loop   # the in-process run's own loop, wrapped
-    try:
-        run = closed_loop.simulate(s, controller, duration_s, disturbances=dist)
-    finally:
-        closed_loop.joint_loop = built
-    half = run.n_steps // 2
-    err = run.reference_rad[half:] - run.position_rad[half:]
-    return float(np.sqrt((err ** 2).mean(axis=0)).max())
+    wrap = None if filt is None else (lambda loop, dt_s: FilteredLoop(loop, dt_s, *filt))
+    return second_half_worst_rms(settings, "encoder_noise", controller, seed, duration_s, wrap)
 
 
 def main() -> int:

@@ -30,9 +30,9 @@ from flag_values import arm_settings, names_in  # noqa: E402
 from pa10_dnbs.arm.arm_path import preset_names  # noqa: E402
 from pa10_dnbs.cli_values import OneLineParser, positive, seconds, whole_in  # noqa: E402
 from pa10_dnbs.run_steps import run_steps  # noqa: E402
-from pa10_dnbs.sim import closed_loop  # noqa: E402
 from pa10_dnbs.study.collection import ARMS, arm_file  # noqa: E402
-from pa10_dnbs.study.scenarios import SCENARIOS, scenario_settings  # noqa: E402
+from pa10_dnbs.study.scenarios import SCENARIOS  # noqa: E402
+from wrapped_loop import second_half_worst_rms  # noqa: E402
 
 THIRD_DIFFERENCE_GAIN = 20.0   # var(x[k] - 3 x[k-1] + 3 x[k-2] - x[k-3]) / var(x) for white x: 1 + 9 + 9 + 1
 
@@ -86,24 +86,14 @@ class NoiseScaledR:
 def run(settings, scenario: str, controller: str, seed: int, duration_s: float, scaled, scale: bool = True):
     """(worst joint's RMS over the second half [rad], the wrapper or None) of one run; ``scaled`` = None or
     (floor [rad], window [s]): the loop behind a NoiseScaledR that scales R (``scale``) or only watches."""
-    s, dist = scenario_settings(settings, scenario, seed)
-    built, wrapped = closed_loop.joint_loop, []
+    wrapped: list[NoiseScaledR] = []
 
-    def joint_loop(*args, **kwargs):
-        reference, loop = built(*args, **kwargs)
-        if scaled is not None:
-            loop = NoiseScaledR(loop, s.simulation.dt_s, *scaled, scale=scale)
-            wrapped.append(loop)
-        return reference, loop
+    def wrap(loop, dt_s):
+        wrapped.append(NoiseScaledR(loop, dt_s, *scaled, scale=scale))
+        return wrapped[-1]
 
-    closed_loop.joint_loop = joint_loop   # the in-process run's own loop, wrapped
-    try:
-        result = closed_loop.simulate(s, controller, duration_s, disturbances=dist)
-    finally:
-        closed_loop.joint_loop = built
-    half = result.n_steps // 2
-    err = result.reference_rad[half:] - result.position_rad[half:]
-    return float(np.sqrt((err ** 2).mean(axis=0)).max()), (wrapped[0] if wrapped else None)
+    rms = second_half_worst_rms(settings, scenario, controller, seed, duration_s, None if scaled is None else wrap)
+    return rms, (wrapped[0] if wrapped else None)
 
 
 def main() -> int:
