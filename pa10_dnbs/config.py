@@ -194,7 +194,8 @@ def _check_mapping(key: str, value: Any, spec: dict) -> None:
     """``value`` is a mapping whose keys are all in ``spec`` (ConfigError naming the first unknown key, a key that
     is not a name too: ``1:``, ``~:``)."""
     if not isinstance(value, dict):
-        raise ConfigError(f"{key or '<root>'}: expected a mapping, got {type(value).__name__}")
+        got = "nothing (an empty section)" if value is None else type(value).__name__
+        raise ConfigError(f"{key or '<root>'}: expected a mapping, got {got}")
     unknown = first_unknown(value, spec)
     if unknown is not None:
         raise ConfigError(f"{key + '.' if key else ''}{unknown}: unknown key "
@@ -334,10 +335,27 @@ def _check_given(key: str, value: Any, spec: Any, n: int | None = None, null_ok:
         raise ConfigError(f"{key}: null (leave the key out for the rule's or a config's value)")
 
 
-def check_arm_settings(settings: dict, n_joints: int) -> None:
+def check_arm_settings(settings: dict, n_joints: int, config_gives: dict) -> None:
     """An arm file's ``settings`` for its arm of ``n_joints`` joints: config keys but ``arm``, each given (not
-    null) of its kind, within its bounds and, per joint, of the arm's length. ConfigError naming the key."""
+    null) of its kind, within its bounds and, per joint, of the arm's length, and none that ``config_gives`` (the
+    default config, which a config extends) gives: the config is the layer above the arm file, so the arm file's
+    value of such a key would never be used. ConfigError naming the key."""
     _check_given("", settings, {k: v for k, v in SCHEMA.items() if k != "arm"}, n_joints, null_ok=False)
+    for key in _leaf_keys(settings):
+        if _get(config_gives, key) is not None:
+            raise ConfigError(f"{key}: the default config gives this key and overrides an arm file's value, so it "
+                              f"would never be used (an arm file's settings hold what the rules would derive, "
+                              f"docs/arms.md); give it in a config file")
+
+
+def _leaf_keys(tree: dict, prefix: str = ""):
+    """The dotted keys of ``tree``'s values that are not mappings, in the file's order."""
+    for k, v in tree.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, dict):
+            yield from _leaf_keys(v, key + ".")
+        else:
+            yield key
 
 
 def merged(base: dict, over: dict) -> dict:

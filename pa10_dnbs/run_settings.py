@@ -33,7 +33,7 @@ def build_settings(config_path: str | Path, arm: str | Path | None = None, repor
             exc.setting = "arm"
         raise
     try:
-        check_arm_settings(the_arm.settings, the_arm.n_joints)
+        check_arm_settings(the_arm.settings, the_arm.n_joints, load_config(default_config_path()))
     except ConfigError as exc:   # said as the arm file's key, not taken for the config's
         raise ConfigError(f"{the_arm.file}: settings.{exc}") from None
     facts = {"plant": {"torque_limit_nm": the_arm.torque_limit_nm.tolist(),

@@ -144,6 +144,22 @@ def test_an_arm_files_setting_of_the_wrong_length_or_null_names_the_arm_file(tmp
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.parametrize("settings, key", [
+    ({"guards": {"max_speed_rad_s": 0.001}}, "guards.max_speed_rad_s"),
+    ({"simulation": {"duration_s": 0.5, "seed": 99}}, "simulation.duration_s"),
+    ({"pid": {"kp": [1.0, 2.0, 3.0]}, "dnbs": {"alpha_net": {"eta": 0.5}}}, "dnbs.alpha_net.eta"),
+])
+def test_an_arm_files_setting_that_the_default_config_overrides_is_refused(tmp_path, settings, key):
+    """Such a value was checked and then silently replaced by the config's: the run ignored it (a 0.5 s
+    duration ran 20 s). A rule key (pid.kp) beside it is still taken."""
+    arm = write_arm(tmp_path, three_link_urdf(), settings=settings)
+    r = run_cli("simulate", "--arm", arm, "--duration", "0.1", "--out", tmp_path / "out")
+    assert r.returncode == 2 and r.stderr.startswith(f"pa10-dnbs: error: {arm}: settings.{key}: the default "
+                                                     f"config gives this key"), r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert not (tmp_path / "out").exists()
+
+
 def _apply(text, changes):
     for old, new in changes.items():
         text = text.replace(old, new)
@@ -204,6 +220,17 @@ def test_the_arm_command_prints_its_report_once_on_stdout():
     r = run_cli("arm", "--arm", "iiwa")
     assert r.returncode == 0 and r.stderr == "", r.stderr
     assert r.stdout.count("J light-heavy [kg m^2]") == 1 and "sources:" in r.stdout and "runs with:" in r.stdout
+
+
+def test_the_arm_command_names_every_gain_the_arm_file_sets(tmp_path):
+    """An arm file's k_a was run but ``arm`` said "runs with: the rule's gains" (it compared k_u alone)."""
+    arm = write_arm(tmp_path, three_link_urdf(),
+                    settings={"dnbs": {"remedies": {"robust_term": {"alpha_gain_per_s": [8.0, 20.0, 20.0]}}}})
+    r = run_cli("arm", "--arm", arm)
+    assert r.returncode == 0, r.stderr
+    tail = r.stdout.splitlines()[-2:]
+    assert tail == ["runs with: its own values where they differ from the rule's:",
+                    "  dnbs.remedies.robust_term.alpha_gain_per_s: j1 8, j2 20, j3 20"], r.stdout
 
 
 def test_the_rules_table_keeps_its_columns_under_long_joint_names(tmp_path):

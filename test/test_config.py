@@ -228,3 +228,12 @@ def test_a_step_of_10_us_is_accepted(tmp_path):
     cfg = tmp_path / "c.yaml"
     cfg.write_text(f"extends: {default_config_path()}\nsimulation:\n  dt_s: 1.0e-5\n")
     assert build_settings(cfg).simulation.dt_s == 1e-5
+
+
+def test_an_empty_section_is_said_as_empty_not_as_a_python_type(tmp_path):
+    """``simulation:`` with nothing under it was "expected a mapping, got NoneType"."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("simulation:\n")
+    r = run_cli("arm", "--config", cfg)
+    assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, r.stderr
+    assert r.stderr.strip() == "pa10-dnbs: error: simulation: expected a mapping, got nothing (an empty section)"

@@ -19,6 +19,37 @@ from ..plant.from_config import opened_plant, plant_params
 from ..run_settings import build_settings
 
 
+def _at(tree: dict, dotted: str):
+    """``tree``'s value at the dotted key."""
+    for part in dotted.split("."):
+        tree = tree[part]
+    return tree
+
+
+def _runs_with(settings, rule: dict, light_kgm2: np.ndarray) -> str:
+    """What the arm runs with: the rule's gains, or a line per gain key (GAIN_KEYS) whose value differs from the
+    rule's, per joint; with k_u its discrete-time figure T k_u / J_light (stable below 2, docs/arms.md)."""
+    from ..derived_settings import GAIN_KEYS
+
+    config, names = settings.to_config(), settings.arm.joint_names
+    own = []
+    for key in GAIN_KEYS:
+        ran, ruled = np.broadcast_to(_at(config, key), (len(names),)), np.broadcast_to(_at(rule, key), (len(names),))
+        if ran.dtype == bool or ruled.dtype == bool:
+            differ = bool(np.any(ran != ruled))
+        else:
+            differ = not np.allclose(np.asarray(ran, float), np.asarray(ruled, float), rtol=1e-12, atol=0.0)
+        if differ:
+            text = f"{key}: " + ", ".join(f"{n} {v}" if isinstance(v, bool) else f"{n} {v:g}"
+                                        for n, v in zip(names, ran.tolist()))
+            if key.endswith("torque_gain_nms_per_rad"):
+                figure = settings.simulation.dt_s * np.asarray(ran, float) / light_kgm2
+                text += f" (T k_u / J_light {', '.join(f'{x:.2f}' for x in figure)})"
+            own.append(text)
+    return "runs with: the rule's gains" if not own else "\n  ".join(
+        ["runs with: its own values where they differ from the rule's:", *own])
+
+
 def run_arm_info(options: ArmInfoOptions) -> int:
     """Print the arm's facts, sources, inertia sweep and gains; returns 0 (bad input raises ConfigError)."""
     from ..derived_settings import derived_gains, derived_reference, inertia_sweep_along
@@ -37,10 +68,5 @@ def run_arm_info(options: ArmInfoOptions) -> int:
         sweep = inertia_sweep_along(plant, settings.reference, run)
         rule = derived_gains(plant, settings.reference, run, report=False, sweep=sweep)
     report_rule(the_arm, sweep, rule, run.dt_s, stream=sys.stdout)
-    run_ku = np.array(settings.dnbs.remedies.robust_term.torque_gain_nms_per_rad)
-    rule_ku = np.array(rule["dnbs"]["remedies"]["robust_term"]["torque_gain_nms_per_rad"])
-    same = np.allclose(run_ku, rule_ku, rtol=1e-12)
-    print("runs with: the rule's gains" if same else
-          "runs with: its own k_u [N m s/rad] " + ", ".join(f"{n} {k:g}" for n, k in zip(the_arm.joint_names, run_ku))
-          + f" (T k_u / J_light {', '.join(f'{x:.2f}' for x in run.dt_s * run_ku / sweep.light_kgm2)})")
+    print(_runs_with(settings, rule, sweep.light_kgm2))
     return 0
