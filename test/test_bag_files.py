@@ -151,13 +151,14 @@ def test_a_complete_run_bag_analyses(tmp_path):
 def test_analyse_with_another_arms_config_is_refused_and_an_exit_1_says_why(tmp_path):
     """--config of another arm with as many joints reported the bag against that arm's limits and ended with
     exit 1 and no word, and one of another step misread the run's steps (metrics 34x off, exit 0); an exit 1
-    (torques beyond the config's limits) now says why."""
+    (torques beyond the config's limits) now says why. A reader of a bag does not print the rules' table."""
     bag = _write_run_bag(tmp_path / "b", ns="/pa10")
     default = Path(__file__).resolve().parent.parent / "config" / "default.yaml"
     iiwa = tmp_path / "iiwa.yaml"
     iiwa.write_text(f"extends: {default}\narm: iiwa\n")
     r = run_cli("analyse", bag, "--out", tmp_path / "out", "--config", iiwa)
     _assert_clear_error(r, f"--config {iiwa}: its arm iiwa (joints a1, ", "is not the bag's (joints s1, ")
+    assert len(r.stderr.strip().splitlines()) == 1, r.stderr   # was the rules' gain table (9 lines), then the error
     assert not (tmp_path / "out").exists()
     from pa10_dnbs.run_settings import build_settings
     stored = build_settings(default).to_config()   # a bag whose stored config gives its step, 1 ms
@@ -280,6 +281,7 @@ def test_analysis_finds_the_arm_under_any_namespace_and_in_old_bags(tmp_path):
 def test_replay_rejects_unknown_topics_before_joining_ros(tmp_path):
     bag = _write_bag(tmp_path / "b")
     _assert_clear_error(run_cli("replay", bag, "--topics", "/nope"), "no such topic in the bag: /nope")
+    _assert_clear_error(run_cli("replay", bag, "--topics", ""), "no such topic in the bag: (an empty name) (it has")
     _assert_clear_error(run_cli("replay", bag, "--rate", "0"), "--rate")
 
 

@@ -185,3 +185,20 @@ def test_the_full_check_judges_each_networks_own_covariance_not_its_padded_row(c
     assert {k: int(v[0]) for k, v in ctrl.ekf_resets.items()} == {"alpha": 0, "torque": 0}
     assert not ctrl.torque_ekf.unhealthy(full=True).any()
     assert ctrl.ekf.unhealthy(full=True)[ctrl.n_joints]  # the padded row as a whole does not factorise
+
+
+def test_a_warm_start_from_another_arms_checkpoints_says_whose_they_are(cfg, tmp_path):
+    """It said only "s1.npz: missing": the folder held another arm's joints (a run of the iiwa, a1..a7)."""
+    from pa10_dnbs.core.checkpoint import load_joint_checkpoints
+
+    a = build_controllers(cfg, "dnbs", [0])
+    for name in ("a1", "a2"):
+        save_checkpoint(tmp_path / f"{name}.npz", a.state_dict(0), 1)
+    with pytest.raises(ValueError) as e:
+        load_joint_checkpoints(tmp_path, ["s1", "s2"])
+    assert str(e.value) == (f"{tmp_path / 's1.npz'}: missing (a warm start needs one checkpoint per joint: s1, s2); "
+                            "the folder holds joints a1, a2: another arm's run?")
+    save_checkpoint(tmp_path / "s1.npz", a.state_dict(0), 1)   # one of its own joints there: only the missing one
+    with pytest.raises(ValueError) as e:
+        load_joint_checkpoints(tmp_path, ["s1", "s2"])
+    assert str(e.value).endswith("missing (a warm start needs one checkpoint per joint: s1, s2)")

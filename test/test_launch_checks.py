@@ -281,3 +281,12 @@ def test_an_empty_fault_joints_list_is_said_to_be_empty(tmp_path, value):
     assert "(none)" not in line
     assert not (tmp_path / "out").exists()
     _no_pa10_children()
+
+
+def test_a_joint_given_twice_in_fault_joints_is_refused(tmp_path):
+    """It was taken silently, while --kill refuses a joint given twice."""
+    line = _refused(run_cli("launch", "--duration", "0.1", "--out", tmp_path / "out", "--drop-states", "0.1",
+                            "--fault-joints", "s1,s2,s1"), ["--fault-joints: joint s1 given twice"])
+    assert line.startswith("pa10-dnbs: error: --fault-joints"), line
+    assert not (tmp_path / "out").exists()
+    _no_pa10_children()

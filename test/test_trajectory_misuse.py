@@ -96,8 +96,11 @@ def test_a_finite_value_whose_quintic_overflows_is_one_line(tmp_path, field):
     (lambda d: d["points"][2].update(time_from_start={}), "points[2].time_from_start: {} gives no time"),
     (lambda d: d.update(header="garbage"), "header: expected a mapping"),
     (lambda d: d.update(header=[1, 2]), "header: expected a mapping"),
+    # JSON writers print NaN, which YAML reads as text: said as text that is no finite number, not just "got 'NaN'"
+    (lambda d: d["points"][1].update(positions=["NaN", 0.0]),
+     "positions: expected a list of numbers, got ['NaN', 0.0] ('NaN' is text, not a number: the values must be finite)"),
 ])
-def test_an_empty_time_or_a_header_that_is_not_a_mapping_is_refused(tmp_path, change, words):
+def test_an_empty_time_a_header_that_is_not_a_mapping_or_text_for_a_number_is_refused(tmp_path, change, words):
     doc = _example()
     change(doc)
     f = tmp_path / "t.yaml"

@@ -84,6 +84,9 @@ def test_held_out_verdict_warns_when_the_tuned_settings_lose_to_the_start():
     (("--controller", "pid", "--trials", 0), "--trials"),
     (("--controller", "pid", "--storage", "sqlite:////no/such/dir/t.db"), "--storage: cannot open"),
     (("--controller", "pid", "--storage", "nosuchdb://x"), "--storage: cannot open"),
+    # SQLAlchemy only warned (two lines naming its own source) and the tune went on without the argument
+    (("--controller", "pid", "--storage", "sqlite:////no/such/dir/t.db?foo=bar"), "Query string argument(s) 'foo'"),
+    (("--controller", "pid", "--storage", "t.db"), "(a database URL; for a file: sqlite:///t.db)"),
     (("--controller", "pid", "--scheduler", "tcp://127.0.0.1:9"), "--scheduler: cannot connect"),
 ])
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, monkeypatch, args, says):

@@ -56,7 +56,7 @@ def _given_config(config_path: Path, joints: tuple[str, ...], bag_dt_s: float | 
     """The run's config from ``config_path``: ConfigError naming it when its arm's joints are not the bag's
     ``joints`` (another arm's config would report the bag against that arm's torque limits) or its step is not
     the bag's ``bag_dt_s`` [s] (its stored config's; None: unknown), which would misread the run's steps."""
-    settings = build_settings(config_path)
+    settings = build_settings(config_path, report=False)   # a reader of a bag: the rules' table is not its to say
     if tuple(settings.arm.joint_names) != tuple(joints):
         raise ConfigError(f"`config_path` {config_path}: its arm {settings.arm.name} (joints "
                           f"{', '.join(settings.arm.joint_names)}) is not the bag's (joints {', '.join(joints)}): pass "
@@ -138,7 +138,7 @@ def run_config(bag: Bag, info: dict, config_path: Path | None, joints: tuple[str
         return _given_config(config_path, joints, _stored_dt_s(info))
     if info.get("config") is None:
         path = default_config_path()
-        found = _from_settings(build_settings(path), f"{path} (the bag carries no config)")
+        found = _from_settings(build_settings(path, report=False), f"{path} (the bag carries no config)")
         whose = f"the shipped default config ({path}; the bag carries none) has torque limits for"
     else:
         found = _from_mapping(_checked_stored(bag, info["config"]),

@@ -95,6 +95,9 @@ def apply_fault_flags(settings: Settings, args: FaultFlags) -> Settings:
         bad = [n for n in names if n not in joint_names]
         if bad:
             raise ConfigError(f"--fault-joints: unknown joint {bad[0]!r} (joints: {', '.join(joint_names)})")
+        twice = next((n for i, n in enumerate(names) if n in names[:i]), None)
+        if twice is not None:   # as --kill refuses one: a repeat is a typo for another joint more often than not
+            raise ConfigError(f"--fault-joints: joint {twice} given twice (joints: {', '.join(joint_names)})")
         joints = [joint_names.index(n) for n in names]
     else:
         joints = list(range(len(joint_names)))

@@ -68,7 +68,8 @@ def _play(o: ReplayOptions, before: set[str]) -> NoReturn:
         if o.topics:
             unknown = [t for t in o.topics if t not in bag.topics]
             if unknown:
-                raise BagError(f"{bag.path}: no such topic in the bag: {', '.join(unknown)} "
+                named = ", ".join(t or "(an empty name)" for t in unknown)
+                raise BagError(f"{bag.path}: no such topic in the bag: {named} "
                                f"(it has {', '.join(sorted(bag.topics))})")
         unplayable = unplayable_topics(bag, o.topics or bag.topics)
         if len(unplayable) == len(set(o.topics or bag.topics)):

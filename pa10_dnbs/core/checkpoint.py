@@ -157,7 +157,11 @@ def load_joint_checkpoints(path: Path, joint_names, degrees: tuple[int, int] | N
     for name in joint_names:
         f = d / f"{name}.npz"
         if not f.is_file():
-            raise ValueError(f"{f}: missing (a warm start needs one checkpoint per joint: {', '.join(joint_names)})")
+            held = sorted(g.stem for g in d.glob("*.npz"))
+            other = f"; the folder holds joints {', '.join(held)}: another arm's run?" \
+                if held and not set(held) & set(joint_names) else ""
+            raise ValueError(f"{f}: missing (a warm start needs one checkpoint per joint: {', '.join(joint_names)})"
+                             f"{other}")
         state = load_checkpoint(f)[0]
         if degrees is not None:
             check_controller_state(f, state, len(states), degrees)

@@ -68,10 +68,16 @@ def _seconds(value, where: str) -> float:
         raise _too_large(value, where) from None
 
 
+_NOT_FINITE = ("nan", "inf", "infinity")   # what JSON writers print for non-finite floats, read as text
+
+
 def _numbers(value, where: str) -> list[float]:
     if not isinstance(value, (list, tuple)) or any(isinstance(v, bool) or not isinstance(v, (int, float))
                                                   for v in value):
-        raise TrajectoryError(f"{where}: expected a list of numbers, got {_short(value)}")
+        text = next((v for v in value if isinstance(v, str) and v.strip().lstrip("+-").lower() in _NOT_FINITE), None) \
+            if isinstance(value, (list, tuple)) else None
+        why = f" ({text!r} is text, not a number: the values must be finite)" if text is not None else ""
+        raise TrajectoryError(f"{where}: expected a list of numbers, got {_short(value)}{why}")
     try:
         return [float(v) for v in value]
     except OverflowError:

@@ -163,13 +163,17 @@ def open_storage(url: str, default_file=None):
     ``storage`` given). Two tunes opening one new storage at once would both create its tables (sqlite: "table studies
     already exists", 4 of 10 tries): one opens it at a time, the other waits (a lock named by the URL as given)."""
     import optuna
+    from sqlalchemy.exc import SAWarning
 
     quiet_optuna()
     where = f"`storage`: {url}" if default_file is None else f"`out`: {default_file} (the tune's storage)"
     try:
         with waiting_for(f"optuna storage {storage_key(url)}",
                          f"{where} is being opened by another run (pid {{pid}}) "
-                         f"for over {STORAGE_OPEN_WAIT_S:g} s", STORAGE_OPEN_WAIT_S, between=check):
+                         f"for over {STORAGE_OPEN_WAIT_S:g} s", STORAGE_OPEN_WAIT_S, between=check), \
+                warnings.catch_warnings():
+            # what SQLAlchemy would only warn of (a query argument the driver ignores) is a refused URL, in one line
+            warnings.simplefilter("error", SAWarning)
             return optuna.storages.RDBStorage(url)
     except OutputInUseError:
         raise
@@ -177,6 +181,8 @@ def open_storage(url: str, default_file=None):
         text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         if default_file is not None:
             raise ConfigError(f"`out`: cannot open {default_file} (the tune's storage): {text}") from None
+        if "://" not in url:
+            text += f" (a database URL; for a file: sqlite:///{url})"
         raise ConfigError(f"storage: cannot open {url}: {text}", setting="storage") from None
 
 
