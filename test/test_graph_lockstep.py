@@ -73,6 +73,13 @@ def test_clean_shutdown(lockstep_run):
     assert_no_leftovers(lockstep_run["pids"].values(), lockstep_run["shm_before"])
 
 
+def test_the_runs_command_lines_read_its_finished_folder(lockstep_run):
+    """logs/commands.sh named the run's temporary folder (renamed at its end): its lines could not be run."""
+    out = lockstep_run["out"]
+    text = (out / "logs" / "commands.sh").read_text()
+    assert ".partial-" not in text and f"--params-file {out}/ros_params.yaml" in text, text
+
+
 def test_warm_start_over_ros_equals_the_in_process_warm_start(lockstep_run, _default_cfg, tmp_path, domain):
     """--init-from the session run's checkpoints: each node loads its joint's weights and P; the lockstep run
     equals simulate(init_states=...) bit for bit, and metrics.json says it was a warm start."""

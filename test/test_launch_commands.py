@@ -34,8 +34,9 @@ def test_each_child_appends_its_command_and_the_file_runs_it_again(tmp_path):
 
 
 def test_a_failed_runs_logs_are_kept_where_its_message_points(tmp_path):
-    """The run folder (.partial) of a failed launch is removed; its logs move to <out>.failed/logs and the
-    failure message names them there. An interrupted run (Ctrl-C) keeps nothing."""
+    """The run folder (.partial) of a failed launch is removed; its logs move to <out>.failed/logs, the params
+    their command lines read beside them, and the failure message names them there. An interrupted run (Ctrl-C)
+    keeps nothing."""
     from pa10_dnbs.commands.launch import _keep_logs
     from pa10_dnbs.supervisor.graph_options import GraphFailure
 
@@ -43,10 +44,15 @@ def test_a_failed_runs_logs_are_kept_where_its_message_points(tmp_path):
     tmp = tmp_path / ".run.partial-x"
     (tmp / "logs").mkdir(parents=True)
     (tmp / "logs" / "plant.log").write_text("graph incomplete\n")
+    (tmp / "ros_params.yaml").write_text("/pa10/plant: {}\n")
+    (tmp / "logs" / COMMANDS_FILE).write_text(f"x --params-file {tmp}/ros_params.yaml &\n")
     exc = _keep_logs(GraphFailure(f"plant exited early with code 1\n--- last lines of {tmp}/logs/plant.log ---"),
                      tmp, out)
     kept = tmp_path / "run.failed" / "logs"
     assert (kept / "plant.log").read_text() == "graph incomplete\n"
+    # its command lines read the params beside them there (they pointed into the removed run folder)
+    assert (kept.parent / "ros_params.yaml").read_text() == "/pa10/plant: {}\n"
+    assert (kept / COMMANDS_FILE).read_text() == f"x --params-file {kept.parent}/ros_params.yaml &\n"
     assert f"--- last lines of {kept}/plant.log ---" in str(exc) and str(tmp) not in str(exc)
     assert not exc.interrupted
     (tmp / "logs").mkdir()
@@ -80,3 +86,17 @@ def test_a_failed_runs_logs_never_replace_a_users_folder_or_file(tmp_path):
     fail("run")
     fail("run")   # a second failure replaces the first's kept logs (its mark), no fresh folder
     assert (tmp_path / "run.failed" / "logs" / "plant.log").is_file() and not list(tmp_path.glob("run.failed-*"))
+
+
+def test_the_command_lines_name_the_folder_where_the_run_ends_up(tmp_path):
+    """They named the run's temporary folder (.NAME.partial-XXXX), renamed when the run ends: a line copied from a
+    finished run's commands.sh failed ("Couldn't parse params file")."""
+    from pa10_dnbs.supervisor.processes import move_commands
+
+    logs = tmp_path / ".run.partial-x" / "logs"
+    logs.mkdir(parents=True)
+    staged = logs.parent
+    (logs / COMMANDS_FILE).write_text(f"a --params-file {staged}/ros_params.yaml -p 'f:=\"{staged}/w.npz\"' &\n")
+    move_commands(logs, logs.parent, tmp_path / "run")
+    assert (logs / COMMANDS_FILE).read_text() == (f"a --params-file {tmp_path}/run/ros_params.yaml "
+                                                  f"-p 'f:=\"{tmp_path}/run/w.npz\"' &\n")

@@ -21,6 +21,7 @@ from ..setting_flags import SETTING_FLAGS
 from ..supervisor.fault_report import fault_report
 from ..supervisor.graph_run import GraphFailure, run_graph
 from ..supervisor.params_file import write_params_file
+from ..supervisor.processes import move_commands
 from ..supervisor.realtime_advice import ON_TIME_TARGET, injected_misses, realtime_hint
 from ..wire.topics import ArmTopics
 from ..wire.wire_record import load_wire_run
@@ -83,6 +84,7 @@ def run_launch(options: LaunchOptions) -> int:
                 notes = report_notes(plan, o, stats, result, source, metrics)
                 write_report(tmp, [run], [metrics], title=f"{the_arm.description}: node graph run ({mode})",
                              notes=notes, chain=the_arm.chain, figures=o.figures)
+                move_commands(tmp / "logs", tmp, Path(out))   # its lines as run from the finished folder
             except GraphFailure as exc:
                 raise _keep_logs(exc, tmp, Path(out)) from None
     except GraphFailure as exc:
@@ -147,10 +149,15 @@ def _hard_stop_cleanup(tmp: Path, out: Path) -> str:
 FAILED_MARK = ".pa10-dnbs-failed-launch"
 
 
+#: the files the nodes' command lines read (their config and params), kept with a failed run's logs
+PARAM_FILES = ("config_used.yaml", "ros_params.yaml")
+
+
 def _keep_logs(exc: GraphFailure, tmp: Path, out: Path) -> GraphFailure:
     """A failed run's output folder (``tmp``) is removed, so its ``logs/`` move to ``<out>.failed/logs`` (replacing
     an earlier failure's, known by its FAILED_MARK; anything else there is left alone and the logs go to a fresh
-    ``<out>.failed-XXXX``) and the message names them there; an interrupted run (Ctrl-C) keeps nothing."""
+    ``<out>.failed-XXXX``), with the PARAM_FILES beside them that logs/commands.sh reads there, and the message
+    names them there; an interrupted run (Ctrl-C) keeps nothing."""
     logs = tmp / "logs"
     if exc.interrupted or not logs.is_dir():
         return exc
@@ -164,7 +171,11 @@ def _keep_logs(exc: GraphFailure, tmp: Path, out: Path) -> GraphFailure:
         else:
             kept.mkdir(parents=True)
         (kept / FAILED_MARK).write_text(f"the logs of a failed pa10-dnbs launch into {out}\n")
+        for name in PARAM_FILES:   # what the lines of logs/commands.sh read: kept beside them
+            if (tmp / name).is_file():
+                shutil.move(str(tmp / name), str(kept / name))
         shutil.move(str(logs), str(kept / "logs"))
+        move_commands(kept / "logs", tmp, kept)
     except OSError as why:   # the failure's own line comes first, whatever happens to its logs
         return GraphFailure(f"{exc}\n(its nodes' logs could not be kept: {why})")
     message = str(exc).replace(str(logs), str(kept / "logs"))

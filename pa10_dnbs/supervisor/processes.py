@@ -4,9 +4,10 @@ Each child's stdout and stderr go to one log file; a reader thread also
 remembers the READY / RUNNING lines the nodes print. Each child's command line
 (with the environment that places it on the run's domain) is appended to
 ``commands.sh`` beside the logs, so a node can be started again by hand as the
-launcher started it (docs/graph.md). Stopping escalates:
-SIGINT, then SIGUSR1 (a node writes its threads' stacks to its log) and SIGTERM after
-``grace_int_s``, then SIGKILL after ``grace_term_s``.
+launcher started it (docs/graph.md), from the folder where the run's files end
+up (:func:`move_commands`). Stopping escalates: SIGINT, then SIGUSR1 (a node
+writes its threads' stacks to its log) and SIGTERM after ``grace_int_s``, then
+SIGKILL after ``grace_term_s``.
 """
 from __future__ import annotations
 
@@ -29,6 +30,14 @@ def command_line(argv: list[str], env: dict) -> str:
     """``argv`` as one shell line, prefixed with the ``ENV_SHOWN`` variables of ``env``."""
     prefix = [f"{k}={shlex.quote(env[k])}" for k in ENV_SHOWN if k in env]
     return " ".join(prefix + [shlex.join(argv)])
+
+
+def move_commands(logs: Path, staged: Path, final: Path) -> None:
+    """``logs``'s COMMANDS_FILE with the run folder ``staged`` (where the nodes ran: the output's temporary
+    folder) said as ``final`` (where the run's files end up), so that its lines start the nodes again from there."""
+    path = logs / COMMANDS_FILE
+    if path.is_file():
+        path.write_text(path.read_text().replace(str(staged), str(final)))
 
 
 class ManagedProcess:
