@@ -22,10 +22,8 @@ NODES = [("plant", "plant.node"), ("joint_controller_<joint>", "joint_controller
 def table(params: dict) -> str:
     rows = ["| parameter | default | range | description |", "|---|---|---|---|"]
     for name, p in params.items():
-        default = repr(p.default) if isinstance(p.default, str) else str(p.default).lower() \
-            if isinstance(p.default, bool) else str(p.default)
         text = p.description.replace("<", "&lt;").replace(">", "&gt;")
-        rows.append(f"| `{name}` | `{default}` | {p.range_text()} | {text} |")
+        rows.append(f"| `{name}` | `{p.default_text()}` | {p.range_text()} | {text} |")
     return "\n".join(rows)
 
 

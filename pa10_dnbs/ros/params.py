@@ -60,6 +60,12 @@ class Param:
                 to_value=float(1.7976931348623157e308 if self.hi is None else self.hi), step=0.0)]
         return d
 
+    def default_text(self) -> str:
+        """The default as ``-p NAME:=VALUE`` or a params file writes it: a string quoted, a switch true / false."""
+        if isinstance(self.default, str):
+            return repr(self.default)
+        return str(self.default).lower() if isinstance(self.default, bool) else str(self.default)
+
     def range_text(self) -> str:
         """The range for docs: '[0, 1]', '>= 0', '' (none)."""
         if self.lo is None and self.hi is None:
@@ -79,9 +85,8 @@ def params_help(prog: str, specs: dict[str, Param]) -> str:
              "a ROS 2 node; its parameters (-p NAME:=VALUE; read-only, read once at start; docs/graph.md lists them "
              "with the settings it also takes):"]
     for name, spec in specs.items():
-        default = repr(spec.default) if isinstance(spec.default, str) else spec.default
         bounds = f" {spec.range_text()}" if spec.range_text() else ""
-        lines.append(f"  {name:<{width}}  {default}{bounds}: {spec.description}")
+        lines.append(f"  {name:<{width}}  {spec.default_text()}{bounds}: {spec.description}")
     return "\n".join(lines)
 
 
