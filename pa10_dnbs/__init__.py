@@ -7,17 +7,23 @@ __version__ = "0.1.0"
 #: processes that are a command to the user (``python -m`` these): the CLI, and the robot node ``pa10-dnbs robot``
 #: runs in the terminal's process group, so that the terminal's Ctrl-C reaches it while rclpy loads
 COMMAND_MODULES = ("pa10_dnbs.cli", "pa10_dnbs.ros.mujoco_robot_node")
+#: the nodes (``python -m pa10_dnbs.ros.X``): one started by hand (docs/graph.md) is in the terminal's group too
+NODE_MODULES = "pa10_dnbs.ros."
 
 
 def _quiet_start_of_the_command() -> None:
-    """When this process is the ``pa10-dnbs`` command (or its robot node): a Ctrl-C while its modules load ends it
-    with one line and exit 130, not an import traceback (pa10_dnbs/interrupt.py; the node's own handler takes
-    over once it runs). Any other importer keeps its own SIGINT."""
+    """When this process is the ``pa10-dnbs`` command or a node: a Ctrl-C while its modules load ends it with one
+    line and exit 130, not an import traceback (pa10_dnbs/interrupt.py; a node's own handler takes over once it
+    runs). Any other importer keeps its own SIGINT."""
     import sys
 
     argv = getattr(sys, "orig_argv", [])[1:3]
-    command = argv[:1] == ["-m"] and argv[1:] and argv[1] in COMMAND_MODULES      # python -m pa10_dnbs.cli
-    if command or (sys.argv[:1] and sys.argv[0].endswith("pa10-dnbs")):       # the console script
+    module = argv[1] if argv[:1] == ["-m"] and argv[1:] else ""      # python -m pa10_dnbs.cli
+    if module.startswith(NODE_MODULES) and module not in COMMAND_MODULES:   # a node: its line names it
+        from .interrupt import quiet_start
+
+        quiet_start(module.removeprefix(NODE_MODULES))
+    elif module in COMMAND_MODULES or (sys.argv[:1] and sys.argv[0].endswith("pa10-dnbs")):   # the console script
         from .interrupt import quiet_start
 
         quiet_start()

@@ -31,11 +31,25 @@ CASES = [  # (node module, bad parameter, word the error line must hold): each n
     ("plant.node", "duration_s:=[1,", "duration_s"),
     # rev_e 16: the plant as a robot reading its own states as commands
     ("plant.node", ("interface:=standard", "robot_state_topic:=/a", "robot_command_topic:=/a"), "robot_command_topic"),
+    # a node started by hand (docs/graph.md), each was a traceback and exit 1, or a run that failed at its end:
+    ("reference_node", "__ns:=/pa10/", "namespace must not end with a '/'"),   # "node name must not start with ..."
+    ("reference_node", "use_sim_time:=maybe", "use_sim_time"),                  # rclpy's own parameter
+    ("joint_controller_node", ("joint:=s1", "queue_depth:=4294967297"), "queue_depth"),   # a QoS TypeError
+    ("reference_node", "batch_steps:=1000000000", "batch_steps"),               # 52 GiB asked at the start
+    ("reference_node", "stats_file:=/no/such/dir/r.json", "stats_file"),        # written only at the end
+    ("joint_controller_node", ("joint:=s1", "checkpoint_file:=/no/such/dir/c.npz"), "checkpoint_file"),
+    ("wire_monitor", "out_file:=/no/such/dir/w.npz", "out_file"),
+    ("recorder_node", ("bag:=/no/such/dir/b", "all_topics:=true"), "bag"),
+    ("plant.node", ("interface:=standard", "robot_state_topic:=bad name"), "robot_state_topic"),
+    ("mujoco_robot_node", "command_topic:=/a//b", "command_topic"),
+    ("joint_controller_node", "controller:=pid", "joint: not given"),           # was "must be one of ..., got ''"
 ]
 
 
 def _ros_args(param) -> list[str]:
-    return [a for one in (param if isinstance(param, tuple) else (param,)) for a in ("-p", one)]
+    """``-p`` each rule, ``-r`` a remapping of the node's name or namespace."""
+    return [a for one in (param if isinstance(param, tuple) else (param,))
+            for a in ("-r" if one.startswith(("__ns:=", "__node:=")) else "-p", one)]
 TIMEOUT_S = 60
 
 

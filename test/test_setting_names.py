@@ -18,7 +18,7 @@ PACKAGE = Path(pa10_dnbs.__file__).parent
 #: the command line itself (its parser, its commands) and the two modules that are programs of their own
 COMMAND_LINE = {"cli.py", "cli_values.py", "setting_flags.py", "ros/trajectory_sender.py", "ros/shm_cleanup.py"}
 FLAG = re.compile(r"(?<![\w-])--[a-z][a-z-]*")
-ROS_ARGUMENTS = {"--ros-args", "--params-file", "--param"}   # rcl's own, in a node's argv: not ours
+ROS_ARGUMENTS = {"--ros-args", "--params-file", "--param", "--remap"}   # rcl's own, in a node's argv: not ours
 #: library text that names a flag on purpose: (file, what the string opens with) -> why
 FLAG_ON_PURPOSE = {
     ("output_mark.py", "Written by pa10-dnbs"): "the mark file a command writes into its output folder",

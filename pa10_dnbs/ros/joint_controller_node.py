@@ -53,7 +53,7 @@ from ..loop.cpu_meter import CpuMeter
 from ..loop.endpoint_match import MatchWait, Need
 from ..loop.joint_loop import JointLoop
 from ..loop.scheduling import apply_batch, apply_fifo, check_priority, policy_name
-from .params import (RT_PRIORITY, SCHED_BATCH, SETTINGS_DEFAULTS, Param, ParameterError, check_choice,
+from .params import (MAX_QOS_DEPTH, RT_PRIORITY, SCHED_BATCH, SETTINGS_DEFAULTS, Param, ParameterError, check_choice,
                      cli_parameter, declare, declare_joint_settings)
 from .ready import announce_when_ready
 from .runtime import announce_ready, exit_process, run_node
@@ -70,9 +70,11 @@ PARAMS = {
                        "joint_controller_<joint>)"),
     "controller": Param("dnbs", "dnbs or pid"),
     "reliability": Param("reliable", "state/effort QoS: reliable or best_effort"),
-    "queue_depth": Param(10, "keep_last depth of the state subscription and effort publisher [messages]", 1),
-    "stats_file": Param("", "JSON file for the counters at exit; '' = none"),
-    "checkpoint_file": Param("", "DNBS weights and covariances, saved every checkpoint.period_s [.npz]; '' = none"),
+    "queue_depth": Param(10, "keep_last depth of the state subscription and effort publisher [messages]", 1,
+                         MAX_QOS_DEPTH),
+    "stats_file": Param("", "JSON file for the counters at exit; '' = none", writes=True),
+    "checkpoint_file": Param("", "DNBS weights and covariances, saved every checkpoint.period_s [.npz]; '' = none",
+                             writes=True),
     "resume": Param(False, "start from checkpoint_file when it exists"),
     "incarnation": Param(0, "0 = first start; n = the launcher's n-th restart", 0),
     "effort_subscribers": Param(1, "subscriptions (plant and recorders) to wait for before answering", 1),
@@ -97,6 +99,10 @@ class JointControllerNode(Node):
         except ValueError as exc:
             raise ParameterError(f"parameter {exc}") from None
         check_choice("controller", p["controller"], CONTROLLER_KINDS)
+        if not p["joint"]:   # a params file's /NS/joint_controller_J section had not reached the node it names
+            raise ParameterError("parameter joint: not given: -p joint:=J (the node is joint_controller_J only once "
+                                 "it has J from the command line or -r __node:=joint_controller_J, so a params file's "
+                                 "section of that node reaches it only then)")
         # every setting it runs: read-only parameters, this joint's values (the launcher's params file, else the
         # config's), and its arm read once from arm_file (ros/settings_params.py: JOINT_CONTROLLER_KEYS)
         settings, index = declare_joint_settings(self, p["controller"], p["joint"], p["config_file"])

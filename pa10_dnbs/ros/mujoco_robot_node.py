@@ -43,8 +43,8 @@ PARAMS = {
     "mode": Param("lockstep", "lockstep (step once the command for the current state is in) or paced (wall-clock "
                               "ticks of simulation.dt_s with the latest command)"),
     "duration_s": Param(0.0, "robot time to run [s]; 0 = until SIGINT", 0.0),
-    "state_topic": Param("/robot_joint_states", "where the robot's JointState goes"),
-    "command_topic": Param("/robot_joint_command", "where its JointState effort commands come from"),
+    "state_topic": Param("/robot_joint_states", "where the robot's JointState goes", topics=True),
+    "command_topic": Param("/robot_joint_command", "where its JointState effort commands come from", topics=True),
     "clock_hz": Param(DEFAULT_CLOCK_HZ, "/clock rate [Hz of robot time]; 0 = no /clock", 0.0, 1e6),
     "resend_s": Param(0.25, "lockstep (and paced before the first command): wall time before the current state "
                             "is sent again [s]", 0.0),

@@ -27,9 +27,9 @@ def override_value(value) -> str:
     return str(value)
 
 
-def param_rules(argv):
-    """(flag, rule) of each ``-p``/``--param`` rule of ``argv`` (a node's command line), in order; only those
-    inside ``--ros-args`` ... (``--`` or the end) count."""
+def param_rules(argv, flags: tuple[str, ...] = ("-p", "--param")):
+    """(flag, rule) of each ``-p``/``--param`` rule (or of ``flags``: ``("-r", "--remap")``) of ``argv`` (a node's
+    command line), in order; only those inside ``--ros-args`` ... (``--`` or the end) count."""
     argv = list(argv)
     inside = False
     for i, arg in enumerate(argv):
@@ -37,7 +37,7 @@ def param_rules(argv):
             inside = True
         elif arg == "--":
             inside = False
-        elif inside and arg in ("-p", "--param") and i + 1 < len(argv):
+        elif inside and arg in flags and i + 1 < len(argv):
             yield arg, argv[i + 1]
 
 

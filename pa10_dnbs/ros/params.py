@@ -12,7 +12,9 @@ controller's (the keys it runs, its joint's value of each per-joint key) by :fun
 """
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
@@ -29,6 +31,11 @@ from .settings_params import (ARM_FILE, ARM_FILE_DESCRIPTION, joint_node_setting
                               node_settings, section_params, section_values)
 
 
+#: the largest keep_last depth a node takes [messages]: a few minutes of 1 kHz messages; past 2^32 rclpy's QoS
+#: refused it with a TypeError traceback, and DDS may reserve the depth's memory up front
+MAX_QOS_DEPTH = 1_000_000
+
+
 class ParameterError(ValueError):
     """A node parameter with a missing or bad value: reported in one line, exit code 2."""
 
@@ -43,6 +50,8 @@ class Param:
     lo: float | int | None = None
     hi: float | int | None = None
     read_only: bool = True
+    writes: bool = False   # a path the node writes ('' = none): its folder must be there when the node starts
+    topics: bool = False   # topic names ('' = the default), or a list of them, each may end in :pkg/msg/Type
 
     def descriptor(self) -> ParameterDescriptor:
         d = ParameterDescriptor(description=self.description, read_only=self.read_only)
@@ -98,7 +107,42 @@ def declare(node: Node, specs: dict[str, Param]) -> dict:
             node.declare_parameter(name, spec.default, spec.descriptor())
         except (ParameterException, TypeError) as exc:  # TypeError: a value of the wrong type for a ranged key
             raise ParameterError(f"parameter {name}: {_one_line(exc)} ({spec.description})") from None
-    return {name: node.get_parameter(name).value for name in specs}
+    values = {name: node.get_parameter(name).value for name in specs}
+    for name, spec in specs.items():
+        if spec.writes and values[name]:
+            check_writable(name, values[name])
+        if spec.topics:
+            check_topic_names(node, name, values[name])
+    return values
+
+
+def check_topic_names(node: Node, name: str, value) -> None:
+    """ParameterError naming parameter ``name`` unless each topic ``value`` names (a name or a list of names, ''
+    skipped, a ``:pkg/msg/Type`` tail ignored) is a valid name once expanded in ``node``'s namespace: rcl refused
+    ``bad name`` or ``/a//b`` only when the endpoint was made, as a traceback."""
+    from rclpy.exceptions import NameValidationException
+    from rclpy.expand_topic_name import expand_topic_name
+    from rclpy.validate_full_topic_name import validate_full_topic_name
+
+    for topic in [value] if isinstance(value, str) else value:
+        topic = topic.split(":", 1)[0]
+        if not topic:
+            continue
+        try:
+            validate_full_topic_name(expand_topic_name(topic, node.get_name(), node.get_namespace()))
+        except (NameValidationException, ValueError) as exc:
+            why = _one_line(exc).removesuffix(" ^").split(", at /")[0]
+            raise ParameterError(f"parameter {name}: {why}") from None
+
+
+def check_writable(name: str, path: str) -> None:
+    """ParameterError naming parameter ``name`` unless the folder of ``path`` is there to write it in: found at
+    the start, not when the node writes it at its end (after the whole run)."""
+    folder = Path(os.path.abspath(path)).parent
+    if not folder.is_dir():
+        raise ParameterError(f"parameter {name}: {path}: no folder {folder} to write it in")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ParameterError(f"parameter {name}: {path}: its folder {folder} is not writable here")
 
 
 def _one_line(exc: Exception) -> str:

@@ -42,8 +42,8 @@ from .bag_qos import bag_qos, subscription_qos, to_bag_qos
 from ..loop.cpu_meter import CpuMeter
 from .msg_types import message_class
 from ..loop.scheduling import apply_batch, apply_fifo
-from .params import (RT_PRIORITY, SCHED_BATCH, SETTINGS_DEFAULTS, Param, ParameterError, check_choice, declare,
-                     declare_settings)
+from .params import (MAX_QOS_DEPTH, RT_PRIORITY, SCHED_BATCH, SETTINGS_DEFAULTS, Param, ParameterError, check_choice,
+                     declare, declare_settings)
 from .settings_params import NODE_SECTIONS
 from .polled import Inbox
 from .ready import announce_when_ready
@@ -69,9 +69,10 @@ def parse_topic_spec(spec: str, ns: str = DEFAULT_NS) -> tuple[str, str | None]:
 
 
 PARAMS = {
-    "bag": Param("", "the bag directory to write (required)"),
+    "bag": Param("", "the bag directory to write (required)", writes=True),
     "force": Param(False, "replace an existing bag"),
-    "topics": Param([""], "topics to record: names, optionally name:pkg/msg/Type; relative ones in the namespace"),
+    "topics": Param([""], "topics to record: names, optionally name:pkg/msg/Type; relative ones in the namespace",
+                    topics=True),
     "all_topics": Param(False, "record every topic discovered"),
     "time_source": Param("clock", "log time: clock (latest /clock) or system (wall time)"),
     "config_file": SETTINGS_DEFAULTS,
@@ -80,7 +81,7 @@ PARAMS = {
     "custom_data": Param([""], "key=value entries for the bag's custom_data"),
     "tf_rate_hz": Param(100.0, "/tf written from joint_states at this rate [Hz of simulated time]; 0 = none", 0.0),
     "end_stamp_ns": Param(-1, "print COMPLETE once every stamped topic reached this stamp [ns]; -1 = never", -1),
-    "qos_depth": Param(2000, "keep_last depth of each subscription [messages]", 1),
+    "qos_depth": Param(2000, "keep_last depth of each subscription [messages]", 1, MAX_QOS_DEPTH),
     "compression": Param("zstd", "MCAP chunk compression: zstd or none"),
     "poll_period_s": Param(0.01, "wall time between two drains of the subscriptions [s]", 0.0),
 }

@@ -45,7 +45,7 @@ from .params import (RT_PRIORITY, SCHED_BATCH, SETTINGS_DEFAULTS, Param, Paramet
 from ..loop.cpu_meter import CpuMeter
 from .polled import Inbox
 from .ready import announce_when_ready
-from .runtime import announce_ready, exit_process, run_node
+from .runtime import announce_ready, exit_process, run_node, stop_requested
 from .settings_params import NODE_SECTIONS
 from .endpoints import CLOCK, StepClock, record_qos, reference_qos, reference_topic
 
@@ -53,6 +53,7 @@ from .endpoints import CLOCK, StepClock, record_qos, reference_qos, reference_to
 FAULT_KEYS = ("clock_backwards",)
 MAX_KEPT = 100  # accepted trajectories and refusal reasons kept for the stats file
 CLOCK_DEPTH = 1000  # /clock messages kept between two polls
+MAX_BATCH_STEPS = 1_000_000  # points of one message: 24 MB per joint; 1e9 asked 52 GiB at the start
 NOW = Duration(seconds=0)  # wait_for_all_acked: just look
 
 
@@ -60,7 +61,7 @@ PARAMS = {
     "config_file": SETTINGS_DEFAULTS,
     "sched_batch": SCHED_BATCH,
     "rt_priority": RT_PRIORITY,
-    "batch_steps": Param(100, "reference points per message [steps]", 1),
+    "batch_steps": Param(100, "reference points per message [steps]", 1, MAX_BATCH_STEPS),
     "lookahead_steps": Param(150, "steps kept published beyond the latest /clock (> reference.preview_steps)", 1),
     "duration_s": Param(0.0, "the run's simulated time [s]: nothing past its end + lookahead; 0 = open-ended", 0.0),
     "poll_period_s": Param(0.01, "wall time between two drains of /clock [s]", 0.0),
@@ -69,7 +70,7 @@ PARAMS = {
     "trajectory_file": Param("", "a JointTrajectory (YAML or JSON) followed from step 0 instead of eq. 27 "
                              "(docs/trajectories.md); '' = eq. 27"),
     "stats_file": Param("", "JSON file at exit: the trajectories received on the trajectory topic, accepted (their "
-                        "steps) and refused (why); '' = none"),
+                        "steps) and refused (why); '' = none", writes=True),
 }
 TRAJECTORY_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
                             durability=DurabilityPolicy.VOLATILE)  # as `ros2 topic pub` and JTC's clients offer
@@ -212,6 +213,8 @@ class ReferenceNode(Node):
         if self.last_step is not None:
             last_step = min(last_step, self.last_step)
         while self.published_until <= last_step:
+            if stop_requested():   # a Ctrl-C while a long lookahead is encoded (also while the node is built)
+                return
             k0 = self.published_until
             steps = np.arange(k0, k0 + self.batch)
             pos = self.reference.position(steps)  # (batch, n_joints)

@@ -40,6 +40,7 @@ import sys
 from typing import Callable, NoReturn
 
 import rclpy
+from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
 from rclpy.task import Future
@@ -47,7 +48,7 @@ from rclpy.task import Future
 from . import exit_deadline
 from ..interrupt import LAUNCHER_PID_ENV, signal_on_parent_death, stop_signals
 from ..wire.robot_interface import RobotFault
-from .param_overrides import bad_param_override
+from .param_overrides import bad_param_override, param_rules
 from .params import ParameterError, params_help
 from .shm_cleanup import remove_stale, shm_files
 from .ready import GraphNotReady
@@ -82,6 +83,26 @@ def _init_rcl(args) -> str | None:
         os.dup2(saved, 2)
         os.close(saved)
         os.close(quiet)
+    return None
+
+
+def bad_remap(argv) -> str | None:
+    """Why a ``-r __ns:=NS`` or ``-r __node:=NAME`` rule of ``argv`` names no valid namespace or node name, else
+    None: rcl takes ``/pa10/`` and fails only when the node is made, as a traceback saying "node name must not
+    start with a number" (rclpy's own validators say what is wrong)."""
+    from rclpy.exceptions import NameValidationException
+    from rclpy.validate_namespace import validate_namespace
+    from rclpy.validate_node_name import validate_node_name
+
+    for flag, rule in param_rules(argv, ("-r", "--remap")):
+        name, sep, value = rule.rpartition(":=")
+        check = {"__ns": validate_namespace, "__node": validate_node_name, "__name": validate_node_name}.get(
+            name.rpartition(":")[2])
+        if sep and check is not None:
+            try:
+                check(value)
+            except NameValidationException as exc:
+                return f"remapping '{flag} {rule}': {' '.join(str(exc).split()).removesuffix(' ^')}"
     return None
 
 
@@ -165,7 +186,8 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None, params: dict
         return 0
     # a -p value rcl cannot read: named before rclpy.init (ros/param_overrides.py); anything else rcl refuses in
     # its --ros-args (an unknown argument): from rclpy.init itself. The user's input: one line, exit 2
-    refused = bad_param_override(list(sys.argv if args is None else args)) or _init_rcl(args)
+    line = list(sys.argv if args is None else args)
+    refused = bad_param_override(line) or bad_remap(line) or _init_rcl(args)
     if refused is not None:
         print(f"FAILED {refused}", file=sys.stderr, flush=True)
         return 2
@@ -190,6 +212,10 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None, params: dict
     except (KeyboardInterrupt, ExternalShutdownException) as exc:
         _KEPT_EXCEPTIONS.append(exc)
         code = 0
+    except ParameterException as exc:   # rclpy refused a value of its own parameters (-p use_sim_time:=maybe)
+        _KEPT_EXCEPTIONS.append(exc)
+        print(f"FAILED {' '.join(str(exc).split())}", file=sys.stderr, flush=True)
+        code = 2
     except (ParameterError, FileExistsError) as exc:  # the user's input: one line, no traceback
         # kept, not freed at the end of this clause: a half-built node's handle must not be destroyed before
         # the exit deadline is armed (seen once: a plant that rejected a parameter spun here for 10 min)

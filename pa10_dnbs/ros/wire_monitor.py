@@ -38,7 +38,7 @@ PARAMS = {
     "sched_batch": SCHED_BATCH,
     "rt_priority": RT_PRIORITY,
     "duration_s": Param(0.0, "the run's simulated time [s]; 0 = simulation.duration_s of the config", 0.0),
-    "out_file": Param("", "the record written at exit [.npz] (required)"),
+    "out_file": Param("", "the record written at exit [.npz] (required)", writes=True),
     "poll_period_s": Param(0.01, "wall time between two drains of the subscriptions [s]", 0.0),
 }
 

@@ -53,8 +53,8 @@ from ...wire.clock_schedule import DEFAULT_CLOCK_HZ, check_clock_hz
 from ...wire.robot_interface import default_state_topic, parse_robot_command
 from ...settings import Settings
 from ..diagnostics import DiagnosticsReporter
-from ..params import (RT_PRIORITY, SETTINGS_DEFAULTS, Param, ParameterError, check_choice, declare, declare_settings,
-                      duration_steps)
+from ..params import (MAX_QOS_DEPTH, RT_PRIORITY, SETTINGS_DEFAULTS, Param, ParameterError, check_choice, declare,
+                      declare_settings, duration_steps)
 from .lockstep import run_lockstep
 from .realtime import run_realtime
 from .stats import diagnostics_report, plant_stats
@@ -77,14 +77,15 @@ PARAMS = {
                             "is sent again [s]", 0.0),
     "on_missing_effort": Param("hold", "what replaces a missing effort: hold (last torque) or zero"),
     "reliability": Param("", "per-joint state/effort QoS: reliable, best_effort; '' = the mode's default"),
-    "stats_file": Param("", "JSON file for timing figures and counters at exit; '' = none"),
+    "stats_file": Param("", "JSON file for timing figures and counters at exit; '' = none", writes=True),
     "min_joint_states_subscribers": Param(0, "joint_states subscribers to wait for before stepping", 0),
     "start_timeout_s": Param(30.0, "wall time to wait for the graph to be matched [s]", 0.0),
     "settle_s": Param(0.3, "wall time to wait after the graph is matched [s]", 0.0),
     "state_subscribers": Param(1, "subscribers of each <joint>/state to wait for (besides recorders)", 0),
     "clock_subscribers": Param(1, "/clock subscribers to wait for (besides recorders)", 0),
     "recorders": Param(0, "recorders to wait for on every topic", 0),
-    "effort_queue_depth": Param(1000, "lockstep: keep_last depth of the effort subscriptions [messages]", 1),
+    "effort_queue_depth": Param(1000, "lockstep: keep_last depth of the effort subscriptions [messages]", 1,
+                                MAX_QOS_DEPTH),
     "real_time_factor": Param(1.0, "realtime: a step of dt takes dt / real_time_factor of wall time", 0.0, 100.0),
     "deadline_fraction": Param(0.9, "realtime: efforts count within this fraction of the tick, in (0, 1]", 0.0, 1.0),
     "late_tolerance": Param(0.1, "realtime: a tick starting later than this fraction of a tick is late, in [0, 1)",
@@ -97,11 +98,11 @@ PARAMS = {
     "interface": Param("", "'' = the per-joint topics of the graph; standard = one JointState state and commands, "
                        "as a robot behind the joint bus (docs/your_robot.md; lockstep waits for every command)"),
     "robot_state_topic": Param("", "standard interface: the state topic; '' = /robot_joint_states (/joint_states "
-                               "with a forward command)"),
+                               "with a forward command)", topics=True),
     "robot_command": Param("joint_state", "standard interface: joint_state (stamped JointState efforts) or "
                            "forward:<controller> (Float64MultiArray on /<controller>/commands)"),
     "robot_command_topic": Param("", "standard interface, joint_state form: the command topic; '' = "
-                                 "/robot_joint_command"),
+                                 "/robot_joint_command", topics=True),
 }
 
 
