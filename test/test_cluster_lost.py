@@ -193,6 +193,33 @@ def test_workers_that_cannot_import_the_project_are_refused_at_connect(tmp_path)
     assert not (tmp_path / "s").exists()
 
 
+def test_a_worker_running_an_edited_copy_of_the_project_is_refused_at_connect(tmp_path, monkeypatch):
+    """The check compared __version__ alone (0.1.0 whatever the code): a worker running an edited copy was taken,
+    and its rows differed from a local run's (payload 5 kg read as 4 kg: other RMS, exit 0)."""
+    import shutil
+    from pathlib import Path
+
+    import pa10_dnbs
+
+    copy = tmp_path / "edited"
+    shutil.copytree(Path(pa10_dnbs.__file__).parent, copy / "pa10_dnbs", ignore=shutil.ignore_patterns("__pycache__"))
+    scenarios = copy / "pa10_dnbs" / "study" / "scenarios.py"
+    scenarios.write_text(scenarios.read_text() + "\n# an edit\n")
+    monkeypatch.setenv("PYTHONPATH", str(copy))   # the cluster's workers import the copy first
+    with local_cluster(tmp_path / "cluster", n_workers=1) as cluster:
+        monkeypatch.delenv("PYTHONPATH")
+        rc, out, err = _end(_command("study", "--scenarios", "nominal", "--controllers", "pid", "--seeds", 1,
+                                     "--duration", 0.3, "--no-progress", "--scheduler", cluster.address,
+                                     "--out", tmp_path / "s"))
+        pids = cluster.pids
+    assert not pids(), "processes of the cluster left behind"
+    assert rc == 2 and re.fullmatch(
+        r"pa10-dnbs: error: --scheduler: worker tcp://127\.0\.0\.1:\d+ of tcp://127\.0\.0\.1:\d+ runs other "
+        r"pa10_dnbs code \(its source differs from this one's\): every worker needs the same pa10_dnbs .*\n", err), \
+        (rc, err)
+    assert not (tmp_path / "s").exists()
+
+
 def test_a_run_whose_workers_keep_dying_is_named_in_one_line(tmp_path, monkeypatch):
     """Dask gives a run up (KilledWorker) once `allowed-failures` workers died running it (0 here: the first
     death; 3 by default): one line naming the run and --scheduler, exit 2, the completed rows kept."""
@@ -282,3 +309,31 @@ def test_a_tls_cluster_configured_in_dasks_config_is_reached(tmp_path):
         pids = cluster.pids
     assert not pids(), "processes of the cluster left behind"
     assert rc == 0 and err == "" and "1 runs, 0 diverged" in out, (rc, out, err)
+
+
+def test_study_whose_scheduler_stops_answering_ends_in_one_line(tmp_path):
+    """A scheduler that stops answering (SIGSTOP: a hung host or a dropped network leaves the connection open)
+    was asked for its workers without a bound: the study waited for ever, and the first Ctrl-C went unheard."""
+    with local_cluster(tmp_path / "cluster") as cluster:
+        proc = _command(*STUDY, "--scheduler", cluster.address, "--out", tmp_path / "s")
+        try:
+            from distributed import Client
+
+            with Client(cluster.address, timeout=30) as client:
+                _wait(lambda: _finished_runs(client, "run_one-") >= 1, "completed work", proc)
+            time.sleep(0.5)
+            os.killpg(cluster.scheduler.pid, signal.SIGSTOP)
+            t0 = time.monotonic()
+            rc, out, err = _end(proc)
+            took = time.monotonic() - t0
+        finally:
+            os.killpg(cluster.scheduler.pid, signal.SIGCONT)
+            if proc.poll() is None:
+                proc.kill()
+                proc.communicate()
+        pids = cluster.pids
+    assert not pids(), "processes of the cluster left behind"
+    m = re.fullmatch(r"pa10-dnbs: error: --scheduler: the scheduler tcp://127\.0\.0\.1:\d+ has not answered for "
+                     r"10 s \(.*\); stopped after (\d) of 8 runs; kept their rows in \S+/s/study\.partial\.md .*\n", err)
+    assert rc == 2 and m, (rc, err)
+    assert took < 10.0 + 15.0, took   # the silence bound, and the client's bounded close

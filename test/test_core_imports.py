@@ -67,7 +67,7 @@ def test_a_run_without_figures_never_loads_matplotlib(tmp_path):
 LAYERS = [
     {"__init__", "paths", "atomic_file", "run_data", "core", "wire", "kinematics", "faults",  # numpy-only data and maths
      "config_error", "refused", "interrupt", "cli_values", "output_lock", "output_mark", "number_text", "run_size",
-     "run_steps", "json_text", "file_path", "console_stream", "setting_flags"},
+     "run_steps", "json_text", "file_path", "console_stream", "setting_flags", "source_digest"},
     {"arm", "config", "config_yaml"},                                          # an arm's files; a config file
     {"settings"},                                                              # a run's typed settings
     {"plant", "loop", "accel", "trajectory_file"},                             # physics, loop logic, compiled step

@@ -4,7 +4,9 @@ no worker for ``WORKERLESS_S``, a run Dask gave up): :class:`ClusterLost`, one l
 from __future__ import annotations
 
 import re
+import sys
 import time
+import warnings
 
 from ..config_error import ConfigError
 from ..interrupt import check
@@ -14,17 +16,19 @@ CONNECT_TIMEOUT_S = 10.0   # to reach the scheduler and to see its first worker
 CLOSE_TIMEOUT_S = 5.0      # a failed or interrupted connection closes within this
 WORKERLESS_S = CONNECT_TIMEOUT_S   # runs out and the scheduler without a worker this long: the cluster is lost
 WATCH_S = 1.0              # how often a waiting executor asks the scheduler for its number of workers
+SILENT_S = CONNECT_TIMEOUT_S   # runs out and no answer from the scheduler this long: the cluster is lost
 CLOSED_RETRY_S = 0.05      # a result's fetch whose connection closed is tried again after this
 
 
 class ClusterWatch:
     """What a waiting executor checks on its cluster: the client still connected to the scheduler (a future it
-    did not cancel itself comes back cancelled when the connection is lost), and a worker there at least once
-    every ``WORKERLESS_S`` (asked every ``WATCH_S``)."""
+    did not cancel itself comes back cancelled when the connection is lost), the scheduler answering (each ask
+    waits at most ``WATCH_S``; none answered for ``SILENT_S``: lost, as a hung host or a dropped network leaves its
+    connection open), and a worker there at least once every ``WORKERLESS_S`` (asked every ``WATCH_S``)."""
 
     def __init__(self, client, address: str):
         self.client, self.address = client, address
-        self.last_worker = self.last_asked = time.monotonic()
+        self.last_worker = self.last_asked = self.last_answer = time.monotonic()
 
     def lost(self, why: str, scheduler_alive: bool = False) -> ClusterLost:
         return ClusterLost(why, scheduler_alive)
@@ -70,10 +74,14 @@ class ClusterWatch:
         if now - self.last_asked < WATCH_S:
             return
         self.last_asked = now
-        try:
-            n = self.client.scheduler_info(n_workers=0).get("n_workers", 1)
+        try:   # bounded: scheduler_info() waits for ever on a scheduler that stopped answering, Ctrl-C unheard
+            n = self.client.sync(self.client.scheduler.identity, n_workers=0, callback_timeout=WATCH_S)["n_workers"]
         except Exception:   # noqa: BLE001 - asked again at the next poll; a lost connection shows in the status
+            if time.monotonic() - self.last_answer >= SILENT_S:
+                raise self.lost(f"the scheduler {self.address} has not answered for {SILENT_S:g} s (its process "
+                                "stopped, or its host or the network hangs)") from None
             return
+        self.last_answer = time.monotonic()
         if n:
             self.last_worker = now
         elif now - self.last_worker >= WORKERLESS_S:
@@ -167,29 +175,49 @@ def connect(address: str):
     for name in ("distributed.client", "distributed.comm", "distributed.core", "distributed.batched"):
         logging.getLogger(name).setLevel(logging.CRITICAL)  # its own connection errors: we say it in one line
     _probe(address)
-    try:
-        client = Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
-    except Exception as exc:   # the scheduler went away since the probe
-        raise ConfigError(f"scheduler: cannot connect to {address}: "
-                          f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}", setting="scheduler") from None
-    try:
+    with warnings.catch_warnings(record=True) as caught:   # Dask's version table: said in one line, or not at all
+        warnings.simplefilter("always")
         try:
-            client.wait_for_workers(1, timeout=CONNECT_TIMEOUT_S)
-        except (OSError, TimeoutError):
-            raise ConfigError(f"scheduler: {address} has no worker (waited {CONNECT_TIMEOUT_S:g} s)",
+            client = Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
+        except Exception as exc:   # the scheduler went away since the probe
+            raise ConfigError(f"scheduler: cannot connect to {address}: "
+                              f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}",
                               setting="scheduler") from None
-        _check_workers(client, address)
-    except BaseException:   # a Ctrl-C too: the client closed, not left to close itself (noisily) at exit
-        client.close(timeout=CLOSE_TIMEOUT_S)
-        raise
+        try:
+            try:
+                client.wait_for_workers(1, timeout=CONNECT_TIMEOUT_S)
+            except (OSError, TimeoutError):
+                raise ConfigError(f"scheduler: {address} has no worker (waited {CONNECT_TIMEOUT_S:g} s)",
+                                  setting="scheduler") from None
+            _check_workers(client, address)   # a worker without pa10_dnbs: its one line, not Dask's table
+        except BaseException:   # a Ctrl-C too: the client closed, not left to close itself (noisily) at exit
+            client.close(timeout=CLOSE_TIMEOUT_S)
+            raise
+    _say_warnings(caught, address)
     return client
 
 
+def _say_warnings(caught, address: str) -> None:
+    """The warnings of connecting: Dask's package version mismatch as one line (the same pa10_dnbs on other
+    versions of its dependencies can give other numbers), any other as Python shows it."""
+    from distributed.versions import VersionMismatchWarning
+
+    for w in caught:
+        if issubclass(w.category, VersionMismatchWarning):
+            first = str(w.message).strip().splitlines()[0].rstrip(":")
+            print(f"pa10-dnbs: warning: the cluster at {address}: {first} (Dask's check of its packages against "
+                  "this process's): runs on other versions may give other numbers", file=sys.stderr, flush=True)
+        else:
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+
+
 def _check_workers(client, address: str) -> None:
-    """ConfigError unless every worker of ``client`` imports this pa10_dnbs, at this version (its tasks are the
-    project's functions: a worker that cannot unpickle them dies on each, and the runs would wait for ever).
-    ``eval`` of a string: a builtin, so the check itself unpickles on any worker."""
+    """ConfigError unless every worker of ``client`` imports this pa10_dnbs, at this version and of this source
+    (source_digest.py): its tasks are the project's functions (a worker that cannot unpickle them dies on each,
+    and the runs would wait for ever), and other code gives other numbers. ``eval`` of a string: a builtin, so
+    the check itself unpickles on any worker."""
     from .. import __version__
+    from ..source_digest import source_digest
 
     try:
         found = client.run(eval, "__import__('pa10_dnbs').__version__", on_error="return")
@@ -205,4 +233,12 @@ def _check_workers(client, address: str) -> None:
         if got != __version__:
             raise ConfigError(f"scheduler: worker {worker} of {address} has pa10_dnbs {got}, this is {__version__}: "
                               "every worker needs the same pa10_dnbs (docs/tuning.md, \"A cluster\")",
+                              setting="scheduler")
+    # the same version can be other code (an edited copy): its source, file by file, must be this one's
+    digests = client.run(eval, "__import__('importlib').import_module('pa10_dnbs.source_digest').source_digest()",
+                         on_error="return")
+    for worker, got in sorted(digests.items()):
+        if got != source_digest():
+            raise ConfigError(f"scheduler: worker {worker} of {address} runs other pa10_dnbs code (its source differs "
+                              "from this one's): every worker needs the same pa10_dnbs (docs/tuning.md, \"A cluster\")",
                               setting="scheduler")
