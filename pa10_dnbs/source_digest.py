@@ -21,7 +21,8 @@ def source_digest() -> str:
     # it from another install, whose own files are not what that worker runs
     root = Path(importlib.import_module(__package__).__file__).resolve().parent
     h = hashlib.sha256()
-    for path in sorted(p for p in root.rglob("*") if p.suffix in SOURCE_SUFFIXES and "__pycache__" not in p.parts):
+    for path in sorted(p for p in root.rglob("*") if p.suffix in SOURCE_SUFFIXES and "__pycache__" not in p.parts
+                       and p.is_file()):   # not an editor's dangling lock link (.#x.py)
         h.update(path.relative_to(root).as_posix().encode() + b"\0")
         h.update(path.read_bytes() + b"\0")
     return h.hexdigest()

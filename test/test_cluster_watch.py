@@ -53,3 +53,43 @@ def test_a_connection_that_stays_closed_is_one_line_after_close_timeout(monkeypa
             r"result for 0\.2 s \(in <TCP \(closed\)")
     with pytest.raises(ClusterLost, match=lost):
         ClusterWatch(_Client(), "tcp://127.0.0.1:8786").result(_Future(closed=10**6))
+
+
+class _SilentClient:
+    """A client whose every ask of the scheduler times out (``answers``: how many are answered first)."""
+
+    status = "running"
+    scheduler = type("rpc", (), {"identity": None})()
+
+    def __init__(self, answers: int = 0):
+        self.answers, self.asks = answers, 0
+
+    def sync(self, func, callback_timeout=None, **kwargs):
+        self.asks += 1
+        if self.asks <= self.answers:
+            return {"n_workers": 2}
+        raise TimeoutError
+
+
+def test_one_slow_answer_after_a_pause_in_the_asks_is_no_silence(monkeypatch):
+    """Asks pause while results keep coming: timed from the last answer, the first slow ask after a pause of
+    over SILENT_S said "has not answered for 10 s" of a scheduler that had answered all along."""
+    clock = [1000.0]
+    monkeypatch.setattr(cluster.time, "monotonic", lambda: clock[0])
+    watch = ClusterWatch(_SilentClient(), "tcp://127.0.0.1:8786")
+    clock[0] += 60.0                    # a minute of results without a check
+    watch.check()                       # the first ask that gets no answer: not lost yet
+    for _ in range(9):
+        clock[0] += cluster.WATCH_S
+        watch.check()                   # 9 s without an answer
+    clock[0] += cluster.WATCH_S
+    with pytest.raises(ClusterLost, match=r"^scheduler: the scheduler tcp://127\.0\.0\.1:8786 has not answered for "
+                                          r"10 s \(its process stopped"):
+        watch.check()
+
+
+def test_an_answer_ends_the_silence():
+    watch = ClusterWatch(_SilentClient(answers=1), "tcp://127.0.0.1:8786")
+    watch.last_asked = -10.0
+    watch.check()
+    assert watch.unanswered_since is None and watch.client.asks == 1

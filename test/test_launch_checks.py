@@ -290,3 +290,13 @@ def test_a_joint_given_twice_in_fault_joints_is_refused(tmp_path):
     assert line.startswith("pa10-dnbs: error: --fault-joints"), line
     assert not (tmp_path / "out").exists()
     _no_pa10_children()
+
+
+def test_a_clock_so_slow_that_a_reference_message_would_be_too_large_is_refused(tmp_path):
+    """A /clock hours apart made the launcher give the reference node more points per message than its
+    batch_steps takes: the run failed inside the node, naming a parameter the user never set."""
+    line = _refused(run_cli("launch", "--duration", "0.1", "--out", tmp_path / "out", "--clock-hz", "0.00005"),
+                    ["--clock-hz: 5e-05 Hz is one /clock per 20,000,000 steps", "(at most 1,000,000)"])
+    assert line.startswith("pa10-dnbs: error: --clock-hz"), line
+    assert not (tmp_path / "out").exists()
+    _no_pa10_children()

@@ -45,6 +45,7 @@ def test_a_failed_runs_logs_are_kept_where_its_message_points(tmp_path):
     (tmp / "logs").mkdir(parents=True)
     (tmp / "logs" / "plant.log").write_text("graph incomplete\n")
     (tmp / "ros_params.yaml").write_text("/pa10/plant: {}\n")
+    (tmp / "checkpoints").mkdir()   # where a controller's line writes (its folder is checked at the start)
     (tmp / "logs" / COMMANDS_FILE).write_text(f"x --params-file {tmp}/ros_params.yaml &\n")
     exc = _keep_logs(GraphFailure(f"plant exited early with code 1\n--- last lines of {tmp}/logs/plant.log ---"),
                      tmp, out)
@@ -52,6 +53,7 @@ def test_a_failed_runs_logs_are_kept_where_its_message_points(tmp_path):
     assert (kept / "plant.log").read_text() == "graph incomplete\n"
     # its command lines read the params beside them there (they pointed into the removed run folder)
     assert (kept.parent / "ros_params.yaml").read_text() == "/pa10/plant: {}\n"
+    assert (kept.parent / "checkpoints").is_dir()
     assert (kept / COMMANDS_FILE).read_text() == f"x --params-file {kept.parent}/ros_params.yaml &\n"
     assert f"--- last lines of {kept}/plant.log ---" in str(exc) and str(tmp) not in str(exc)
     assert not exc.interrupted

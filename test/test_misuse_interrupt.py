@@ -514,6 +514,23 @@ def test_the_robot_node_stopped_while_rclpy_loads_says_one_line(tmp_path, module
                                                         "nothing changed"), (proc.returncode, err)
 
 
+def test_the_quiet_start_is_for_the_modules_that_run_as_nodes():
+    """Its handler ends the process at a Ctrl-C until run_node's replaces it: a module that never calls run_node
+    (the trajectory sender, shm_cleanup) kept it for its whole run, "nothing changed" said after its work."""
+    import ast
+
+    import pa10_dnbs
+
+    ros = REPO / "pa10_dnbs" / "ros"
+    running = set()
+    for path in ros.rglob("*.py"):
+        calls = {n.func.id for n in ast.walk(ast.parse(path.read_text()))
+                 if isinstance(n, ast.Call) and isinstance(n.func, ast.Name)}
+        if "run_node" in calls and path.name != "runtime.py":
+            running.add("pa10_dnbs.ros." + ".".join(path.relative_to(ros).with_suffix("").parts))
+    assert running == set(pa10_dnbs.NODE_MODULES) | {"pa10_dnbs.ros.mujoco_robot_node"}, running
+
+
 def _maps(pid: int, name: str) -> bool:
     """Whether process ``pid`` has mapped a library whose path holds ``name``."""
     try:

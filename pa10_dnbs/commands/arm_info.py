@@ -40,7 +40,7 @@ def _runs_with(settings, rule: dict, light_kgm2: np.ndarray) -> str:
         else:
             differ = not np.allclose(np.asarray(ran, float), np.asarray(ruled, float), rtol=1e-12, atol=0.0)
         if differ:
-            text = f"{key}: " + ", ".join(f"{n} {v}" if isinstance(v, bool) else f"{n} {v:g}"
+            text = f"{key}: " + ", ".join(f"{n} {str(v).lower()}" if isinstance(v, bool) else f"{n} {v:g}"
                                         for n, v in zip(names, ran.tolist()))
             if key.endswith("torque_gain_nms_per_rad"):
                 figure = settings.simulation.dt_s * np.asarray(ran, float) / light_kgm2

@@ -149,8 +149,9 @@ def _hard_stop_cleanup(tmp: Path, out: Path) -> str:
 FAILED_MARK = ".pa10-dnbs-failed-launch"
 
 
-#: the files the nodes' command lines read (their config and params), kept with a failed run's logs
-PARAM_FILES = ("config_used.yaml", "ros_params.yaml")
+#: what the nodes' command lines read (their config and params) and the folder they write checkpoints in, kept
+#: with a failed run's logs
+PARAM_FILES = ("config_used.yaml", "ros_params.yaml", "checkpoints")
 
 
 def _keep_logs(exc: GraphFailure, tmp: Path, out: Path) -> GraphFailure:
@@ -171,8 +172,8 @@ def _keep_logs(exc: GraphFailure, tmp: Path, out: Path) -> GraphFailure:
         else:
             kept.mkdir(parents=True)
         (kept / FAILED_MARK).write_text(f"the logs of a failed pa10-dnbs launch into {out}\n")
-        for name in PARAM_FILES:   # what the lines of logs/commands.sh read: kept beside them
-            if (tmp / name).is_file():
+        for name in PARAM_FILES:   # what the lines of logs/commands.sh read and write in: kept beside them
+            if (tmp / name).exists():
                 shutil.move(str(tmp / name), str(kept / name))
         shutil.move(str(logs), str(kept / "logs"))
         move_commands(kept / "logs", tmp, kept)

@@ -23,11 +23,12 @@ from ..settings import Settings
 from ..supervisor.domain_ids import shell_domain
 from .fault_flags import apply_fault_flags, check_kill_times
 from ..supervisor.graph_run import GraphOptions, loop_reliability, parse_netns
+from ..supervisor.node_specs import reference_batch
 from ..supervisor.plant_engine import plant_robot_options
 from ..supervisor.rmw_check import check_rmw
 from ..supervisor.robot_options import check_robot_options
 from ..wire.clock_schedule import checked_clock_hz
-from ..wire.topics import check_joint_name, check_namespace, default_namespace
+from ..wire.topics import MAX_BATCH_STEPS, REFERENCE_DEPTH, check_joint_name, check_namespace, default_namespace
 from .options import LaunchOptions
 
 
@@ -140,6 +141,11 @@ def plan_launch(options: LaunchOptions) -> LaunchPlan:
                        rt_priority=rt_priority, sched_batch=o.sched_batch, namespace=namespace,
                        clock_hz=clock_hz, joint_names=joint_names, trajectory_file=trajectory,
                        **robot_fields)
+    if reference_batch(opt) > MAX_BATCH_STEPS:   # a /clock hours apart: its lookahead, in messages the node keeps
+        slowest = 1.0 / (dt * (MAX_BATCH_STEPS * (REFERENCE_DEPTH - 2) - 50))
+        raise ConfigError(f"clock_hz: {clock_hz:g} Hz is one /clock per {1.0 / (clock_hz * dt):,.0f} steps: the "
+                          f"reference node would send {reference_batch(opt):,} points per message (at most "
+                          f"{MAX_BATCH_STEPS:,}); give at least {slowest:.3g} Hz", setting="clock_hz")
     reliability = loop_reliability(opt)
     measured = metrics_settings(settings, n_steps * dt)
     return LaunchPlan(settings=settings, opt=opt, config_path=config_path, n_steps=n_steps, dt_s=dt,

@@ -79,11 +79,12 @@ class Param:
         """The range for docs: '[0, 1]', '>= 0', '' (none)."""
         if self.lo is None and self.hi is None:
             return ""
+        lo, hi = (v if isinstance(v, int) or v is None else f"{v:g}" for v in (self.lo, self.hi))  # 1000000, 1e+06
         if self.hi is None:
-            return f">= {self.lo:g}"
+            return f">= {lo}"
         if self.lo is None:
-            return f"<= {self.hi:g}"
-        return f"[{self.lo:g}, {self.hi:g}]"
+            return f"<= {hi}"
+        return f"[{lo}, {hi}]"
 
 
 def params_help(prog: str, specs: dict[str, Param]) -> str:

@@ -36,7 +36,7 @@ from ..config_error import ConfigError
 from ..controller_factory import build_reference, load_reference_trajectory, switchable_reference
 from ..core.joint_trajectory import TrajectoryError, trajectory_from_lists
 from ..core.trajectory_reference import received_start
-from ..wire.topics import TRAJECTORY
+from ..wire.topics import MAX_BATCH_STEPS, TRAJECTORY
 from ..wire.trajectory_cdr import encode_one_joint
 from .diagnostics import DiagnosticsReporter, status, status_name
 from ..loop.scheduling import apply_batch, apply_fifo
@@ -53,7 +53,6 @@ from .endpoints import CLOCK, StepClock, record_qos, reference_qos, reference_to
 FAULT_KEYS = ("clock_backwards",)
 MAX_KEPT = 100  # accepted trajectories and refusal reasons kept for the stats file
 CLOCK_DEPTH = 1000  # /clock messages kept between two polls
-MAX_BATCH_STEPS = 1_000_000  # points of one message: 24 MB per joint; 1e9 asked 52 GiB at the start
 NOW = Duration(seconds=0)  # wait_for_all_acked: just look
 
 

@@ -40,7 +40,7 @@ import sys
 from typing import Callable, NoReturn
 
 import rclpy
-from rclpy.exceptions import ParameterException
+from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
 from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
 from rclpy.task import Future
@@ -212,7 +212,8 @@ def run_node(make_node: Callable[[], "rclpy.node.Node"], args=None, params: dict
     except (KeyboardInterrupt, ExternalShutdownException) as exc:
         _KEPT_EXCEPTIONS.append(exc)
         code = 0
-    except ParameterException as exc:   # rclpy refused a value of its own parameters (-p use_sim_time:=maybe)
+    except (InvalidParameterTypeException, InvalidParameterValueException) as exc:   # rclpy refused a value of its
+        # own parameters (-p use_sim_time:=maybe)
         _KEPT_EXCEPTIONS.append(exc)
         print(f"FAILED {' '.join(str(exc).split())}", file=sys.stderr, flush=True)
         code = 2

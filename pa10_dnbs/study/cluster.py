@@ -28,7 +28,8 @@ class ClusterWatch:
 
     def __init__(self, client, address: str):
         self.client, self.address = client, address
-        self.last_worker = self.last_asked = self.last_answer = time.monotonic()
+        self.last_worker = self.last_asked = time.monotonic()
+        self.unanswered_since: float | None = None   # the first ask since the last answer that got none
 
     def lost(self, why: str, scheduler_alive: bool = False) -> ClusterLost:
         return ClusterLost(why, scheduler_alive)
@@ -77,11 +78,14 @@ class ClusterWatch:
         try:   # bounded: scheduler_info() waits for ever on a scheduler that stopped answering, Ctrl-C unheard
             n = self.client.sync(self.client.scheduler.identity, n_workers=0, callback_timeout=WATCH_S)["n_workers"]
         except Exception:   # noqa: BLE001 - asked again at the next poll; a lost connection shows in the status
-            if time.monotonic() - self.last_answer >= SILENT_S:
+            # silent since the first ask it left unanswered (not since the last answer: asks pause while results
+            # keep coming, and one slow answer after such a pause is no silence)
+            self.unanswered_since = now if self.unanswered_since is None else self.unanswered_since
+            if time.monotonic() - self.unanswered_since >= SILENT_S:
                 raise self.lost(f"the scheduler {self.address} has not answered for {SILENT_S:g} s (its process "
                                 "stopped, or its host or the network hangs)") from None
             return
-        self.last_answer = time.monotonic()
+        self.unanswered_since = None
         if n:
             self.last_worker = now
         elif now - self.last_worker >= WORKERLESS_S:
@@ -175,8 +179,10 @@ def connect(address: str):
     for name in ("distributed.client", "distributed.comm", "distributed.core", "distributed.batched"):
         logging.getLogger(name).setLevel(logging.CRITICAL)  # its own connection errors: we say it in one line
     _probe(address)
+    from distributed.versions import VersionMismatchWarning
+
     with warnings.catch_warnings(record=True) as caught:   # Dask's version table: said in one line, or not at all
-        warnings.simplefilter("always")
+        warnings.simplefilter("always", VersionMismatchWarning)
         try:
             client = Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
         except Exception as exc:   # the scheduler went away since the probe
@@ -204,9 +210,12 @@ def _say_warnings(caught, address: str) -> None:
 
     for w in caught:
         if issubclass(w.category, VersionMismatchWarning):
-            first = str(w.message).strip().splitlines()[0].rstrip(":")
-            print(f"pa10-dnbs: warning: the cluster at {address}: {first} (Dask's check of its packages against "
-                  "this process's): runs on other versions may give other numbers", file=sys.stderr, flush=True)
+            rows = [[c.strip() for c in line.strip().strip("|").split("|")] for line in str(w.message).splitlines()
+                    if line.strip().startswith("|")]
+            named = "; ".join(f"{r[0]}: " + ", ".join(f"{h.lower()} {v}" for h, v in zip(rows[0][1:], r[1:]))
+                              for r in rows[1:]) if rows else str(w.message).strip().splitlines()[0]
+            print(f"pa10-dnbs: warning: the cluster at {address} runs other package versions ({named}; Dask's "
+                  "check): runs on other versions may give other numbers", file=sys.stderr, flush=True)
         else:
             warnings.showwarning(w.message, w.category, w.filename, w.lineno)
 
@@ -235,10 +244,16 @@ def _check_workers(client, address: str) -> None:
                               "every worker needs the same pa10_dnbs (docs/tuning.md, \"A cluster\")",
                               setting="scheduler")
     # the same version can be other code (an edited copy): its source, file by file, must be this one's
-    digests = client.run(eval, "__import__('importlib').import_module('pa10_dnbs.source_digest').source_digest()",
-                         on_error="return")
+    try:
+        digests = client.run(eval, "__import__('importlib').import_module('pa10_dnbs.source_digest').source_digest()",
+                             on_error="return")
+    except Exception as exc:   # noqa: BLE001 - the scheduler went away meanwhile: said in one line
+        text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ConfigError(f"scheduler: cannot check the workers of {address}: {text}", setting="scheduler") \
+            from None
     for worker, got in sorted(digests.items()):
         if got != source_digest():
-            raise ConfigError(f"scheduler: worker {worker} of {address} runs other pa10_dnbs code (its source differs "
-                              "from this one's): every worker needs the same pa10_dnbs (docs/tuning.md, \"A cluster\")",
-                              setting="scheduler")
+            why = "its source differs from this one's" if not isinstance(got, BaseException) else \
+                f"no digest of its source: {type(got).__name__}: {str(got).splitlines()[0] if str(got) else ''}"
+            raise ConfigError(f"scheduler: worker {worker} of {address} runs other pa10_dnbs code ({why}): every "
+                              "worker needs the same pa10_dnbs (docs/tuning.md, \"A cluster\")", setting="scheduler")

@@ -173,7 +173,7 @@ def open_storage(url: str, default_file=None):
                          f"for over {STORAGE_OPEN_WAIT_S:g} s", STORAGE_OPEN_WAIT_S, between=check), \
                 warnings.catch_warnings():
             # what SQLAlchemy would only warn of (a query argument the driver ignores) is a refused URL, in one line
-            warnings.simplefilter("error", SAWarning)
+            warnings.filterwarnings("error", "Query string argument", SAWarning)
             return optuna.storages.RDBStorage(url)
     except OutputInUseError:
         raise

@@ -24,6 +24,8 @@ TRAJECTORY = "trajectory"  # trajectory_msgs/JointTrajectory of every joint, tak
 #: reference batches each <joint>/reference endpoint keeps (KEEP_LAST, transient-local: ros/endpoints.py); the
 #: launcher sizes the batches so that the reference node's lookahead fits in fewer (supervisor/node_specs.py)
 REFERENCE_DEPTH = 20
+#: the most reference points one message holds (the reference node's batch_steps): 24 MB per joint's message
+MAX_BATCH_STEPS = 1_000_000
 
 # global
 CLOCK = "/clock"
