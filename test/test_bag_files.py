@@ -297,7 +297,10 @@ def test_standalone_recorder_rejects_bad_parameters(tmp_path, domain):
     _assert_clear_error(_recorder(domain), "parameter bag is required")
     _assert_clear_error(_recorder(domain, f"bag:={tmp_path / 'b'}"), "all_topics")
     _assert_clear_error(_recorder(domain, f"bag:={tmp_path / 'b'}", "topics:=['/pa10//joint_states']"),
-                        "is not a topic name")
+                        "parameter topics: Invalid topic name: topic name must not contain repeated '/'")
+    # a space: a ValueError traceback from making the subscription, an empty bag left behind
+    _assert_clear_error(_recorder(domain, f"bag:={tmp_path / 'b'}", "topics:=['bad topic']"),
+                        "parameter topics: topic name 'bad topic' is invalid")
     existing = _write_bag(tmp_path / "old")
     before = sorted(p.name for p in existing.iterdir())
     _assert_clear_error(_recorder(domain, f"bag:={existing}", "all_topics:=true"), "exists", "pass force:=true")
