@@ -82,6 +82,22 @@ def _kill_scheduler_once(cluster, proc, done):
             proc.communicate()
 
 
+def _one_worker_study(tmp_path, monkeypatch, worker_env: dict, controller: str, duration_s: float):
+    """(exit code, stdout, stderr) of a one-run study on a cluster of one worker started with ``worker_env`` (this
+    process's own environment left as it was for the command); no process of the cluster left behind."""
+    for key, value in worker_env.items():
+        monkeypatch.setenv(key, value)
+    with local_cluster(tmp_path / "cluster", n_workers=1) as cluster:
+        for key in worker_env:
+            monkeypatch.delenv(key)
+        result = _end(_command("study", "--scenarios", "nominal", "--controllers", controller, "--seeds", 1,
+                               "--duration", duration_s, "--no-progress", "--scheduler", cluster.address,
+                               "--out", tmp_path / "s"))
+        pids = cluster.pids
+    assert not pids(), "processes of the cluster left behind"
+    return result
+
+
 def test_study_whose_scheduler_dies_keeps_its_completed_rows(tmp_path):
     with local_cluster(tmp_path / "cluster") as cluster:
         proc = _command(*STUDY, "--scheduler", cluster.address, "--out", tmp_path / "s")
@@ -205,14 +221,8 @@ def test_a_worker_running_an_edited_copy_of_the_project_is_refused_at_connect(tm
     shutil.copytree(Path(pa10_dnbs.__file__).parent, copy / "pa10_dnbs", ignore=shutil.ignore_patterns("__pycache__"))
     scenarios = copy / "pa10_dnbs" / "study" / "scenarios.py"
     scenarios.write_text(scenarios.read_text() + "\n# an edit\n")
-    monkeypatch.setenv("PYTHONPATH", str(copy))   # the cluster's workers import the copy first
-    with local_cluster(tmp_path / "cluster", n_workers=1) as cluster:
-        monkeypatch.delenv("PYTHONPATH")
-        rc, out, err = _end(_command("study", "--scenarios", "nominal", "--controllers", "pid", "--seeds", 1,
-                                     "--duration", 0.3, "--no-progress", "--scheduler", cluster.address,
-                                     "--out", tmp_path / "s"))
-        pids = cluster.pids
-    assert not pids(), "processes of the cluster left behind"
+    # the cluster's worker imports the copy first
+    rc, out, err = _one_worker_study(tmp_path, monkeypatch, {"PYTHONPATH": str(copy)}, "pid", 0.3)
     assert rc == 2 and re.fullmatch(
         r"pa10-dnbs: error: --scheduler: worker tcp://127\.0\.0\.1:\d+ of tcp://127\.0\.0\.1:\d+ runs other "
         r"pa10_dnbs code \(its source differs from this one's\): every worker needs the same pa10_dnbs .*\n", err), \
@@ -272,16 +282,10 @@ def test_a_ctrl_c_while_a_tune_waits_for_a_worker_stops_it_at_once(tmp_path):
 def test_a_worker_without_a_compiler_runs_a_dnbs_study_with_kernel_auto(tmp_path, monkeypatch):
     """`dnbs.kernel: auto` on a cluster: each worker resolves it (c where it builds, else numpy: the same bits);
     it was resolved here (c) and imposed on a worker that cannot build it: the study refused, exit 2."""
-    monkeypatch.setenv("CC", "no-such-cc")   # the workers' environment: no compiler, an empty kernel cache
-    monkeypatch.setenv("PA10_DNBS_CACHE", str(tmp_path / "worker_cache"))
-    with local_cluster(tmp_path / "cluster", n_workers=1) as cluster:
-        monkeypatch.delenv("CC")
-        monkeypatch.delenv("PA10_DNBS_CACHE")
-        rc, out, err = _end(_command("study", "--scenarios", "nominal", "--controllers", "dnbs", "--seeds", 1,
-                                     "--duration", 0.2, "--no-progress", "--scheduler", cluster.address,
-                                     "--out", tmp_path / "s"))
-        pids = cluster.pids
-    assert not pids(), "processes of the cluster left behind"
+    # the worker's environment: no compiler, an empty kernel cache
+    rc, out, err = _one_worker_study(tmp_path, monkeypatch, {"CC": "no-such-cc",
+                                                             "PA10_DNBS_CACHE": str(tmp_path / "worker_cache")},
+                                     "dnbs", 0.2)
     assert rc == 0 and err == "", (rc, err)
     assert not list((tmp_path / "worker_cache").glob("*.so"))   # the worker ran numpy's step
     assert json.loads((tmp_path / "s" / "study.json").read_text())["rows"][0]["controller"] == "dnbs"
